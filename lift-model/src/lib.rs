@@ -1,0 +1,1 @@
+//! lift-model: the laboratory lift of seed 003 as a physical plant (SPEC §4).

@@ -1,0 +1,2 @@
+//! asi-lift: the application that wires the simulated AS-i bus, the lab lift, its PLC program and
+//! its safety logic together on one simulated clock (SPEC §0).

@@ -1,0 +1,5 @@
+//! The `asi-lift` command.
+
+fn main() {
+    println!("asi-lift: the `run` command is not built yet; see README.md");
+}
