@@ -214,7 +214,12 @@ impl Sub for SimDuration {
 impl fmt::Display for SimTime {
     /// Seconds with nanosecond precision, e.g. `12.000154000 s`.
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{}.{:09} s", self.0 / 1_000_000_000, self.0 % 1_000_000_000)
+        write!(
+            f,
+            "{}.{:09} s",
+            self.0 / 1_000_000_000,
+            self.0 % 1_000_000_000
+        )
     }
 }
 
@@ -367,7 +372,10 @@ mod tests {
         assert_eq!(SimDuration::from_millis(1500).to_string(), "1.5 s");
         assert_eq!(SimDuration::from_nanos(4_928_000).to_string(), "4.928 ms");
         assert_eq!(SimDuration::from_nanos(7).to_string(), "7 ns");
-        assert_eq!(SimTime::from_micros(12_000_154).to_string(), "12.000154000 s");
+        assert_eq!(
+            SimTime::from_micros(12_000_154).to_string(),
+            "12.000154000 s"
+        );
     }
 
     #[test]

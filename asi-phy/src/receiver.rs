@@ -1,0 +1,789 @@
+//! The AS-i receiver: pulses in, telegrams out, each with the seven receiver checks (SPEC §1
+//! "The seven receiver checks"; reference/asi.md §3.1; seed 003 §2.2.2).
+//!
+//! A telegram is the run of pulses between two pauses. The receiver anchors the half-bit grid at
+//! the first pulse of the run, places every later pulse on the nearest grid point, and decodes
+//! bit `i` from the pulse at the middle of its cell (grid point `2i + 1`: negative = 1,
+//! positive = 0). It then applies the checks of SPEC §1, with these precisions (**Decision**,
+//! recorded in the README):
+//!
+//! | check | fails when |
+//! |---|---|
+//! | start bit | the first pulse is positive, or the first bit decodes as 1 |
+//! | alternation | two consecutive pulses have the same polarity |
+//! | pause | inside the telegram two pulses are more than a bit time apart, or closer than the grid allows, or a pulse is off the grid by more than the tolerance; or, after an erroneous telegram, the telegram came after less than the asynchronous pause (the A²SI receiver needs 18 µs of silence to resynchronise) |
+//! | information | a bit cell has no pulse at its middle |
+//! | parity | the bits between start and end bit hold an odd number of ones |
+//! | end bit | the last bit is not 1, or the line does not return to idle (a positive pulse at the end of the end bit) |
+//! | length | the number of bits is not 14 (request) or 7 (response) |
+//!
+//! The receiver is a state machine fed one pulse at a time ([`Receiver::push`]); a telegram is
+//! complete when the next pulse comes after a pause, or when [`Receiver::poll`] is called at or
+//! after [`Receiver::poll_at`]. Nothing allocates; no input can make it panic.
+
+use crate::manchester::compact;
+use crate::pulse::{Polarity, Pulse};
+use crate::telegram::{Request, Response};
+use crate::time::{SimDuration, SimTime};
+use crate::timing::BusTiming;
+use core::fmt;
+
+/// One of the seven receiver checks, in the fixed order that picks the primary class.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+#[repr(u8)]
+pub enum Check {
+    /// The telegram does not begin with a negative pulse and a 0 bit.
+    StartBit = 0,
+    /// Two consecutive pulses with the same polarity.
+    Alternation = 1,
+    /// A pulse off the half-bit grid, a gap longer than a bit time, or too short a pause.
+    Pause = 2,
+    /// A bit cell without its mid-bit pulse (Manchester violation).
+    Information = 3,
+    /// Odd parity.
+    Parity = 4,
+    /// The end bit is not 1 or the line does not return to idle.
+    EndBit = 5,
+    /// Not 14 (request) or 7 (response) bits.
+    Length = 6,
+}
+
+impl Check {
+    /// All seven, in order.
+    pub const ALL: [Check; 7] = [
+        Check::StartBit,
+        Check::Alternation,
+        Check::Pause,
+        Check::Information,
+        Check::Parity,
+        Check::EndBit,
+        Check::Length,
+    ];
+
+    /// The check's name as SPEC §1 spells it.
+    pub const fn name(self) -> &'static str {
+        match self {
+            Check::StartBit => "start bit",
+            Check::Alternation => "alternation",
+            Check::Pause => "pause",
+            Check::Information => "information",
+            Check::Parity => "parity",
+            Check::EndBit => "end bit",
+            Check::Length => "length",
+        }
+    }
+}
+
+impl fmt::Display for Check {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// A set of failed checks.
+#[derive(Clone, Copy, Default, PartialEq, Eq, Hash)]
+pub struct Checks(u8);
+
+impl Checks {
+    /// No check failed.
+    pub const NONE: Checks = Checks(0);
+
+    /// The set holding `check` only.
+    pub const fn only(check: Check) -> Checks {
+        Checks(1 << check as u8)
+    }
+
+    /// `true` if no check failed.
+    pub const fn is_empty(self) -> bool {
+        self.0 == 0
+    }
+
+    /// `true` if `check` failed.
+    pub const fn contains(self, check: Check) -> bool {
+        self.0 & (1 << check as u8) != 0
+    }
+
+    /// The set with `check` added.
+    pub const fn with(self, check: Check) -> Checks {
+        Checks(self.0 | (1 << check as u8))
+    }
+
+    /// The first failed check in the fixed order of SPEC §1, the telegram's primary class.
+    pub const fn primary(self) -> Option<Check> {
+        if self.0 == 0 {
+            return None;
+        }
+        Some(Check::ALL[self.0.trailing_zeros() as usize])
+    }
+
+    /// The failed checks in order.
+    pub fn iter(self) -> impl Iterator<Item = Check> {
+        Check::ALL.into_iter().filter(move |c| self.contains(*c))
+    }
+
+    /// Number of failed checks.
+    pub const fn len(self) -> u32 {
+        self.0.count_ones()
+    }
+}
+
+impl fmt::Debug for Checks {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_set().entries(self.iter()).finish()
+    }
+}
+
+impl fmt::Display for Checks {
+    /// `ok`, or the failed checks joined by `+`: `alternation+information`.
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if self.is_empty() {
+            return f.write_str("ok");
+        }
+        for (i, c) in self.iter().enumerate() {
+            if i > 0 {
+                f.write_str("+")?;
+            }
+            f.write_str(c.name())?;
+        }
+        Ok(())
+    }
+}
+
+/// Which telegrams a receiver listens for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Expect {
+    /// Every telegram is a 14-bit request (a slave that hears only the master).
+    Requests,
+    /// Every telegram is a 7-bit response (the master during its response window).
+    Responses,
+    /// A live bus: a telegram that starts within the response timeout after a valid request is
+    /// that request's response, anything else a request. Responses never change the receiver's
+    /// synchronisation: a slave that is not addressed waits out the reply of another slave
+    /// (A²SI §7.1.2.1). This is the setting for slaves and for bus monitors.
+    Both,
+}
+
+/// What a received telegram was taken for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum TelegramKind {
+    /// A master request, 14 bits expected.
+    Request,
+    /// A slave response, 7 bits expected.
+    Response,
+}
+
+impl TelegramKind {
+    /// The length this kind of telegram has.
+    pub const fn bits(self) -> u32 {
+        match self {
+            TelegramKind::Request => Request::BITS,
+            TelegramKind::Response => Response::BITS,
+        }
+    }
+}
+
+/// Receiver settings, derived from a [`BusTiming`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ReceiverConfig {
+    half_bit: u64,
+    tolerance: u64,
+    pause: u64,
+    async_pause: u64,
+    response_window: u64,
+    expect: Expect,
+}
+
+impl ReceiverConfig {
+    /// The settings for `timing`, listening for `expect`.
+    pub fn new(timing: &BusTiming, expect: Expect) -> ReceiverConfig {
+        ReceiverConfig {
+            half_bit: timing.half_bit().as_nanos().max(1),
+            tolerance: timing.tolerance().as_nanos(),
+            pause: timing.min_pause().as_nanos().max(1),
+            async_pause: timing.async_pause().as_nanos(),
+            response_window: timing.response_timeout().as_nanos(),
+            expect,
+        }
+    }
+
+    /// What this receiver listens for.
+    pub const fn expect(&self) -> Expect {
+        self.expect
+    }
+
+    /// The silence that ends a telegram.
+    pub const fn pause(&self) -> SimDuration {
+        SimDuration::from_nanos(self.pause)
+    }
+}
+
+/// A telegram as the receiver saw it: its bits, its timing, and the checks that failed.
+#[derive(Clone, Copy, PartialEq, Eq, Hash)]
+pub struct Received {
+    /// What the receiver took it for (which length it expected).
+    pub kind: TelegramKind,
+    /// Time of the first pulse.
+    pub start: SimTime,
+    /// Time of the last pulse.
+    pub end: SimTime,
+    /// Number of pulses.
+    pub pulses: u32,
+    /// Number of bits decoded (a cell is counted once its middle is reached).
+    pub bit_count: u32,
+    /// The first (up to 32) bits, first bit in the most significant used position.
+    pub raw: u32,
+    /// The checks that failed.
+    pub failed: Checks,
+}
+
+impl Received {
+    /// `true` if every check passed.
+    pub const fn is_valid(&self) -> bool {
+        self.failed.is_empty()
+    }
+
+    /// The primary error class, `None` for a valid telegram.
+    pub const fn primary(&self) -> Option<Check> {
+        self.failed.primary()
+    }
+
+    /// The request, if this is a valid one.
+    pub fn request(&self) -> Option<Request> {
+        if self.is_valid() && self.kind == TelegramKind::Request {
+            Request::from_bits(self.raw as u16).ok()
+        } else {
+            None
+        }
+    }
+
+    /// The response, if this is a valid one.
+    pub fn response(&self) -> Option<Response> {
+        if self.is_valid() && self.kind == TelegramKind::Response {
+            Response::from_bits(self.raw as u8).ok()
+        } else {
+            None
+        }
+    }
+
+    /// The decoded bits as `0`/`1` digits (at most 32), for traces of broken telegrams.
+    pub fn bit_string(&self) -> String {
+        let n = self.bit_count.min(32);
+        (0..n)
+            .map(|i| {
+                if self.raw >> (n - 1 - i) & 1 == 1 {
+                    '1'
+                } else {
+                    '0'
+                }
+            })
+            .collect()
+    }
+}
+
+impl fmt::Debug for Received {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "Received({:?} at {} bits={} [{}] {})",
+            self.kind,
+            self.start,
+            self.bit_count,
+            self.bit_string(),
+            self.failed
+        )
+    }
+}
+
+/// The telegram in progress.
+#[derive(Clone, Copy, Debug)]
+struct Run {
+    kind: TelegramKind,
+    t0: SimTime,
+    last_t: SimTime,
+    last_g: u64,
+    last_positive: bool,
+    count: u32,
+    occupied: u64,
+    positive: u64,
+    failed: Checks,
+}
+
+/// A streaming AS-i receiver with the seven checks and the synchronous/asynchronous pause rule.
+#[derive(Clone, Debug)]
+pub struct Receiver {
+    cfg: ReceiverConfig,
+    synced: bool,
+    prev_end: Option<SimTime>,
+    window_from: Option<SimTime>,
+    run: Option<Run>,
+}
+
+impl Receiver {
+    /// A receiver that has just powered up (asynchronous, idle).
+    pub fn new(cfg: ReceiverConfig) -> Receiver {
+        Receiver {
+            cfg,
+            synced: false,
+            prev_end: None,
+            window_from: None,
+            run: None,
+        }
+    }
+
+    /// Its settings.
+    pub fn config(&self) -> &ReceiverConfig {
+        &self.cfg
+    }
+
+    /// `true` after a valid telegram: the next one is accepted after the normal pause.
+    pub fn is_synchronised(&self) -> bool {
+        self.synced
+    }
+
+    /// Back to the power-up state, dropping any telegram in progress.
+    pub fn reset(&mut self) {
+        *self = Receiver::new(self.cfg);
+    }
+
+    /// Takes the next pulse. Returns the previous telegram if this pulse comes after a pause
+    /// and so completes it. Pulses are expected in time order; one that goes back in time is a
+    /// pause (timing) error of the telegram in progress.
+    pub fn push(&mut self, pulse: Pulse) -> Option<Received> {
+        let Some(run) = &mut self.run else {
+            self.begin(pulse);
+            return None;
+        };
+        if pulse.at >= run.last_t && pulse.at.as_nanos() - run.last_t.as_nanos() >= self.cfg.pause {
+            let done = self.complete();
+            self.begin(pulse);
+            return done;
+        }
+        Self::extend(&self.cfg, run, pulse);
+        None
+    }
+
+    /// When the telegram in progress will be complete if no further pulse comes.
+    pub fn poll_at(&self) -> Option<SimTime> {
+        self.run
+            .as_ref()
+            .map(|r| r.last_t + SimDuration::from_nanos(self.cfg.pause))
+    }
+
+    /// Completes the telegram in progress if the line has been silent for a pause by `now`.
+    pub fn poll(&mut self, now: SimTime) -> Option<Received> {
+        match self.poll_at() {
+            Some(t) if now >= t => self.complete(),
+            _ => None,
+        }
+    }
+
+    /// Completes the telegram in progress now, whatever the time (end of a capture).
+    pub fn flush(&mut self) -> Option<Received> {
+        self.complete()
+    }
+
+    /// Decodes a whole pulse sequence, yielding every telegram (the last one flushed).
+    pub fn decode<I: IntoIterator<Item = Pulse>>(&mut self, pulses: I) -> Decode<'_, I::IntoIter> {
+        Decode {
+            rx: self,
+            pulses: pulses.into_iter(),
+            done: false,
+        }
+    }
+
+    fn begin(&mut self, p: Pulse) {
+        let mut kind = match self.cfg.expect {
+            Expect::Requests => TelegramKind::Request,
+            Expect::Responses => TelegramKind::Response,
+            Expect::Both => TelegramKind::Request,
+        };
+        if self.cfg.expect == Expect::Both {
+            if let Some(from) = self.window_from.take() {
+                if p.at >= from && p.at.as_nanos() - from.as_nanos() <= self.cfg.response_window {
+                    kind = TelegramKind::Response;
+                }
+            }
+        }
+        let positive = p.polarity == Polarity::Positive;
+        let mut failed = Checks::NONE;
+        if positive {
+            failed = failed.with(Check::StartBit);
+        }
+        if let Some(prev) = self.prev_end {
+            let silence = p.at.as_nanos().saturating_sub(prev.as_nanos());
+            if !self.synced && kind == TelegramKind::Request && silence < self.cfg.async_pause {
+                failed = failed.with(Check::Pause);
+            }
+        }
+        self.run = Some(Run {
+            kind,
+            t0: p.at,
+            last_t: p.at,
+            last_g: 0,
+            last_positive: positive,
+            count: 1,
+            occupied: 1,
+            positive: positive as u64,
+            failed,
+        });
+    }
+
+    fn extend(cfg: &ReceiverConfig, run: &mut Run, p: Pulse) {
+        let h = cfg.half_bit;
+        let tol = cfg.tolerance;
+        let positive = p.polarity == Polarity::Positive;
+        let g;
+        if p.at < run.last_t {
+            run.failed = run.failed.with(Check::Pause);
+            g = run.last_g.saturating_add(1);
+        } else {
+            let dt = p.at.as_nanos().saturating_sub(run.t0.as_nanos());
+            let next = run.last_g.saturating_add(1).saturating_mul(h);
+            if dt.abs_diff(next) <= tol {
+                g = run.last_g.saturating_add(1);
+            } else if dt.abs_diff(next.saturating_add(h)) <= tol {
+                g = run.last_g.saturating_add(2);
+            } else {
+                // Off the expected points: find the nearest grid point.
+                let q = dt.saturating_add(h / 2) / h;
+                run.failed = run.failed.with(Check::Pause);
+                g = q.max(run.last_g.saturating_add(1));
+            }
+        }
+        if positive == run.last_positive {
+            run.failed = run.failed.with(Check::Alternation);
+        }
+        if g < 64 {
+            run.occupied |= 1 << g;
+            run.positive |= (positive as u64) << g;
+        }
+        run.last_g = g;
+        run.last_t = p.at;
+        run.last_positive = positive;
+        run.count = run.count.saturating_add(1);
+    }
+
+    fn complete(&mut self) -> Option<Received> {
+        let run = self.run.take()?;
+        let g = run.last_g;
+        let n = g.div_ceil(2);
+        let mut failed = run.failed;
+        let cells = n.min(32) as u32;
+        let mid_mask: u64 = if cells == 0 {
+            0
+        } else {
+            0xAAAA_AAAA_AAAA_AAAA & (u64::MAX >> (64 - 2 * cells))
+        };
+        let raw = if run.occupied & mid_mask == mid_mask {
+            // Bit i is 1 where the mid pulse of cell i is negative.
+            compact((!run.positive & mid_mask) >> 1)
+        } else {
+            failed = failed.with(Check::Information);
+            level_bits(run.occupied, run.positive, cells)
+        };
+        // `raw` holds bit i in position i; turn it into transmission order, first bit highest.
+        let raw = if cells == 0 {
+            0
+        } else {
+            raw.reverse_bits() >> (32 - cells)
+        };
+        if cells >= 1 && raw >> (cells - 1) & 1 == 1 {
+            failed = failed.with(Check::StartBit);
+        }
+        if cells >= 3 {
+            let between = (raw >> 1) & ((1 << (cells - 2)) - 1);
+            if between.count_ones() % 2 != 0 {
+                failed = failed.with(Check::Parity);
+            }
+        }
+        if g % 2 != 0 || n == 0 || raw & 1 == 0 {
+            failed = failed.with(Check::EndBit);
+        }
+        if n != run.kind.bits() as u64 {
+            failed = failed.with(Check::Length);
+        }
+        let received = Received {
+            kind: run.kind,
+            start: run.t0,
+            end: run.last_t,
+            pulses: run.count,
+            bit_count: n.min(u32::MAX as u64) as u32,
+            raw,
+            failed,
+        };
+        self.prev_end = Some(run.last_t);
+        let is_request = run.kind == TelegramKind::Request;
+        if is_request || self.cfg.expect != Expect::Both {
+            self.synced = failed.is_empty();
+        }
+        self.window_from = (self.cfg.expect == Expect::Both && is_request && failed.is_empty())
+            .then_some(run.last_t);
+        Some(received)
+    }
+}
+
+/// Bits read from line levels when some mid pulses are missing: a cell reads 1 where the line
+/// is low during its second half (the level left by the last pulse at or before its middle).
+fn level_bits(occupied: u64, positive: u64, cells: u32) -> u32 {
+    let mut bits = 0u32;
+    for i in 0..cells {
+        let upto = occupied & (u64::MAX >> (62 - 2 * i));
+        if upto != 0 {
+            let last = 63 - upto.leading_zeros();
+            if positive & (1 << last) == 0 {
+                bits |= 1 << i;
+            }
+        }
+    }
+    bits
+}
+
+/// The telegrams of a pulse sequence; see [`Receiver::decode`].
+#[derive(Debug)]
+pub struct Decode<'a, I> {
+    rx: &'a mut Receiver,
+    pulses: I,
+    done: bool,
+}
+
+impl<I: Iterator<Item = Pulse>> Iterator for Decode<'_, I> {
+    type Item = Received;
+
+    fn next(&mut self) -> Option<Received> {
+        if self.done {
+            return None;
+        }
+        for p in self.pulses.by_ref() {
+            if let Some(r) = self.rx.push(p) {
+                return Some(r);
+            }
+        }
+        self.done = true;
+        self.rx.flush()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::pulse::PulseTrain;
+    use crate::telegram::{Address, Nibble};
+
+    fn timing() -> BusTiming {
+        BusTiming::default()
+    }
+
+    fn rx(expect: Expect) -> Receiver {
+        Receiver::new(timing().receiver(expect))
+    }
+
+    fn train(req: Request, at_us: u64) -> PulseTrain {
+        PulseTrain::request(req, SimTime::from_micros(at_us), timing().half_bit())
+    }
+
+    fn dexg(a: u8, d: u8) -> Request {
+        Request::data_exchange(Address::new(a).expect("addr"), Nibble::from_low_bits(d))
+            .expect("valid")
+    }
+
+    fn pulses(spec: &str, start_us: u64) -> Vec<Pulse> {
+        spec.split_whitespace()
+            .map(|tok| {
+                let (k, s) = tok.split_at(tok.len() - 1);
+                let k: f64 = k.parse().expect("grid point");
+                let pol = if s == "+" {
+                    Polarity::Positive
+                } else {
+                    Polarity::Negative
+                };
+                Pulse::new(
+                    SimTime::from_nanos(start_us * 1000 + (3000.0 * k) as u64),
+                    pol,
+                )
+            })
+            .collect()
+    }
+
+    #[test]
+    fn decodes_the_spec_vectors() {
+        let mut r = rx(Expect::Requests);
+        let got: Vec<Received> = r.decode(train(dexg(5, 0b1010), 0)).collect();
+        assert_eq!(got.len(), 1);
+        assert_eq!(got[0].request(), Some(dexg(5, 0b1010)));
+        let mut r = rx(Expect::Responses);
+        let got: Vec<Received> = r
+            .decode(pulses("0- 1+ 2- 3+ 5- 6+ 7- 9+ 10- 11+ 13- 14+", 0))
+            .collect();
+        assert_eq!(
+            got[0].response().map(|r| r.data()),
+            Some(Nibble::from_low_bits(0b0110))
+        );
+    }
+
+    #[test]
+    fn a_telegram_completes_after_the_pause() {
+        let mut r = rx(Expect::Requests);
+        for p in train(dexg(3, 1), 0) {
+            assert_eq!(r.push(p), None);
+        }
+        assert_eq!(r.poll_at(), Some(SimTime::from_micros(84 + 9)));
+        assert_eq!(r.poll(SimTime::from_micros(92)), None);
+        let got = r.poll(SimTime::from_micros(93)).expect("complete");
+        assert_eq!(got.request(), Some(dexg(3, 1)));
+        assert_eq!(
+            (got.start, got.end),
+            (SimTime::ZERO, SimTime::from_micros(84))
+        );
+        assert!(r.is_synchronised());
+    }
+
+    /// One hand-made broken telegram per check, the class it must get.
+    #[test]
+    fn each_check_has_its_class() {
+        let cases = [
+            // Response 0000 with the start pulse positive.
+            (
+                "0+ 1- 2+ 3- 4+ 5- 6+ 7- 8+ 9- 10+ 11- 13+ 14-",
+                Check::StartBit,
+            ),
+            // 0110 with pulse 6+ flipped.
+            (
+                "0- 1+ 2- 3+ 5- 6- 7- 9+ 10- 11+ 13- 14+",
+                Check::Alternation,
+            ),
+            // 0000 with pulse 10- half a grid step late.
+            (
+                "0- 1+ 2- 3+ 4- 5+ 6- 7+ 8- 9+ 10.5- 11+ 13- 14+",
+                Check::Pause,
+            ),
+            // 0000 with the mid pulse of cell 5 moved to the free boundary after it.
+            (
+                "0- 1+ 2- 3+ 4- 5+ 6- 7+ 8- 9+ 10- 12+ 13- 14+",
+                Check::Information,
+            ),
+            // 0000 with PB = 1: 0 0000 1 1.
+            (
+                "0- 1+ 2- 3+ 4- 5+ 6- 7+ 8- 9+ 11- 12+ 13- 14+",
+                Check::Parity,
+            ),
+            // 0 0000 0 0 then idle: no end bit 1.
+            (
+                "0- 1+ 2- 3+ 4- 5+ 6- 7+ 8- 9+ 10- 11+ 12- 13+",
+                Check::EndBit,
+            ),
+            // Six bits: 0 0000 1 (a response without its last bit).
+            ("0- 1+ 2- 3+ 4- 5+ 6- 7+ 8- 9+ 11- 12+", Check::Length),
+        ];
+        for (spec, check) in cases {
+            let mut r = rx(Expect::Responses);
+            let got: Vec<Received> = r.decode(pulses(spec, 0)).collect();
+            assert_eq!(got.len(), 1, "{spec}");
+            assert_eq!(got[0].primary(), Some(check), "{spec}: {:?}", got[0]);
+        }
+    }
+
+    #[test]
+    fn a_missing_return_to_idle_is_an_end_bit_error() {
+        // Response 0000 without its final positive pulse: the line stays low.
+        let mut r = rx(Expect::Responses);
+        let got: Vec<Received> = r
+            .decode(pulses("0- 1+ 2- 3+ 4- 5+ 6- 7+ 8- 9+ 10- 11+ 13-", 0))
+            .collect();
+        assert_eq!(got[0].failed, Checks::only(Check::EndBit));
+    }
+
+    #[test]
+    fn jitter_within_tolerance_is_accepted_and_beyond_is_a_pause_error() {
+        let mut p: Vec<Pulse> = train(dexg(9, 6), 0).iter().collect();
+        for (i, x) in p.iter_mut().enumerate() {
+            x.at = if i % 2 == 0 {
+                x.at + SimDuration::from_nanos(500)
+            } else {
+                x.at - SimDuration::from_nanos(0)
+            };
+        }
+        p[0].at = SimTime::ZERO;
+        let got: Vec<Received> = rx(Expect::Requests).decode(p.clone()).collect();
+        assert_eq!(got[0].request(), Some(dexg(9, 6)));
+        p[5].at += SimDuration::from_nanos(501);
+        let got: Vec<Received> = rx(Expect::Requests).decode(p).collect();
+        assert_eq!(got[0].failed, Checks::only(Check::Pause));
+    }
+
+    #[test]
+    fn after_an_error_the_next_request_needs_the_asynchronous_pause() {
+        let mut r = rx(Expect::Requests);
+        let mut bad: Vec<Pulse> = train(dexg(4, 0), 0).iter().collect();
+        bad[4].polarity = bad[4].polarity.flipped();
+        let good_soon = train(dexg(4, 0), 84 + 10);
+        let good_later = train(dexg(4, 0), 84 + 10 + 84 + 18);
+        let got: Vec<Received> = r
+            .decode(bad.into_iter().chain(good_soon).chain(good_later))
+            .collect();
+        assert_eq!(got.len(), 3);
+        assert!(got[0].failed.contains(Check::Alternation));
+        assert_eq!(
+            got[1].failed,
+            Checks::only(Check::Pause),
+            "10 µs after an error is too soon"
+        );
+        assert_eq!(
+            got[2].request(),
+            Some(dexg(4, 0)),
+            "18 µs after an error is enough"
+        );
+    }
+
+    #[test]
+    fn on_a_live_bus_the_reply_to_a_valid_request_is_a_response() {
+        let t = timing();
+        let req = train(dexg(4, 0), 0);
+        let resp = PulseTrain::response(
+            Response::new(Nibble::from_low_bits(5)),
+            SimTime::from_micros(102),
+            t.half_bit(),
+        );
+        let next = train(dexg(5, 0), 154);
+        let mut r = rx(Expect::Both);
+        let got: Vec<Received> = r.decode(req.into_iter().chain(resp).chain(next)).collect();
+        let kinds: Vec<_> = got.iter().map(|g| (g.kind, g.is_valid())).collect();
+        assert_eq!(
+            kinds,
+            [
+                (TelegramKind::Request, true),
+                (TelegramKind::Response, true),
+                (TelegramKind::Request, true)
+            ]
+        );
+        assert_eq!(got[1].response().map(|r| r.data().get()), Some(5));
+    }
+
+    #[test]
+    fn odd_inputs_never_panic() {
+        let mut r = rx(Expect::Both);
+        let wild = [
+            Pulse::new(SimTime::MAX, Polarity::Positive),
+            Pulse::new(SimTime::ZERO, Polarity::Positive),
+            Pulse::new(SimTime::ZERO, Polarity::Positive),
+            Pulse::new(SimTime::from_nanos(1), Polarity::Negative),
+            Pulse::new(SimTime::MAX, Polarity::Negative),
+        ];
+        let got: Vec<Received> = r.decode(wild).collect();
+        assert!(got.iter().all(|g| !g.is_valid()));
+        // A run far longer than any telegram.
+        let long = (0..10_000u64).map(|k| {
+            Pulse::new(
+                SimTime::from_micros(3 * k),
+                if k % 2 == 0 {
+                    Polarity::Negative
+                } else {
+                    Polarity::Positive
+                },
+            )
+        });
+        let got: Vec<Received> = rx(Expect::Requests).decode(long).collect();
+        assert_eq!(got.len(), 1);
+        assert_eq!(got[0].bit_count, 5000);
+        assert!(got[0].failed.contains(Check::Length));
+    }
+}
