@@ -29,7 +29,10 @@ pub mod timing;
 pub use fault::{FaultInjector, FaultRates, PulseFault};
 pub use manchester::{HalfBits, Level};
 pub use pulse::{Polarity, Pulse, PulseTrain};
-pub use receiver::{Check, Checks, Expect, Received, Receiver, ReceiverConfig, TelegramKind};
+pub use receiver::{
+    Check, Checks, Expect, Frame, LineDecoder, Listener, Received, Receiver, ReceiverConfig,
+    TelegramKind,
+};
 pub use telegram::{Address, Call, Nibble, Request, Response, Select, TelegramError};
 pub use time::{SimDuration, SimTime};
 pub use timing::{BusTiming, TimingError};

@@ -151,6 +151,11 @@ impl PulseTrain {
         self.points as u32
     }
 
+    /// The grid masks: which points carry a pulse, and which of those are positive.
+    pub(crate) const fn masks(&self) -> (u64, u64) {
+        (self.occupied, self.positive)
+    }
+
     /// The pulse at grid point `k`, if any.
     pub fn pulse_at(&self, k: u32) -> Option<Pulse> {
         if k >= 64 || self.occupied & (1 << k) == 0 {
