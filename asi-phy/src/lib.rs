@@ -25,6 +25,7 @@ pub mod receiver;
 pub mod telegram;
 pub mod time;
 pub mod timing;
+pub mod waveform;
 
 pub use fault::{FaultInjector, FaultRates, PulseFault};
 pub use manchester::{HalfBits, Level};
