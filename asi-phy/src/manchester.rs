@@ -34,6 +34,31 @@ pub struct ManchesterError {
     pub level: Level,
 }
 
+/// Bit-reversed bytes: baseline x86-64 has no bit-reverse instruction, and `u32::reverse_bits`
+/// then costs some twenty operations on every telegram.
+const REV8: [u8; 256] = {
+    let mut t = [0u8; 256];
+    let mut i = 0;
+    while i < 256 {
+        t[i] = (i as u8).reverse_bits();
+        i += 1;
+    }
+    t
+};
+
+/// The low `n` (≤ 32) bits of `x` in reverse order: bit `i` moves to bit `n − 1 − i`; bits
+/// above `n` are dropped.
+pub(crate) const fn reverse_low(x: u32, n: u32) -> u32 {
+    if n == 0 {
+        return 0;
+    }
+    let r = (REV8[(x & 0xFF) as usize] as u32) << 24
+        | (REV8[((x >> 8) & 0xFF) as usize] as u32) << 16
+        | (REV8[((x >> 16) & 0xFF) as usize] as u32) << 8
+        | REV8[(x >> 24) as usize] as u32;
+    r >> (32 - n)
+}
+
 /// Moves bit `i` of `x` (i < 16) to bit `2i`.
 pub(crate) const fn spread(x: u32) -> u32 {
     let mut x = x & 0xFFFF;
@@ -53,6 +78,14 @@ pub(crate) const fn compact(x: u64) -> u32 {
     ((x | (x >> 16)) & 0xFFFF_FFFF) as u32
 }
 
+/// The Manchester levels of `n` (≤ 16) bits given first-sent-first (bit `i` of `t` is the
+/// `i`-th bit sent): bit `2i` of the result is the first half of cell `i`, 1 = high.
+pub(crate) const fn manchester_levels(t: u32, n: u32) -> u32 {
+    let mask = if n >= 16 { 0xFFFF } else { (1u32 << n) - 1 };
+    let t = t & mask;
+    spread(t) | (spread(!t & mask) << 1)
+}
+
 impl HalfBits {
     /// The Manchester levels of the `n` (≤ 16) bits in `bits`, the first bit sent in bit
     /// `n - 1`. Bits above `n` are ignored.
@@ -61,12 +94,10 @@ impl HalfBits {
         if n == 0 {
             return HalfBits { levels: 0, len: 0 };
         }
-        let mask = (1u32 << n) - 1;
         // Transmission order, first bit in bit 0.
-        let t = (bits & mask).reverse_bits() >> (32 - n);
-        let levels = spread(t) | (spread(!t & mask) << 1);
+        let t = reverse_low(bits, n);
         HalfBits {
-            levels,
+            levels: manchester_levels(t, n),
             len: (2 * n) as u8,
         }
     }
@@ -140,7 +171,7 @@ impl HalfBits {
         if n == 0 {
             return Ok((0, 0));
         }
-        Ok((t.reverse_bits() >> (32 - n), n))
+        Ok((reverse_low(t, n), n))
     }
 
     /// The request these levels carry, if they are a valid one.
@@ -228,6 +259,16 @@ mod tests {
         let r = Response::new(Nibble::from_low_bits(0b0110));
         // 0 0110 0 1
         assert_eq!(HalfBits::from(r).to_string(), "LH LH HL HL LH LH HL");
+    }
+
+    #[test]
+    fn reverse_low_matches_the_library() {
+        for n in 1..=32u32 {
+            for x in [0u32, 1, 0x8000_0001, 0xDEAD_BEEF, 0x1234_5678, u32::MAX] {
+                let want = (x & (u32::MAX >> (32 - n))).reverse_bits() >> (32 - n);
+                assert_eq!(reverse_low(x, n), want, "{x:#x} {n}");
+            }
+        }
     }
 
     #[test]

@@ -55,6 +55,19 @@ impl Pulse {
     }
 }
 
+/// The pulse masks of Manchester levels (`levels` bit `k` = cell `k`, 1 = high, `len` ≤ 32
+/// cells) with the line idle high before and after: a pulse at each level change, positive
+/// where the line rises. Returns (occupied, positive), bit `k` = grid point `k`.
+pub(crate) const fn grid_masks(levels: u32, len: u32) -> (u64, u64) {
+    // Levels of cells 0..len, then idle high at cell `len`.
+    let lv = (levels as u64) | (1 << len);
+    // The level before each cell: idle high before cell 0.
+    let prev = (lv << 1) | 1;
+    let span = (1u64 << (len + 1)) - 1;
+    let occupied = (lv ^ prev) & span;
+    (occupied, occupied & lv)
+}
+
 /// The pulses of one telegram on the half-bit grid, starting at a given time.
 ///
 /// Held as two masks over grid points (bit `k` = point `k`): which points carry a pulse, and
@@ -78,17 +91,12 @@ impl PulseTrain {
         half_bit: SimDuration,
     ) -> PulseTrain {
         let len = levels.len();
-        // Levels of cells 0..len, then idle high at cell `len`.
-        let lv = (levels.mask() as u64) | (1 << len);
-        // The level before each cell: idle high before cell 0.
-        let prev = (lv << 1) | 1;
-        let span = (1u64 << (len + 1)) - 1;
-        let occupied = (lv ^ prev) & span;
+        let (occupied, positive) = grid_masks(levels.mask(), len);
         PulseTrain {
             start,
             half_bit,
             occupied,
-            positive: occupied & lv,
+            positive,
             points: (len + 1) as u8,
         }
     }

@@ -281,6 +281,20 @@ struct Lobe {
     peak: f32,
 }
 
+impl Lobe {
+    /// An excursion that begins with value `x` at sample position `at`.
+    fn new(x: f32, at: f64) -> Lobe {
+        Lobe {
+            negative: x < 0.0,
+            in_ignore: at,
+            out_ignore: f64::NAN,
+            in_thr: f64::NAN,
+            out_thr: f64::NAN,
+            peak: x.abs(),
+        }
+    }
+}
+
 /// The comparator demodulator: samples in, pulses out. Feed it any number of buffers with
 /// [`Demodulator::push`]; nothing allocates.
 #[derive(Clone, Debug)]
@@ -373,54 +387,54 @@ impl Demodulator {
         let alpha = self.alpha;
         let ignore = self.ignore;
         let mut prev = self.prev;
-        let mut i = self.index;
-        for &v in samples {
-            // Non-finite samples (a capture's overflow marks) count as the baseline.
+        let first = self.index;
+        let mut k = 0usize;
+        while k < samples.len() {
+            if self.lobe.is_none() {
+                // The quiet line: the tight loop most samples go through.
+                while k < samples.len() {
+                    let x = samples[k] - base;
+                    // Also leaves on NaN, which the slow path below handles.
+                    if x.abs().partial_cmp(&ignore) != Some(core::cmp::Ordering::Less) {
+                        break;
+                    }
+                    base += alpha * x;
+                    prev = x;
+                    k += 1;
+                }
+                let Some(&v) = samples.get(k) else { break };
+                let i = first + k as u64;
+                // Non-finite samples (a capture's overflow marks) count as the baseline.
+                let x = if v.is_finite() { v - base } else { 0.0 };
+                if x.abs() >= ignore {
+                    self.lobe = Some(Lobe::new(x, crossing(i, prev.abs(), x.abs(), ignore)));
+                    self.track(i, prev, x);
+                }
+                prev = x;
+                k += 1;
+                continue;
+            }
+            let v = samples[k];
+            let i = first + k as u64;
             let x = if v.is_finite() { v - base } else { 0.0 };
             let mag = x.abs();
-            match &mut self.lobe {
-                None => {
-                    if mag >= ignore {
-                        let pos = crossing(i, prev.abs(), mag, ignore);
-                        self.lobe = Some(Lobe {
-                            negative: x < 0.0,
-                            in_ignore: pos,
-                            out_ignore: f64::NAN,
-                            in_thr: f64::NAN,
-                            out_thr: f64::NAN,
-                            peak: mag,
-                        });
-                        self.track(i, prev, x);
-                    } else {
-                        base += alpha * x;
-                    }
-                }
-                Some(lobe) => {
-                    let same_sign = (x < 0.0) == lobe.negative;
-                    if same_sign && mag >= self.exit {
-                        self.track(i, prev, x);
-                    } else {
-                        self.close(i, prev, x, &mut out);
-                        if mag >= ignore {
-                            // A sign change without a pass through the quiet band.
-                            self.lobe = Some(Lobe {
-                                negative: x < 0.0,
-                                in_ignore: i as f64,
-                                out_ignore: f64::NAN,
-                                in_thr: f64::NAN,
-                                out_thr: f64::NAN,
-                                peak: mag,
-                            });
-                            self.track(i, prev, x);
-                        } else {
-                            base += alpha * x;
-                        }
-                    }
+            let negative = self.lobe.as_ref().is_some_and(|l| l.negative);
+            if (x < 0.0) == negative && mag >= self.exit {
+                self.track(i, prev, x);
+            } else {
+                self.close(i, prev, x, &mut out);
+                if mag >= ignore {
+                    // A sign change without a pass through the quiet band.
+                    self.lobe = Some(Lobe::new(x, i as f64));
+                    self.track(i, prev, x);
+                } else {
+                    base += alpha * x;
                 }
             }
             prev = x;
-            i += 1;
+            k += 1;
         }
+        let i = first + samples.len() as u64;
         self.prev = prev;
         self.index = i;
         if alpha > 0.0 {

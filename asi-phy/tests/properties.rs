@@ -67,6 +67,23 @@ proptest! {
     }
 
     #[test]
+    fn decoding_slices_equals_pushing_each_pulse(pulses in pulse_sequence(), cuts in prop::collection::vec(0usize..300, 0..6), expect in expect()) {
+        let cfg = BusTiming::default().receiver(expect);
+        let one: Vec<Received> = Receiver::new(cfg).decode(pulses.iter().copied()).collect();
+        let mut rx = Receiver::new(cfg);
+        let mut sliced = Vec::new();
+        let mut cuts: Vec<usize> = cuts.into_iter().map(|c| c.min(pulses.len())).collect();
+        cuts.push(0);
+        cuts.push(pulses.len());
+        cuts.sort_unstable();
+        for w in cuts.windows(2) {
+            rx.push_slice(&pulses[w[0]..w[1]], |r| sliced.push(r));
+        }
+        sliced.extend(rx.flush());
+        prop_assert_eq!(one, sliced);
+    }
+
+    #[test]
     fn polling_between_pulses_changes_nothing(pulses in pulse_sequence(), polls in prop::collection::vec(0u64..20_000, 0..300)) {
         let cfg = BusTiming::default().receiver(Expect::Both);
         let plain: Vec<Received> = Receiver::new(cfg).decode(pulses.iter().copied()).collect();
