@@ -19,7 +19,7 @@ fn pulse_sequence() -> impl Strategy<Value = Vec<Pulse>> {
         3 => (2_500u64..3_500).prop_map(|d| d as i64),
         2 => (5_500u64..6_500).prop_map(|d| d as i64),
         1 => (0u64..40_000).prop_map(|d| d as i64),
-        1 => (-5_000i64..0),
+        1 => -5_000i64..0,
         1 => any::<u32>().prop_map(|d| d as i64),
     ];
     prop::collection::vec((step, polarity()), 0..300).prop_map(|steps| {
