@@ -4,6 +4,9 @@
 //!
 //! `cargo bench -p asi-phy --bench phy`
 
+// criterion_group! generates an undocumented public function.
+#![allow(missing_docs)]
+
 use asi_phy::waveform::{render, DemodConfig, Demodulator, WaveformConfig};
 use asi_phy::{
     BusTiming, Expect, LineDecoder, Listener, Nibble, Pulse, PulseTrain, Receiver, Request,
