@@ -71,7 +71,7 @@ pub enum ConfigError {
         floors: u8,
     },
     /// A number is NaN or infinite.
-    #[error("{field} = {value}: not a finite number")]
+    #[error("{field} = {value:?}: not a finite number")]
     NotFinite {
         /// The field, as named in the configuration.
         field: &'static str,
@@ -79,7 +79,7 @@ pub enum ConfigError {
         value: f64,
     },
     /// A length, speed, ratio or rate is zero or negative.
-    #[error("{field} = {value}: must be greater than zero")]
+    #[error("{field} = {value:?}: must be greater than zero")]
     NotPositive {
         /// The field, as named in the configuration.
         field: &'static str,
@@ -87,7 +87,7 @@ pub enum ConfigError {
         value: f64,
     },
     /// A value beyond what this model accepts.
-    #[error("{field} = {value}: larger than the {max} this model accepts")]
+    #[error("{field} = {value:?}: larger than the {max:?} this model accepts")]
     TooLarge {
         /// The field, as named in the configuration.
         field: &'static str,
@@ -97,13 +97,13 @@ pub enum ConfigError {
         max: f64,
     },
     /// The motor slip is outside 0 ≤ s < 1.
-    #[error("drive.slip = {slip}: the slip of an induction motor is at least 0 and below 1")]
+    #[error("drive.slip = {slip:?}: the slip of an induction motor is at least 0 and below 1")]
     Slip {
         /// The value given.
         slip: f64,
     },
     /// The short track is not shorter than the long one.
-    #[error("short_track_half_mm = {short_mm} must be less than long_track_half_mm = {long_mm}: floor 1 is recognised by its long track rising first (seed 003 §6.4)")]
+    #[error("short_track_half_mm = {short_mm:?} must be less than long_track_half_mm = {long_mm:?}: floor 1 is recognised by its long track rising first (seed 003 §6.4)")]
     TrackLengths {
         /// The short half length given.
         short_mm: f64,
@@ -111,7 +111,7 @@ pub enum ConfigError {
         long_mm: f64,
     },
     /// Two tracks of one sensor touch or overlap, so the sensor would not drop between floors.
-    #[error("vanes overlap: the {sensor} tracks of floors {lower_floor} and {upper_floor} touch or overlap (floor {lower_floor} ends at {lower_top_mm} mm, floor {upper_floor} starts at {upper_bottom_mm} mm); the sensor must drop between floors or the controller's floor counting (seed 003 tables 6.4, 6.5) misses one: raise floor_pitch_mm or shorten the tracks")]
+    #[error("vanes overlap: the {sensor} tracks of floors {lower_floor} and {upper_floor} touch or overlap (floor {lower_floor} ends at {lower_top_mm:?} mm, floor {upper_floor} starts at {upper_bottom_mm:?} mm); the sensor must drop between floors or the controller's floor counting (seed 003 tables 6.4, 6.5) misses one: raise floor_pitch_mm or shorten the tracks")]
     VanesOverlap {
         /// The sensor whose tracks collide.
         sensor: VaneSensor,
@@ -125,7 +125,7 @@ pub enum ConfigError {
         upper_bottom_mm: f64,
     },
     /// An overtravel trip point lies within the vane tracks of an end floor.
-    #[error("trip_beyond_floor_mm = {trip_mm} must exceed long_track_half_mm = {track_mm}: the overtravel trip zones would overlap the vane tracks of the end floors")]
+    #[error("trip_beyond_floor_mm = {trip_mm:?} must exceed long_track_half_mm = {track_mm:?}: the overtravel trip zones would overlap the vane tracks of the end floors")]
     TripZoneOverlapsFloor {
         /// The trip distance given.
         trip_mm: f64,
@@ -133,7 +133,7 @@ pub enum ConfigError {
         track_mm: f64,
     },
     /// The cabin would start outside the mechanical ends.
-    #[error("initial_position_mm = {position_mm} is outside the shaft: the mechanical ends are at {lowest_mm} mm and {highest_mm} mm")]
+    #[error("initial_position_mm = {position_mm:?} is outside the shaft: the mechanical ends are at {lowest_mm:?} mm and {highest_mm:?} mm")]
     InitialPosition {
         /// The position given.
         position_mm: f64,

@@ -46,7 +46,7 @@ pub enum PlantError {
         floors: u8,
     },
     /// A crank distance that is NaN or infinite.
-    #[error("crank distance {distance_mm} mm is not a finite number")]
+    #[error("crank distance {distance_mm:?} mm is not a finite number")]
     CrankDistance {
         /// The distance given.
         distance_mm: f64,
@@ -55,7 +55,7 @@ pub enum PlantError {
     #[error("the hand crank is refused while contactor K1 is closed: the drive has power")]
     CrankWhilePowered,
     /// The crank needs the cabin at rest.
-    #[error("the hand crank is refused while the cabin moves ({velocity_mm_s} mm/s)")]
+    #[error("the hand crank is refused while the cabin moves ({velocity_mm_s:.3} mm/s)")]
     CrankWhileMoving {
         /// The cabin's velocity.
         velocity_mm_s: f64,

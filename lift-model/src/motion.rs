@@ -76,8 +76,9 @@ impl Segment {
     }
 
     fn tau(&self, t: SimTime) -> f64 {
-        // Exact below 2^53 ns (104 days after the anchor).
-        (t - self.t0).as_nanos() as f64 * 1e-9
+        // The integer is exact below 2^53 ns (104 days after the anchor), and one correctly
+        // rounded division keeps whole seconds and other exact values exact.
+        (t - self.t0).as_nanos() as f64 / 1e9
     }
 
     /// The position in mm at `t` (at or after the anchor).
