@@ -114,74 +114,31 @@ fn a_number_that_is_not_finite_is_rejected() {
     assert_eq!(message, "drive.slip = NaN: not a finite number");
 }
 
+/// A change that breaks one field of a valid configuration.
+type Breakage = fn(&mut LiftConfig);
+
 #[test]
 fn every_length_speed_and_rate_must_be_positive() {
-    let cases: [(LiftConfig, &str); 9] = [
+    let cases: [(Breakage, &str); 9] = [
+        (|c| c.short_track_half_mm = -10.0, "short_track_half_mm"),
+        (|c| c.trip_beyond_floor_mm = 0.0, "trip_beyond_floor_mm"),
+        (|c| c.end_beyond_trip_mm = -1.0, "end_beyond_trip_mm"),
+        (|c| c.crank_speed_mm_s = 0.0, "crank_speed_mm_s"),
+        (|c| c.drive.gear_ratio = 0.0, "drive.gear_ratio"),
         (
-            LiftConfig {
-                short_track_half_mm: -10.0,
-                ..LiftConfig::default()
-            },
-            "short_track_half_mm",
-        ),
-        (
-            LiftConfig {
-                trip_beyond_floor_mm: 0.0,
-                ..LiftConfig::default()
-            },
-            "trip_beyond_floor_mm",
-        ),
-        (
-            LiftConfig {
-                end_beyond_trip_mm: -1.0,
-                ..LiftConfig::default()
-            },
-            "end_beyond_trip_mm",
-        ),
-        (
-            LiftConfig {
-                crank_speed_mm_s: 0.0,
-                ..LiftConfig::default()
-            },
-            "crank_speed_mm_s",
-        ),
-        (
-            with_drive(DriveConfig {
-                gear_ratio: 0.0,
-                ..DriveConfig::default()
-            }),
-            "drive.gear_ratio",
-        ),
-        (
-            with_drive(DriveConfig {
-                sprocket_diameter_mm: -79.0,
-                ..DriveConfig::default()
-            }),
+            |c| c.drive.sprocket_diameter_mm = -79.0,
             "drive.sprocket_diameter_mm",
         ),
+        (|c| c.drive.ramp_hz_per_s = 0.0, "drive.ramp_hz_per_s"),
         (
-            with_drive(DriveConfig {
-                ramp_hz_per_s: 0.0,
-                ..DriveConfig::default()
-            }),
-            "drive.ramp_hz_per_s",
-        ),
-        (
-            with_drive(DriveConfig {
-                brake_decel_mm_s2: -500.0,
-                ..DriveConfig::default()
-            }),
+            |c| c.drive.brake_decel_mm_s2 = -500.0,
             "drive.brake_decel_mm_s2",
         ),
-        (
-            with_drive(DriveConfig {
-                pole_pairs: 0,
-                ..DriveConfig::default()
-            }),
-            "drive.pole_pairs",
-        ),
+        (|c| c.drive.pole_pairs = 0, "drive.pole_pairs"),
     ];
-    for (config, field) in cases {
+    for (break_it, field) in cases {
+        let mut config = LiftConfig::default();
+        break_it(&mut config);
         let (e, message) = rejected(config);
         assert!(
             matches!(e, ConfigError::NotPositive { field: f, .. } if f == field),

@@ -4,7 +4,7 @@
 mod common;
 
 use asi_phy::SimTime;
-use common::{lift_at, ok, run_to};
+use common::*;
 use lift_model::{converter_frequency_hz, DriveConfig, EventKind, VaneSensor};
 
 /// `value` printed with as many decimals as the seed's `table` text has.
@@ -27,9 +27,7 @@ fn check_row(setpoint_ua: u16, f_hz: &str, n1: &str, n2: &str, v_mm_s: &str) {
         "v"
     );
 
-    let mut lift = lift_at(0.0);
-    ok(lift.set_contactor(SimTime::ZERO, true));
-    ok(lift.set_converter(SimTime::ZERO, true, true, setpoint_ua));
+    let mut lift = driving(0.0, true, setpoint_ua);
     let end = run_to(&mut lift, |k| matches!(k, EventKind::RampEnd { .. }));
     // The ramp takes f / 50 Hz/s, rounded up to the nanosecond.
     assert_eq!(
@@ -67,12 +65,12 @@ fn table_6_6_row_4000_is_standstill() {
     let drive = DriveConfig::default();
     assert_eq!(converter_frequency_hz(4000), 0.0);
     assert_eq!(drive.cabin_velocity_mm_s(0.0), 0.0);
-    let mut lift = lift_at(0.0);
-    ok(lift.set_contactor(SimTime::ZERO, true));
-    ok(lift.set_converter(SimTime::ZERO, true, true, 4000));
+    let mut lift = driving(0.0, true, 4000);
     // Running at 4000 µA the converter holds 0 Hz: nothing will ever happen.
     assert_eq!(lift.next_event(), None);
+    assert!(advance(&mut lift, secs(10.0)).is_empty());
     assert_eq!(lift.velocity_mm_s(), 0.0);
+    assert_eq!(lift.position_mm(), 0.0);
     assert!(lift.converter_ready());
 }
 

@@ -5,7 +5,7 @@
 mod common;
 
 use asi_phy::{SimDuration, SimTime};
-use common::{advance, lift_at, ok, secs};
+use common::*;
 use lift_model::{
     Button, ContactFault, DisplayId, DisplayState, DisplayWord, DisplayWordError, EventKind, Lift,
     LiftConfig, LoadLevel, PlantError, StopChannel,
@@ -194,9 +194,7 @@ fn time_never_runs_backwards() {
 
 #[test]
 fn an_input_brings_the_plant_to_its_time_and_queues_the_edges_on_the_way() {
-    let mut lift = lift_at(0.0);
-    ok(lift.set_contactor(SimTime::ZERO, true));
-    ok(lift.set_converter(SimTime::ZERO, true, true, 10_000));
+    let mut lift = driving(0.0, true, 10_000);
     // No advance_to: the bell press at 10 s carries the plant past floor 2's vane.
     ok(lift.press(secs(10.0), Button::Bell, SimDuration::from_secs(1)));
     assert_eq!(lift.now(), secs(10.0));
@@ -291,7 +289,7 @@ proptest! {
                 last_event = e.at;
             }
             let x = lift.position_mm();
-            prop_assert!(x.is_finite() && x >= bottom - 1e-6 && x <= top + 1e-6, "{}", x);
+            prop_assert!(x.is_finite() && x >= bottom && x <= top, "{}", x);
             prop_assert!(lift.next_event().is_none_or(|t| t >= now));
         }
     }

@@ -4,7 +4,7 @@
 mod common;
 
 use asi_phy::{SimDuration, SimTime};
-use common::{advance, lift_at, lift_with, ok, run_to, secs};
+use common::*;
 use lift_model::{DriveConfig, End, EventKind, LiftConfig, PlantError, VaneSensor};
 
 fn near(x: f64, expected: f64) -> bool {
@@ -18,9 +18,7 @@ fn speed(setpoint: u16) -> f64 {
 
 /// The lift running up at `setpoint` at constant speed, at the end of its ramp.
 fn running_up(setpoint: u16, config: LiftConfig) -> lift_model::Lift {
-    let mut lift = lift_with(config);
-    ok(lift.set_contactor(SimTime::ZERO, true));
-    ok(lift.set_converter(SimTime::ZERO, true, true, setpoint));
+    let mut lift = driving_with(config, true, setpoint);
     run_to(&mut lift, |k| matches!(k, EventKind::RampEnd { .. }));
     lift
 }
@@ -179,9 +177,7 @@ fn closing_k1_ends_a_crank_turn_where_the_cabin_is() {
 #[test]
 fn the_overtravel_sensors_trip_at_their_zones() {
     // Down from floor 1 at 6000 with nothing to stop it: the bottom trips at −60 mm.
-    let mut lift = lift_at(0.0);
-    ok(lift.set_contactor(SimTime::ZERO, true));
-    ok(lift.set_converter(SimTime::ZERO, true, false, 6000));
+    let mut lift = driving(0.0, false, 6000);
     assert!(lift.overtravel_bottom_free() && lift.overtravel_top_free());
     let trip = run_to(&mut lift, |k| matches!(k, EventKind::Overtravel { .. }));
     assert_eq!(
@@ -195,9 +191,7 @@ fn the_overtravel_sensors_trip_at_their_zones() {
     assert!(!lift.overtravel_bottom_free() && lift.overtravel_top_free());
 
     // Up from floor 4 at 6000: the top trips at 1200 + 60 mm.
-    let mut lift = lift_at(1200.0);
-    ok(lift.set_contactor(SimTime::ZERO, true));
-    ok(lift.set_converter(SimTime::ZERO, true, true, 6000));
+    let mut lift = driving(1200.0, true, 6000);
     let trip = run_to(&mut lift, |k| matches!(k, EventKind::Overtravel { .. }));
     assert_eq!(
         trip.kind,
@@ -213,9 +207,7 @@ fn the_overtravel_sensors_trip_at_their_zones() {
 #[test]
 fn k1_dropping_at_the_trip_stops_the_cabin_short_of_the_buffer() {
     // SPEC §6: the overtravel trip drops K1 at once (here with no reaction delay).
-    let mut lift = lift_at(0.0);
-    ok(lift.set_contactor(SimTime::ZERO, true));
-    ok(lift.set_converter(SimTime::ZERO, true, false, 11_000));
+    let mut lift = driving(0.0, false, 11_000);
     run_to(&mut lift, |k| matches!(k, EventKind::Overtravel { .. }));
     let t = lift.now();
     ok(lift.set_contactor(t, false));
@@ -230,9 +222,7 @@ fn k1_dropping_at_the_trip_stops_the_cabin_short_of_the_buffer() {
 
 #[test]
 fn a_drive_into_the_bottom_end_is_a_recorded_crash_and_trips_the_converter() {
-    let mut lift = lift_at(0.0);
-    ok(lift.set_contactor(SimTime::ZERO, true));
-    ok(lift.set_converter(SimTime::ZERO, true, false, 6000));
+    let mut lift = driving(0.0, false, 6000);
     let crash = run_to(&mut lift, |k| matches!(k, EventKind::Crash { .. }));
     let EventKind::Crash { end, impact_mm_s } = crash.kind else {
         unreachable!()
@@ -281,9 +271,7 @@ fn braking_into_the_buffer_and_cranking_into_it_are_crashes_too() {
         },
         ..LiftConfig::default()
     };
-    let mut lift = lift_with(config);
-    ok(lift.set_contactor(SimTime::ZERO, true));
-    ok(lift.set_converter(SimTime::ZERO, true, false, 11_000));
+    let mut lift = driving_with(config, false, 11_000);
     run_to(&mut lift, |k| matches!(k, EventKind::Overtravel { .. }));
     let (t, x, v) = (lift.now(), lift.position_mm(), lift.velocity_mm_s());
     ok(lift.set_contactor(t, false));

@@ -5,7 +5,7 @@
 mod common;
 
 use asi_phy::{SimDuration, SimTime};
-use common::{advance, lift_at, lift_with, ok, run_to, secs, trace_until};
+use common::*;
 use lift_model::{DriveConfig, EventKind, Lift, LiftConfig, PlantEvent, VaneSensor};
 use proptest::prelude::*;
 
@@ -38,9 +38,7 @@ fn new_level(kind: &EventKind) -> Option<bool> {
 
 #[test]
 fn at_steady_speed_every_edge_is_the_rounded_up_crossing_time() {
-    let mut lift = lift_at(0.0);
-    ok(lift.set_contactor(SimTime::ZERO, true));
-    ok(lift.set_converter(SimTime::ZERO, true, true, 10_000));
+    let mut lift = driving(0.0, true, 10_000);
     let ramp = run_to(&mut lift, |k| matches!(k, EventKind::RampEnd { .. }));
     let (t_r, x_r) = (ramp.at.as_nanos() as f64, lift.position_mm());
     let v = DriveConfig::default().setpoint_velocity_mm_s(10_000);
@@ -56,21 +54,27 @@ fn at_steady_speed_every_edge_is_the_rounded_up_crossing_time() {
     }
 }
 
+/// A lift with a converter ramp of `ramp_hz_per_s`, at `position_mm`, driving up or down at
+/// Rychlost 10000; with the cabin acceleration of that ramp in mm/s².
+fn slow_ramp(ramp_hz_per_s: f64, position_mm: f64, up: bool) -> (Lift, f64) {
+    let drive = DriveConfig {
+        ramp_hz_per_s,
+        ..DriveConfig::default()
+    };
+    let a = drive.ramp_mm_s2();
+    let config = LiftConfig {
+        drive,
+        initial_position_mm: position_mm,
+        ..LiftConfig::default()
+    };
+    (driving_with(config, up, 10_000), a)
+}
+
 #[test]
 fn during_a_ramp_the_edges_solve_the_quadratic() {
     // A slow ramp (5 Hz/s) so that floor 1's tracks are left while accelerating:
     // x = a t² / 2 from rest, so x = b at t = √(2b/a).
-    let drive = DriveConfig {
-        ramp_hz_per_s: 5.0,
-        ..DriveConfig::default()
-    };
-    let a = drive.ramp_mm_s2();
-    let mut lift = lift_with(LiftConfig {
-        drive,
-        ..LiftConfig::default()
-    });
-    ok(lift.set_contactor(SimTime::ZERO, true));
-    ok(lift.set_converter(SimTime::ZERO, true, true, 10_000));
+    let (mut lift, a) = slow_ramp(5.0, 0.0, true);
     // The ramp to 13.3 Hz takes 2.66 s and 79 mm: both edges fall inside it.
     let right = run_to(&mut lift, |k| {
         matches!(k, EventKind::Vane { on: false, .. })
@@ -101,18 +105,7 @@ fn while_ramping_down_and_braking_the_edges_solve_the_quadratic() {
     // Down at 10000 with a slow ramp (10 Hz/s, 44.7 mm/s²); when the right sensor rises at
     // 440 mm (floor 2's long track) the set-point drops to 4000 and the cabin ramps to rest
     // over 39.5 mm, the left sensor rising at 410 mm on the way.
-    let drive = DriveConfig {
-        ramp_hz_per_s: 10.0,
-        ..DriveConfig::default()
-    };
-    let a = drive.ramp_mm_s2();
-    let mut lift = lift_with(LiftConfig {
-        drive,
-        initial_position_mm: 600.0,
-        ..LiftConfig::default()
-    });
-    ok(lift.set_contactor(SimTime::ZERO, true));
-    ok(lift.set_converter(SimTime::ZERO, true, false, 10_000));
+    let (mut lift, a) = slow_ramp(10.0, 600.0, false);
     run_to(&mut lift, |k| matches!(k, EventKind::Vane { on: true, .. }));
     let (t0, x0, v0) = (lift.now(), lift.position_mm(), lift.velocity_mm_s());
     assert!((x0 - 440.0).abs() < 1e-6 && v0 < 0.0);
@@ -133,9 +126,7 @@ fn while_ramping_down_and_braking_the_edges_solve_the_quadratic() {
     assert_rounded_up(stop.at, t0.as_nanos() as f64 + -v0 / a * 1e9);
 
     // Now the brake: K1 opens at full speed 2 mm above the left track's end at 1190.
-    let mut lift = lift_at(0.0);
-    ok(lift.set_contactor(SimTime::ZERO, true));
-    ok(lift.set_converter(SimTime::ZERO, true, true, 10_000));
+    let mut lift = driving(0.0, true, 10_000);
     let v = DriveConfig::default().setpoint_velocity_mm_s(10_000);
     run_to(&mut lift, |k| matches!(k, EventKind::RampEnd { .. }));
     let x = lift.position_mm();

@@ -4,8 +4,8 @@
 
 mod common;
 
-use asi_phy::{SimDuration, SimTime};
-use common::{advance, lift_at, lift_with, ok, run_to, secs, trace_until, vane_edges};
+use asi_phy::SimDuration;
+use common::*;
 use lift_model::{EventKind, LiftConfig, VaneSensor};
 
 use VaneSensor::{Left, Right};
@@ -33,9 +33,7 @@ fn assert_edges(actual: &[(VaneSensor, f64)], expected: &[(VaneSensor, f64)]) {
 
 #[test]
 fn down_onto_floor_1_the_left_sensor_rises_first_and_the_right_within_2_s_at_6000() {
-    let mut lift = lift_at(400.0);
-    ok(lift.set_contactor(SimTime::ZERO, true));
-    ok(lift.set_converter(SimTime::ZERO, true, false, 6000));
+    let mut lift = driving(400.0, false, 6000);
     let left = run_to(&mut lift, |k| {
         *k == EventKind::Vane {
             sensor: Left,
@@ -63,9 +61,7 @@ fn the_seed_initialisation_finds_floor_1_within_its_2_s_timer() {
     // Seed table 6.3: run down at 11000; on the left sensor rising, 6000 and a 2 s timer;
     // the right sensor rising while the timer runs means floor 1. Here the controller
     // reacts 50 ms late (AS-i handshake and PLC scan), then 6000 ramps down from 68.8 mm/s.
-    let mut lift = lift_at(1000.0);
-    ok(lift.set_contactor(SimTime::ZERO, true));
-    ok(lift.set_converter(SimTime::ZERO, true, false, 11_000));
+    let mut lift = driving(1000.0, false, 11_000);
     // Passing floors 3 and 2 the right sensor (long track) rises first, so the seed's
     // routine does not mistake them for floor 1.
     for floor_level in [800.0, 400.0] {
@@ -108,9 +104,7 @@ fn the_seed_initialisation_finds_floor_1_within_its_2_s_timer() {
 
 #[test]
 fn down_through_every_floor_the_long_track_leads() {
-    let mut lift = lift_at(1200.0);
-    ok(lift.set_contactor(SimTime::ZERO, true));
-    ok(lift.set_converter(SimTime::ZERO, true, false, 10_000));
+    let mut lift = driving(1200.0, false, 10_000);
     // Stop once past floor 1's vane, before the overtravel zone.
     let trace = trace_until(&mut lift, secs(21.2));
     let edges = vane_edges(&trace);
@@ -149,9 +143,7 @@ fn down_through_every_floor_the_long_track_leads() {
 #[test]
 fn up_through_every_floor_the_order_mirrors() {
     // From just above the bottom trip point, so floor 1 is met going up too.
-    let mut lift = lift_at(-50.0);
-    ok(lift.set_contactor(SimTime::ZERO, true));
-    ok(lift.set_converter(SimTime::ZERO, true, true, 10_000));
+    let mut lift = driving(-50.0, true, 10_000);
     let trace = trace_until(&mut lift, secs(21.2));
     assert_edges(
         &rising(&vane_edges(&trace)),
@@ -171,9 +163,7 @@ fn up_through_every_floor_the_order_mirrors() {
 #[test]
 fn the_level_zone_is_where_both_sensors_are_on() {
     // Passing floor 3 down at a steady 59.416 mm/s: both on from 810 to 790 mm inclusive.
-    let mut lift = lift_at(1200.0);
-    ok(lift.set_contactor(SimTime::ZERO, true));
-    ok(lift.set_converter(SimTime::ZERO, true, false, 10_000));
+    let mut lift = driving(1200.0, false, 10_000);
     let trace = trace_until(&mut lift, secs(10.0));
     let mut in_zone = false;
     let mut zone = Vec::new();
@@ -200,9 +190,7 @@ fn the_level_zone_is_where_both_sensors_are_on() {
 fn stopping_on_both_sensors_at_6000_ends_inside_the_level_zone() {
     // Seed table 6.4 "Dobrždění → Aktuální patro": braking at 6000, then 4000 when both
     // sensors are on. Ramping down from 20.55 mm/s at 50 Hz/s covers under 1 mm.
-    let mut lift = lift_at(800.0);
-    ok(lift.set_contactor(SimTime::ZERO, true));
-    ok(lift.set_converter(SimTime::ZERO, true, false, 6000));
+    let mut lift = driving(800.0, false, 6000);
     run_to(&mut lift, |k| {
         *k == EventKind::Vane {
             sensor: Left,
@@ -221,13 +209,12 @@ fn stopping_on_both_sensors_at_6000_ends_inside_the_level_zone() {
 #[test]
 fn any_number_of_floors_from_2_to_24_is_counted_the_same_way() {
     for floors in [2u8, 7, 24] {
-        let mut lift = lift_with(LiftConfig {
+        let config = LiftConfig {
             floors,
             ..LiftConfig::default()
-        });
+        };
+        let mut lift = driving_with(config, true, 11_000);
         let top = f64::from(floors - 1) * 400.0;
-        ok(lift.set_contactor(SimTime::ZERO, true));
-        ok(lift.set_converter(SimTime::ZERO, true, true, 11_000));
         // Up from floor 1 at 68.797 mm/s until just past the top trip point.
         let trace = trace_until(&mut lift, secs((top + 70.0) / 68.797 + 0.3));
         let rises = rising(&vane_edges(&trace));

@@ -85,3 +85,24 @@ pub fn vane_edges(trace: &[(PlantEvent, f64)]) -> Vec<(lift_model::VaneSensor, b
         })
         .collect()
 }
+
+/// A lift at `position_mm` with K1 closed and the converter running up (`up`) or down at
+/// `setpoint` µA from time zero.
+pub fn driving(position_mm: f64, up: bool, setpoint: u16) -> Lift {
+    driving_with(
+        LiftConfig {
+            initial_position_mm: position_mm,
+            ..LiftConfig::default()
+        },
+        up,
+        setpoint,
+    )
+}
+
+/// [`driving`] with a whole configuration.
+pub fn driving_with(config: LiftConfig, up: bool, setpoint: u16) -> Lift {
+    let mut lift = lift_with(config);
+    ok(lift.set_contactor(SimTime::ZERO, true));
+    ok(lift.set_converter(SimTime::ZERO, true, up, setpoint));
+    lift
+}
