@@ -122,7 +122,7 @@ impl ExactSizeIterator for Events<'_> {}
 /// The plant has its own time [`Lift::now`]. [`Lift::next_event`] says when the next edge
 /// happens under the present inputs; [`Lift::advance_to`] moves to a later time and returns
 /// every edge up to and including it, in time order, each at the first nanosecond at which
-/// its new state holds (see [`crate::motion`] for the rounding rule). Edges at one
+/// its new state holds (see the crate documentation for the rounding rule). Edges at one
 /// nanosecond come in this order: button releases, sensor edges in the order the cabin meets
 /// them, then the end of the motion segment. The result does not depend on how the caller
 /// steps: one call to `t`, a million small ones, or jumps from event to event give the same
@@ -244,14 +244,18 @@ impl Lift {
         }
         while let Some(next) = self.next_event().filter(|&next| next <= t) {
             self.now = next;
-            self.step();
+            if !self.step() {
+                // Unreachable: `next_event` is the earliest of the three `step` handles.
+                // Stopping here rather than spinning keeps a logic slip from hanging a run.
+                break;
+            }
         }
         self.now = t;
         Ok(())
     }
 
-    /// Handles one edge due at `self.now`.
-    fn step(&mut self) {
+    /// Handles one edge due at `self.now`; `false` if none was due.
+    fn step(&mut self) -> bool {
         let now = self.now;
         if self.buttons.next_release() == Some(now) {
             let events = &mut self.events;
@@ -265,7 +269,10 @@ impl Lift {
             self.cross();
         } else if let Some((_, how)) = self.motion.end.filter(|&(t, _)| t == now) {
             self.end_segment(how);
+        } else {
+            return false;
         }
+        true
     }
 
     fn emit(&mut self, kind: EventKind) {
