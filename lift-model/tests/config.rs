@@ -288,14 +288,16 @@ fn a_start_outside_the_mechanical_ends_is_rejected() {
 
 #[test]
 fn a_scenario_file_reads_into_the_configuration_and_unknown_keys_are_refused() {
-    let config: LiftConfig =
-        match toml::from_str("floors = 6\nfloor_pitch_mm = 350.0\n[drive]\nramp_hz_per_s = 25.0\n")
-        {
-            Ok(c) => c,
-            Err(e) => panic!("{e}"),
-        };
+    // Missing fields take the lab defaults; a misspelt one is an error, not ignored.
+    let text = r#"{ "floors": 6, "floor_pitch_mm": 350.0, "drive": { "ramp_hz_per_s": 25.0 } }"#;
+    let config: LiftConfig = match serde_json::from_str(text) {
+        Ok(c) => c,
+        Err(e) => panic!("{e}"),
+    };
     assert_eq!(config.floors, 6);
     assert_eq!(config.drive.ramp_hz_per_s, 25.0);
     assert_eq!(config.drive.gear_ratio, 25.0);
-    assert!(toml::from_str::<LiftConfig>("flors = 6\n").is_err());
+    assert_eq!(config.long_track_half_mm, 40.0);
+    let err = serde_json::from_str::<LiftConfig>(r#"{ "flors": 6 }"#).err();
+    assert!(err.is_some_and(|e| e.to_string().starts_with("unknown field `flors`")));
 }
