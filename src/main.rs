@@ -1,5 +1,163 @@
 //! The `asi-lift` command.
 
-fn main() {
-    println!("asi-lift: the `run` command is not built yet; see README.md");
+use asi_lift::phy_tools::{decode_capture, describe, parse_call, waveform_csv, DecodeOptions};
+use asi_phy::waveform::WaveformConfig;
+use asi_phy::Expect;
+use clap::{Parser, Subcommand, ValueEnum};
+use std::io::{Read, Write};
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+/// asi-lift: the AS-Interface laboratory lift, simulated to the bit and to the millisecond.
+#[derive(Parser)]
+#[command(version, about)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Show how a master call or slave response travels on the line: bits, Manchester levels,
+    /// APM pulses; optionally write its line voltage as CSV.
+    ///
+    /// Calls by their ZMD mnemonic: dexg ADDR VALUE, wpar ADDR VALUE, adra NEW, wid1 VALUE,
+    /// dela|res|rdio|rdid|rid1|rid2|rdst ADDR, br01, resp VALUE. ADDR is 0..31 with an optional
+    /// A/B suffix (7B); VALUE is four binary digits (1010), 0b1010 or 0..15.
+    Encode {
+        /// The call and its arguments, e.g. `dexg 5 1010`.
+        #[arg(required = true, num_args = 1..)]
+        call: Vec<String>,
+        /// Write the line voltage as `time,voltage` CSV to this file (`-` for standard output).
+        #[arg(long, value_name = "FILE")]
+        csv: Option<PathBuf>,
+        /// Overwrite the CSV file if it exists.
+        #[arg(long)]
+        force: bool,
+        /// Pulse amplitude in volts.
+        #[arg(long, default_value_t = 2.5)]
+        amplitude: f32,
+        /// RMS of added white noise in volts.
+        #[arg(long, default_value_t = 0.0)]
+        noise_rms: f32,
+        /// Seed of the noise.
+        #[arg(long, default_value_t = 0)]
+        seed: u64,
+    },
+    /// Decode an oscilloscope capture (`time,voltage` CSV, seconds and volts) into telegrams
+    /// with the comparator rule and the seven receiver checks.
+    Decode {
+        /// The capture file (`-` for standard input).
+        file: PathBuf,
+        /// Nominal pulse amplitude in volts (estimated from the capture if not given).
+        #[arg(long)]
+        nominal: Option<f32>,
+        /// What the receiver listens for.
+        #[arg(long, value_enum, default_value_t = Listen::Both)]
+        expect: Listen,
+    },
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum Listen {
+    /// Master requests only.
+    Requests,
+    /// Slave responses only.
+    Responses,
+    /// A live bus: requests and the responses that follow them.
+    Both,
+}
+
+fn main() -> ExitCode {
+    match run(Cli::parse()) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(msg) => {
+            eprintln!("asi-lift: {msg}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn run(cli: Cli) -> Result<(), String> {
+    match cli.command {
+        Command::Encode {
+            call,
+            csv,
+            force,
+            amplitude,
+            noise_rms,
+            seed,
+        } => {
+            let t = parse_call(&call).map_err(|e| e.to_string())?;
+            match csv {
+                None => print!("{}", describe(t)),
+                Some(path) => {
+                    let cfg = WaveformConfig {
+                        amplitude,
+                        noise_rms,
+                        seed,
+                        ..WaveformConfig::default()
+                    };
+                    let text = waveform_csv(t, &cfg).map_err(|e| e.to_string())?;
+                    write_output(&path, &text, force)?;
+                    if path != Path::new("-") {
+                        print!("{}", describe(t));
+                        println!("wrote       {}", path.display());
+                    }
+                }
+            }
+            Ok(())
+        }
+        Command::Decode {
+            file,
+            nominal,
+            expect,
+        } => {
+            let text = read_input(&file)?;
+            let expect = match expect {
+                Listen::Requests => Expect::Requests,
+                Listen::Responses => Expect::Responses,
+                Listen::Both => Expect::Both,
+            };
+            let out = decode_capture(&text, DecodeOptions { nominal, expect })
+                .map_err(|e| format!("{}: {e}", file.display()))?;
+            print!("{out}");
+            Ok(())
+        }
+    }
+}
+
+fn read_input(path: &Path) -> Result<String, String> {
+    if path == Path::new("-") {
+        let mut s = String::new();
+        std::io::stdin()
+            .read_to_string(&mut s)
+            .map_err(|e| format!("standard input: {e}"))?;
+        return Ok(s);
+    }
+    std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))
+}
+
+/// Writes `text` to `path`, never replacing a file the user has unless `force` is given.
+fn write_output(path: &Path, text: &str, force: bool) -> Result<(), String> {
+    if path == Path::new("-") {
+        return std::io::stdout()
+            .write_all(text.as_bytes())
+            .map_err(|e| format!("standard output: {e}"));
+    }
+    let mut options = std::fs::OpenOptions::new();
+    options.write(true);
+    if force {
+        options.create(true).truncate(true);
+    } else {
+        options.create_new(true);
+    }
+    let mut f = options.open(path).map_err(|e| match e.kind() {
+        std::io::ErrorKind::AlreadyExists => {
+            format!("{} exists; pass --force to overwrite it", path.display())
+        }
+        _ => format!("{}: {e}", path.display()),
+    })?;
+    f.write_all(text.as_bytes())
+        .map_err(|e| format!("{}: {e}", path.display()))
 }
