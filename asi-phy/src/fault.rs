@@ -9,6 +9,7 @@
 
 use crate::pulse::{Polarity, Pulse};
 use crate::time::{SimDuration, SimTime};
+use crate::waveform::{NoiseBurst, Waveform};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -242,9 +243,56 @@ impl FaultInjector {
     }
 }
 
+impl FaultInjector {
+    /// Adds noise bursts to `wf` at random times: on average `per_ms` bursts a millisecond,
+    /// each `duration` long with Gaussian noise of `rms` volts. Returns the bursts added, in time
+    /// order, so a test can say which telegrams they hit.
+    pub fn noise_bursts(
+        &mut self,
+        wf: &mut Waveform,
+        per_ms: f64,
+        duration: SimDuration,
+        rms: f32,
+    ) -> Vec<NoiseBurst> {
+        let span_ns = wf.samples.len() as f64 * wf.period_ns;
+        let rate_per_ns = clamp_rate(per_ms) / 1e6;
+        let mut bursts = Vec::new();
+        if rate_per_ns <= 0.0 || !span_ns.is_finite() {
+            return bursts;
+        }
+        // Exponential gaps between bursts: a Poisson process.
+        let mut t = 0.0f64;
+        loop {
+            let u: f64 = self.rng.random::<f64>().max(f64::MIN_POSITIVE);
+            t += -u.ln() / rate_per_ns;
+            if t >= span_ns {
+                break;
+            }
+            let burst = NoiseBurst {
+                start: wf.start + SimDuration::from_nanos(t as u64),
+                duration,
+                rms,
+            };
+            wf.add_burst(&burst, self.rng.random());
+            bursts.push(burst);
+            self.injected += 1;
+        }
+        bursts
+    }
+}
+
+fn clamp_rate(r: f64) -> f64 {
+    if r.is_finite() {
+        r.max(0.0)
+    } else {
+        0.0
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::waveform::{render, WaveformConfig};
 
     fn p(us: u64, pos: bool) -> Pulse {
         Pulse::new(
@@ -299,6 +347,38 @@ mod tests {
         // 1000 pulses at 10 %: the count is near 100.
         assert!((60..=140).contains(&n1), "{n1}");
         assert!(a.windows(2).all(|w| w[0].at <= w[1].at));
+    }
+
+    #[test]
+    fn noise_bursts_are_seeded_and_land_inside_the_waveform() {
+        let quiet = render(
+            [],
+            SimTime::ZERO,
+            SimTime::from_millis(10),
+            &WaveformConfig::default(),
+        )
+        .expect("render");
+        let run = |seed| {
+            let mut wf = quiet.clone();
+            let mut inj = FaultInjector::new(seed, FaultRates::NONE, SimDuration::from_micros(3));
+            let bursts = inj.noise_bursts(&mut wf, 2.0, SimDuration::from_micros(5), 1.0);
+            (bursts, wf)
+        };
+        let (a, wa) = run(5);
+        let (b, wb) = run(5);
+        assert_eq!((&a, &wa), (&b, &wb));
+        // 2 per ms over 10 ms: about 20.
+        assert!((8..=35).contains(&a.len()), "{}", a.len());
+        assert!(a.windows(2).all(|w| w[0].start <= w[1].start));
+        assert!(a.iter().all(|b| b.start < SimTime::from_millis(10)));
+        // Noise only where a burst is.
+        let noisy = wa.samples.iter().filter(|v| **v != 0.0).count();
+        assert!(noisy > 0 && noisy <= a.len() * 50, "{noisy}");
+        let mut none = quiet.clone();
+        let mut inj = FaultInjector::new(5, FaultRates::NONE, SimDuration::from_micros(3));
+        assert!(inj
+            .noise_bursts(&mut none, f64::NAN, SimDuration::from_micros(5), 1.0)
+            .is_empty());
     }
 
     #[test]
