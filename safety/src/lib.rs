@@ -1,1 +1,8 @@
-//! safety: TwinSAFE KL6904 logic and PLCopen blocks guarding the lift (SPEC §6).
+//! safety: the TwinSAFE logic and PLCopen safety blocks that guard the asi-lift lift (SPEC §6).
+//!
+//! - [`primitives`]: IEC `R_TRIG`, `F_TRIG`, `TON` and the TwinSAFE 0→1→0 pulse detector.
+//!
+//! All time is [`asi_phy::SimTime`], passed in by the caller; nothing reads the wall clock and
+//! nothing is random, so a run is reproducible scan by scan.
+
+pub mod primitives;
