@@ -1,8 +1,10 @@
 //! safety: the TwinSAFE logic and PLCopen safety blocks that guard the asi-lift lift (SPEC §6).
 //!
-//! - [`primitives`]: IEC `R_TRIG`, `F_TRIG`, `TON` and the TwinSAFE 0→1→0 pulse detector.
+//! - [`primitives`]: IEC `R_TRIG`, `F_TRIG`, `TON` and the TwinSAFE 0→1→0 pulse detector;
+//! - [`plcopen`]: SF_EmergencyStop (seed 002), SF_Equivalent and SF_EDM.
 //!
 //! All time is [`asi_phy::SimTime`], passed in by the caller; nothing reads the wall clock and
 //! nothing is random, so a run is reproducible scan by scan.
 
+pub mod plcopen;
 pub mod primitives;
