@@ -6,40 +6,19 @@ use safety::plcopen::{
     SfEquivalentInputs,
 };
 
-/// One row of a SF_EmergencyStop vector: inputs, then the expected outputs.
-struct Row {
-    act: u8,
-    inp: u8,
-    reset: u8,
-    diag: u16,
-    out: u8,
-    demand: u8,
-    reset_req: u8,
-    err: u8,
-}
-
-const fn row(act: u8, inp: u8, reset: u8, diag: u16, out: u8, demand: u8, rr: u8, err: u8) -> Row {
-    Row {
-        act,
-        inp,
-        reset,
-        diag,
-        out,
-        demand,
-        reset_req: rr,
-        err,
-    }
-}
+/// One row of a SF_EmergencyStop vector, in the column order of reference/safety.md §9.2:
+/// Activate, S_EStopIn, Reset → DiagCode, S_EStopOut, SafetyDemand, ResetRequest, Error.
+type Row = (u8, u8, u8, u16, u8, u8, u8, u8);
 
 fn run_estop(start_reset: bool, auto_reset: bool, rows: &[Row]) {
     let mut fb = SfEmergencyStop::new();
-    for (scan, r) in rows.iter().enumerate() {
+    for (scan, &(act, inp, reset, diag, out, demand, reset_req, err)) in rows.iter().enumerate() {
         let o = fb.call(SfEmergencyStopInputs {
-            activate: r.act == 1,
-            s_estop_in: r.inp == 1,
+            activate: act == 1,
+            s_estop_in: inp == 1,
             s_start_reset: start_reset,
             s_auto_reset: auto_reset,
-            reset: r.reset == 1,
+            reset: reset == 1,
         });
         let got = (
             o.diag_code,
@@ -50,12 +29,12 @@ fn run_estop(start_reset: bool, auto_reset: bool, rows: &[Row]) {
             o.ready,
         );
         let want = (
-            DiagCode(r.diag),
-            r.out == 1,
-            r.demand == 1,
-            r.reset_req == 1,
-            r.err == 1,
-            r.diag != 0,
+            DiagCode(diag),
+            out == 1,
+            demand == 1,
+            reset_req == 1,
+            err == 1,
+            diag != 0,
         );
         assert_eq!(
             got, want,
@@ -71,15 +50,15 @@ fn estop_fig23_start_reset_demand_restart() {
         false,
         false,
         &[
-            row(0, 0, 0, 0x0000, 0, 0, 0, 0),
-            row(1, 0, 0, 0x8001, 0, 0, 0, 0),
-            row(1, 0, 0, 0x8802, 0, 1, 0, 0),
-            row(1, 1, 0, 0x8402, 0, 0, 1, 0),
-            row(1, 1, 1, 0x8000, 1, 0, 0, 0),
-            row(1, 1, 0, 0x8000, 1, 0, 0, 0),
-            row(1, 0, 0, 0x8804, 0, 1, 0, 0),
-            row(1, 1, 0, 0x8404, 0, 0, 1, 0),
-            row(1, 1, 1, 0x8000, 1, 0, 0, 0),
+            (0, 0, 0, 0x0000, 0, 0, 0, 0),
+            (1, 0, 0, 0x8001, 0, 0, 0, 0),
+            (1, 0, 0, 0x8802, 0, 1, 0, 0),
+            (1, 1, 0, 0x8402, 0, 0, 1, 0),
+            (1, 1, 1, 0x8000, 1, 0, 0, 0),
+            (1, 1, 0, 0x8000, 1, 0, 0, 0),
+            (1, 0, 0, 0x8804, 0, 1, 0, 0),
+            (1, 1, 0, 0x8404, 0, 0, 1, 0),
+            (1, 1, 1, 0x8000, 1, 0, 0, 0),
         ],
     );
 }
@@ -90,13 +69,13 @@ fn estop_fig24_start_reset_enables_without_reset_but_a_demand_needs_one() {
         true,
         false,
         &[
-            row(0, 1, 0, 0x0000, 0, 0, 0, 0),
-            row(1, 1, 0, 0x8001, 0, 0, 0, 0),
-            row(1, 1, 0, 0x8000, 1, 0, 0, 0),
-            row(1, 0, 0, 0x8804, 0, 1, 0, 0),
-            row(1, 1, 0, 0x8404, 0, 0, 1, 0),
-            row(1, 1, 0, 0x8404, 0, 0, 1, 0),
-            row(1, 1, 1, 0x8000, 1, 0, 0, 0),
+            (0, 1, 0, 0x0000, 0, 0, 0, 0),
+            (1, 1, 0, 0x8001, 0, 0, 0, 0),
+            (1, 1, 0, 0x8000, 1, 0, 0, 0),
+            (1, 0, 0, 0x8804, 0, 1, 0, 0),
+            (1, 1, 0, 0x8404, 0, 0, 1, 0),
+            (1, 1, 0, 0x8404, 0, 0, 1, 0),
+            (1, 1, 1, 0x8000, 1, 0, 0, 0),
         ],
     );
 }
@@ -107,9 +86,9 @@ fn estop_fig24_start_reset_with_demand_at_start_waits_in_8804() {
         true,
         false,
         &[
-            row(1, 0, 0, 0x8001, 0, 0, 0, 0),
-            row(1, 0, 0, 0x8804, 0, 1, 0, 0),
-            row(1, 1, 0, 0x8404, 0, 0, 1, 0),
+            (1, 0, 0, 0x8001, 0, 0, 0, 0),
+            (1, 0, 0, 0x8804, 0, 1, 0, 0),
+            (1, 1, 0, 0x8404, 0, 0, 1, 0),
         ],
     );
 }
@@ -120,14 +99,14 @@ fn estop_fig25_auto_reset_needs_reset_at_start_only() {
         false,
         true,
         &[
-            row(1, 0, 0, 0x8001, 0, 0, 0, 0),
-            row(1, 0, 0, 0x8802, 0, 1, 0, 0),
-            row(1, 1, 0, 0x8402, 0, 0, 1, 0),
-            row(1, 1, 0, 0x8402, 0, 0, 1, 0),
-            row(1, 1, 1, 0x8000, 1, 0, 0, 0),
-            row(1, 0, 0, 0x8804, 0, 1, 0, 0),
-            row(1, 0, 0, 0x8804, 0, 1, 0, 0),
-            row(1, 1, 0, 0x8000, 1, 0, 0, 0),
+            (1, 0, 0, 0x8001, 0, 0, 0, 0),
+            (1, 0, 0, 0x8802, 0, 1, 0, 0),
+            (1, 1, 0, 0x8402, 0, 0, 1, 0),
+            (1, 1, 0, 0x8402, 0, 0, 1, 0),
+            (1, 1, 1, 0x8000, 1, 0, 0, 0),
+            (1, 0, 0, 0x8804, 0, 1, 0, 0),
+            (1, 0, 0, 0x8804, 0, 1, 0, 0),
+            (1, 1, 0, 0x8000, 1, 0, 0, 0),
         ],
     );
 }
@@ -138,15 +117,15 @@ fn estop_stuck_reset_on_the_start_path_gives_c001_until_released() {
         false,
         false,
         &[
-            row(1, 0, 0, 0x8001, 0, 0, 0, 0),
-            row(1, 0, 0, 0x8802, 0, 1, 0, 0),
-            row(1, 0, 1, 0xC001, 0, 0, 0, 1),
-            row(1, 1, 1, 0xC001, 0, 0, 0, 1),
-            row(1, 1, 0, 0x8802, 0, 1, 0, 0),
-            row(1, 1, 0, 0x8402, 0, 0, 1, 0),
+            (1, 0, 0, 0x8001, 0, 0, 0, 0),
+            (1, 0, 0, 0x8802, 0, 1, 0, 0),
+            (1, 0, 1, 0xC001, 0, 0, 0, 1),
+            (1, 1, 1, 0xC001, 0, 0, 0, 1),
+            (1, 1, 0, 0x8802, 0, 1, 0, 0),
+            (1, 1, 0, 0x8402, 0, 0, 1, 0),
             // no acknowledgement until a new edge
-            row(1, 1, 0, 0x8402, 0, 0, 1, 0),
-            row(1, 1, 1, 0x8000, 1, 0, 0, 0),
+            (1, 1, 0, 0x8402, 0, 0, 1, 0),
+            (1, 1, 1, 0x8000, 1, 0, 0, 0),
         ],
     );
 }
@@ -157,11 +136,11 @@ fn estop_reset_held_from_power_up_is_static_and_never_enables() {
         false,
         false,
         &[
-            row(0, 1, 1, 0x0000, 0, 0, 0, 0),
-            row(1, 1, 1, 0x8001, 0, 0, 0, 0),
-            row(1, 1, 1, 0x8802, 0, 1, 0, 0),
-            row(1, 1, 1, 0xC001, 0, 0, 0, 1),
-            row(1, 1, 1, 0xC001, 0, 0, 0, 1),
+            (0, 1, 1, 0x0000, 0, 0, 0, 0),
+            (1, 1, 1, 0x8001, 0, 0, 0, 0),
+            (1, 1, 1, 0x8802, 0, 1, 0, 0),
+            (1, 1, 1, 0xC001, 0, 0, 0, 1),
+            (1, 1, 1, 0xC001, 0, 0, 0, 1),
         ],
     );
 }
@@ -172,13 +151,13 @@ fn estop_stuck_reset_after_a_demand_gives_c011() {
         true,
         false,
         &[
-            row(1, 1, 0, 0x8001, 0, 0, 0, 0),
-            row(1, 1, 0, 0x8000, 1, 0, 0, 0),
-            row(1, 0, 1, 0x8804, 0, 1, 0, 0),
-            row(1, 1, 1, 0xC011, 0, 0, 0, 1),
-            row(1, 1, 0, 0x8804, 0, 1, 0, 0),
-            row(1, 1, 0, 0x8404, 0, 0, 1, 0),
-            row(1, 1, 1, 0x8000, 1, 0, 0, 0),
+            (1, 1, 0, 0x8001, 0, 0, 0, 0),
+            (1, 1, 0, 0x8000, 1, 0, 0, 0),
+            (1, 0, 1, 0x8804, 0, 1, 0, 0),
+            (1, 1, 1, 0xC011, 0, 0, 0, 1),
+            (1, 1, 0, 0x8804, 0, 1, 0, 0),
+            (1, 1, 0, 0x8404, 0, 0, 1, 0),
+            (1, 1, 1, 0x8000, 1, 0, 0, 0),
         ],
     );
 }
@@ -186,20 +165,23 @@ fn estop_stuck_reset_after_a_demand_gives_c011() {
 #[test]
 fn estop_activate_dropped_in_every_state_goes_idle_in_the_same_scan() {
     // Reach each state with a prefix, then drop Activate: 0000 and all outputs 0 at once.
-    let prefixes: Vec<(u16, bool, bool, Vec<(u8, u8)>)> = vec![
-        (0x8001, false, false, vec![(0, 0)]),
-        (0x8802, false, false, vec![(0, 0), (0, 0)]),
-        (0x8402, false, false, vec![(0, 0), (0, 0), (1, 0)]),
-        (0x8000, false, false, vec![(0, 0), (0, 0), (1, 0), (1, 1)]),
-        (0x8804, true, false, vec![(0, 0), (0, 0)]),
-        (0x8404, true, false, vec![(0, 0), (0, 0), (1, 0)]),
-        (0xC001, false, false, vec![(0, 0), (0, 0), (0, 1)]),
-        (0xC011, true, false, vec![(0, 0), (0, 0), (0, 1)]),
+    // (state reached, S_StartReset, [(S_EStopIn, Reset)] scans from Idle with Activate = 1)
+    type Prefix = (u16, bool, &'static [(u8, u8)]);
+    let prefixes: [Prefix; 8] = [
+        (0x8001, false, &[(0, 0)]),
+        (0x8802, false, &[(0, 0), (0, 0)]),
+        (0x8402, false, &[(0, 0), (0, 0), (1, 0)]),
+        (0x8000, false, &[(0, 0), (0, 0), (1, 0), (1, 1)]),
+        (0x8804, true, &[(0, 0), (0, 0)]),
+        (0x8404, true, &[(0, 0), (0, 0), (1, 0)]),
+        (0xC001, false, &[(0, 0), (0, 0), (0, 1)]),
+        (0xC011, true, &[(0, 0), (0, 0), (0, 1)]),
     ];
-    for (code, start_reset, auto_reset, steps) in prefixes {
+    let auto_reset = false;
+    for (code, start_reset, steps) in prefixes {
         let mut fb = SfEmergencyStop::new();
         let mut last = None;
-        for (inp, reset) in steps {
+        for &(inp, reset) in steps {
             last = Some(fb.call(SfEmergencyStopInputs {
                 activate: true,
                 s_estop_in: inp == 1,
