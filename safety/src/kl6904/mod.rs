@@ -1,7 +1,11 @@
 //! The Beckhoff TwinSAFE KL6904 logic terminal (seed 004; reference/safety.md §1, §6, §8.3).
 //!
 //! - [`signal`]: contact types, signal kinds and references;
-//! - [`modules`]: the function modules AND, OR, OPMODE, ESTOP, MON, DECOUPLE.
+//! - [`modules`]: the function modules AND, OR, OPMODE, ESTOP, MON, DECOUPLE;
+//! - [`group`]: TwinSAFE groups with RUN, ERR_ACK, FB_ERR, COM_ERR, OUT_ERR;
+//! - [`connection`]: TwinSAFE connections, the safe telegram and the black channel;
 
+pub mod connection;
+pub mod group;
 pub mod modules;
 pub mod signal;
