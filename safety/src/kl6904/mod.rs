@@ -4,8 +4,14 @@
 //! - [`modules`]: the function modules AND, OR, OPMODE, ESTOP, MON, DECOUPLE;
 //! - [`group`]: TwinSAFE groups with RUN, ERR_ACK, FB_ERR, COM_ERR, OUT_ERR;
 //! - [`connection`]: TwinSAFE connections, the safe telegram and the black channel;
+//! - [`project`]: a project as data (TOML file or builder);
+//! - [`verify`]: the verifier's rules.
 
 pub mod connection;
 pub mod group;
 pub mod modules;
+pub mod project;
 pub mod signal;
+pub mod verify;
+
+pub use project::Project;
