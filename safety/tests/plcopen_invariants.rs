@@ -30,6 +30,7 @@ proptest! {
     #![proptest_config(ProptestConfig {
         cases: 512,
         rng_seed: RngSeed::Fixed(0x5AFE_0002),
+        failure_persistence: None,
         ..ProptestConfig::default()
     })]
 
