@@ -141,6 +141,16 @@ impl Rig {
         self.logic.standard_output_value(o)
     }
 
+    /// Schedule `fault` on the terminal's channel at the next scan.
+    fn inject_now(&mut self, fault: ChannelFault) {
+        let at = SimTime::from_millis(self.t);
+        self.logic.inject(self.terminal, at, fault);
+    }
+
+    fn logged(&self, needle: &str) -> bool {
+        self.log.iter().any(|l| l.contains(needle))
+    }
+
     fn diag(&self) -> ConnDiag {
         self.logic.connection_diag(self.terminal)
     }
@@ -170,23 +180,22 @@ fn the_project_starts_safe_and_runs_after_a_restart_pulse() {
     let restart = rig.restart;
     rig.pulse(restart);
     assert!(rig.k1());
-    assert!(rig
-        .log
-        .iter()
-        .any(|l| l.contains("connection 1 `estop_terminal` running")));
+    assert!(rig.logged("connection 1 `estop_terminal` running"));
+    let signal = |text: &str| rig.logic.signal(&text.parse().expect(text));
+    assert_eq!(signal("fb:estop.EStopOut"), Some(true));
+    assert_eq!(signal("ts:estop_terminal.s1a"), Some(true));
+    assert_eq!(signal("ts:estop_terminal.4"), Some(false), "unused channel");
+    assert_eq!(signal("group:bridge.COM_ERR"), Some(false));
+    assert_eq!(signal("std:restart"), Some(false));
+    assert_eq!(signal("fb:nope.X"), None);
 }
 
 #[test]
 fn a_connection_that_stops_sending_trips_com_err_until_acknowledged() {
     let mut rig = Rig::started();
-    let at = SimTime::from_millis(rig.t);
-    rig.logic.inject(
-        rig.terminal,
-        at,
-        ChannelFault::Drop {
-            duration: SimDuration::from_millis(50),
-        },
-    );
+    rig.inject_now(ChannelFault::Drop {
+        duration: SimDuration::from_millis(50),
+    });
     // the last valid telegram came 1 ms before the drop; 20 ms watchdog
     rig.run(20);
     assert_eq!(
@@ -222,9 +231,7 @@ fn a_connection_that_stops_sending_trips_com_err_until_acknowledged() {
         GroupState::Run,
         "DECOUPLE keeps the other groups running"
     );
-    assert!(rig.log.iter().any(|l| l.contains(
-        "COM_ERR: watchdog expired on connection 1 `estop_terminal`: no valid telegram for 21 ms (watchdog 20 ms)"
-    )));
+    assert!(rig.logged("COM_ERR: watchdog expired on connection 1 `estop_terminal`: no valid telegram for 21 ms (watchdog 20 ms)"));
 
     // acknowledgement while the link is still down is refused
     let ack = rig.ack;
@@ -263,14 +270,9 @@ fn a_connection_that_stops_sending_trips_com_err_until_acknowledged() {
 #[test]
 fn a_drop_shorter_than_the_watchdog_is_tolerated() {
     let mut rig = Rig::started();
-    let at = SimTime::from_millis(rig.t);
-    rig.logic.inject(
-        rig.terminal,
-        at,
-        ChannelFault::Drop {
-            duration: SimDuration::from_millis(15),
-        },
-    );
+    rig.inject_now(ChannelFault::Drop {
+        duration: SimDuration::from_millis(15),
+    });
     rig.run(100);
     assert_eq!(rig.diag(), ConnDiag(0));
     assert!(rig.k1());
@@ -290,10 +292,7 @@ fn one_corrupted_crc_is_a_crc_error() {
         "diag bit 3"
     );
     assert!(!rig.estop_ok());
-    assert!(rig
-        .log
-        .iter()
-        .any(|l| l.contains("COM_ERR: CRC error on connection 1")));
+    assert!(rig.logged("COM_ERR: CRC error on connection 1"));
     rig.run(5);
     let ack = rig.ack;
     rig.pulse(ack);
@@ -307,20 +306,14 @@ fn one_corrupted_crc_is_a_crc_error() {
 #[test]
 fn one_replayed_telegram_is_a_sequence_error() {
     let mut rig = Rig::started();
-    let at = SimTime::from_millis(rig.t);
-    rig.logic
-        .inject(rig.terminal, at, ChannelFault::Replay { age: 1 });
+    rig.inject_now(ChannelFault::Replay { age: 1 });
     rig.run(1);
     assert_eq!(
         rig.diag(),
         ConnDiag::SEQUENCE | ConnDiag::FAIL_SAFE_VALUES,
         "diag bit 4"
     );
-    assert!(
-        rig.log.iter().any(|l| l.contains("sequence error")),
-        "{:?}",
-        rig.log
-    );
+    assert!(rig.logged("sequence error"), "{:?}", rig.log);
     rig.run(3);
     let ack = rig.ack;
     rig.pulse(ack);
@@ -330,23 +323,16 @@ fn one_replayed_telegram_is_a_sequence_error() {
 #[test]
 fn a_telegram_from_the_wrong_address_is_rejected() {
     let mut rig = Rig::started();
-    let at = SimTime::from_millis(rig.t);
-    rig.logic
-        .inject(rig.terminal, at, ChannelFault::WrongAddress { sender: 7 });
+    rig.inject_now(ChannelFault::WrongAddress { sender: 7 });
     rig.run(1);
     assert!(rig.diag().contains(ConnDiag::CRC));
-    assert!(rig
-        .log
-        .iter()
-        .any(|l| l.contains("telegram from TwinSAFE address 7, expected 2")));
+    assert!(rig.logged("telegram from TwinSAFE address 7, expected 2"));
 }
 
 #[test]
 fn a_null_telegram_sets_bit_0() {
     let mut rig = Rig::started();
-    let at = SimTime::from_millis(rig.t);
-    rig.logic
-        .inject(rig.terminal, at, ChannelFault::NullTelegram);
+    rig.inject_now(ChannelFault::NullTelegram);
     rig.run(1);
     assert!(rig.diag().contains(ConnDiag::NULL_TELEGRAM));
     assert!(!rig.estop_ok());
@@ -402,10 +388,7 @@ fn a_welded_contactor_refuses_the_restart_with_an_edm_error() {
     assert!(!rig.k1());
     let m = rig.logic.module("estop").expect("estop");
     assert_eq!(rig.logic.module_status(m).diag, 1 << 4, "diag bit 4: EDM1");
-    assert!(rig
-        .log
-        .iter()
-        .any(|l| l.contains("FB_ERR: ESTOP `estop`: EDM1 not 1 at restart")));
+    assert!(rig.logged("FB_ERR: ESTOP `estop`: EDM1 not 1 at restart"));
 }
 
 #[test]

@@ -24,7 +24,8 @@ use core::fmt;
 use super::connection::{ChannelFault, ConnDiag, ConnEvent, Connection};
 use super::group::{Group, GroupErrors, GroupState};
 use super::modules::{
-    and, decouple, or, Estop, EstopInputs, FbEvent, FbState, Mon, MonInputs, OpMode, OpModeInputs,
+    and, decouple, or, Core, Estop, EstopInputs, FbEvent, FbState, Mon, MonInputs, OpMode,
+    OpModeInputs,
 };
 use super::project::{ModuleKind, Project};
 use super::signal::{ChannelRef, GroupOutput, SignalRef};
@@ -260,54 +261,45 @@ impl ModuleRt {
         }
     }
 
-    fn state(&self, running: bool) -> FbState {
+    /// The state machine of a stateful module; AND, OR and DECOUPLE have none.
+    fn core(&self) -> Option<&Core> {
         match self {
-            ModuleRt::OpMode(m) => m.state(),
-            ModuleRt::Estop(m) => m.state(),
-            ModuleRt::Mon(m) => m.state(),
-            _ if running => FbState::Run,
-            _ => FbState::Stop,
+            ModuleRt::OpMode(m) => Some(m.core()),
+            ModuleRt::Estop(m) => Some(m.core()),
+            ModuleRt::Mon(m) => Some(m.core()),
+            ModuleRt::And | ModuleRt::Or | ModuleRt::Decouple => None,
         }
+    }
+
+    fn state(&self, running: bool) -> FbState {
+        let stateless = if running { FbState::Run } else { FbState::Stop };
+        self.core().map_or(stateless, |c| c.state)
     }
 
     fn diag(&self) -> u8 {
-        match self {
-            ModuleRt::OpMode(m) => m.diag(),
-            ModuleRt::Estop(m) => m.diag(),
-            ModuleRt::Mon(m) => m.diag(),
-            _ => 0,
-        }
+        self.core().map_or(0, |c| c.diag)
     }
 
     fn events(&self) -> &[FbEvent] {
-        match self {
-            ModuleRt::OpMode(m) => m.events(),
-            ModuleRt::Estop(m) => m.events(),
-            ModuleRt::Mon(m) => m.events(),
-            _ => &[],
-        }
+        self.core().map_or(&[], |c| &c.events)
     }
 
     fn has_error(&self) -> bool {
-        self.state(true) == FbState::Error
+        self.core().is_some_and(|c| c.state == FbState::Error)
     }
 
     fn error_cause_active(&self) -> bool {
-        match self {
-            ModuleRt::OpMode(m) => m.error_cause_active(),
-            ModuleRt::Estop(m) => m.error_cause_active(),
-            ModuleRt::Mon(m) => m.error_cause_active(),
-            _ => false,
-        }
+        self.core().is_some_and(Core::error_cause_active)
     }
 
     fn acknowledge(&mut self) {
-        match self {
-            ModuleRt::OpMode(m) => m.acknowledge(),
-            ModuleRt::Estop(m) => m.acknowledge(),
-            ModuleRt::Mon(m) => m.acknowledge(),
-            _ => {}
-        }
+        let core = match self {
+            ModuleRt::OpMode(m) => m.core_mut(),
+            ModuleRt::Estop(m) => m.core_mut(),
+            ModuleRt::Mon(m) => m.core_mut(),
+            ModuleRt::And | ModuleRt::Or | ModuleRt::Decouple => return,
+        };
+        core.acknowledge();
     }
 }
 

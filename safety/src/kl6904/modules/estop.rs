@@ -47,10 +47,6 @@ pub struct EstopOutputs {
     pub error: bool,
 }
 
-/// Diagnostic bits (seed 004 §3.3): 0–3 discrepancy of pair 1–4, 4 EDM1, 5 EDM2.
-const EDM1_BIT: u8 = 4;
-const EDM2_BIT: u8 = 5;
-
 /// The KL6904 emergency-stop module.
 ///
 /// - As soon as an active input demands the safe state, EStopOut goes to 0 at once and
@@ -73,7 +69,6 @@ pub struct Estop {
     config: EstopConfig,
     core: Core,
     pairs: [PairMonitor; 4],
-    cause_active: bool,
 }
 
 impl Estop {
@@ -117,25 +112,14 @@ impl Estop {
         if running {
             match self.core.state {
                 FbState::Run | FbState::DelayOut => self.core.supervise(now, demand, cfg.delay),
-                FbState::Safe if restart => {
-                    if edm_bad[0] {
-                        self.core.fail(EDM1_BIT, FbError::Edm { channel: 1 });
-                    }
-                    if edm_bad[1] {
-                        self.core.fail(EDM2_BIT, FbError::Edm { channel: 2 });
-                    }
-                    if self.core.state == FbState::Safe {
-                        self.core.release();
-                    }
-                }
+                FbState::Safe if restart => self.core.restart_checking_edm(edm_bad),
                 _ => {}
             }
         }
         let diag = self.core.diag;
-        self.cause_active = (0..4)
+        self.core.cause_active = (0..4)
             .any(|k| diag & 1 << k != 0 && demands[2 * k] != demands[2 * k + 1])
-            || (diag & 1 << EDM1_BIT != 0 && edm_bad[0])
-            || (diag & 1 << EDM2_BIT != 0 && edm_bad[1]);
+            || self.core.edm_cause_active(edm_bad);
         let (estop_out, estop_del_out, error) = self.core.outputs();
         EstopOutputs {
             estop_out,
@@ -143,30 +127,6 @@ impl Estop {
             error,
         }
     }
-
-    /// The state after the last scan.
-    pub fn state(&self) -> FbState {
-        self.core.state
-    }
-
-    /// Diagnostic bits (seed 004 §3.3): 0–3 discrepancy of pair 1–4, 4 EDM1, 5 EDM2.
-    pub fn diag(&self) -> u8 {
-        self.core.diag
-    }
-
-    /// What the module did in the last scan.
-    pub fn events(&self) -> &[FbEvent] {
-        &self.core.events
-    }
-
-    /// `true` while the cause of the latched error was still present in the last scan (the group
-    /// then refuses ERR_ACK).
-    pub fn error_cause_active(&self) -> bool {
-        self.core.state == FbState::Error && self.cause_active
-    }
-
-    /// The group's ERR_ACK: ERROR → SAFE (a Restart is then needed).
-    pub fn acknowledge(&mut self) {
-        self.core.acknowledge();
-    }
 }
+
+core_accessors!(Estop);

@@ -6,6 +6,50 @@
 //! the newer Beckhoff FB state names (reference/safety.md §6.1): STOP, SAFE, RUN, DELAYOUT,
 //! ERROR; the group's RESET state lives in [`crate::kl6904::group`].
 
+/// The diagnostic accessors every stateful module (ESTOP, MON, OPMODE) has, over its [`Core`].
+macro_rules! core_accessors {
+    ($module:ty) => {
+        impl $module {
+            /// The state after the last scan.
+            pub fn state(&self) -> FbState {
+                self.core.state
+            }
+
+            /// Diagnostic bits (seed 004 §3.3): ESTOP 0–3 discrepancy of pair 1–4; MON 0–1
+            /// MonIn pairs, 2 Secure pair; ESTOP and MON 4 EDM1, 5 EDM2; OPMODE 0 discrepancy.
+            pub fn diag(&self) -> u8 {
+                self.core.diag
+            }
+
+            /// What the module did in the last scan.
+            pub fn events(&self) -> &[FbEvent] {
+                &self.core.events
+            }
+
+            /// `true` while the cause of the latched error was still present in the last scan
+            /// (the group then refuses ERR_ACK).
+            pub fn error_cause_active(&self) -> bool {
+                self.core.error_cause_active()
+            }
+
+            /// The group's ERR_ACK: ERROR → SAFE (the module's restart rule then applies).
+            pub fn acknowledge(&mut self) {
+                self.core.acknowledge();
+            }
+
+            /// The shared state machine, for the logic.
+            pub(crate) fn core(&self) -> &Core {
+                &self.core
+            }
+
+            /// The shared state machine, for the logic's acknowledgement.
+            pub(crate) fn core_mut(&mut self) -> &mut Core {
+                &mut self.core
+            }
+        }
+    };
+}
+
 mod estop;
 mod gates;
 mod mon;
@@ -99,6 +143,11 @@ impl fmt::Display for FbError {
     }
 }
 
+/// Diag bit of an EDM1 error (ESTOP and MON, seed 004 §3.3).
+pub(crate) const EDM1_BIT: u8 = 4;
+/// Diag bit of an EDM2 error.
+pub(crate) const EDM2_BIT: u8 = 5;
+
 /// Something a module did in a scan, for the event log.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum FbEvent {
@@ -156,6 +205,8 @@ pub(crate) struct Core {
     pub(crate) restart: PulseDetector,
     pub(crate) diag: u8,
     pub(crate) events: Vec<FbEvent>,
+    /// Whether the cause of the latched error was still present in the last scan.
+    pub(crate) cause_active: bool,
     acknowledged: bool,
 }
 
@@ -216,6 +267,30 @@ impl Core {
         self.events.push(FbEvent::Restarted);
     }
 
+    /// A restart was accepted: check the activated EDM inputs (`edm_bad[k]` = EDM*k+1* activated
+    /// and not 1) and leave the safe state, or enter ERROR with diag bit 4/5 (seed 004 §4.4.1).
+    pub(crate) fn restart_checking_edm(&mut self, edm_bad: [bool; 2]) {
+        for (k, bit) in [EDM1_BIT, EDM2_BIT].into_iter().enumerate() {
+            if edm_bad[k] {
+                self.fail(
+                    bit,
+                    FbError::Edm {
+                        channel: k as u8 + 1,
+                    },
+                );
+            }
+        }
+        if self.state == FbState::Safe {
+            self.release();
+        }
+    }
+
+    /// `true` while a latched EDM error's input still is not 1.
+    pub(crate) fn edm_cause_active(&self, edm_bad: [bool; 2]) -> bool {
+        (self.diag & 1 << EDM1_BIT != 0 && edm_bad[0])
+            || (self.diag & 1 << EDM2_BIT != 0 && edm_bad[1])
+    }
+
     /// The group's ERR_ACK: leave ERROR for SAFE and clear the diagnostic bits.
     pub(crate) fn acknowledge(&mut self) {
         if self.state == FbState::Error {
@@ -224,6 +299,11 @@ impl Core {
             // Reported with the next scan's events (the group acknowledges between scans).
             self.acknowledged = true;
         }
+    }
+
+    /// `true` while in ERROR and its cause was still present in the last scan.
+    pub(crate) fn error_cause_active(&self) -> bool {
+        self.state == FbState::Error && self.cause_active
     }
 
     /// (immediate output, delayed output, Error).

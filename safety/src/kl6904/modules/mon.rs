@@ -57,10 +57,9 @@ pub struct MonOutputs {
     pub error: bool,
 }
 
-/// Diagnostic bits (seed 004 §3.3): 0–1 MonIn pair 1/2, 2 Secure pair, 4 EDM1, 5 EDM2.
+/// Diagnostic bit of a Secure-pair discrepancy (seed 004 §3.3; 0–1 are the MonIn pairs, 4–5
+/// EDM1/EDM2).
 const SECURE_BIT: u8 = 2;
-const EDM1_BIT: u8 = 4;
-const EDM2_BIT: u8 = 5;
 
 /// The KL6904 monitoring module (safety door, or the lift's overtravel sensors).
 ///
@@ -86,7 +85,6 @@ pub struct Mon {
     pairs: [PairMonitor; 2],
     secure_pair: PairMonitor,
     tested: [bool; 4],
-    cause_active: bool,
 }
 
 impl Mon {
@@ -154,15 +152,7 @@ impl Mon {
             match self.core.state {
                 FbState::Run | FbState::DelayOut => self.core.supervise(now, demand, cfg.delay),
                 FbState::Safe if cfg.manual_restart && restart => {
-                    if edm_bad[0] {
-                        self.core.fail(EDM1_BIT, FbError::Edm { channel: 1 });
-                    }
-                    if edm_bad[1] {
-                        self.core.fail(EDM2_BIT, FbError::Edm { channel: 2 });
-                    }
-                    if self.core.state == FbState::Safe {
-                        self.core.release();
-                    }
+                    self.core.restart_checking_edm(edm_bad);
                 }
                 FbState::Safe if !cfg.manual_restart && may_leave && !edm_bad.contains(&true) => {
                     self.core.release();
@@ -172,10 +162,9 @@ impl Mon {
         }
 
         let diag = self.core.diag;
-        self.cause_active = (0..2).any(|k| diag & 1 << k != 0 && raw[2 * k] != raw[2 * k + 1])
+        self.core.cause_active = (0..2).any(|k| diag & 1 << k != 0 && raw[2 * k] != raw[2 * k + 1])
             || (diag & 1 << SECURE_BIT != 0 && secure_on.is_some_and(|[a, b]| a != b))
-            || (diag & 1 << EDM1_BIT != 0 && edm_bad[0])
-            || (diag & 1 << EDM2_BIT != 0 && edm_bad[1]);
+            || self.core.edm_cause_active(edm_bad);
         let (mon_out, mon_del_out, error) = self.core.outputs();
         MonOutputs {
             mon_out,
@@ -183,29 +172,6 @@ impl Mon {
             error,
         }
     }
-
-    /// The state after the last scan.
-    pub fn state(&self) -> FbState {
-        self.core.state
-    }
-
-    /// Diagnostic bits (seed 004 §3.3): 0–1 MonIn pairs, 2 Secure pair, 4 EDM1, 5 EDM2.
-    pub fn diag(&self) -> u8 {
-        self.core.diag
-    }
-
-    /// What the module did in the last scan.
-    pub fn events(&self) -> &[FbEvent] {
-        &self.core.events
-    }
-
-    /// `true` while the cause of the latched error was still present in the last scan.
-    pub fn error_cause_active(&self) -> bool {
-        self.core.state == FbState::Error && self.cause_active
-    }
-
-    /// The group's ERR_ACK: ERROR → SAFE.
-    pub fn acknowledge(&mut self) {
-        self.core.acknowledge();
-    }
 }
+
+core_accessors!(Mon);

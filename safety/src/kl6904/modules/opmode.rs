@@ -2,8 +2,7 @@
 
 use asi_phy::{SimDuration, SimTime};
 
-use super::{FbError, FbEvent, FbState, PairMonitor};
-use crate::primitives::PulseDetector;
+use super::{Core, FbError, FbEvent, FbState, PairMonitor};
 
 /// Parameters of an OPMODE module (seed 004 §4.3.3).
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
@@ -53,15 +52,10 @@ pub struct OpModeOutputs {
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct OpMode {
     config: OpModeConfig,
-    state: FbState,
+    core: Core,
     mode: usize,
-    restart: PulseDetector,
     /// Times how long the selection has been invalid (a "pair" of invalid vs. FALSE).
     invalid: PairMonitor,
-    diag: u8,
-    events: Vec<FbEvent>,
-    cause_active: bool,
-    acknowledged: bool,
 }
 
 impl OpMode {
@@ -80,10 +74,6 @@ impl OpMode {
 
     /// One scan at `now`; `run` is whether the module's group is in RUN.
     pub fn scan(&mut self, now: SimTime, run: bool, i: &OpModeInputs) -> OpModeOutputs {
-        self.events.clear();
-        if core::mem::take(&mut self.acknowledged) {
-            self.events.push(FbEvent::Acknowledged);
-        }
         let set: Vec<usize> = (0..8)
             .filter(|&n| self.config.inputs[n] && i.op_in[n])
             .collect();
@@ -91,88 +81,52 @@ impl OpMode {
             [one] => Some(*one),
             _ => None,
         };
-        if !run {
-            if !matches!(self.state, FbState::Stop | FbState::Error) {
-                self.state = FbState::Stop;
-                self.events.push(FbEvent::Stopped);
-            }
+        let running = self.core.begin(run);
+        let t = self.config.discrepancy;
+        if !running {
             self.invalid.reset();
-        } else {
-            if self.state == FbState::Stop {
-                self.state = FbState::Safe;
-            }
-            let t = self.config.discrepancy;
-            if self.state != FbState::Error
-                && !t.is_zero()
-                && self.invalid.exceeded(now, selected.is_none(), false, t)
-            {
-                self.state = FbState::Error;
-                self.diag |= 1;
-                self.events.push(FbEvent::Error(FbError::ModeSelection));
-            }
+        } else if self.core.state != FbState::Error
+            && !t.is_zero()
+            && self.invalid.exceeded(now, selected.is_none(), false, t)
+        {
+            self.core.fail(0, FbError::ModeSelection);
         }
-        let accept = run && self.state == FbState::Safe && selected.is_some();
-        let restart = self.restart.call(i.restart, accept && self.config.restart);
-        if run {
-            match (self.state, selected) {
+        let accept = running && self.core.state == FbState::Safe && selected.is_some();
+        let restart = self
+            .core
+            .restart
+            .call(i.restart, accept && self.config.restart);
+        if running {
+            match (self.core.state, selected) {
                 (FbState::Run, Some(m)) if m == self.mode => {}
                 (FbState::Run, Some(m)) if !self.config.restart => self.mode = m,
                 (FbState::Run, _) => {
-                    self.state = FbState::Safe;
-                    self.events.push(FbEvent::SafeStateDemanded {
-                        inputs: set.iter().fold(0, |m, &n| m | 1 << n),
-                    });
+                    self.core.state = FbState::Safe;
+                    let inputs = set.iter().fold(0, |m, &n| m | 1 << n);
+                    self.core.events.push(FbEvent::SafeStateDemanded { inputs });
                 }
                 (FbState::Safe, Some(m)) if restart || !self.config.restart => {
-                    self.state = FbState::Run;
                     self.mode = m;
-                    self.events.push(FbEvent::Restarted);
+                    self.core.release();
                 }
                 _ => {}
             }
         }
-        self.cause_active = self.state == FbState::Error && selected.is_none();
+        self.core.cause_active = selected.is_none();
         let mut op_out = [false; 8];
-        if self.state == FbState::Run {
+        if self.core.state == FbState::Run {
             op_out[self.mode] = true;
         }
         OpModeOutputs {
             op_out,
-            error: self.state == FbState::Error,
+            error: self.core.state == FbState::Error,
         }
-    }
-
-    /// The state after the last scan.
-    pub fn state(&self) -> FbState {
-        self.state
     }
 
     /// The selected mode (0-based) while in RUN.
     pub fn mode(&self) -> Option<usize> {
-        (self.state == FbState::Run).then_some(self.mode)
-    }
-
-    /// Diagnostic bits (seed 004 §3.3): bit 0 = discrepancy error.
-    pub fn diag(&self) -> u8 {
-        self.diag
-    }
-
-    /// What the module did in the last scan.
-    pub fn events(&self) -> &[FbEvent] {
-        &self.events
-    }
-
-    /// `true` while the selection was still invalid in the last scan.
-    pub fn error_cause_active(&self) -> bool {
-        self.cause_active
-    }
-
-    /// The group's ERR_ACK: ERROR → SAFE.
-    pub fn acknowledge(&mut self) {
-        if self.state == FbState::Error {
-            self.state = FbState::Safe;
-            self.diag = 0;
-            self.acknowledged = true;
-        }
+        (self.core.state == FbState::Run).then_some(self.mode)
     }
 }
+
+core_accessors!(OpMode);
