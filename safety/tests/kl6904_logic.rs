@@ -428,3 +428,51 @@ fn time_running_backwards_is_a_logic_fault() {
         .any(|e| matches!(e.kind, LogicEventKind::LogicFault { .. })));
     assert!(!rig.k1());
 }
+
+#[test]
+fn run_false_stops_the_group_and_a_restart_is_needed_after_it_returns() {
+    use safety::kl6904::project::{ModuleDesc, ModuleKind};
+    use safety::kl6904::signal::SignalRef;
+    let mut project = Project::new("run", 1).group("g", SignalRef::standard("ack"));
+    project.groups[0].run = Some(SignalRef::standard("run"));
+    let project = project
+        .module(
+            ModuleDesc::new(ModuleKind::Estop, "estop", "g")
+                // its own Error output as a make contact: a safe input that never demands
+                .input_contact(
+                    "EStopIn1",
+                    SignalRef::fb("estop", "Error"),
+                    safety::kl6904::signal::Contact::Make,
+                )
+                .input("Restart", SignalRef::standard("restart")),
+        )
+        .local_output(1, "K", "g", SignalRef::fb("estop", "EStopOut"));
+    let mut logic = TwinSafeLogic::new(&project).expect("valid");
+    let run = logic.standard_input("run").expect("run");
+    let restart = logic.standard_input("restart").expect("restart");
+    let g = logic.group("g").expect("g");
+    let mut t = 0;
+    let mut scan = |logic: &mut TwinSafeLogic, run_v: bool, restart_v: bool| {
+        logic.set_standard_input(run, run_v);
+        logic.set_standard_input(restart, restart_v);
+        logic.scan(SimTime::from_millis(t));
+        t += 1;
+    };
+    scan(&mut logic, false, false);
+    assert_eq!(logic.group_status(g).state, GroupState::Stop, "RUN = FALSE");
+    for r in [false, true, false] {
+        scan(&mut logic, false, r);
+    }
+    assert!(!logic.local_output(1), "stopped: no restart possible");
+    for r in [false, true, false] {
+        scan(&mut logic, true, r);
+    }
+    assert!(logic.local_output(1));
+    scan(&mut logic, false, false);
+    assert!(!logic.local_output(1), "RUN = FALSE: outputs safe at once");
+    scan(&mut logic, true, false);
+    assert!(
+        !logic.local_output(1),
+        "back in RUN: the module starts in its safe state"
+    );
+}
