@@ -476,3 +476,96 @@ fn run_false_stops_the_group_and_a_restart_is_needed_after_it_returns() {
         "back in RUN: the module starts in its safe state"
     );
 }
+
+/// Two groups on two terminals: `a` (RUN from a standard input) holds AND `a0`, then an
+/// OPMODE `m` that errors when no mode is selected for 5 ms; `b` holds AND `b1`, which reads
+/// `a0` across the group boundary.
+fn two_groups() -> TwinSafeLogic {
+    use safety::kl6904::connection::PartnerKind;
+    use safety::kl6904::project::{ModuleDesc, ModuleKind};
+    use safety::kl6904::signal::SignalRef;
+    let (ts, std) = (SignalRef::twinsafe, SignalRef::standard);
+    let ms = SimDuration::from_millis;
+    let mut p = Project::new("two", 1)
+        .group("a", std("ack"))
+        .group("b", std("ack"))
+        .connection("ta", "a", PartnerKind::Kl1904, 2, ms(100), &[])
+        .connection("tb", "b", PartnerKind::Kl1904, 3, ms(100), &[])
+        .module(
+            ModuleDesc::new(ModuleKind::And, "a0", "a")
+                .input("AndIn1", std("x"))
+                .input("AndIn2", ts("ta", 1)),
+        )
+        .module(
+            ModuleDesc::new(ModuleKind::OpMode, "m", "a")
+                .input("OpIn1", ts("ta", 2))
+                .input("OpIn2", ts("ta", 3))
+                .discrepancy(ms(5)),
+        )
+        .module(
+            ModuleDesc::new(ModuleKind::And, "b1", "b")
+                .input("AndIn1", ts("tb", 1))
+                .input("AndIn2", SignalRef::fb("a0", "AndOut")),
+        )
+        .standard_output("a_out", SignalRef::fb("a0", "AndOut"))
+        .standard_output("b_out", SignalRef::fb("b1", "AndOut"));
+    p.groups[0].run = Some(std("run_a"));
+    let mut logic = TwinSafeLogic::new(&p).expect("valid");
+    for (name, v) in [("x", true), ("run_a", true)] {
+        let h = logic.standard_input(name).expect(name);
+        logic.set_standard_input(h, v);
+    }
+    let ta = logic.connection("ta").expect("ta");
+    let tb = logic.connection("tb").expect("tb");
+    logic.set_partner_inputs(ta, 0b011); // mode 1 selected
+    logic.set_partner_inputs(tb, 0b001);
+    logic
+}
+
+fn std_out(logic: &TwinSafeLogic, name: &str) -> bool {
+    logic.standard_output_value(logic.standard_output(name).expect(name))
+}
+
+#[test]
+fn a_stopped_group_outputs_zero_to_readers_in_other_groups_in_the_same_scan() {
+    let mut logic = two_groups();
+    logic.scan(SimTime::from_millis(0));
+    assert!(std_out(&logic, "b_out"), "both groups run: b1 = a0 = 1");
+    let run_a = logic.standard_input("run_a").expect("run_a");
+    logic.set_standard_input(run_a, false);
+    logic.scan(SimTime::from_millis(1));
+    assert!(!std_out(&logic, "a_out"));
+    assert!(
+        !std_out(&logic, "b_out"),
+        "b1 read a0 as 0 in the scan group a stopped"
+    );
+}
+
+#[test]
+fn a_module_error_zeroes_its_group_in_the_scan_it_is_found() {
+    let mut logic = two_groups();
+    logic.scan(SimTime::from_millis(0));
+    assert!(std_out(&logic, "a_out"));
+    let ta = logic.connection("ta").expect("ta");
+    logic.set_partner_inputs(ta, 0b001); // no mode selected
+    let a = logic.group("a").expect("a");
+    for t in 1..20 {
+        logic.scan(SimTime::from_millis(t));
+        if logic.group_status(a).state == GroupState::Error {
+            assert_eq!(t, 7, "invalid from 1 ms, longer than 5 ms at 7 ms");
+            assert!(
+                !std_out(&logic, "a_out"),
+                "a0 ran before m, yet its output is 0 now"
+            );
+            assert!(
+                std_out(&logic, "b_out"),
+                "b1 (another group) read a0 before the trip: it sees 0 one scan later"
+            );
+            logic.scan(SimTime::from_millis(t + 1));
+            assert!(!std_out(&logic, "b_out"));
+            return;
+        }
+        assert!(std_out(&logic, "a_out"), "t = {t}");
+    }
+    panic!("OPMODE never reported its discrepancy error");
+}

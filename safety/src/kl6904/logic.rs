@@ -8,7 +8,9 @@
 //!    RUN, and the ERR_ACK 0→1→0 acknowledgement;
 //! 3. evaluates the function modules in their configured order; a module reads the values of
 //!    modules before it from this scan and of modules after it from the previous scan;
-//! 4. trips a group at once if one of its modules found an error in this scan;
+//! 4. trips a group at once if one of its modules found an error in this scan (its outputs are
+//!    0 in this scan's output image; a module of *another* group that already read one of them
+//!    in this scan sees the 0 from the next scan on);
 //! 5. writes every output: module safety outputs, local outputs and TwinSAFE-Out channels of a
 //!    group that is not in RUN are 0 (a group error drives all its outputs to the safe state,
 //!    seed 004 §3.1); modules' Error outputs and the group outputs FB_ERR/COM_ERR/OUT_ERR are
