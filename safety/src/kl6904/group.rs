@@ -37,10 +37,12 @@ impl fmt::Display for GroupState {
     }
 }
 
-/// Which error classes a group has latched: its outputs FB_ERR, COM_ERR, OUT_ERR.
+/// Which error classes a group has latched: its outputs FB_ERR, COM_ERR, OUT_ERR (seed 004
+/// table 3-2).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub struct GroupErrors {
-    /// At least one module of the group has an error.
+    /// At least one module of the group has an error; FALSE means no module has one (the
+    /// seed's Czech FALSE text, "all modules are faulty", is inverted: SPEC §8).
     pub fb_err: bool,
     /// At least one connection of the group reports an error.
     pub com_err: bool,
