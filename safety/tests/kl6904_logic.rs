@@ -569,3 +569,72 @@ fn a_module_error_zeroes_its_group_in_the_scan_it_is_found() {
     }
     panic!("OPMODE never reported its discrepancy error");
 }
+
+#[test]
+fn twinsafe_out_reaches_a_kl2904_and_fails_safe_on_a_lost_link() {
+    use safety::kl6904::connection::PartnerKind;
+    use safety::kl6904::project::{ConnectionOutputDesc, ModuleDesc, ModuleKind};
+    use safety::kl6904::signal::SignalRef;
+    let ms = SimDuration::from_millis;
+    let mut p = Project::new("out", 1)
+        .group("g", SignalRef::standard("ack"))
+        .connection("in", "g", PartnerKind::Kl1904, 2, ms(20), &[])
+        .connection("out", "g", PartnerKind::Kl2904, 3, ms(20), &[])
+        .module(
+            ModuleDesc::new(ModuleKind::And, "and", "g")
+                .input("AndIn1", SignalRef::twinsafe("in", 1))
+                .input("AndIn2", SignalRef::twinsafe("in", 2)),
+        );
+    p.connections[1].outputs = vec![ConnectionOutputDesc {
+        channel: 3,
+        source: SignalRef::fb("and", "AndOut"),
+    }];
+    let mut logic = TwinSafeLogic::new(&p).expect("valid");
+    let (cin, cout) = (
+        logic.connection("in").expect("in"),
+        logic.connection("out").expect("out"),
+    );
+    logic.set_partner_inputs(cin, 0b11);
+    for t in 0..3 {
+        logic.scan(SimTime::from_millis(t));
+    }
+    assert_eq!(
+        logic.partner_outputs(cout),
+        0b100,
+        "channel 3 on at the KL2904"
+    );
+    logic.set_partner_inputs(cin, 0b01);
+    logic.scan(SimTime::from_millis(3));
+    logic.scan(SimTime::from_millis(4));
+    assert_eq!(
+        logic.partner_outputs(cout),
+        0,
+        "follows the AND one exchange later"
+    );
+    logic.set_partner_inputs(cin, 0b11);
+    logic.scan(SimTime::from_millis(5));
+    logic.scan(SimTime::from_millis(6));
+    assert_eq!(logic.partner_outputs(cout), 0b100);
+    logic.inject(
+        cout,
+        SimTime::from_millis(7),
+        ChannelFault::Drop { duration: ms(100) },
+    );
+    // the last valid exchange was at 6 ms; both watchdogs (20 ms) expire after 26 ms
+    for t in 7..=26 {
+        logic.scan(SimTime::from_millis(t));
+    }
+    assert_eq!(
+        logic.partner_outputs(cout),
+        0b100,
+        "20 ms: the terminal's watchdog holds"
+    );
+    assert_eq!(logic.connection_diag(cout), ConnDiag(0));
+    logic.scan(SimTime::from_millis(27));
+    assert_eq!(
+        logic.partner_outputs(cout),
+        0,
+        "the KL2904's own watchdog: outputs safe"
+    );
+    assert!(logic.connection_diag(cout).contains(ConnDiag::WATCHDOG));
+}
