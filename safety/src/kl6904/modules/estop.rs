@@ -1,0 +1,132 @@
+//! The ESTOP function module (seed 004 §4.4; reference/safety.md §1.6).
+
+use asi_phy::{SimDuration, SimTime};
+
+use super::{mask, Core, FbError, FbEvent, FbState, PairMonitor};
+use crate::kl6904::signal::Contact;
+
+/// Parameters of an ESTOP module (the "Activated", contact, Delay-Time and discrepancy settings
+/// of seed 004 §4.4.3).
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct EstopConfig {
+    /// EStopIn1..8: `None` = input not activated, else its contact type.
+    pub inputs: [Option<Contact>; 8],
+    /// Discrepancy time of pairs 1/2, 3/4, 5/6, 7/8. A non-zero time makes the two inputs a
+    /// pair (seed 004 table 4-10: "if the discrepancy time is not 0"); zero leaves them single
+    /// channels.
+    pub discrepancy: [SimDuration; 4],
+    /// EDM1 (feedback of EStopOut) activated.
+    pub edm1: bool,
+    /// EDM2 (feedback of EStopDelOut) activated.
+    pub edm2: bool,
+    /// Delay Time of EStopDelOut.
+    pub delay: SimDuration,
+}
+
+/// Input values of an ESTOP module for one scan (inactive inputs are ignored).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct EstopInputs {
+    /// EStopIn1..8, raw (before the contact type).
+    pub estop_in: [bool; 8],
+    /// Restart: a 0→1→0 pulse leaves the safe state.
+    pub restart: bool,
+    /// EDM1: external feedback of EStopOut (1 = contactor released).
+    pub edm1: bool,
+    /// EDM2: external feedback of EStopDelOut.
+    pub edm2: bool,
+}
+
+/// Outputs of an ESTOP module (seed 004 table 4-11).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct EstopOutputs {
+    /// First output: 0 at once on a demand.
+    pub estop_out: bool,
+    /// Second output: 0 after the Delay Time.
+    pub estop_del_out: bool,
+    /// An error (discrepancy or EDM) is latched until the group's ERR_ACK.
+    pub error: bool,
+}
+
+/// The KL6904 emergency-stop module.
+///
+/// - As soon as an active input demands the safe state, EStopOut goes to 0 at once and
+///   EStopDelOut after the Delay Time (seed 004 §4.4.1).
+/// - The safe state — at start (group activated) and after every demand — is left only by a
+///   0→1→0 sequence on Restart, acting on its falling edge.
+/// - When a restart is accepted, every activated EDM input must read 1, else the module enters
+///   ERROR with diag bit 4/5 (a welded contactor, seed 004 §5.1).
+/// - Inputs paired by a non-zero discrepancy time may differ only for that time, else ERROR
+///   with diag bit 0–3. In ERROR all outputs are 0; only the group's ERR_ACK leaves it.
+///
+/// **Decisions** where the seed is silent:
+/// - a restart is accepted only in SAFE, i.e. once the delayed output too has gone to 0 and no
+///   input demands the safe state; a pulse during the delay is ignored (the EDM check is then
+///   meaningful: a contactor driven by EStopDelOut must have released);
+/// - an error is *resolved* (ERR_ACK may clear it) when the offending pair agrees again, or the
+///   offending EDM input reads 1 again; the group refuses the acknowledgement before that.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Estop {
+    config: EstopConfig,
+    core: Core,
+    pairs: [PairMonitor; 4],
+}
+
+impl Estop {
+    /// A module in STOP.
+    pub fn new(config: EstopConfig) -> Self {
+        Estop {
+            config,
+            ..Default::default()
+        }
+    }
+
+    /// The parameters.
+    pub fn config(&self) -> &EstopConfig {
+        &self.config
+    }
+
+    /// One scan at `now`; `run` is whether the module's group is in RUN.
+    pub fn scan(&mut self, now: SimTime, run: bool, i: &EstopInputs) -> EstopOutputs {
+        let cfg = &self.config;
+        let demands: [bool; 8] =
+            core::array::from_fn(|n| cfg.inputs[n].is_some_and(|c| c.demands(i.estop_in[n])));
+        let edm_bad = [cfg.edm1 && !i.edm1, cfg.edm2 && !i.edm2];
+
+        let running = self.core.begin(run);
+        if !running || self.core.state == FbState::Error {
+            self.pairs.iter_mut().for_each(PairMonitor::reset);
+        } else {
+            for k in 0..4 {
+                let t = cfg.discrepancy[k];
+                if !t.is_zero()
+                    && self.pairs[k].exceeded(now, demands[2 * k], demands[2 * k + 1], t)
+                {
+                    self.core
+                        .fail(k as u8, FbError::Discrepancy { pair: k as u8 + 1 });
+                }
+            }
+        }
+        let demand = mask(demands);
+        let accept = running && self.core.state == FbState::Safe && demand == 0;
+        let restart = self.core.restart.call(i.restart, accept);
+        if running {
+            match self.core.state {
+                FbState::Run | FbState::DelayOut => self.core.supervise(now, demand, cfg.delay),
+                FbState::Safe if restart => self.core.restart_checking_edm(edm_bad),
+                _ => {}
+            }
+        }
+        let diag = self.core.diag;
+        self.core.cause_active = (0..4)
+            .any(|k| diag & 1 << k != 0 && demands[2 * k] != demands[2 * k + 1])
+            || self.core.edm_cause_active(edm_bad);
+        let (estop_out, estop_del_out, error) = self.core.outputs();
+        EstopOutputs {
+            estop_out,
+            estop_del_out,
+            error,
+        }
+    }
+}
+
+core_accessors!(Estop);

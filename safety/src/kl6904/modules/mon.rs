@@ -1,0 +1,177 @@
+//! The MON function module (seed 004 §4.5; reference/safety.md §1.6).
+
+use asi_phy::{SimDuration, SimTime};
+
+use super::{mask, Core, FbError, FbEvent, FbState, PairMonitor};
+use crate::kl6904::signal::Contact;
+
+/// Parameters of a MON module (seed 004 §4.5.3).
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct MonConfig {
+    /// MonIn1..4 (four inputs, SPEC §8): `None` = not activated, else the contact type.
+    pub inputs: [Option<Contact>; 4],
+    /// Discrepancy time of pairs MonIn1/2 and MonIn3/4; non-zero makes a pair.
+    pub discrepancy: [SimDuration; 2],
+    /// Secure1 and Secure2 (muting): `None` = not used, else their contact type. Both inputs
+    /// of the pair share it.
+    pub secure: Option<Contact>,
+    /// Discrepancy time of the Secure pair; non-zero activates the check.
+    pub secure_discrepancy: SimDuration,
+    /// "Manual": leaving the safe state needs a 0→1→0 pulse on Restart; otherwise it is left
+    /// automatically when no input demands it.
+    pub manual_restart: bool,
+    /// "Manual Function Test": after the module starts, every active MonIn must demand the safe
+    /// state once before the safe state can be left.
+    pub function_test: bool,
+    /// EDM1 (feedback of MonOut) activated.
+    pub edm1: bool,
+    /// EDM2 (feedback of MonDelOut) activated.
+    pub edm2: bool,
+    /// Delay Time of MonDelOut.
+    pub delay: SimDuration,
+}
+
+/// Input values of a MON module for one scan.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct MonInputs {
+    /// MonIn1..4, raw.
+    pub mon_in: [bool; 4],
+    /// Secure1, Secure2, raw.
+    pub secure: [bool; 2],
+    /// Restart (used only with manual restart).
+    pub restart: bool,
+    /// EDM1 (1 = contactor released).
+    pub edm1: bool,
+    /// EDM2.
+    pub edm2: bool,
+}
+
+/// Outputs of a MON module (seed 004 table 4-14).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct MonOutputs {
+    /// First output: 0 at once on a demand.
+    pub mon_out: bool,
+    /// Second output: 0 after the Delay Time.
+    pub mon_del_out: bool,
+    /// An error is latched until the group's ERR_ACK.
+    pub error: bool,
+}
+
+/// Diagnostic bit of a Secure-pair discrepancy (seed 004 §3.3; 0–1 are the MonIn pairs, 4–5
+/// EDM1/EDM2).
+const SECURE_BIT: u8 = 2;
+
+/// The KL6904 monitoring module (safety door, or the lift's overtravel sensors).
+///
+/// - An active MonIn demanding the safe state drops MonOut at once and MonDelOut after the
+///   Delay Time, unless muted: with Secure inputs as break contacts the MonIn inputs are
+///   ignored while Secure1 = Secure2 = 1, as make contacts while both are 0.
+/// - Manual restart: the safe state is left by a 0→1→0 Restart pulse; an activated EDM input
+///   that is not 1 at that moment is an error (diag bit 4/5).
+/// - Automatic restart: the safe state is left as soon as nothing demands it; an EDM input that
+///   is not 1 then keeps the module in SAFE *without* an error (seed 004 §4.5.1: "an EDM error
+///   is only detected with manual restart"; reference/safety.md §10 point 5 — kept as the seed
+///   says, and shown as a SAFE module whose EDM input is 0).
+/// - MonIn pairs and the Secure pair are discrepancy-monitored; manual function test as in
+///   [`MonConfig::function_test`].
+///
+/// **Decisions**: as for ESTOP, a restart is accepted only in SAFE (after the delay); the
+/// function test counts the raw demands (muted or not) since the module last started (group
+/// start or restart after an error) and applies before the first release after that start.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Mon {
+    config: MonConfig,
+    core: Core,
+    pairs: [PairMonitor; 2],
+    secure_pair: PairMonitor,
+    tested: [bool; 4],
+}
+
+impl Mon {
+    /// A module in STOP.
+    pub fn new(config: MonConfig) -> Self {
+        Mon {
+            config,
+            ..Default::default()
+        }
+    }
+
+    /// The parameters.
+    pub fn config(&self) -> &MonConfig {
+        &self.config
+    }
+
+    /// One scan at `now`; `run` is whether the module's group is in RUN.
+    pub fn scan(&mut self, now: SimTime, run: bool, i: &MonInputs) -> MonOutputs {
+        let cfg = &self.config;
+        let raw: [bool; 4] =
+            core::array::from_fn(|n| cfg.inputs[n].is_some_and(|c| c.demands(i.mon_in[n])));
+        let secure_on = cfg
+            .secure
+            .map(|c| [c.normalise(i.secure[0]), c.normalise(i.secure[1])]);
+        let muted = secure_on.is_some_and(|[a, b]| a && b);
+        let demands = if muted { [false; 4] } else { raw };
+        let edm_bad = [cfg.edm1 && !i.edm1, cfg.edm2 && !i.edm2];
+
+        let was_stopped = self.core.state == FbState::Stop;
+        let running = self.core.begin(run);
+        if running && was_stopped {
+            self.tested = [false; 4];
+        }
+        for (t, d) in self.tested.iter_mut().zip(raw) {
+            *t |= d;
+        }
+        if !running || self.core.state == FbState::Error {
+            self.pairs.iter_mut().for_each(PairMonitor::reset);
+            self.secure_pair.reset();
+        } else {
+            for k in 0..2 {
+                let t = cfg.discrepancy[k];
+                if !t.is_zero() && self.pairs[k].exceeded(now, raw[2 * k], raw[2 * k + 1], t) {
+                    self.core
+                        .fail(k as u8, FbError::Discrepancy { pair: k as u8 + 1 });
+                }
+            }
+            if let Some([a, b]) = secure_on {
+                let t = cfg.secure_discrepancy;
+                if !t.is_zero() && self.secure_pair.exceeded(now, a, b, t) {
+                    self.core.fail(SECURE_BIT, FbError::SecureDiscrepancy);
+                }
+            }
+        }
+
+        let demand = mask(demands);
+        let tested =
+            !cfg.function_test || (0..4).all(|n| cfg.inputs[n].is_none() || self.tested[n]);
+        let may_leave = running && self.core.state == FbState::Safe && demand == 0 && tested;
+        let restart = self
+            .core
+            .restart
+            .call(i.restart, may_leave && cfg.manual_restart);
+        if running {
+            match self.core.state {
+                FbState::Run | FbState::DelayOut => self.core.supervise(now, demand, cfg.delay),
+                FbState::Safe if cfg.manual_restart && restart => {
+                    self.core.restart_checking_edm(edm_bad);
+                }
+                FbState::Safe if !cfg.manual_restart && may_leave && !edm_bad.contains(&true) => {
+                    self.core.release();
+                }
+                _ => {}
+            }
+        }
+
+        let diag = self.core.diag;
+        self.core.cause_active = (0..2).any(|k| diag & 1 << k != 0 && raw[2 * k] != raw[2 * k + 1])
+            || (diag & 1 << SECURE_BIT != 0 && secure_on.is_some_and(|[a, b]| a != b))
+            || self.core.edm_cause_active(edm_bad);
+        let (mon_out, mon_del_out, error) = self.core.outputs();
+        MonOutputs {
+            mon_out,
+            mon_del_out,
+            error,
+        }
+    }
+}
+
+core_accessors!(Mon);

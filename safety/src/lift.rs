@@ -1,0 +1,659 @@
+//! The lift's safety project (SPEC §6; reference/safety.md §8.4): a KL6904 that owns the drive
+//! contactor K1 and guards the lift for the cabin STOP button, the overtravel limits and
+//! overload.
+//!
+//! ```text
+//!  cabin KL1904 (addr 2) --conn 1 `cabin_stop`--+
+//!    stop_ch1, stop_ch2 (NC)                    |   ESTOP `stop` (pair 1/2, 50 ms, delay)
+//!                                               +-> EStopIn1/2   EStopOut ------> estop_out (to the PLC)
+//!  std:controller_restart ------------------------> Restart      EStopDelOut --+
+//!  cabinet KL1904 (addr 3) --conn 2 `cabinet`---+-> EDM1 (k1_aux)              |
+//!    overtravel_bottom, overtravel_top,         |                              |  AND `k1`
+//!    k1_aux                                     |   MON `overtravel` (manual)  +-> AndIn2
+//!                                               +-> MonIn1/2     MonOut -------> AndIn3     AndOut -> Local-Out 1 = K1
+//!  std:operator_reset ----------------------------> Restart                 std:overloaded -> AndIn1 (make contact)
+//!                                               +-> EDM1 (k1_aux)
+//!  std:err_ack -----> group `drive` ERR_ACK (RUN unconnected = TRUE); COM_ERR/FB_ERR/OUT_ERR -> PLC
+//! ```
+//!
+//! K1 = AND(not overloaded, ESTOP.EStopDelOut, MON.MonOut). All of it is one group, `drive`: a
+//! lost or corrupted telegram on either connection trips COM_ERR and K1 drops at once.
+
+use asi_phy::{SimDuration, SimTime};
+use core::fmt;
+
+use crate::kl6904::connection::{ChannelFault, ConnDiag, PartnerKind};
+use crate::kl6904::group::GroupErrors;
+use crate::kl6904::logic::{
+    ConnectionId, GroupId, GroupStatus, LogicEvent, LogicEventKind, ModuleId, ModuleStatus,
+    StandardInput, StandardOutput,
+};
+use crate::kl6904::modules::{FbError, FbEvent, FbState};
+use crate::kl6904::project::{ModuleDesc, ModuleKind, Project};
+use crate::kl6904::signal::{Contact, GroupOutput, SignalRef};
+use crate::kl6904::verify::VerifyError;
+use crate::kl6904::TwinSafeLogic;
+
+/// The safety scan period the rig should call [`LiftSafety::scan`] with: **1 ms**.
+///
+/// Why: the logic must see every change of its inputs at a finer grain than the times it
+/// monitors. 1 ms resolves the 50 ms STOP discrepancy time to 2 % and the 100 ms watchdog to
+/// 1 %; it is shorter than one AS-i cycle of the lab bus ((9 + 2) · 154 µs ≈ 1.7 ms, SPEC §2),
+/// so the safety monitor's release state is sampled at least once per bus cycle, and ten times
+/// finer than the controller's 10 ms scan, so a controller pulse (≥ one controller scan) is
+/// always seen high and low. Each connection exchanges one telegram per scan; scanning much
+/// slower than the watchdog (100 ms) would trip COM_ERR by itself.
+pub const SAFETY_SCAN_PERIOD: SimDuration = SimDuration::from_millis(1);
+
+/// How the default STOP delay (the time EStopDelOut keeps K1 closed after STOP) is derived from
+/// the lift: the controller stops at the next floor in the direction of travel (SPEC §5), so
+/// the delay must cover the worst case of a STOP pressed just after leaving a floor.
+///
+/// Worst case = run at travel speed up to the approach point, creep over the approach
+/// distance, brake, plus a margin:
+///
+/// `delay = (pitch − approach) / v_travel + approach / v_creep + v_creep / a_brake + margin`
+///
+/// With the defaults (SPEC §4: pitch 400 mm; Rychlost 10000 → 59.416 mm/s, 6000 → 20.550 mm/s;
+/// the long vane track starts braking 40 mm before the level; 500 mm/s² brake; 1 s margin for
+/// ramps and the controller's 10 ms reaction) that is 6.059 + 1.946 + 0.041 + 1 = 9.046 s,
+/// rounded up to the next 100 ms: **9.1 s**. A plain "one pitch at travel speed plus braking"
+/// (6.85 s) would drop K1 before a creeping cabin reaches the floor.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StopDelayModel {
+    /// Floor pitch in mm.
+    pub floor_pitch_mm: f64,
+    /// Travel speed in mm/s.
+    pub travel_speed_mm_s: f64,
+    /// Distance before the level where the controller slows to creep speed, in mm.
+    pub approach_mm: f64,
+    /// Creep (approach) speed in mm/s.
+    pub approach_speed_mm_s: f64,
+    /// Braking deceleration in mm/s².
+    pub deceleration_mm_s2: f64,
+    /// Margin added on top.
+    pub margin: SimDuration,
+}
+
+impl Default for StopDelayModel {
+    fn default() -> Self {
+        StopDelayModel {
+            floor_pitch_mm: 400.0,
+            travel_speed_mm_s: 59.416,
+            approach_mm: 40.0,
+            approach_speed_mm_s: 20.550,
+            deceleration_mm_s2: 500.0,
+            margin: SimDuration::from_secs(1),
+        }
+    }
+}
+
+impl StopDelayModel {
+    /// The delay, rounded up to the next 100 ms. Nonsensical numbers (zero or negative speeds)
+    /// give the margin alone plus whatever terms are finite.
+    pub fn delay(&self) -> SimDuration {
+        let term = |num: f64, den: f64| if den > 0.0 { (num / den).max(0.0) } else { 0.0 };
+        let secs = term(
+            self.floor_pitch_mm - self.approach_mm,
+            self.travel_speed_mm_s,
+        ) + term(self.approach_mm, self.approach_speed_mm_s)
+            + term(self.approach_speed_mm_s, self.deceleration_mm_s2);
+        let tenths = (secs * 10.0).ceil();
+        let base = SimDuration::from_secs_f64(tenths / 10.0).unwrap_or(SimDuration::ZERO);
+        base + self.margin
+    }
+}
+
+/// Parameters of the lift's safety project.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct LiftSafetyConfig {
+    /// Delay of EStopDelOut: how long K1 stays closed after STOP (default: [`StopDelayModel`]).
+    pub estop_delay: SimDuration,
+    /// Discrepancy time of the two STOP channels (SPEC §6: 50 ms).
+    pub stop_discrepancy: SimDuration,
+    /// Watchdog time of both TwinSAFE connections.
+    ///
+    /// **Decision**: 100 ms — a hundred scans, so single lost telegrams never trip, and short
+    /// against the lift's stopping time, so a dead link removes power within 0.1 s.
+    pub watchdog: SimDuration,
+    /// The KL6904's TwinSAFE address.
+    pub logic_address: u16,
+    /// The cabin KL1904 (STOP contacts).
+    pub stop_terminal_address: u16,
+    /// The cabinet KL1904 (safety monitor outputs, K1 auxiliary contact).
+    pub cabinet_terminal_address: u16,
+}
+
+impl Default for LiftSafetyConfig {
+    fn default() -> Self {
+        LiftSafetyConfig {
+            estop_delay: StopDelayModel::default().delay(),
+            stop_discrepancy: SimDuration::from_millis(50),
+            watchdog: SimDuration::from_millis(100),
+            logic_address: 1,
+            stop_terminal_address: 2,
+            cabinet_terminal_address: 3,
+        }
+    }
+}
+
+/// Names used in the project.
+mod names {
+    pub const GROUP: &str = "drive";
+    pub const STOP_LINK: &str = "cabin_stop";
+    pub const CABINET_LINK: &str = "cabinet";
+    pub const ESTOP: &str = "stop";
+    pub const MON: &str = "overtravel";
+    pub const AND: &str = "k1";
+}
+
+impl LiftSafetyConfig {
+    /// The lift's safety project for these parameters (the same as `safety/projects/lift.toml`
+    /// with the defaults).
+    pub fn project(&self) -> Project {
+        use names::*;
+        let ts = SignalRef::twinsafe;
+        let std = SignalRef::standard;
+        Project::new("asi-lift safety", self.logic_address)
+            .group(GROUP, std("err_ack"))
+            .connection(
+                STOP_LINK,
+                GROUP,
+                PartnerKind::Kl1904,
+                self.stop_terminal_address,
+                self.watchdog,
+                &["stop_ch1", "stop_ch2"],
+            )
+            .connection(
+                CABINET_LINK,
+                GROUP,
+                PartnerKind::Kl1904,
+                self.cabinet_terminal_address,
+                self.watchdog,
+                &["overtravel_bottom", "overtravel_top", "k1_aux"],
+            )
+            .module(
+                ModuleDesc::new(ModuleKind::Estop, ESTOP, GROUP)
+                    .input("EStopIn1", ts(STOP_LINK, "stop_ch1"))
+                    .input("EStopIn2", ts(STOP_LINK, "stop_ch2"))
+                    .input("Restart", std("controller_restart"))
+                    .input("EDM1", ts(CABINET_LINK, "k1_aux"))
+                    .pair_discrepancy(&[self.stop_discrepancy])
+                    .delay(self.estop_delay),
+            )
+            .module(
+                ModuleDesc::new(ModuleKind::Mon, MON, GROUP)
+                    .input("MonIn1", ts(CABINET_LINK, "overtravel_bottom"))
+                    .input("MonIn2", ts(CABINET_LINK, "overtravel_top"))
+                    .input("Restart", std("operator_reset"))
+                    .input("EDM1", ts(CABINET_LINK, "k1_aux"))
+                    .manual_restart(true),
+            )
+            .module(
+                ModuleDesc::new(ModuleKind::And, AND, GROUP)
+                    .input_contact("AndIn1", std("overloaded"), Contact::Make)
+                    .input("AndIn2", SignalRef::fb(ESTOP, "EStopDelOut"))
+                    .input("AndIn3", SignalRef::fb(MON, "MonOut")),
+            )
+            .local_output(1, "K1", GROUP, SignalRef::fb(AND, "AndOut"))
+            .standard_output("estop_out", SignalRef::fb(ESTOP, "EStopOut"))
+            .standard_output("fb_err", SignalRef::group(GROUP, GroupOutput::FbErr))
+            .standard_output("com_err", SignalRef::group(GROUP, GroupOutput::ComErr))
+            .standard_output("out_err", SignalRef::group(GROUP, GroupOutput::OutErr))
+    }
+}
+
+/// What the rig gives the safety logic each scan.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct LiftSafetyInputs {
+    /// STOP button channel 1, NC contact: `true` = closed = not pressed. Travels over
+    /// connection 1.
+    pub stop_ch1: bool,
+    /// STOP button channel 2, NC contact.
+    pub stop_ch2: bool,
+    /// The passive AS-i safety monitor releases for the bottom overtravel sensor (sensor free).
+    pub overtravel_bottom_released: bool,
+    /// The same for the top sensor.
+    pub overtravel_top_released: bool,
+    /// Load level 3 (overloaded), from the PLC: a standard signal.
+    pub overloaded: bool,
+    /// K1's auxiliary NC contact: `true` = K1 released (EDM feedback).
+    pub k1_aux: bool,
+    /// The operator's reset button (overtravel recovery), a standard signal.
+    pub operator_reset: bool,
+    /// The operator's acknowledge (group ERR_ACK), a standard signal.
+    pub err_ack: bool,
+    /// The controller's restart of the STOP circuit, pulsed on the next cabin request.
+    pub controller_restart: bool,
+}
+
+impl LiftSafetyInputs {
+    /// Everything healthy and at rest: STOP closed, sensors free, not overloaded, K1 released,
+    /// no buttons.
+    pub const fn healthy() -> Self {
+        LiftSafetyInputs {
+            stop_ch1: true,
+            stop_ch2: true,
+            overtravel_bottom_released: true,
+            overtravel_top_released: true,
+            overloaded: false,
+            k1_aux: true,
+            operator_reset: false,
+            err_ack: false,
+            controller_restart: false,
+        }
+    }
+}
+
+/// Why K1 is open.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum K1Cause {
+    /// The whole logic stopped on an internal fault.
+    LogicFault,
+    /// The group is in ERROR (or RESET) with these errors latched: waiting for ERR_ACK.
+    GroupError(GroupErrors),
+    /// The STOP button is pressed (a channel open) and its delay has elapsed.
+    StopPressed,
+    /// STOP released, but the STOP circuit waits for the controller's restart.
+    StopRestartPending,
+    /// An overtravel sensor is tripped.
+    Overtravel {
+        /// The bottom sensor is tripped.
+        bottom: bool,
+        /// The top sensor is tripped.
+        top: bool,
+    },
+    /// The sensors are free again; the overtravel monitor waits for the operator's reset.
+    OvertravelResetPending,
+    /// The cabin is overloaded.
+    Overloaded,
+}
+
+impl fmt::Display for K1Cause {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            K1Cause::LogicFault => f.write_str("safety logic fault"),
+            K1Cause::GroupError(e) => write!(f, "group error ({e}), waiting for ERR_ACK"),
+            K1Cause::StopPressed => f.write_str("STOP pressed"),
+            K1Cause::StopRestartPending => {
+                f.write_str("STOP circuit waiting for the controller's restart")
+            }
+            K1Cause::Overtravel { bottom, top } => {
+                let which = match (bottom, top) {
+                    (true, true) => "bottom and top",
+                    (true, false) => "bottom",
+                    _ => "top",
+                };
+                write!(f, "overtravel {which} sensor tripped")
+            }
+            K1Cause::OvertravelResetPending => {
+                f.write_str("overtravel monitor waiting for the operator's reset")
+            }
+            K1Cause::Overloaded => f.write_str("cabin overloaded"),
+        }
+    }
+}
+
+/// The kind of a [`LiftSafetyEvent`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum LiftEventKind {
+    /// Power or enable was taken away: a safety function tripped, K1 opened, a group tripped.
+    Trip,
+    /// An error was detected (FB_ERR, COM_ERR, OUT_ERR, logic fault).
+    Error,
+    /// A safety function was reset, K1 closed.
+    Release,
+    /// ERR_ACK accepted.
+    Acknowledge,
+    /// Anything else worth a log line (start-up).
+    Info,
+}
+
+/// One line of the safety log.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct LiftSafetyEvent {
+    /// When (the scan's time).
+    pub at: SimTime,
+    /// What kind.
+    pub kind: LiftEventKind,
+    /// The cause in words, e.g. `tripped: STOP demanded (channel 1 open)`.
+    pub cause: String,
+}
+
+impl LiftSafetyEvent {
+    /// The time in seconds, for the rig's `at_s`.
+    pub fn at_s(&self) -> f64 {
+        self.at.as_secs_f64()
+    }
+
+    /// `true` for trips and errors.
+    pub fn is_trip(&self) -> bool {
+        matches!(self.kind, LiftEventKind::Trip | LiftEventKind::Error)
+    }
+}
+
+impl fmt::Display for LiftSafetyEvent {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}: {}", self.at, self.cause)
+    }
+}
+
+/// The state of the safety logic after a scan, for displays and logs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct LiftSafetyDiag {
+    /// The `drive` group: state and FB_ERR/COM_ERR/OUT_ERR.
+    pub group: GroupStatus,
+    /// Diag byte of connection 1 (cabin STOP terminal).
+    pub stop_link: ConnDiag,
+    /// Diag byte of connection 2 (cabinet terminal).
+    pub cabinet_link: ConnDiag,
+    /// The ESTOP module (STOP): state and diag bits (0 = STOP pair discrepancy, 4 = EDM1).
+    pub estop: ModuleStatus,
+    /// The MON module (overtravel): state and diag bits (4 = EDM1).
+    pub overtravel: ModuleStatus,
+    /// Why K1 is open, or `None` while it is closed.
+    pub k1_open_cause: Option<K1Cause>,
+    /// `true` once the logic has stopped on an internal fault.
+    pub logic_fault: bool,
+}
+
+/// What the safety logic gives the rig each scan.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct LiftSafetyOutputs {
+    /// Command of contactor K1 (drive power): `true` = closed.
+    pub k1: bool,
+    /// ESTOP's immediate output to the controller: `false` = STOP demanded, stop at the next
+    /// floor (or not yet restarted).
+    pub estop_out: bool,
+    /// The logic's state.
+    pub diag: LiftSafetyDiag,
+    /// What happened in this scan.
+    pub events: Vec<LiftSafetyEvent>,
+}
+
+/// Which safe link a fault is injected into.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum SafeLink {
+    /// Connection 1: the cabin KL1904 with the STOP contacts.
+    CabinStop,
+    /// Connection 2: the cabinet KL1904 with the overtravel monitor and K1's auxiliary contact.
+    Cabinet,
+}
+
+/// Why the lift's safety project cannot be built.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum LiftSafetyError {
+    /// The configuration gives a project the verifier rejects (e.g. two equal addresses).
+    #[error("the lift's safety project was rejected: {}", .0.iter().map(ToString::to_string).collect::<Vec<_>>().join("; "))]
+    Rejected(Vec<VerifyError>),
+    /// The built project lacks an item the lift needs (a defect of this crate).
+    #[error("the lift's safety project lacks `{0}`")]
+    Missing(&'static str),
+}
+
+/// Handles into the running logic.
+#[derive(Clone, Copy, Debug)]
+struct Ids {
+    group: GroupId,
+    stop_link: ConnectionId,
+    cabinet_link: ConnectionId,
+    estop: ModuleId,
+    mon: ModuleId,
+    overloaded: StandardInput,
+    operator_reset: StandardInput,
+    err_ack: StandardInput,
+    controller_restart: StandardInput,
+    estop_out: StandardOutput,
+}
+
+/// The lift's safety logic: call [`LiftSafety::scan`] every [`SAFETY_SCAN_PERIOD`].
+#[derive(Clone, Debug)]
+pub struct LiftSafety {
+    config: LiftSafetyConfig,
+    logic: TwinSafeLogic,
+    ids: Ids,
+    k1: bool,
+}
+
+impl LiftSafety {
+    /// Build and verify the project for `config`. K1 starts open; it closes once the group
+    /// runs, the controller has pulsed `controller_restart` and the operator `operator_reset`
+    /// (a start-up needs both resets, like the real rig after power-on).
+    pub fn new(config: LiftSafetyConfig) -> Result<Self, LiftSafetyError> {
+        let logic = TwinSafeLogic::new(&config.project()).map_err(LiftSafetyError::Rejected)?;
+        fn find<T>(what: Option<T>, name: &'static str) -> Result<T, LiftSafetyError> {
+            what.ok_or(LiftSafetyError::Missing(name))
+        }
+        let ids = Ids {
+            group: find(logic.group(names::GROUP), names::GROUP)?,
+            stop_link: find(logic.connection(names::STOP_LINK), names::STOP_LINK)?,
+            cabinet_link: find(logic.connection(names::CABINET_LINK), names::CABINET_LINK)?,
+            estop: find(logic.module(names::ESTOP), names::ESTOP)?,
+            mon: find(logic.module(names::MON), names::MON)?,
+            overloaded: find(logic.standard_input("overloaded"), "overloaded")?,
+            operator_reset: find(logic.standard_input("operator_reset"), "operator_reset")?,
+            err_ack: find(logic.standard_input("err_ack"), "err_ack")?,
+            controller_restart: find(
+                logic.standard_input("controller_restart"),
+                "controller_restart",
+            )?,
+            estop_out: find(logic.standard_output("estop_out"), "estop_out")?,
+        };
+        Ok(LiftSafety {
+            config,
+            logic,
+            ids,
+            k1: false,
+        })
+    }
+
+    /// The parameters.
+    pub fn config(&self) -> &LiftSafetyConfig {
+        &self.config
+    }
+
+    /// The underlying KL6904, for deeper diagnostics.
+    pub fn logic(&self) -> &TwinSafeLogic {
+        &self.logic
+    }
+
+    fn link(&self, link: SafeLink) -> ConnectionId {
+        match link {
+            SafeLink::CabinStop => self.ids.stop_link,
+            SafeLink::Cabinet => self.ids.cabinet_link,
+        }
+    }
+
+    /// The rig's "safe-link-drop" fault: `link` delivers no telegrams from `at` for
+    /// `duration`. Longer than the watchdog (100 ms) trips COM_ERR and drops K1.
+    pub fn drop_link(&mut self, link: SafeLink, at: SimTime, duration: SimDuration) {
+        self.inject_link_fault(link, at, ChannelFault::Drop { duration });
+    }
+
+    /// Any black-channel fault on `link` at `at` (corrupted CRC, replay, wrong address, null
+    /// telegram, drop).
+    pub fn inject_link_fault(&mut self, link: SafeLink, at: SimTime, fault: ChannelFault) {
+        let c = self.link(link);
+        self.logic.inject(c, at, fault);
+    }
+
+    /// Make local output 1 (K1) report an error (OUT_ERR) while `faulty`.
+    pub fn set_k1_output_fault(&mut self, faulty: bool) {
+        self.logic.set_local_output_fault(1, faulty);
+    }
+
+    /// Stop the whole logic at the next scan (internal logic fault).
+    pub fn inject_logic_fault(&mut self, cause: &str) {
+        self.logic.inject_logic_fault(cause);
+    }
+
+    /// One safety scan at `now` with `inputs`.
+    pub fn scan(&mut self, now: SimTime, inputs: &LiftSafetyInputs) -> LiftSafetyOutputs {
+        let i = inputs;
+        let ids = self.ids;
+        self.logic.set_standard_input(ids.overloaded, i.overloaded);
+        self.logic
+            .set_standard_input(ids.operator_reset, i.operator_reset);
+        self.logic.set_standard_input(ids.err_ack, i.err_ack);
+        self.logic
+            .set_standard_input(ids.controller_restart, i.controller_restart);
+        self.logic.set_partner_inputs(
+            ids.stop_link,
+            u8::from(i.stop_ch1) | u8::from(i.stop_ch2) << 1,
+        );
+        self.logic.set_partner_inputs(
+            ids.cabinet_link,
+            u8::from(i.overtravel_bottom_released)
+                | u8::from(i.overtravel_top_released) << 1
+                | u8::from(i.k1_aux) << 2,
+        );
+        let mut events: Vec<LiftSafetyEvent> = self
+            .logic
+            .scan(now)
+            .iter()
+            .map(|e| describe(e, &self.config))
+            .collect();
+
+        let k1 = self.logic.local_output(1);
+        let estop_out = self.logic.standard_output_value(ids.estop_out);
+        let diag = LiftSafetyDiag {
+            group: self.logic.group_status(ids.group),
+            stop_link: self.logic.connection_diag(ids.stop_link),
+            cabinet_link: self.logic.connection_diag(ids.cabinet_link),
+            estop: self.logic.module_status(ids.estop),
+            overtravel: self.logic.module_status(ids.mon),
+            k1_open_cause: (!k1).then(|| self.k1_cause(i)),
+            logic_fault: self.logic.logic_fault().is_some(),
+        };
+        if k1 != self.k1 {
+            let (kind, cause) = match diag.k1_open_cause {
+                None => (
+                    LiftEventKind::Release,
+                    "K1 closed: drive power on".to_owned(),
+                ),
+                Some(c) => (LiftEventKind::Trip, format!("K1 opened: {c}")),
+            };
+            events.push(LiftSafetyEvent {
+                at: now,
+                kind,
+                cause,
+            });
+            self.k1 = k1;
+        }
+        LiftSafetyOutputs {
+            k1,
+            estop_out,
+            diag,
+            events,
+        }
+    }
+
+    /// The highest-priority reason K1 is open now.
+    fn k1_cause(&self, i: &LiftSafetyInputs) -> K1Cause {
+        let group = self.logic.group_status(self.ids.group);
+        let estop = self.logic.module_status(self.ids.estop).state;
+        let mon = self.logic.module_status(self.ids.mon).state;
+        if self.logic.logic_fault().is_some() {
+            K1Cause::LogicFault
+        } else if group.errors.any() {
+            K1Cause::GroupError(group.errors)
+        } else if !matches!(estop, FbState::Run | FbState::DelayOut) {
+            if i.stop_ch1 && i.stop_ch2 {
+                K1Cause::StopRestartPending
+            } else {
+                K1Cause::StopPressed
+            }
+        } else if mon != FbState::Run {
+            if i.overtravel_bottom_released && i.overtravel_top_released {
+                K1Cause::OvertravelResetPending
+            } else {
+                K1Cause::Overtravel {
+                    bottom: !i.overtravel_bottom_released,
+                    top: !i.overtravel_top_released,
+                }
+            }
+        } else {
+            K1Cause::Overloaded
+        }
+    }
+}
+
+/// A logic event in the lift's words.
+fn describe(e: &LogicEvent, config: &LiftSafetyConfig) -> LiftSafetyEvent {
+    use LiftEventKind::*;
+    let (kind, cause) = match &e.kind {
+        LogicEventKind::Module { module, event, .. } if module == names::ESTOP => match event {
+            FbEvent::SafeStateDemanded { inputs } => {
+                let channels: Vec<String> = (0..2)
+                    .filter(|b| inputs & 1 << b != 0)
+                    .map(|b| (b + 1).to_string())
+                    .collect();
+                (
+                    Trip,
+                    format!(
+                        "tripped: STOP demanded (channel {} open); estop_out off, K1 off in {}",
+                        channels.join(" and "),
+                        config.estop_delay
+                    ),
+                )
+            }
+            FbEvent::DelayedOutputOff => (
+                Trip,
+                format!(
+                    "STOP delay of {} elapsed: EStopDelOut off",
+                    config.estop_delay
+                ),
+            ),
+            FbEvent::Restarted => (
+                Release,
+                "STOP circuit restarted by the controller".to_owned(),
+            ),
+            FbEvent::Error(FbError::Discrepancy { .. }) => (
+                Error,
+                format!(
+                    "FB_ERR: STOP channels disagree for longer than {}",
+                    config.stop_discrepancy
+                ),
+            ),
+            FbEvent::Error(FbError::Edm { .. }) => (
+                Error,
+                "FB_ERR: K1 auxiliary contact open at the STOP restart (K1 welded?)".to_owned(),
+            ),
+            _ => (Info, e.kind.to_string()),
+        },
+        LogicEventKind::Module { module, event, .. } if module == names::MON => match event {
+            FbEvent::SafeStateDemanded { inputs } => {
+                let which = match inputs & 0b11 {
+                    0b11 => "bottom and top sensors",
+                    0b01 => "bottom sensor",
+                    _ => "top sensor",
+                };
+                (
+                    Trip,
+                    format!("tripped: overtravel {which} (safety monitor not released); K1 off"),
+                )
+            }
+            FbEvent::Restarted => (
+                Release,
+                "overtravel monitor reset by the operator".to_owned(),
+            ),
+            FbEvent::Error(FbError::Edm { .. }) => (
+                Error,
+                "FB_ERR: K1 auxiliary contact open at the overtravel reset (K1 welded?)".to_owned(),
+            ),
+            _ => (Info, e.kind.to_string()),
+        },
+        LogicEventKind::Connection { .. } if e.is_trip() => (Error, e.kind.to_string()),
+        LogicEventKind::GroupTripped { .. } => (Trip, e.kind.to_string()),
+        LogicEventKind::GroupAcknowledged { .. } => (Acknowledge, e.kind.to_string()),
+        LogicEventKind::LocalOutputFault { .. } | LogicEventKind::LogicFault { .. } => {
+            (Error, e.kind.to_string())
+        }
+        _ => (Info, e.kind.to_string()),
+    };
+    LiftSafetyEvent {
+        at: e.at,
+        kind,
+        cause,
+    }
+}
