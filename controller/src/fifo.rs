@@ -1,0 +1,122 @@
+//! The request memories FIFO_Kabina and FIFO_Patra (seed 003 §6.5, table 6.1: `INT[4]`).
+//!
+//! The seed loads them with the FIFO Load instruction and unloads the next target with FIFO
+//! Unload when the cabin stands at its target. SPEC §5 adds: a floor already queued is not
+//! queued again. A full memory refuses the request, as FFL does when its done bit is set.
+
+/// What happened to a request offered to a [`RequestFifo`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Offer {
+    /// Stored at the back.
+    Stored,
+    /// The floor is queued already.
+    AlreadyQueued,
+    /// All places are taken; the request is lost.
+    Full,
+}
+
+/// A FIFO of floor numbers with no duplicates and `N` places.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct RequestFifo<const N: usize> {
+    items: [u8; N],
+    len: usize,
+}
+
+impl<const N: usize> Default for RequestFifo<N> {
+    fn default() -> Self {
+        RequestFifo {
+            items: [0; N],
+            len: 0,
+        }
+    }
+}
+
+impl<const N: usize> RequestFifo<N> {
+    /// An empty memory.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Offers `floor`; see [`Offer`].
+    pub fn offer(&mut self, floor: u8) -> Offer {
+        if self.contains(floor) {
+            Offer::AlreadyQueued
+        } else if self.len == N {
+            Offer::Full
+        } else {
+            self.items[self.len] = floor;
+            self.len += 1;
+            Offer::Stored
+        }
+    }
+
+    /// Takes the oldest floor out (FIFO Unload).
+    pub fn unload(&mut self) -> Option<u8> {
+        if self.len == 0 {
+            return None;
+        }
+        let first = self.items[0];
+        self.items.copy_within(1..self.len, 0);
+        self.len -= 1;
+        Some(first)
+    }
+
+    /// Removes `floor` wherever it is; `true` if it was queued.
+    pub fn remove(&mut self, floor: u8) -> bool {
+        let Some(i) = self.as_slice().iter().position(|f| *f == floor) else {
+            return false;
+        };
+        self.items.copy_within(i + 1..self.len, i);
+        self.len -= 1;
+        true
+    }
+
+    /// `true` if `floor` is queued.
+    pub fn contains(&self, floor: u8) -> bool {
+        self.as_slice().contains(&floor)
+    }
+
+    /// The queued floors, oldest first.
+    pub fn as_slice(&self) -> &[u8] {
+        &self.items[..self.len]
+    }
+
+    /// Number of queued floors.
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    /// `true` if nothing is queued.
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// Forgets everything.
+    pub fn clear(&mut self) {
+        self.len = 0;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn first_in_first_out_without_duplicates_and_four_places() {
+        let mut f = RequestFifo::<4>::new();
+        assert_eq!(f.offer(3), Offer::Stored);
+        assert_eq!(f.offer(1), Offer::Stored);
+        assert_eq!(f.offer(3), Offer::AlreadyQueued);
+        assert_eq!(f.offer(4), Offer::Stored);
+        assert_eq!(f.offer(2), Offer::Stored);
+        assert_eq!(f.offer(5), Offer::Full);
+        assert_eq!(f.as_slice(), &[3, 1, 4, 2]);
+        assert_eq!(f.unload(), Some(3));
+        assert!(f.remove(4));
+        assert!(!f.remove(4));
+        assert_eq!(f.as_slice(), &[1, 2]);
+        assert_eq!(f.unload(), Some(1));
+        assert_eq!(f.unload(), Some(2));
+        assert_eq!(f.unload(), None);
+    }
+}

@@ -1,0 +1,932 @@
+//! The PLC program of seed 003 §6 as a scan-driven state machine: read inputs, safety checks,
+//! initialisation once, the automat, write outputs (seed figure 6.1).
+//!
+//! This module is the program's logic over plain inputs and outputs; [`crate::plc`] connects it
+//! to the AS-i master's process image and runs the handshakes of seed tables 4.2–4.7.
+
+use crate::dispatch::{Algorithm, Dir, Dispatcher, HallDir, ServedCall, Source, Stored};
+use asi_phy::{SimDuration, SimTime};
+use core::fmt;
+
+/// The program's settings. Defaults: the seed's set-points (µA of the current loop) and timer,
+/// a 10 ms scan (SPEC §5).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ControllerConfig {
+    /// Floors served, 2..=24.
+    pub floors: u8,
+    /// FIFO (seed) or collective selective.
+    pub algorithm: Algorithm,
+    /// The PLC scan period.
+    pub scan: SimDuration,
+    /// Travel set-point (seed tables 6.4/6.5: 10000 µA, 59.4 mm/s).
+    pub travel_ua: u16,
+    /// Braking (creep) set-point (6000 µA, 20.6 mm/s).
+    pub creep_ua: u16,
+    /// Standstill set-point (4000 µA = 4 mA).
+    pub standstill_ua: u16,
+    /// Initialisation set-point (seed table 6.3: 11000 µA, 68.8 mm/s).
+    pub init_ua: u16,
+    /// The initialisation timer (seed §6.4: 2 s).
+    pub init_timer: SimDuration,
+    /// How often the restart pulse is repeated while the STOP circuit is not yet running again.
+    pub restart_every: SimDuration,
+    /// A cabin word older than this means the cabin slave is lost.
+    pub stale_after: SimDuration,
+}
+
+impl Default for ControllerConfig {
+    fn default() -> Self {
+        ControllerConfig {
+            floors: 4,
+            algorithm: Algorithm::Fifo,
+            scan: SimDuration::from_millis(10),
+            travel_ua: 10_000,
+            creep_ua: 6_000,
+            standstill_ua: 4_000,
+            init_ua: 11_000,
+            init_timer: SimDuration::from_secs(2),
+            restart_every: SimDuration::from_millis(500),
+            stale_after: SimDuration::from_secs(1),
+        }
+    }
+}
+
+/// A setting the program cannot run with.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("controller: {field} = {value}: {rule}")]
+pub struct ControllerConfigError {
+    /// The setting.
+    pub field: &'static str,
+    /// Its value.
+    pub value: String,
+    /// What it must be.
+    pub rule: &'static str,
+}
+
+impl ControllerConfig {
+    /// Checks the settings.
+    pub fn check(&self) -> Result<(), ControllerConfigError> {
+        let err = |field, value: &dyn fmt::Display, rule| {
+            Err(ControllerConfigError {
+                field,
+                value: value.to_string(),
+                rule,
+            })
+        };
+        if !(2..=24).contains(&self.floors) {
+            return err(
+                "floors",
+                &self.floors,
+                "must be 2..=24 (the display word carries 5 bits)",
+            );
+        }
+        if self.scan.is_zero() {
+            return err("scan", &self.scan, "must be positive");
+        }
+        if self.standstill_ua >= self.creep_ua
+            || self.creep_ua > self.travel_ua
+            || self.travel_ua > 20_000
+        {
+            return err(
+                "set-points",
+                &format!(
+                    "{}/{}/{} µA",
+                    self.standstill_ua, self.creep_ua, self.travel_ua
+                ),
+                "need standstill < creep <= travel <= 20000 µA",
+            );
+        }
+        if self.init_ua <= self.creep_ua || self.init_ua > 20_000 {
+            return err(
+                "init_ua",
+                &self.init_ua,
+                "must lie above the creep set-point, up to 20000 µA",
+            );
+        }
+        Ok(())
+    }
+}
+
+/// The cabin's 32-bit word (seed table 4.6), as the PLC assembles it from the two halves.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct CabinWord {
+    /// Floor buttons, bit `f − 1` for floor `f` (1..=24).
+    pub buttons: u32,
+    /// The bell button.
+    pub bell: bool,
+    /// The STOP button's standard contact (pressed).
+    pub stop: bool,
+    /// SnZavD: the door is closed.
+    pub door_closed: bool,
+    /// Snimac_1, the left vane sensor.
+    pub vane_left: bool,
+    /// Snimac_2, the right vane sensor.
+    pub vane_right: bool,
+}
+
+/// What the program reads at the start of a scan.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Inputs {
+    /// A cabin word completed since the last scan, if any.
+    pub cabin: Option<CabinWord>,
+    /// Hall up calls received since the last scan, bit `f − 1`.
+    pub hall_up: u32,
+    /// Hall down calls received since the last scan, bit `f − 1`.
+    pub hall_down: u32,
+    /// Zatizeni_Kabiny: 0 empty, 1 loaded, 2 full, 3 overloaded.
+    pub load: u8,
+    /// The safety logic's EStopOut: `true` = no STOP demand.
+    pub estop_ok: bool,
+    /// The converter reports ready (it has power and no fault).
+    pub converter_ready: bool,
+    /// The converter reports a fault.
+    pub converter_fault: bool,
+    /// The master runs in normal operation without configuration error or power fail.
+    pub bus_ok: bool,
+}
+
+/// What a passenger sees on the floor and cabin displays (seed tables 4.2/4.4).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct DisplayState {
+    /// Cislo_Patra, 1..=24.
+    pub floor: u8,
+    /// Smer_Nahoru.
+    pub up: bool,
+    /// Smer_Dolu.
+    pub down: bool,
+    /// Pojezd: the cabin is commanded to move.
+    pub moving: bool,
+    /// Porucha: a fault state.
+    pub fault: bool,
+}
+
+/// What the program writes at the end of a scan.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Outputs {
+    /// Start1: the converter's run input.
+    pub run: bool,
+    /// Smer_Motoru: 1 up, 0 down.
+    pub up: bool,
+    /// Rychlost, the speed set-point in µA.
+    pub setpoint_ua: u16,
+    /// The display word content.
+    pub display: DisplayState,
+    /// The Restart input of the safety logic's STOP circuit (pulsed).
+    pub restart: bool,
+    /// The overload signal for the safety logic's AND input.
+    pub overloaded: bool,
+}
+
+/// Why the program holds the cabin where it is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum HaltReason {
+    /// The door opened during travel.
+    DoorOpen,
+    /// The cabin became overloaded during travel.
+    Overload,
+    /// The converter reported a fault.
+    ConverterFault,
+    /// The converter lost its power (K1 open).
+    NoPower,
+}
+
+impl fmt::Display for HaltReason {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            HaltReason::DoorOpen => "door open",
+            HaltReason::Overload => "overloaded",
+            HaltReason::ConverterFault => "converter fault",
+            HaltReason::NoPower => "no drive power (K1 open)",
+        })
+    }
+}
+
+/// Something the program did, for the log and the report.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum EventKind {
+    /// Initialisation began, from the sensor state seen.
+    InitStarted {
+        /// What the vane sensors showed.
+        start: InitStart,
+    },
+    /// The cabin stands at floor 1 and the automat takes over.
+    Initialised,
+    /// A call was stored.
+    CallStored {
+        /// The floor.
+        floor: u8,
+        /// Cabin or hall.
+        source: Source,
+    },
+    /// A call was lost because its memory was full.
+    CallLost {
+        /// The floor.
+        floor: u8,
+        /// Cabin or hall.
+        source: Source,
+    },
+    /// The cabin leaves for a target.
+    Departed {
+        /// The floor it leaves.
+        from: u8,
+        /// Where it goes.
+        to: u8,
+    },
+    /// The cabin passed a floor's first vane edge.
+    Passed {
+        /// The floor.
+        floor: u8,
+    },
+    /// The cabin creeps into its stop floor.
+    Braking {
+        /// The floor.
+        floor: u8,
+    },
+    /// The cabin stopped level at a floor.
+    Arrived {
+        /// The floor.
+        floor: u8,
+    },
+    /// A call was served by a stop.
+    Served(ServedCall),
+    /// STOP in the cabin: the target becomes the next floor in the direction of travel.
+    StopDemanded {
+        /// The target given up (FIFO: the request is dropped, as in the seed).
+        dropped: Option<u8>,
+        /// The floor the cabin will stop at.
+        stop_at: u8,
+    },
+    /// The cabin stands in the STOP fault.
+    StopFault,
+    /// A cabin request after STOP resumes service.
+    Resumed,
+    /// Overload at a floor: no departure.
+    OverloadFault,
+    /// The load is back to normal.
+    OverloadCleared,
+    /// The cabin is held between floors.
+    Halted(HaltReason),
+    /// The hold is over; travel continues.
+    Continued,
+    /// The cabin slave or the bus is lost: the cabin stops.
+    BusFault,
+    /// The bus is back; the program initialises again.
+    BusRestored,
+}
+
+/// An event with the scan time it happened in.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Event {
+    /// The scan's time.
+    pub at: SimTime,
+    /// What happened.
+    pub kind: EventKind,
+}
+
+/// The vane sensors at the start of initialisation, which decide how it proceeds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum InitStart {
+    /// No vane, or only the right sensor: the seed's routine (down at 11000 µA).
+    Seed,
+    /// Only the left sensor: inside floor 1's long track, above or below level.
+    Floor1Track,
+    /// Both sensors: level at some floor; a slow probe tells floor 1 from the others.
+    Level,
+}
+
+/// Initialisation steps (seed table 6.3, extended for a start at floor 1).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum InitStep {
+    /// Jede: down at the initialisation speed.
+    Run,
+    /// Brzdí: creeping with the 2 s timer after the left sensor rose.
+    Brake { until: SimTime },
+    /// Inside floor 1's long track: creep down until the right sensor rises (level) or the
+    /// left one falls (we were below level).
+    Floor1Down,
+    /// Level at an unknown floor: creep down; which sensor falls first tells the floor.
+    Probe,
+    /// Below floor 1's level: creep up until both sensors are on.
+    Floor1Up,
+}
+
+/// Automat steps (seed tables 6.4/6.5).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Step {
+    /// Aktuální patro: standing at a floor.
+    AtFloor,
+    /// Porucha přetížení.
+    Overload,
+    /// Jede dolů / Jede nahoru.
+    Travel,
+    /// Dobrždění.
+    Braking,
+    /// Porucha Stop: stopped after STOP, waiting for a cabin request.
+    StopFault,
+    /// Held between floors; `braking` says which step to go back to.
+    Halted { reason: HaltReason, braking: bool },
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Phase {
+    /// Until the first cabin word arrives, nothing is known.
+    WaitInputs,
+    Init(InitStep),
+    Service(Step),
+    BusFault,
+}
+
+/// The lift's PLC program.
+#[derive(Clone, Debug)]
+pub struct Program {
+    cfg: ControllerConfig,
+    phase: Phase,
+    /// Aktualni_Patro.
+    current: u8,
+    /// Cil.
+    target: u8,
+    /// The direction of the present or last trip.
+    dir: Option<Dir>,
+    /// STOP was pressed during this trip.
+    stop_pending: bool,
+    /// A cabin request came in the STOP fault: restart pulses are due.
+    restart_wanted: bool,
+    cabin: CabinWord,
+    last_cabin_at: Option<SimTime>,
+    restart_high: bool,
+    next_restart: SimTime,
+    initialised_at: Option<SimTime>,
+    dispatch: Dispatcher,
+    out: Outputs,
+    events: Vec<Event>,
+    served: Vec<ServedCall>,
+}
+
+/// Edges seen in this scan's inputs.
+#[derive(Clone, Copy, Debug, Default)]
+struct Edges {
+    left_rise: bool,
+    right_rise: bool,
+    left_fall: bool,
+    right_fall: bool,
+    /// "Left OR right in log. 1" rose: the cabin reaches a floor's vane (tables 6.4/6.5).
+    vane_rise: bool,
+}
+
+impl Program {
+    /// A program that has just been loaded and set to RUN.
+    pub fn new(cfg: ControllerConfig) -> Result<Program, ControllerConfigError> {
+        cfg.check()?;
+        let dispatch = Dispatcher::new(cfg.algorithm, cfg.floors);
+        Ok(Program {
+            phase: Phase::WaitInputs,
+            current: 1,
+            target: 1,
+            dir: None,
+            stop_pending: false,
+            restart_wanted: false,
+            cabin: CabinWord::default(),
+            last_cabin_at: None,
+            restart_high: false,
+            next_restart: SimTime::ZERO,
+            initialised_at: None,
+            dispatch,
+            out: Outputs {
+                setpoint_ua: cfg.standstill_ua,
+                display: DisplayState {
+                    floor: 1,
+                    ..DisplayState::default()
+                },
+                ..Outputs::default()
+            },
+            cfg,
+            events: Vec::new(),
+            served: Vec::new(),
+        })
+    }
+
+    /// The settings.
+    pub fn config(&self) -> &ControllerConfig {
+        &self.cfg
+    }
+
+    /// One scan: reads `inp`, runs the routines, returns the outputs to write.
+    pub fn scan(&mut self, now: SimTime, inp: &Inputs) -> Outputs {
+        let edges = self.read_inputs(now, inp);
+        self.out.overloaded = inp.load >= 3;
+        let stop_demand = !inp.estop_ok || self.cabin.stop;
+        let bus_ok = inp.bus_ok
+            && self
+                .last_cabin_at
+                .is_some_and(|t| now.saturating_duration_since(t) <= self.cfg.stale_after);
+        let mut want_restart = false;
+        match self.phase {
+            Phase::WaitInputs => {
+                if bus_ok {
+                    self.start_init(now);
+                    want_restart = true;
+                }
+            }
+            Phase::Init(step) => {
+                if !bus_ok {
+                    self.bus_fault(now);
+                } else {
+                    want_restart = !inp.estop_ok;
+                    self.init(now, step, edges, stop_demand);
+                }
+            }
+            Phase::Service(step) => {
+                if !bus_ok {
+                    self.bus_fault(now);
+                } else {
+                    want_restart = self.service(now, step, edges, inp, stop_demand);
+                }
+            }
+            Phase::BusFault => {
+                self.hold();
+                if bus_ok {
+                    self.event(now, EventKind::BusRestored);
+                    self.start_init(now);
+                }
+            }
+        }
+        self.pulse_restart(now, want_restart);
+        self.update_display();
+        self.out
+    }
+
+    fn read_inputs(&mut self, now: SimTime, inp: &Inputs) -> Edges {
+        let mut e = Edges::default();
+        if let Some(w) = inp.cabin {
+            let old = self.cabin;
+            let first = self.last_cabin_at.is_none();
+            e.vane_rise =
+                (w.vane_left || w.vane_right) && !(old.vane_left || old.vane_right) && !first;
+            e.left_rise = w.vane_left && !old.vane_left && !first;
+            e.right_rise = w.vane_right && !old.vane_right && !first;
+            e.left_fall = !w.vane_left && old.vane_left;
+            e.right_fall = !w.vane_right && old.vane_right;
+            let pressed = if first {
+                w.buttons
+            } else {
+                w.buttons & !old.buttons
+            };
+            self.cabin = w;
+            self.last_cabin_at = Some(now);
+            for f in floors(pressed, self.cfg.floors) {
+                self.store(now, f, Source::Cabin, None);
+                if self.phase == Phase::Service(Step::StopFault) {
+                    self.restart_wanted = true;
+                }
+            }
+        }
+        for f in floors(inp.hall_up, self.cfg.floors) {
+            self.store(now, f, Source::Hall, Some(HallDir::Up));
+        }
+        for f in floors(inp.hall_down, self.cfg.floors) {
+            self.store(now, f, Source::Hall, Some(HallDir::Down));
+        }
+        e
+    }
+
+    fn store(&mut self, now: SimTime, floor: u8, source: Source, hall: Option<HallDir>) {
+        let stored = match hall {
+            None => self.dispatch.cabin_call(floor, now),
+            Some(d) => self.dispatch.hall_call(floor, d, now),
+        };
+        match stored {
+            Stored::New => self.event(now, EventKind::CallStored { floor, source }),
+            Stored::Full => self.event(now, EventKind::CallLost { floor, source }),
+            Stored::Duplicate => {}
+        }
+    }
+
+    fn start_init(&mut self, now: SimTime) {
+        let start = match (self.cabin.vane_left, self.cabin.vane_right) {
+            (true, true) => InitStart::Level,
+            (true, false) => InitStart::Floor1Track,
+            _ => InitStart::Seed,
+        };
+        let step = match start {
+            InitStart::Level => InitStep::Probe,
+            InitStart::Floor1Track => InitStep::Floor1Down,
+            InitStart::Seed => InitStep::Run,
+        };
+        self.initialised_at = None;
+        self.event(now, EventKind::InitStarted { start });
+        self.phase = Phase::Init(step);
+        self.drive_init(step);
+    }
+
+    /// The outputs of an initialisation step (seed table 6.3: down, floor 1 and "down" shown).
+    fn drive_init(&mut self, step: InitStep) {
+        let (ua, up) = match step {
+            InitStep::Run => (self.cfg.init_ua, false),
+            InitStep::Brake { .. } | InitStep::Floor1Down | InitStep::Probe => {
+                (self.cfg.creep_ua, false)
+            }
+            InitStep::Floor1Up => (self.cfg.creep_ua, true),
+        };
+        self.out.run = true;
+        self.out.up = up;
+        self.out.setpoint_ua = ua;
+        self.current = 1;
+        self.target = 1;
+        self.dir = Some(if up { Dir::Up } else { Dir::Down });
+    }
+
+    fn init(&mut self, now: SimTime, step: InitStep, e: Edges, stop_demand: bool) {
+        if stop_demand {
+            // Hold still while STOP is demanded; carry on once it is released and restarted.
+            self.hold();
+            return;
+        }
+        let c = self.cabin;
+        let next = match step {
+            InitStep::Run if e.left_rise => Some(InitStep::Brake {
+                until: now + self.cfg.init_timer,
+            }),
+            InitStep::Brake { .. } if e.right_rise => return self.initialised(now),
+            InitStep::Brake { until } if now >= until => Some(InitStep::Run),
+            InitStep::Floor1Down if e.right_rise => return self.initialised(now),
+            InitStep::Floor1Down if e.left_fall => Some(InitStep::Floor1Up),
+            InitStep::Probe if e.right_fall && c.vane_left => Some(InitStep::Floor1Up),
+            InitStep::Probe if e.left_fall => Some(InitStep::Run),
+            InitStep::Floor1Up if c.vane_left && c.vane_right => return self.initialised(now),
+            _ => None,
+        };
+        let step = next.unwrap_or(step);
+        self.phase = Phase::Init(step);
+        self.drive_init(step);
+    }
+
+    fn initialised(&mut self, now: SimTime) {
+        self.hold();
+        self.current = 1;
+        self.target = 1;
+        self.dir = None;
+        self.stop_pending = false;
+        self.initialised_at = Some(now);
+        self.event(now, EventKind::Initialised);
+        self.phase = Phase::Service(Step::AtFloor);
+    }
+
+    fn bus_fault(&mut self, now: SimTime) {
+        self.hold();
+        self.phase = Phase::BusFault;
+        self.event(now, EventKind::BusFault);
+    }
+
+    /// Motor off: run cleared, standstill set-point.
+    fn hold(&mut self) {
+        self.out.run = false;
+        self.out.setpoint_ua = self.cfg.standstill_ua;
+    }
+
+    /// One scan of the automat; returns whether restart pulses are wanted.
+    fn service(
+        &mut self,
+        now: SimTime,
+        step: Step,
+        e: Edges,
+        inp: &Inputs,
+        stop_demand: bool,
+    ) -> bool {
+        let door_closed = self.cabin.door_closed;
+        let overloaded = inp.load >= 3;
+        let both = self.cabin.vane_left && self.cabin.vane_right;
+        match step {
+            Step::AtFloor => {
+                if stop_demand {
+                    self.enter(now, Step::StopFault);
+                } else if overloaded {
+                    self.event(now, EventKind::OverloadFault);
+                    self.phase = Phase::Service(Step::Overload);
+                } else {
+                    self.choose_target(now);
+                    if self.target != self.current
+                        && door_closed
+                        && inp.converter_ready
+                        && !inp.converter_fault
+                    {
+                        self.depart(now);
+                    }
+                }
+            }
+            Step::Overload => {
+                if !overloaded {
+                    self.event(now, EventKind::OverloadCleared);
+                    self.phase = Phase::Service(Step::AtFloor);
+                }
+            }
+            Step::Travel | Step::Braking => {
+                let braking = step == Step::Braking;
+                if stop_demand && !self.stop_pending {
+                    self.stop_demanded(now, braking);
+                }
+                let halt = if !door_closed {
+                    Some(HaltReason::DoorOpen)
+                } else if overloaded {
+                    Some(HaltReason::Overload)
+                } else if inp.converter_fault {
+                    Some(HaltReason::ConverterFault)
+                } else if !inp.converter_ready {
+                    Some(HaltReason::NoPower)
+                } else {
+                    None
+                };
+                if let Some(reason) = halt {
+                    self.hold();
+                    self.event(now, EventKind::Halted(reason));
+                    self.phase = Phase::Service(Step::Halted { reason, braking });
+                } else if braking {
+                    if both {
+                        self.arrive(now);
+                    }
+                } else if e.vane_rise {
+                    self.pass_floor(now);
+                }
+            }
+            Step::Halted { reason, braking } => {
+                if stop_demand && !self.stop_pending {
+                    self.stop_demanded(now, braking);
+                }
+                let cleared = match reason {
+                    HaltReason::DoorOpen => door_closed,
+                    HaltReason::Overload => !overloaded,
+                    HaltReason::ConverterFault | HaltReason::NoPower => {
+                        !inp.converter_fault && inp.converter_ready
+                    }
+                };
+                if cleared && door_closed && !overloaded && inp.estop_ok {
+                    self.event(now, EventKind::Continued);
+                    self.out.run = true;
+                    self.out.up = self.dir == Some(Dir::Up);
+                    self.out.setpoint_ua = if braking {
+                        self.cfg.creep_ua
+                    } else {
+                        self.cfg.travel_ua
+                    };
+                    self.phase = Phase::Service(if braking { Step::Braking } else { Step::Travel });
+                }
+            }
+            Step::StopFault => {
+                if self.restart_wanted && inp.estop_ok && !self.cabin.stop {
+                    self.restart_wanted = false;
+                    self.event(now, EventKind::Resumed);
+                    self.phase = Phase::Service(Step::AtFloor);
+                }
+                return self.restart_wanted;
+            }
+        }
+        false
+    }
+
+    fn enter(&mut self, now: SimTime, step: Step) {
+        if step == Step::StopFault {
+            self.hold();
+            self.restart_wanted = false;
+            self.event(now, EventKind::StopFault);
+        }
+        self.phase = Phase::Service(step);
+    }
+
+    /// At a floor: unload the next target while current floor = target (seed §6.6); a call for
+    /// the floor the cabin stands at is served at once.
+    fn choose_target(&mut self, now: SimTime) {
+        for _ in 0..64 {
+            if self.target != self.current {
+                return;
+            }
+            match self.dispatch.next_target(self.current, self.dir) {
+                Some(t) if t == self.current => self.serve(now, None),
+                Some(t) if (1..=self.cfg.floors).contains(&t) => self.target = t,
+                _ => return,
+            }
+        }
+    }
+
+    fn depart(&mut self, now: SimTime) {
+        let dir = Dir::between(self.current, self.target);
+        self.dir = dir;
+        self.stop_pending = false;
+        self.out.run = true;
+        self.out.up = dir == Some(Dir::Up);
+        self.out.setpoint_ua = self.cfg.travel_ua;
+        self.event(
+            now,
+            EventKind::Departed {
+                from: self.current,
+                to: self.target,
+            },
+        );
+        self.phase = Phase::Service(Step::Travel);
+    }
+
+    /// A rising vane edge during travel: the cabin reaches the next floor's vane (seed tables
+    /// 6.4/6.5, "Rozdil" counting); at the target it brakes to the creep speed.
+    fn pass_floor(&mut self, now: SimTime) {
+        let Some(dir) = self.dir else { return };
+        let floor = dir.next(self.current).clamp(1, self.cfg.floors);
+        self.current = floor;
+        if !self.stop_pending
+            && self.dispatch.algorithm() == Algorithm::Collective
+            && self.dispatch.should_stop(floor, dir)
+        {
+            self.target = floor;
+        }
+        if floor == self.target {
+            self.out.setpoint_ua = self.cfg.creep_ua;
+            self.event(now, EventKind::Braking { floor });
+            self.phase = Phase::Service(Step::Braking);
+        } else {
+            self.event(now, EventKind::Passed { floor });
+        }
+    }
+
+    /// STOP during travel: stop at the next floor in the direction of travel (seed §6.3, "Porucha
+    /// Stop"); already braking, stop where it brakes.
+    fn stop_demanded(&mut self, now: SimTime, braking: bool) {
+        self.stop_pending = true;
+        let stop_at = match (braking, self.dir) {
+            (false, Some(dir)) => dir.next(self.current).clamp(1, self.cfg.floors),
+            _ => self.target,
+        };
+        let dropped = (stop_at != self.target).then_some(self.target);
+        self.target = stop_at;
+        self.event(now, EventKind::StopDemanded { dropped, stop_at });
+    }
+
+    fn arrive(&mut self, now: SimTime) {
+        self.hold();
+        let floor = self.current;
+        self.target = floor;
+        self.event(now, EventKind::Arrived { floor });
+        self.serve(now, self.dir);
+        if self.stop_pending {
+            self.stop_pending = false;
+            self.enter(now, Step::StopFault);
+        } else {
+            self.phase = Phase::Service(Step::AtFloor);
+        }
+    }
+
+    fn serve(&mut self, now: SimTime, dir: Option<Dir>) {
+        let mut served = core::mem::take(&mut self.served);
+        served.clear();
+        self.dispatch.serve(self.current, dir, &mut served);
+        for s in &served {
+            self.event(now, EventKind::Served(*s));
+        }
+        self.served = served;
+    }
+
+    fn pulse_restart(&mut self, now: SimTime, want: bool) {
+        if self.restart_high {
+            self.restart_high = false;
+        } else if want && now >= self.next_restart {
+            self.restart_high = true;
+            self.next_restart = now + self.cfg.restart_every;
+        }
+        self.out.restart = self.restart_high;
+    }
+
+    fn update_display(&mut self) {
+        let (moving, fault) = match self.phase {
+            Phase::WaitInputs => (false, false),
+            Phase::Init(_) => (self.out.run, false),
+            Phase::BusFault => (false, true),
+            Phase::Service(step) => match step {
+                Step::AtFloor => (false, false),
+                Step::Travel | Step::Braking => (true, false),
+                Step::Overload | Step::StopFault | Step::Halted { .. } => (false, true),
+            },
+        };
+        let dir = if moving { self.dir } else { None };
+        self.out.display = DisplayState {
+            floor: self.current,
+            up: dir == Some(Dir::Up),
+            down: dir == Some(Dir::Down),
+            moving,
+            fault,
+        };
+    }
+
+    fn event(&mut self, at: SimTime, kind: EventKind) {
+        self.events.push(Event { at, kind });
+    }
+
+    /// Takes the events since the last call.
+    pub fn drain_events(&mut self) -> impl Iterator<Item = Event> + '_ {
+        self.events.drain(..)
+    }
+
+    /// The outputs of the last scan.
+    pub fn outputs(&self) -> Outputs {
+        self.out
+    }
+
+    /// Aktualni_Patro.
+    pub fn current_floor(&self) -> u8 {
+        self.current
+    }
+
+    /// Cil.
+    pub fn target(&self) -> u8 {
+        self.target
+    }
+
+    /// Rozdil = Aktualni_Patro − Cil.
+    pub fn rozdil(&self) -> i32 {
+        self.current as i32 - self.target as i32
+    }
+
+    /// When initialisation finished (the last time, after a bus fault).
+    pub fn initialised_at(&self) -> Option<SimTime> {
+        self.initialised_at
+    }
+
+    /// `true` once the automat runs.
+    pub fn is_initialised(&self) -> bool {
+        matches!(self.phase, Phase::Service(_))
+    }
+
+    /// The pending cabin calls (FIFO_Kabina).
+    pub fn fifo_cabin(&self) -> Vec<u8> {
+        self.dispatch.cabin_calls()
+    }
+
+    /// The pending hall calls (FIFO_Patra).
+    pub fn fifo_hall(&self) -> Vec<u8> {
+        self.dispatch.hall_calls()
+    }
+
+    /// The program's state in words, as the report shows it.
+    pub fn state_name(&self) -> &'static str {
+        match self.phase {
+            Phase::WaitInputs => "waiting for inputs",
+            Phase::Init(_) => "initialising",
+            Phase::BusFault => "bus fault",
+            Phase::Service(step) => match step {
+                Step::AtFloor => "at floor",
+                Step::Overload => "overload fault",
+                Step::Travel if self.dir == Some(Dir::Up) => "moving up",
+                Step::Travel => "moving down",
+                Step::Braking => "braking",
+                Step::StopFault => "STOP fault",
+                Step::Halted { .. } => "halted",
+            },
+        }
+    }
+}
+
+/// The floors whose bits are set, ascending.
+fn floors(bits: u32, n: u8) -> impl Iterator<Item = u8> {
+    (1..=n).filter(move |f| bits & (1 << (f - 1)) != 0)
+}
+
+impl fmt::Display for EventKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let src = |s: &Source| match s {
+            Source::Cabin => "cabin",
+            Source::Hall => "hall",
+        };
+        match self {
+            EventKind::InitStarted { start } => write!(
+                f,
+                "initialisation: {}",
+                match start {
+                    InitStart::Seed => "running down to find floor 1",
+                    InitStart::Floor1Track => "inside floor 1's vane, creeping to level",
+                    InitStart::Level => "level at a floor, probing which one",
+                }
+            ),
+            EventKind::Initialised => f.write_str("initialised at floor 1"),
+            EventKind::CallStored { floor, source } => {
+                write!(f, "{} call to floor {floor} stored", src(source))
+            }
+            EventKind::CallLost { floor, source } => {
+                write!(f, "{} call to floor {floor} lost: memory full", src(source))
+            }
+            EventKind::Departed { from, to } => write!(f, "departs floor {from} for floor {to}"),
+            EventKind::Passed { floor } => write!(f, "passes floor {floor}"),
+            EventKind::Braking { floor } => write!(f, "brakes for floor {floor}"),
+            EventKind::Arrived { floor } => write!(f, "arrives at floor {floor}"),
+            EventKind::Served(s) => {
+                write!(f, "{} call to floor {} served", src(&s.source), s.floor)
+            }
+            EventKind::StopDemanded { dropped, stop_at } => match dropped {
+                Some(d) => write!(f, "STOP: stops at floor {stop_at}, target {d} dropped"),
+                None => write!(f, "STOP: stops at floor {stop_at}"),
+            },
+            EventKind::StopFault => f.write_str("STOP fault: waiting for a cabin request"),
+            EventKind::Resumed => f.write_str("cabin request after STOP: service resumes"),
+            EventKind::OverloadFault => f.write_str("overloaded: no departure"),
+            EventKind::OverloadCleared => f.write_str("load back to normal"),
+            EventKind::Halted(r) => write!(f, "halted between floors: {r}"),
+            EventKind::Continued => f.write_str("continues travel"),
+            EventKind::BusFault => f.write_str("cabin slave or bus lost: cabin stopped"),
+            EventKind::BusRestored => f.write_str("bus restored: initialising again"),
+        }
+    }
+}
