@@ -2,3 +2,4 @@
 //! its safety logic together on one simulated clock (SPEC §0).
 
 pub mod phy_tools;
+pub mod scenario;
