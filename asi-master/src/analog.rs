@@ -48,10 +48,11 @@ pub struct S73OutputMaster {
 }
 
 impl S73OutputMaster {
-    /// An engine for a slave with `channels` (1..=4) channels.
+    /// An engine for a slave with `channels` (1..=4) channels. K starts at 1: the slave was
+    /// activated with the default outputs 1111, so it has seen K = 1.
     pub fn new(channels: u8) -> S73OutputMaster {
         S73OutputMaster {
-            answerer: Answerer::new(&SEVEN_STEPS),
+            answerer: Answerer::with_k(&SEVEN_STEPS, true),
             channels: channels.clamp(1, 4),
             next: 1,
             values: [0; 4],
@@ -91,7 +92,7 @@ impl S73OutputMaster {
 
     /// Back to the start (after the slave was lost or reset).
     pub fn reset(&mut self) {
-        self.answerer.reset();
+        self.answerer = Answerer::with_k(&SEVEN_STEPS, true);
         self.next = 1;
     }
 }

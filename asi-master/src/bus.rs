@@ -263,7 +263,8 @@ impl Bus {
         });
         let mut frames: [Option<Frame>; 4] = [None; 4];
         let mut n = 0;
-        self.medium.transmit(&train, &mut |f| {
+        let raw = tx.request.bits() as u32;
+        self.medium.transmit(&train, raw, Request::BITS, &mut |f| {
             if n < frames.len() {
                 frames[n] = Some(f);
                 n += 1;
@@ -426,7 +427,7 @@ impl Bus {
     fn respond(&mut self, now: SimTime, req_end: SimTime, req: Request, mut who: u64) {
         let start = req_end + self.timing.master_pause();
         let h = self.timing.half_bit();
-        let mut trains: [Option<PulseTrain>; 4] = [None; 4];
+        let mut trains: [Option<(PulseTrain, Response)>; 4] = [None; 4];
         let mut n = 0usize;
         let mut extra = Vec::new();
         let mut readdressed = false;
@@ -445,7 +446,7 @@ impl Bus {
             if let Some(r) = answer {
                 let train = PulseTrain::response(r, start, h);
                 if n < trains.len() {
-                    trains[n] = Some(train);
+                    trains[n] = Some((train, r));
                 } else {
                     extra.push(train);
                 }
@@ -460,12 +461,18 @@ impl Bus {
         match n {
             0 => {}
             1 => {
-                if let Some(t) = trains[0] {
-                    self.medium.transmit(&t, &mut collect);
+                if let Some((t, r)) = trains[0] {
+                    self.medium
+                        .transmit(&t, r.bits() as u32, Response::BITS, &mut collect);
                 }
             }
             _ => {
-                let all: Vec<PulseTrain> = trains.iter().flatten().copied().chain(extra).collect();
+                let all: Vec<PulseTrain> = trains
+                    .iter()
+                    .flatten()
+                    .map(|(t, _)| *t)
+                    .chain(extra)
+                    .collect();
                 self.medium.transmit_merged(&all, &mut collect);
             }
         }

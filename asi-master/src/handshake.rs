@@ -206,6 +206,16 @@ impl Answerer {
         }
     }
 
+    /// An answerer whose K starts at `k`: the K the requester saw last (for example 1 after
+    /// the master's activation Data_Exchange with the default outputs 1111), so that the first
+    /// answer is a visible toggle.
+    pub fn with_k(steps: &'static [u8], k: bool) -> Answerer {
+        Answerer {
+            k,
+            ..Answerer::new(steps)
+        }
+    }
+
     /// Back to the power-up state.
     pub fn reset(&mut self) {
         *self = Answerer::new(self.steps);

@@ -220,7 +220,11 @@ pub struct Master {
     job: Option<(MailboxRequest, JobStep)>,
     offline_cursor: u8,
     stats: BusStats,
+    flags: EcFlags,
 }
+
+/// What the flags depend on, to recompute them only when it changes.
+type Signature = (u64, u64, u64, u64, Phase, Mode, bool, HostFlags);
 
 impl Master {
     /// A master with `cfg` and the projected configuration `projected`, powered up now (it
@@ -265,6 +269,7 @@ impl Master {
             job: None,
             offline_cursor: 0,
             stats: BusStats::default(),
+            flags: EcFlags::default(),
         };
         m.update_flags();
         Ok(m)
@@ -339,6 +344,23 @@ impl Master {
 
     /// The execution-control flags (reference/asi.md §5.3).
     pub fn flags(&self) -> EcFlags {
+        self.flags
+    }
+
+    fn signature(&self) -> Signature {
+        (
+            self.lds.bits(),
+            self.las.bits(),
+            self.lpf.bits(),
+            self.projected.lps().bits(),
+            self.phase,
+            self.mode,
+            self.power_ok,
+            self.host,
+        )
+    }
+
+    fn compute_flags(&self) -> EcFlags {
         let mut f = EcFlags::default();
         let found = self.lds.without_zero();
         let wrong = found.iter().any(|a| !self.matches_projection(a));
@@ -379,7 +401,8 @@ impl Master {
     }
 
     fn update_flags(&mut self) {
-        let f = self.flags();
+        let f = self.compute_flags();
+        self.flags = f;
         let mut n = 0u16;
         if !f.config_ok() {
             n |= F0_CONFIG_ERROR;
@@ -442,7 +465,16 @@ impl Master {
             // An outcome was never delivered: forget the transaction.
             self.in_flight = None;
         }
+        let before = self.signature();
         self.service_host(now);
+        let t = self.next_transmit(now);
+        if self.signature() != before {
+            self.update_flags();
+        }
+        t
+    }
+
+    fn next_transmit(&mut self, now: SimTime) -> Option<Transmit> {
         for _ in 0..4 {
             let tx = self.next_tx(now)?;
             match self.request_for(tx) {
@@ -488,8 +520,11 @@ impl Master {
             };
         }
         self.in_flight = None;
+        let before = self.signature();
         self.apply(now, f.tx, resp);
-        self.update_flags();
+        if self.signature() != before {
+            self.update_flags();
+        }
         Verdict {
             repeat: false,
             error: failed,
@@ -507,9 +542,9 @@ impl Master {
         if self.job.is_none() {
             if let Some(req) = self.mailbox.take(&self.image.output) {
                 self.start_job(req);
+                self.update_flags();
             }
         }
-        self.update_flags();
     }
 
     fn finish_job(&mut self, req: &MailboxRequest, result: JobResult, response: &[u8]) {
@@ -677,7 +712,7 @@ impl Master {
                 self.finish_job(&req, R::Ok, &list.to_bytes());
             }
             Command::ReadFlags => {
-                let f = self.flags().bits();
+                let f = self.compute_flags().bits();
                 self.finish_job(&req, R::Ok, &f.to_be_bytes());
             }
         }
@@ -1160,7 +1195,7 @@ impl Master {
     }
 
     fn auto_address_target(&self, codes: SlaveCodes) -> Option<(SlaveAddr, Option<Nibble>)> {
-        if !self.flags().auto_address_available() {
+        if !self.compute_flags().auto_address_available() {
             return None;
         }
         let missing = SlaveList::from_bits(self.projected.lps().bits() & !self.lds.bits());

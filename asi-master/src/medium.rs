@@ -7,6 +7,14 @@
 //! intact and different answers are corrupted. One [`LineDecoder`] assembles the line's pulses
 //! into frames once for all receivers; each receiver's own [`Listener`](asi_phy::Listener) then
 //! judges the frame.
+//!
+//! **Fast path.** A telegram a correct transmitter encoded, alone on a quiet line without
+//! faults, decodes to its own bits with no line check failed; asi-phy's
+//! `LineDecoder::push_train` recognises such a train by re-encoding it. The medium knows the
+//! telegram it just encoded, so it keeps the train as the pending frame directly (the frame
+//! asi-phy would produce: same start, end, pulse count, bits). Any fault, overlap or second
+//! transmitter sends the pending train and the new pulses through the decoder instead. The
+//! equivalence is tested for every request and response (`tests/medium.rs`).
 
 use asi_phy::fault::apply_faults;
 use asi_phy::{
@@ -23,6 +31,8 @@ pub struct Medium {
     pulses: Vec<Pulse>,
     scratch: Vec<Pulse>,
     faults_injected: u64,
+    pause: asi_phy::SimDuration,
+    pending: Option<(PulseTrain, Frame)>,
 }
 
 impl Medium {
@@ -35,6 +45,8 @@ impl Medium {
             pulses: Vec::with_capacity(64),
             scratch: Vec::with_capacity(64),
             faults_injected: 0,
+            pause: timing.min_pause(),
+            pending: None,
         }
     }
 
@@ -60,8 +72,40 @@ impl Medium {
         self.faults_injected + self.injector.as_ref().map_or(0, |i| i.injected())
     }
 
-    /// Puts `train` on the line; `done` gets every frame the line completes on the way.
-    pub fn transmit(&mut self, train: &PulseTrain, done: &mut impl FnMut(Frame)) {
+    /// Puts the encoded telegram `train` on the line; `raw` holds its `bits` bits (first bit
+    /// highest) as the transmitter sent them. `done` gets every frame the line completes on the
+    /// way.
+    pub fn transmit(
+        &mut self,
+        train: &PulseTrain,
+        raw: u32,
+        bits: u32,
+        done: &mut impl FnMut(Frame),
+    ) {
+        if self.injector.is_none() && self.one_shot.is_empty() && self.decoder.poll_at().is_none() {
+            let quiet = match &self.pending {
+                None => true,
+                Some((p, _)) => train.start() >= p.end() && train.start() - p.end() >= self.pause,
+            };
+            if quiet {
+                if let Some((_, f)) = self.pending.take() {
+                    done(f);
+                }
+                self.pending = Some((
+                    *train,
+                    Frame {
+                        start: train.start(),
+                        end: train.end(),
+                        pulses: train.len(),
+                        bit_count: bits,
+                        raw,
+                        line_failed: asi_phy::Checks::NONE,
+                    },
+                ));
+                return;
+            }
+        }
+        self.flush_pending(done);
         if self.injector.is_none() && self.one_shot.is_empty() {
             if let Some(f) = self.decoder.push_train(train) {
                 done(f);
@@ -75,8 +119,18 @@ impl Medium {
         self.pulses = pulses;
     }
 
+    /// Hands a pending clean train to the decoder (something else comes on the line).
+    fn flush_pending(&mut self, done: &mut impl FnMut(Frame)) {
+        if let Some((t, _)) = self.pending.take() {
+            if let Some(f) = self.decoder.push_train(&t) {
+                done(f);
+            }
+        }
+    }
+
     /// Puts several simultaneous trains on the line, superimposed.
     pub fn transmit_merged(&mut self, trains: &[PulseTrain], done: &mut impl FnMut(Frame)) {
+        self.flush_pending(done);
         let mut all: Vec<Pulse> = trains.iter().flat_map(|t| t.iter()).collect();
         all.sort_by_key(|p| p.at);
         let mut merged = core::mem::take(&mut self.pulses);
@@ -125,16 +179,24 @@ impl Medium {
 
     /// When the frame on the line completes if nothing more comes.
     pub fn poll_at(&self) -> Option<asi_phy::SimTime> {
-        self.decoder.poll_at()
+        match &self.pending {
+            Some((_, f)) => Some(f.end + self.pause),
+            None => self.decoder.poll_at(),
+        }
     }
 
     /// The frame on the line, if it has completed by `now`.
     pub fn poll(&mut self, now: asi_phy::SimTime) -> Option<Frame> {
-        self.decoder.poll(now)
+        match &self.pending {
+            Some((_, f)) if now >= f.end + self.pause => self.pending.take().map(|(_, f)| f),
+            Some(_) => None,
+            None => self.decoder.poll(now),
+        }
     }
 
     /// Drops whatever is on the line (power fail).
     pub fn reset(&mut self) {
         self.decoder.reset();
+        self.pending = None;
     }
 }
