@@ -864,8 +864,11 @@ impl CabinPanelSlave {
                 seven_step_word(1, snapshot.1, false, true)
             }
         });
-        if ev == Some(AnswererEvent::WordStarted) {
-            self.next_half ^= 1;
+        match ev {
+            Some(AnswererEvent::WordStarted) => self.next_half ^= 1,
+            // A requester that (re)synchronises starts a new 32-bit word with half 0.
+            Some(AnswererEvent::Sync) => self.next_half = 0,
+            _ => {}
         }
         out
     }
