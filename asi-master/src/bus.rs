@@ -11,6 +11,13 @@
 //!    the response, the master decides (repeat, next call), and the next request starts — at
 //!    request start + 154 µs with the default timing, later if noise kept the line busy.
 //!
+//! **Decision**: after a transaction whose line carried an erroneous frame (a corrupt request
+//! that still reached the slaves, a corrupt or colliding response) the master starts its next
+//! request no earlier than the asynchronous pause (18 µs) after the last pulse, instead of the
+//! 10 µs slave pause: receivers that saw the error need that pause to accept the repeat
+//! (A²SI; reference/asi.md §2.3). A repeat after a corrupt request (no response) still comes
+//! 154 µs after the first try; after a corrupt response it comes 162 µs after.
+//!
 //! Device inputs set between `advance_to` calls are seen by the transactions after the call
 //! that set them, so an application that wants exact sampling steps to `poll_at()`.
 //!
@@ -84,6 +91,8 @@ struct Current {
     responses: u32,
     response_failed: Checks,
     response: Option<Response>,
+    line_end: SimTime,
+    line_error: bool,
 }
 
 /// Callback sink for trace records.
@@ -220,10 +229,13 @@ impl Bus {
             match self.state {
                 State::Idle => self.start_transaction(t),
                 State::AwaitRequestFrame => self.request_frame(t),
-                State::AwaitResponse => {
-                    self.finish_transaction(t);
-                    self.start_transaction(t);
-                }
+                State::AwaitResponse => match self.finish_transaction(t) {
+                    Some(resync) if resync > t => {
+                        self.state = State::Idle;
+                        self.next_event = resync;
+                    }
+                    _ => self.start_transaction(t),
+                },
             }
         }
         if now > self.now {
@@ -260,6 +272,8 @@ impl Bus {
             responses: 0,
             response_failed: Checks::NONE,
             response: None,
+            line_end: train.end(),
+            line_error: false,
         });
         let mut frames: [Option<Frame>; 4] = [None; 4];
         let mut n = 0;
@@ -299,13 +313,13 @@ impl Bus {
         self.next_event = quiet.map_or(base, |q| q.max(base)).max(t);
     }
 
-    fn finish_transaction(&mut self, t: SimTime) {
+    /// Ends the transaction; returns the earliest start of the next request when the line
+    /// carried an error (the receivers need the asynchronous pause to resynchronise).
+    fn finish_transaction(&mut self, t: SimTime) -> Option<SimTime> {
         if let Some(f) = self.medium.poll(t) {
             self.hear(t, &f, Role::Response);
         }
-        let Some(cur) = self.cur.take() else {
-            return;
-        };
+        let cur = self.cur.take()?;
         let outcome = match (cur.responses, cur.response) {
             (0, _) => Outcome::NoResponse,
             (1, Some(r)) => Outcome::Response(r),
@@ -340,6 +354,8 @@ impl Bus {
         if let Some(cb) = &mut self.callback {
             cb(&rec);
         }
+        cur.line_error
+            .then(|| cur.line_end + self.timing.async_pause())
     }
 
     /// Every receiver on the line hears frame `f` at `now`.
@@ -348,9 +364,11 @@ impl Bus {
             return;
         };
         let window_end = cur.req_end + self.timing.response_timeout();
+        cur.line_end = cur.line_end.max(f.end);
         if matches!(role, Role::Response) && f.start > cur.req_end && f.start <= window_end {
             let r = self.master_rx.accept(f);
             cur.responses += 1;
+            cur.line_error |= !r.is_valid();
             if r.is_valid() && cur.responses == 1 {
                 cur.response = r.response();
             } else {
@@ -364,6 +382,9 @@ impl Bus {
         let mut keys: [(bool, bool); 8] = [(false, false); 8];
         for (gi, g) in self.groups.iter_mut().enumerate() {
             let r = g.listener.accept(f);
+            if gi == 0 && !f.line_failed.is_empty() {
+                cur.line_error = true;
+            }
             if gi < keys.len() {
                 keys[gi] = (
                     r.kind == TelegramKind::Request,

@@ -86,7 +86,10 @@ pub fn folded<'a>(records: impl IntoIterator<Item = &'a TransactionRecord>) -> S
     for r in records {
         match &mut last {
             Some((l, n))
-                if l.request == r.request && l.response == r.response && l.kind == r.kind =>
+                if l.request == r.request
+                    && l.response == r.response
+                    && l.kind == r.kind
+                    && l.repeat == r.repeat =>
             {
                 *n += 1
             }
