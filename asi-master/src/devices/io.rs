@@ -62,6 +62,10 @@ impl Converter {
     pub fn new() -> Converter {
         Converter::default()
     }
+    /// The output bits as last received.
+    pub fn outputs(&self) -> Nibble {
+        self.io.outputs
+    }
     /// Output D0: run the converter.
     pub fn run(&self) -> bool {
         self.io.outputs.bit(0)
