@@ -3,6 +3,8 @@
 //!
 //! Run: `cargo bench -p asi-master -- --warm-up-time 1 --measurement-time 5`.
 
+// criterion_group! and criterion_main! generate undocumented items.
+#![allow(missing_docs)]
 use asi_master::devices::{IoModule, AC2726};
 use asi_master::{Bus, MasterConfig, ProjectedConfig, ProjectedSlave, Slave, SlaveAddr};
 use asi_phy::{Address, Nibble, SimDuration, SimTime};

@@ -903,6 +903,7 @@ mod tests {
     }
 
     #[test]
+    #[allow(clippy::unusual_byte_groupings)] // grouped by the fields of table 4.2
     fn display_word_layout_of_table_4_2() {
         let w = DisplayWord::new(3, true, false, true, false).expect("ok");
         // D10..D6 = 00011, D5 up = 1, D4 = 0, D3 moving = 1, D2 = 0, D1 parity.

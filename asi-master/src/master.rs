@@ -490,14 +490,16 @@ impl Master {
                         repeat: false,
                     });
                 }
-                None => self.apply(now, tx, None),
+                None => self.apply(tx, None),
             }
         }
         None
     }
 
-    /// What came back for the request in flight.
+    /// What came back for the request in flight, known at `now` (part of the sans-IO
+    /// interface; no decision depends on the time yet).
     pub fn handle_outcome(&mut self, now: SimTime, outcome: Outcome) -> Verdict {
+        let _ = now;
         let Some(mut f) = self.in_flight else {
             return Verdict {
                 repeat: false,
@@ -521,7 +523,7 @@ impl Master {
         }
         self.in_flight = None;
         let before = self.signature();
-        self.apply(now, f.tx, resp);
+        self.apply(f.tx, resp);
         if self.signature() != before {
             self.update_flags();
         }
@@ -977,7 +979,6 @@ impl Master {
         if let Some((req, _)) = self.job.take() {
             self.mailbox.abort(&mut self.image.input, &req);
         }
-        self.wake_at = self.wake_at.max(SimTime::ZERO);
         self.update_flags();
     }
 
@@ -1055,7 +1056,7 @@ impl Master {
 
     // ----- outcomes -------------------------------------------------------------------
 
-    fn apply(&mut self, now: SimTime, tx: Tx, resp: Option<Nibble>) {
+    fn apply(&mut self, tx: Tx, resp: Option<Nibble>) {
         match tx {
             Tx::Detect(a, r) => self.detect_result(a, r, resp),
             Tx::ActivateParam(a) => match resp {
@@ -1082,7 +1083,6 @@ impl Master {
             Tx::Job(step) => self.job_result(step, resp),
             Tx::OfflineDefault(_) => {}
         }
-        let _ = now;
     }
 
     fn detect_result(&mut self, a: SlaveAddr, r: Read, resp: Option<Nibble>) {

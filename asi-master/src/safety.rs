@@ -145,9 +145,7 @@ impl Channel {
     }
 
     fn drop_release(&mut self, why: NotReleased) {
-        if self.released || self.reason != why {
-            self.reason = why;
-        }
+        self.reason = why;
         self.released = false;
         self.good_run = 0;
     }

@@ -27,7 +27,7 @@ fn run_plc(
         lab.bus.advance_to(t);
         if t == next_scan {
             scan(&mut lab.bus);
-            next_scan = next_scan + SCAN;
+            next_scan += SCAN;
         }
         if done(lab) {
             // Let the transaction in progress finish, so the trace shows it.
