@@ -5,38 +5,16 @@
 
 // criterion_group! and criterion_main! generate undocumented items.
 #![allow(missing_docs)]
-use asi_master::devices::{IoModule, AC2726};
-use asi_master::{Bus, MasterConfig, ProjectedConfig, ProjectedSlave, Slave, SlaveAddr};
-use asi_phy::{Address, Nibble, SimDuration, SimTime};
+use asi_master::devices::AC2726;
+use asi_master::lab::io_bus;
+use asi_phy::{SimDuration, SimTime};
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use std::hint::black_box;
 
-fn bus_31() -> Bus {
-    let mut projected = Vec::new();
-    let mut slaves = Vec::new();
-    for n in 1..=31u8 {
-        let a = Address::new(n).expect("address");
-        projected.push(ProjectedSlave {
-            addr: SlaveAddr::a(n).expect("address"),
-            codes: AC2726,
-            parameter: Nibble::ALL,
-        });
-        slaves.push(Slave::new(
-            format!("io {n}"),
-            a,
-            AC2726,
-            Box::new(IoModule::new()),
-        ));
-    }
-    let p = ProjectedConfig::new(projected).expect("projection");
-    let mut bus = Bus::new(MasterConfig::default(), p, slaves).expect("bus");
+fn normal_operation(c: &mut Criterion) {
+    let mut bus = io_bus(31, AC2726).expect("bus");
     bus.advance_to(SimTime::from_millis(100));
     assert!(bus.is_running());
-    bus
-}
-
-fn normal_operation(c: &mut Criterion) {
-    let mut bus = bus_31();
     // 1000 transactions of 154 µs per iteration.
     let step = SimDuration::from_micros(154_000);
     let mut g = c.benchmark_group("bus");

@@ -4,33 +4,13 @@
 //! `cargo run --release -p asi-master --example hour` (an optional argument gives the
 //! simulated seconds, default 3600).
 
-use asi_master::devices::{IoModule, AC2726};
-use asi_master::{Bus, MasterConfig, ProjectedConfig, ProjectedSlave, Slave, SlaveAddr};
-use asi_phy::{Address, Nibble, SimDuration, SimTime};
+use asi_master::devices::AC2726;
+use asi_master::lab::io_bus;
+use asi_phy::{SimDuration, SimTime};
 use std::time::Instant;
 
 fn main() {
-    let mut projected = Vec::new();
-    let mut slaves = Vec::new();
-    for n in 1..=31u8 {
-        let (Some(a), Some(sa)) = (Address::new(n), SlaveAddr::a(n)) else {
-            return;
-        };
-        projected.push(ProjectedSlave {
-            addr: sa,
-            codes: AC2726,
-            parameter: Nibble::ALL,
-        });
-        slaves.push(Slave::new(
-            format!("io {n}"),
-            a,
-            AC2726,
-            Box::new(IoModule::new()),
-        ));
-    }
-    let bus =
-        ProjectedConfig::new(projected).and_then(|p| Bus::new(MasterConfig::default(), p, slaves));
-    let mut bus = match bus {
+    let mut bus = match io_bus(31, AC2726) {
         Ok(b) => b,
         Err(e) => {
             eprintln!("{e}");

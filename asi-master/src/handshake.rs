@@ -372,14 +372,87 @@ pub struct FloorCalls {
     pub down: bool,
 }
 
+/// The words a receiving side took and dropped, and the last good one.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct WordLog<T> {
+    last: Option<T>,
+    good: u32,
+    bad: u32,
+}
+
+impl<T> Default for WordLog<T> {
+    fn default() -> Self {
+        WordLog {
+            last: None,
+            good: 0,
+            bad: 0,
+        }
+    }
+}
+
+impl<T: Copy> WordLog<T> {
+    /// Records a received word: `Some` if it passed its checks, `None` if it was dropped.
+    pub fn record(&mut self, w: Option<T>) {
+        match w {
+            Some(w) => {
+                self.last = Some(w);
+                self.good = self.good.wrapping_add(1);
+            }
+            None => self.bad = self.bad.wrapping_add(1),
+        }
+    }
+    /// The last good word.
+    pub fn last(&self) -> Option<T> {
+        self.last
+    }
+    /// Good words received.
+    pub fn good(&self) -> u32 {
+        self.good
+    }
+    /// Words dropped (parity, O, V, channel, order).
+    pub fn bad(&self) -> u32 {
+        self.bad
+    }
+}
+
+/// The sending (answering) side of a display word handshake: the word to send, a consistent
+/// snapshot per transfer, and the count of words sent.
+#[derive(Clone, Debug)]
+struct DisplaySender {
+    answerer: Answerer,
+    word: DisplayWord,
+    words_sent: u32,
+}
+
+impl DisplaySender {
+    fn new(steps: &'static [u8]) -> DisplaySender {
+        DisplaySender {
+            answerer: Answerer::new(steps),
+            word: DisplayWord::new(1, false, false, false, false).unwrap_or_default(),
+            words_sent: 0,
+        }
+    }
+
+    fn step(
+        &mut self,
+        input: Nibble,
+        transport: fn(DisplayWord) -> u32,
+    ) -> (Nibble, Option<AnswererEvent>) {
+        let word = self.word;
+        let (out, ev) = self.answerer.step_with(input, || transport(word));
+        if ev == Some(AnswererEvent::WordDone) {
+            self.words_sent = self.words_sent.wrapping_add(1);
+        }
+        (out, ev)
+    }
+}
+
 /// The master (PLC) side of a floor station, seed 003 table 4.3: answers the slave's word
 /// requests with the display word and collects button reports.
 #[derive(Clone, Debug)]
 pub struct FloorStationMaster {
-    answerer: Answerer,
-    word: DisplayWord,
+    sender: DisplaySender,
     calls: FloorCalls,
-    words_sent: u32,
 }
 
 impl Default for FloorStationMaster {
@@ -392,30 +465,23 @@ impl FloorStationMaster {
     /// A fresh engine; it sends floor 1, standing, until told otherwise.
     pub fn new() -> FloorStationMaster {
         FloorStationMaster {
-            answerer: Answerer::new(&FOUR_STEPS),
-            word: DisplayWord::new(1, false, false, false, false).unwrap_or_default(),
+            sender: DisplaySender::new(&FOUR_STEPS),
             calls: FloorCalls::default(),
-            words_sent: 0,
         }
     }
 
     /// The display word to send from the next word on.
     pub fn set_word(&mut self, w: DisplayWord) {
-        self.word = w;
+        self.sender.word = w;
     }
 
     /// One step: the slave's input nibble from the input image in, the output nibble for the
     /// output image out.
     pub fn step(&mut self, input: Nibble) -> Nibble {
-        let word = self.word;
-        let (out, ev) = self.answerer.step_with(input, || floor_transport(word));
-        match ev {
-            Some(AnswererEvent::WordDone) => self.words_sent = self.words_sent.wrapping_add(1),
-            Some(AnswererEvent::Extra(c)) => {
-                self.calls.up |= c == CODE_UP || c == CODE_BOTH;
-                self.calls.down |= c == CODE_DOWN || c == CODE_BOTH;
-            }
-            _ => {}
+        let (out, ev) = self.sender.step(input, floor_transport);
+        if let Some(AnswererEvent::Extra(c)) = ev {
+            self.calls.up |= c == CODE_UP || c == CODE_BOTH;
+            self.calls.down |= c == CODE_DOWN || c == CODE_BOTH;
         }
         out
     }
@@ -427,12 +493,12 @@ impl FloorStationMaster {
 
     /// Number of whole words sent.
     pub fn words_sent(&self) -> u32 {
-        self.words_sent
+        self.sender.words_sent
     }
 
     /// Back to the power-up state (keeps the word to send).
     pub fn reset(&mut self) {
-        self.answerer.reset();
+        self.sender.answerer.reset();
         self.calls = FloorCalls::default();
     }
 }
@@ -449,9 +515,7 @@ pub struct FloorStationSlave {
     down_pressed: bool,
     up_latched: bool,
     down_latched: bool,
-    display: Option<DisplayWord>,
-    words_received: u32,
-    words_rejected: u32,
+    words: WordLog<DisplayWord>,
 }
 
 impl Default for FloorStationSlave {
@@ -469,9 +533,7 @@ impl FloorStationSlave {
             down_pressed: false,
             up_latched: false,
             down_latched: false,
-            display: None,
-            words_received: 0,
-            words_rejected: 0,
+            words: WordLog::default(),
         }
     }
 
@@ -500,12 +562,8 @@ impl FloorStationSlave {
         match ev {
             Some(RequesterEvent::Word(bits)) => {
                 let w = DisplayWord::from_bits((bits >> 2) as u16);
-                if bits & 0b11 == OV_VALID && w.parity_ok() {
-                    self.display = Some(w);
-                    self.words_received = self.words_received.wrapping_add(1);
-                } else {
-                    self.words_rejected = self.words_rejected.wrapping_add(1);
-                }
+                let ok = bits & 0b11 == OV_VALID && w.parity_ok();
+                self.words.record(ok.then_some(w));
             }
             Some(RequesterEvent::Extra(c)) => {
                 if c == CODE_UP || c == CODE_BOTH {
@@ -522,17 +580,12 @@ impl FloorStationSlave {
 
     /// The last good display word received.
     pub fn display(&self) -> Option<DisplayWord> {
-        self.display
+        self.words.last()
     }
 
-    /// Good words received.
-    pub fn words_received(&self) -> u32 {
-        self.words_received
-    }
-
-    /// Words dropped for parity, O or V.
-    pub fn words_rejected(&self) -> u32 {
-        self.words_rejected
+    /// Words received and dropped.
+    pub fn words(&self) -> &WordLog<DisplayWord> {
+        &self.words
     }
 
     /// Power-up reset: the display goes blank, latches are cleared.
@@ -545,13 +598,15 @@ impl FloorStationSlave {
 /// layout E3E2E1 D16..D1 O V; the display word occupies D10..D1, D16..D11 = 0).
 pub const CABIN_DISPLAY_CHANNEL: u8 = 1;
 
+fn cabin_transport(w: DisplayWord) -> u32 {
+    seven_step_word(CABIN_DISPLAY_CHANNEL, w.bits(), false, true)
+}
+
 /// The master (PLC) side of the cabin display, seed 003 tables 4.4/4.5: answers the slave's
 /// seven step requests with the display word.
 #[derive(Clone, Debug)]
 pub struct CabinDisplayMaster {
-    answerer: Answerer,
-    word: DisplayWord,
-    words_sent: u32,
+    sender: DisplaySender,
 }
 
 impl Default for CabinDisplayMaster {
@@ -564,37 +619,28 @@ impl CabinDisplayMaster {
     /// A fresh engine sending floor 1, standing.
     pub fn new() -> CabinDisplayMaster {
         CabinDisplayMaster {
-            answerer: Answerer::new(&SEVEN_STEPS),
-            word: DisplayWord::new(1, false, false, false, false).unwrap_or_default(),
-            words_sent: 0,
+            sender: DisplaySender::new(&SEVEN_STEPS),
         }
     }
 
     /// The display word to send from the next word on.
     pub fn set_word(&mut self, w: DisplayWord) {
-        self.word = w;
+        self.sender.word = w;
     }
 
     /// One step: input nibble in, output nibble out.
     pub fn step(&mut self, input: Nibble) -> Nibble {
-        let word = self.word;
-        let (out, ev) = self.answerer.step_with(input, || {
-            seven_step_word(CABIN_DISPLAY_CHANNEL, word.bits(), false, true)
-        });
-        if ev == Some(AnswererEvent::WordDone) {
-            self.words_sent = self.words_sent.wrapping_add(1);
-        }
-        out
+        self.sender.step(input, cabin_transport).0
     }
 
     /// Number of whole words sent.
     pub fn words_sent(&self) -> u32 {
-        self.words_sent
+        self.sender.words_sent
     }
 
     /// Back to the power-up state (keeps the word).
     pub fn reset(&mut self) {
-        self.answerer.reset();
+        self.sender.answerer.reset();
     }
 }
 
@@ -602,9 +648,7 @@ impl CabinDisplayMaster {
 #[derive(Clone, Debug)]
 pub struct CabinDisplaySlave {
     requester: Requester,
-    display: Option<DisplayWord>,
-    words_received: u32,
-    words_rejected: u32,
+    words: WordLog<DisplayWord>,
 }
 
 impl Default for CabinDisplaySlave {
@@ -618,9 +662,7 @@ impl CabinDisplaySlave {
     pub fn new() -> CabinDisplaySlave {
         CabinDisplaySlave {
             requester: Requester::new(&SEVEN_STEPS),
-            display: None,
-            words_received: 0,
-            words_rejected: 0,
+            words: WordLog::default(),
         }
     }
 
@@ -630,29 +672,20 @@ impl CabinDisplaySlave {
         if let Some(RequesterEvent::Word(bits)) = ev {
             let (e, d, o, v) = split_seven_step_word(bits);
             let w = DisplayWord::from_bits(d);
-            if e == CABIN_DISPLAY_CHANNEL && v && !o && d >> 10 == 0 && w.parity_ok() {
-                self.display = Some(w);
-                self.words_received = self.words_received.wrapping_add(1);
-            } else {
-                self.words_rejected = self.words_rejected.wrapping_add(1);
-            }
+            let ok = e == CABIN_DISPLAY_CHANNEL && v && !o && d >> 10 == 0 && w.parity_ok();
+            self.words.record(ok.then_some(w));
         }
         out
     }
 
     /// The last good display word.
     pub fn display(&self) -> Option<DisplayWord> {
-        self.display
+        self.words.last()
     }
 
-    /// Good words received.
-    pub fn words_received(&self) -> u32 {
-        self.words_received
-    }
-
-    /// Words dropped for channel, O, V or parity.
-    pub fn words_rejected(&self) -> u32 {
-        self.words_rejected
+    /// Words received and dropped.
+    pub fn words(&self) -> &WordLog<DisplayWord> {
+        &self.words
     }
 
     /// Power-up reset.
@@ -724,10 +757,8 @@ impl CabinPanelState {
 pub struct CabinPanelMaster {
     requester: Requester,
     half0: Option<u16>,
-    state: Option<CabinPanelState>,
+    words: WordLog<CabinPanelState>,
     fresh: bool,
-    words_received: u32,
-    words_rejected: u32,
 }
 
 impl Default for CabinPanelMaster {
@@ -742,10 +773,8 @@ impl CabinPanelMaster {
         CabinPanelMaster {
             requester: Requester::new(&SEVEN_STEPS),
             half0: None,
-            state: None,
+            words: WordLog::default(),
             fresh: false,
-            words_received: 0,
-            words_rejected: 0,
         }
     }
 
@@ -762,21 +791,17 @@ impl CabinPanelMaster {
             let (e, d, o, v) = split_seven_step_word(bits);
             match (e, v && !o) {
                 (0, true) => self.half0 = Some(d),
-                (1, true) => match self
-                    .half0
-                    .take()
-                    .and_then(|h0| CabinPanelState::from_halves(h0, d))
-                {
-                    Some(s) => {
-                        self.state = Some(s);
-                        self.fresh = true;
-                        self.words_received = self.words_received.wrapping_add(1);
-                    }
-                    None => self.words_rejected = self.words_rejected.wrapping_add(1),
-                },
+                (1, true) => {
+                    let w = self
+                        .half0
+                        .take()
+                        .and_then(|h0| CabinPanelState::from_halves(h0, d));
+                    self.fresh |= w.is_some();
+                    self.words.record(w);
+                }
                 _ => {
                     self.half0 = None;
-                    self.words_rejected = self.words_rejected.wrapping_add(1);
+                    self.words.record(None);
                 }
             }
         }
@@ -785,26 +810,21 @@ impl CabinPanelMaster {
 
     /// The last good 32-bit word.
     pub fn state(&self) -> Option<CabinPanelState> {
-        self.state
+        self.words.last()
     }
 
     /// The last good word if it arrived since the last take.
     pub fn take_update(&mut self) -> Option<CabinPanelState> {
         if core::mem::take(&mut self.fresh) {
-            self.state
+            self.words.last()
         } else {
             None
         }
     }
 
-    /// Good 32-bit words received.
-    pub fn words_received(&self) -> u32 {
-        self.words_received
-    }
-
-    /// Halves or words dropped (parity, O, V, order).
-    pub fn words_rejected(&self) -> u32 {
-        self.words_rejected
+    /// 32-bit words received and halves or words dropped (parity, O, V, order).
+    pub fn words(&self) -> &WordLog<CabinPanelState> {
+        &self.words
     }
 
     /// Back to the power-up state.
@@ -971,7 +991,7 @@ mod tests {
         let mut dev = |o| s.step(o);
         run(|i| m.step(i), &mut dev, 40, 2);
         assert_eq!(s.display(), Some(w));
-        assert_eq!(s.words_rejected(), 0);
+        assert_eq!(s.words().bad(), 0);
     }
 
     #[test]
@@ -992,7 +1012,7 @@ mod tests {
         assert_eq!(m.state(), Some(want));
         assert!(m.state().expect("state").floor_button(3));
         assert!(m.state().expect("state").floor_button(21));
-        assert_eq!(m.words_rejected(), 0);
+        assert_eq!(m.words().bad(), 0);
     }
 
     #[test]

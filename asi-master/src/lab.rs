@@ -17,8 +17,8 @@
 use crate::bus::{Bus, MonitorId, SlaveId};
 use crate::config::{ConfigError, MasterConfig, ProjectedConfig, ProjectedSlave, SlaveCodes};
 use crate::devices::{
-    AnalogOutput, CabinDisplay, CabinPanel, Converter, FloorStation, LoadSensor, SafetySensor,
-    AC2258, AC2618, AC2726, GG505S, IG5886,
+    AnalogOutput, CabinDisplay, CabinPanel, Converter, FloorStation, IoModule, LoadSensor,
+    SafetySensor, AC2258, AC2618, AC2726, GG505S, IG5886,
 };
 use crate::lists::SlaveAddr;
 use crate::safety::{CodeTable, MonitorConfig, SafetyMonitor};
@@ -211,4 +211,36 @@ impl LabLift {
     pub fn slave_id(&self, n: u8) -> Option<SlaveId> {
         self.id(n)
     }
+}
+
+/// A bus of `n` (1..=31) plain 4I/4O modules with `codes` at addresses 1..=n, all projected:
+/// the reference bus of the cycle-time formulas (SPEC §7) and of the benchmark.
+pub fn io_bus(n: u8, codes: SlaveCodes) -> Result<Bus, ConfigError> {
+    if !(1..=31).contains(&n) {
+        return Err(ConfigError::TooManyDevices(n as usize));
+    }
+    let mut projected = Vec::new();
+    let mut slaves = Vec::new();
+    for k in 1..=n {
+        let address = addr(k)?;
+        projected.push(ProjectedSlave {
+            addr: SlaveAddr {
+                address,
+                select: asi_phy::Select::A,
+            },
+            codes,
+            parameter: Nibble::ALL,
+        });
+        slaves.push(Slave::new(
+            format!("io {k}"),
+            address,
+            codes,
+            Box::new(IoModule::new()),
+        ));
+    }
+    Bus::new(
+        MasterConfig::default(),
+        ProjectedConfig::new(projected)?,
+        slaves,
+    )
 }

@@ -5,19 +5,10 @@
 
 mod common;
 use asi_master::devices::{FloorStation, IoModule, AC2726, IG5886};
-use asi_master::lab::LabLift;
 use asi_master::safety::NotReleased;
 use asi_master::{Bus, MasterConfig, Phase, ProjectedConfig, Slave, TransactionRecord};
 use asi_phy::{Check, FaultRates, Nibble, PulseFault};
 use common::*;
-
-fn running_lab() -> LabLift {
-    let mut lab = LabLift::new().expect("lab");
-    lab.bus.advance_to(ms(40));
-    assert!(lab.bus.is_running());
-    lab.bus.enable_trace(1_000_000);
-    lab
-}
 
 /// Steps the bus to just after a transaction's responses went on the line, so that the next
 /// telegram on the line is the next request.
@@ -45,7 +36,7 @@ fn repeats_follow_their_failure(trace: &[TransactionRecord]) {
 
 #[test]
 fn a_corrupted_request_and_its_repeat() {
-    let mut lab = running_lab();
+    let mut lab = running_lab(40);
     to_next_request(&mut lab.bus);
     // Pulse 6 of the next request arrives with the wrong sign.
     lab.bus
@@ -69,7 +60,7 @@ fn a_corrupted_request_and_its_repeat() {
 
 #[test]
 fn a_corrupted_response_is_repeated_too() {
-    let mut lab = running_lab();
+    let mut lab = running_lab(40);
     to_next_request(&mut lab.bus);
     // The next request goes out clean; corrupt the response that follows it.
     let t = lab.bus.poll_at();
@@ -89,7 +80,7 @@ fn a_corrupted_response_is_repeated_too() {
 
 #[test]
 fn a_slave_lost_and_readmitted() {
-    let mut lab = running_lab();
+    let mut lab = running_lab(40);
     let floor2 = lab.slave_id(2).expect("floor 2");
     let t0 = lab.bus.now();
     lab.bus.detach(floor2);
@@ -122,7 +113,7 @@ fn a_slave_lost_and_readmitted() {
 
 #[test]
 fn line_noise_is_absorbed_by_repeats() {
-    let mut lab = running_lab();
+    let mut lab = running_lab(40);
     lab.bus.set_line_faults(42, FaultRates::uniform(0.002));
     lab.bus.advance_to(ms(2_040));
     let s = lab.bus.stats();
@@ -143,7 +134,7 @@ fn line_noise_is_absorbed_by_repeats() {
 
 #[test]
 fn power_fail_sets_apf_goes_offline_and_restarts() {
-    let mut lab = running_lab();
+    let mut lab = running_lab(40);
     lab.bus.image_mut().output.set_analog(10, 1, 11_000);
     lab.bus.advance_to(ms(100));
     assert_eq!(lab.analog_output().expect("out").current_ua(1), 11_000);
@@ -183,7 +174,7 @@ fn power_fail_sets_apf_goes_offline_and_restarts() {
 
 #[test]
 fn a_brown_out_above_the_slaves_minimum_stops_only_the_master() {
-    let mut lab = running_lab();
+    let mut lab = running_lab(40);
     lab.bus.set_supply_voltage(19.0);
     assert!(lab.bus.master().flags().apf());
     lab.bus.advance_to(ms(100));
@@ -195,7 +186,7 @@ fn a_brown_out_above_the_slaves_minimum_stops_only_the_master() {
 
 #[test]
 fn a_wrong_slave_in_protected_mode_is_a_configuration_error() {
-    let mut lab = running_lab();
+    let mut lab = running_lab(40);
     let load = lab.slave_id(8).expect("load sensor");
     lab.bus.detach(load);
     // An AC2726 where the IG5886 (S-1.1) belongs.
@@ -224,7 +215,7 @@ fn a_wrong_slave_in_protected_mode_is_a_configuration_error() {
 
 #[test]
 fn a_replaced_slave_at_address_0_is_auto_addressed() {
-    let mut lab = running_lab();
+    let mut lab = running_lab(40);
     let old = lab.slave_id(3).expect("floor 3");
     lab.bus.detach(old);
     let new = lab
@@ -294,7 +285,7 @@ fn two_slaves_answering_at_once_corrupt_each_other() {
 
 #[test]
 fn safety_monitor_learns_releases_and_catches_a_frozen_tripped_or_missing_code() {
-    let mut lab = running_lab();
+    let mut lab = running_lab(40);
     lab.bus.advance_to(ms(100));
     assert!(lab.released(11) && lab.released(12));
     let table = lab.safety_sensor(11).expect("sensor").table();
@@ -338,7 +329,7 @@ fn safety_monitor_learns_releases_and_catches_a_frozen_tripped_or_missing_code()
 
 #[test]
 fn a_wrong_code_table_is_not_released() {
-    let mut lab = running_lab();
+    let mut lab = running_lab(40);
     lab.bus.advance_to(ms(100));
     assert!(lab.released(11));
     // Swap the sensor at 11 for one with another table (a wrong slave).

@@ -51,19 +51,11 @@ fn exchanges_with(trace: &[TransactionRecord], n: u8) -> Vec<TransactionRecord> 
         .collect()
 }
 
-fn started_lab() -> LabLift {
-    let mut lab = LabLift::new().expect("lab");
-    lab.bus.advance_to(ms(29));
-    assert!(lab.bus.is_running());
-    lab.bus.enable_trace(100_000);
-    lab
-}
-
 /// Seed 003 table 4.3: the floor slave requests 111, 010, 001, 000; the PLC answers D10..D8,
 /// D7..D5, D4..D2, D1 O V toggling K; between words the slave reports its buttons (101 = up).
 #[test]
 fn floor_display_word_and_up_button() {
-    let mut lab = started_lab();
+    let mut lab = running_lab(29);
     let word = DisplayWord::new(3, true, false, true, false).expect("word");
     let mut plc = FloorStationMaster::new();
     plc.set_word(word);
@@ -106,7 +98,7 @@ fn floor_display_word_and_up_button() {
 /// E = 001) and checks its parity.
 #[test]
 fn cabin_32_bit_button_word() {
-    let mut lab = started_lab();
+    let mut lab = running_lab(29);
     let want = CabinPanelState {
         floor_buttons: 1 << 1,
         bell: false,
@@ -132,14 +124,14 @@ fn cabin_32_bit_button_word() {
         |_| got.get().is_some(),
     );
     assert_eq!(got.get(), Some(want));
-    assert_eq!(plc.words_rejected(), 0);
+    assert_eq!(plc.words().bad(), 0);
     let trace = lab.bus.drain_trace();
     insta::assert_snapshot!(folded(&exchanges_with(&trace, 6)));
 }
 
 #[test]
 fn cabin_display_word() {
-    let mut lab = started_lab();
+    let mut lab = running_lab(29);
     let word = DisplayWord::new(4, false, true, true, true).expect("word");
     let mut plc = CabinDisplayMaster::new();
     plc.set_word(word);
@@ -155,7 +147,7 @@ fn cabin_display_word() {
 /// cycles (integrated S-7.3, CTT1); channel 1 carries Rychlost = 11000 µA.
 #[test]
 fn one_s73_value_to_the_current_loop_output() {
-    let mut lab = started_lab();
+    let mut lab = running_lab(29);
     lab.bus.image_mut().output.set_analog(10, 1, 11_000);
     let mut at = Vec::new();
     let mut last = 0;

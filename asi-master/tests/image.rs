@@ -11,16 +11,9 @@ use asi_master::{
 use asi_phy::{Call, Nibble};
 use common::*;
 
-fn running_lab() -> LabLift {
-    let mut lab = LabLift::new().expect("lab");
-    lab.bus.advance_to(ms(40));
-    assert!(lab.bus.is_running());
-    lab
-}
-
 #[test]
 fn input_nibbles_land_where_table_4_1_puts_them() {
-    let mut lab = running_lab();
+    let mut lab = running_lab(40);
     // Slave 7 (word 1 bits 3..0): converter ready D0 and fault D1.
     lab.converter_mut().expect("converter").set_ready(true);
     lab.converter_mut().expect("converter").set_fault(true);
@@ -56,7 +49,7 @@ fn input_nibbles_land_where_table_4_1_puts_them() {
 
 #[test]
 fn output_nibbles_reach_the_slaves_from_table_4_1_positions() {
-    let mut lab = running_lab();
+    let mut lab = running_lab(40);
     // Slave 7 is word 1 bits 3..0: run (D0) and up (D1).
     let w1 = lab.bus.image().output.word(1);
     lab.bus.image_mut().output.set_word(1, (w1 & !0xF) | 0b0011);
@@ -74,7 +67,7 @@ fn output_nibbles_reach_the_slaves_from_table_4_1_positions() {
 
 #[test]
 fn flags_f0_to_f3_in_word_0() {
-    let mut lab = running_lab();
+    let mut lab = running_lab(40);
     let f = |lab: &LabLift| lab.bus.image().input.word(0) >> 12;
     // Protected mode, configuration OK, power OK, periphery OK: only F3 (not active) = 1.
     assert_eq!(f(&lab), 0b1000);
@@ -185,7 +178,7 @@ fn analog_input_words_of_slaves_10_to_31() {
 
 #[test]
 fn host_flag_offline_sends_default_outputs_then_stops() {
-    let mut lab = running_lab();
+    let mut lab = running_lab(40);
     lab.bus.enable_trace(100_000);
     lab.bus
         .image_mut()
@@ -227,7 +220,7 @@ fn host_flag_offline_sends_default_outputs_then_stops() {
 
 #[test]
 fn host_flag_lock_data_exchange_sends_1111() {
-    let mut lab = running_lab();
+    let mut lab = running_lab(40);
     lab.bus.enable_trace(100_000);
     lab.bus
         .image_mut()

@@ -2,7 +2,6 @@
 //! src/mailbox.rs protocol).
 
 mod common;
-use asi_master::lab::LabLift;
 use asi_master::mailbox::{completed, post, Command, JobResult};
 use asi_master::{Bus, EcFlags, Mode};
 use asi_phy::SimDuration;
@@ -23,16 +22,9 @@ fn job(bus: &mut Bus, cmd: Command, args: &[u8]) -> (JobResult, [u8; 34]) {
     }
 }
 
-fn running_lab() -> LabLift {
-    let mut lab = LabLift::new().expect("lab");
-    lab.bus.advance_to(ms(40));
-    assert!(lab.bus.is_running());
-    lab
-}
-
 #[test]
 fn read_status_and_write_parameter() {
-    let mut lab = running_lab();
+    let mut lab = running_lab(40);
     let (r, b) = job(&mut lab.bus, Command::ReadStatus, &[5]);
     assert_eq!((r, b[0]), (JobResult::Ok, 0));
     let (r, b) = job(&mut lab.bus, Command::WriteParameter, &[5, 0b0101]);
@@ -48,7 +40,7 @@ fn read_status_and_write_parameter() {
 
 #[test]
 fn change_address_moves_a_slave() {
-    let mut lab = running_lab();
+    let mut lab = running_lab(40);
     let (r, _) = job(&mut lab.bus, Command::ChangeAddress, &[8, 9]);
     assert_eq!(r, JobResult::Ok);
     let id = lab.slave_id(8).expect("load sensor");
@@ -71,7 +63,7 @@ fn change_address_moves_a_slave() {
 
 #[test]
 fn configuration_mode_and_store_actual_configuration() {
-    let mut lab = running_lab();
+    let mut lab = running_lab(40);
     let (r, _) = job(
         &mut lab.bus,
         Command::WriteProjected,
@@ -110,7 +102,7 @@ fn configuration_mode_and_store_actual_configuration() {
 
 #[test]
 fn lists_flags_and_bad_commands() {
-    let mut lab = running_lab();
+    let mut lab = running_lab(40);
     let (r, b) = job(&mut lab.bus, Command::ReadList, &[1]);
     assert_eq!(r, JobResult::Ok);
     assert_eq!(&b[..8], &lab.bus.master().las().to_bytes());

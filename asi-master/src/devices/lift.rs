@@ -11,19 +11,72 @@ use crate::handshake::{
 };
 use crate::slave::Peripheral;
 use asi_phy::{Nibble, SimTime};
+use core::fmt::Debug;
 
-/// A floor station (addresses 1..4): up/down call buttons in, the display word out.
+/// The device side of a handshake, stepped with the output bits it receives.
+pub trait HandshakeEngine: Clone + Debug + Default + Send + 'static {
+    /// The new outputs in, the input pins to set out.
+    fn step(&mut self, outputs: Nibble) -> Nibble;
+    /// Power-up reset.
+    fn reset(&mut self);
+}
+
+macro_rules! engine {
+    ($t:ty) => {
+        impl HandshakeEngine for $t {
+            fn step(&mut self, outputs: Nibble) -> Nibble {
+                <$t>::step(self, outputs)
+            }
+            fn reset(&mut self) {
+                <$t>::reset(self)
+            }
+        }
+    };
+}
+engine!(FloorStationSlave);
+engine!(CabinDisplaySlave);
+engine!(CabinPanelSlave);
+
+/// An AC2726 module with handshake electronics `E` behind its ports.
 #[derive(Clone, Debug, Default)]
-pub struct FloorStation {
-    engine: FloorStationSlave,
+pub struct HandshakeModule<E> {
+    engine: E,
     pins: Nibble,
 }
 
-impl FloorStation {
-    /// A station that has just powered up.
-    pub fn new() -> FloorStation {
-        FloorStation::default()
+impl<E: HandshakeEngine> HandshakeModule<E> {
+    /// A module that has just powered up.
+    pub fn new() -> Self {
+        Self::default()
     }
+    /// The electronics.
+    pub fn engine(&self) -> &E {
+        &self.engine
+    }
+}
+
+impl<E: HandshakeEngine> Peripheral for HandshakeModule<E> {
+    fn exchange(&mut self, _now: SimTime, outputs: Nibble) -> Nibble {
+        let sampled = self.pins;
+        self.pins = self.engine.step(outputs);
+        sampled
+    }
+    fn reset(&mut self) {
+        self.engine.reset();
+        self.pins = Nibble::ZERO;
+    }
+    any_impls!();
+}
+
+/// A floor station (addresses 1..4): up/down call buttons in, the display word out.
+pub type FloorStation = HandshakeModule<FloorStationSlave>;
+/// The cabin display (address 5): the display word in.
+pub type CabinDisplay = HandshakeModule<CabinDisplaySlave>;
+/// The cabin panel (address 6): floor buttons 1..24, bell, STOP, door closed (SnZavD) and the
+/// vane sensors Snimac_1 (left) and Snimac_2 (right), sent as one 32-bit word.
+pub type CabinPanel = HandshakeModule<CabinPanelSlave>;
+
+impl FloorStation {
     /// The call buttons' levels (a press is latched until reported).
     pub fn set_buttons(&mut self, up: bool, down: bool) {
         self.engine.set_buttons(up, down);
@@ -32,73 +85,16 @@ impl FloorStation {
     pub fn display(&self) -> Option<DisplayWord> {
         self.engine.display()
     }
-    /// The handshake engine (counters).
-    pub fn engine(&self) -> &FloorStationSlave {
-        &self.engine
-    }
-}
-
-impl Peripheral for FloorStation {
-    fn exchange(&mut self, _now: SimTime, outputs: Nibble) -> Nibble {
-        let sampled = self.pins;
-        self.pins = self.engine.step(outputs);
-        sampled
-    }
-    fn reset(&mut self) {
-        self.engine.reset();
-        self.pins = Nibble::ZERO;
-    }
-    any_impls!();
-}
-
-/// The cabin display (address 5): the display word in.
-#[derive(Clone, Debug, Default)]
-pub struct CabinDisplay {
-    engine: CabinDisplaySlave,
-    pins: Nibble,
 }
 
 impl CabinDisplay {
-    /// A display that has just powered up.
-    pub fn new() -> CabinDisplay {
-        CabinDisplay::default()
-    }
     /// The display word shown, `None` while blank.
     pub fn display(&self) -> Option<DisplayWord> {
         self.engine.display()
     }
-    /// The handshake engine (counters).
-    pub fn engine(&self) -> &CabinDisplaySlave {
-        &self.engine
-    }
-}
-
-impl Peripheral for CabinDisplay {
-    fn exchange(&mut self, _now: SimTime, outputs: Nibble) -> Nibble {
-        let sampled = self.pins;
-        self.pins = self.engine.step(outputs);
-        sampled
-    }
-    fn reset(&mut self) {
-        self.engine.reset();
-        self.pins = Nibble::ZERO;
-    }
-    any_impls!();
-}
-
-/// The cabin panel (address 6): floor buttons 1..24, bell, STOP, door closed (SnZavD) and the
-/// vane sensors Snimac_1 (left) and Snimac_2 (right), sent as one 32-bit word.
-#[derive(Clone, Debug, Default)]
-pub struct CabinPanel {
-    engine: CabinPanelSlave,
-    pins: Nibble,
 }
 
 impl CabinPanel {
-    /// A panel that has just powered up, nothing pressed.
-    pub fn new() -> CabinPanel {
-        CabinPanel::default()
-    }
     /// All signal levels at once.
     pub fn signals_mut(&mut self) -> &mut CabinPanelState {
         self.engine.signals_mut()
@@ -139,17 +135,4 @@ impl CabinPanel {
     pub fn set_vane_right(&mut self, on: bool) {
         self.engine.signals_mut().vane_right = on;
     }
-}
-
-impl Peripheral for CabinPanel {
-    fn exchange(&mut self, _now: SimTime, outputs: Nibble) -> Nibble {
-        let sampled = self.pins;
-        self.pins = self.engine.step(outputs);
-        sampled
-    }
-    fn reset(&mut self) {
-        self.engine.reset();
-        self.pins = Nibble::ZERO;
-    }
-    any_impls!();
 }

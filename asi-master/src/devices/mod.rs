@@ -19,7 +19,7 @@ mod safety;
 
 pub use analog::{AnalogInput, AnalogOutput};
 pub use io::{Converter, IoModule, LoadSensor};
-pub use lift::{CabinDisplay, CabinPanel, FloorStation};
+pub use lift::{CabinDisplay, CabinPanel, FloorStation, HandshakeEngine, HandshakeModule};
 pub use safety::SafetySensor;
 
 use crate::config::SlaveCodes;

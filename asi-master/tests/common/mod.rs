@@ -1,12 +1,10 @@
 //! Helpers shared by the integration tests.
 #![allow(dead_code)]
 
-use asi_master::devices::{IoModule, AC2726};
-use asi_master::{
-    Bus, MasterConfig, ProjectedConfig, ProjectedSlave, Slave, SlaveAddr, SlaveCodes,
-    TransactionRecord,
-};
-use asi_phy::{Address, Call, Nibble, SimDuration, SimTime};
+use asi_master::devices::AC2726;
+use asi_master::lab::LabLift;
+use asi_master::{Bus, SlaveAddr, TransactionRecord};
+use asi_phy::{Address, Call, SimDuration, SimTime};
 
 pub fn addr(n: u8) -> Address {
     Address::new(n).expect("address")
@@ -30,27 +28,16 @@ pub fn ms(n: u64) -> SimTime {
 
 /// A bus of `n` plain I/O modules at 1..=n, all projected.
 pub fn io_bus(n: u8) -> Bus {
-    io_bus_with(n, AC2726)
+    asi_master::lab::io_bus(n, AC2726).expect("bus")
 }
 
-pub fn io_bus_with(n: u8, codes: SlaveCodes) -> Bus {
-    let mut projected = Vec::new();
-    let mut slaves = Vec::new();
-    for k in 1..=n {
-        projected.push(ProjectedSlave {
-            addr: a(k),
-            codes,
-            parameter: Nibble::ALL,
-        });
-        slaves.push(Slave::new(
-            format!("io {k}"),
-            addr(k),
-            codes,
-            Box::new(IoModule::new()),
-        ));
-    }
-    let p = ProjectedConfig::new(projected).expect("projection");
-    Bus::new(MasterConfig::default(), p, slaves).expect("bus")
+/// The lab bus in normal operation at `at_ms`, tracing.
+pub fn running_lab(at_ms: u64) -> LabLift {
+    let mut lab = LabLift::new().expect("lab");
+    lab.bus.advance_to(ms(at_ms));
+    assert!(lab.bus.is_running());
+    lab.bus.enable_trace(1_000_000);
+    lab
 }
 
 /// The address a request is for (Address_Assignment: the new address).
