@@ -17,8 +17,7 @@ fn first_ready_exchange(offset_us: u64) -> (SimDuration, u64) {
         .bus
         .drain_trace()
         .into_iter()
-        .filter(|r| matches!(r.request.call(), Call::DataExchange { address, .. } if address.get() == 7))
-        .last()
+        .rfind(|r| matches!(r.request.call(), Call::DataExchange { address, .. } if address.get() == 7))
         .expect("an exchange with 7")
         .start;
     let next7 = last7 + cycle;
