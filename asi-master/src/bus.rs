@@ -345,6 +345,7 @@ impl Bus {
             },
             no_response: outcome == Outcome::NoResponse,
             repeat: cur.tx.repeat,
+            ab: cur.tx.ab,
         };
         self.stats.record(&rec, verdict.error, verdict.repeat);
         tracing::trace!(target: "asi_master::trace", "{rec}");

@@ -80,6 +80,9 @@ pub struct Transmit {
     pub kind: TxKind,
     /// `true` for the immediate repeat of a failed transaction.
     pub repeat: bool,
+    /// `true` if the request goes to an A/B slave (I3 of a Data_Exchange or Write_Parameter is
+    /// then the select bit).
+    pub ab: bool,
 }
 
 /// How the master judged an outcome.
@@ -460,6 +463,7 @@ impl Master {
                     request: f.request,
                     kind: f.tx.kind(),
                     repeat: true,
+                    ab: self.is_ab_call(f.tx),
                 });
             }
             // An outcome was never delivered: forget the transaction.
@@ -488,6 +492,7 @@ impl Master {
                         request,
                         kind: tx.kind(),
                         repeat: false,
+                        ab: self.is_ab_call(tx),
                     });
                 }
                 None => self.apply(tx, None),
@@ -999,6 +1004,18 @@ impl Master {
                 .ok()
         } else {
             Request::write_parameter(a.address, p).ok()
+        }
+    }
+
+    fn is_ab_call(&self, tx: Tx) -> bool {
+        match tx {
+            Tx::ActivateParam(a)
+            | Tx::ActivateDexg(a)
+            | Tx::Exchange(a)
+            | Tx::OfflineDefault(a)
+            | Tx::Include(a, InclStep::Param | InclStep::Dexg)
+            | Tx::Job(JobStep::Param(a, _)) => self.detected[a.index() as usize].is_ab(),
+            _ => false,
         }
     }
 

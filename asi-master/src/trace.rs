@@ -67,6 +67,8 @@ pub struct TransactionRecord {
     pub no_response: bool,
     /// `true` for the immediate repeat of a failed transaction.
     pub repeat: bool,
+    /// `true` if the request went to an A/B slave (I3 is the select bit).
+    pub ab: bool,
 }
 
 impl TransactionRecord {
@@ -76,10 +78,23 @@ impl TransactionRecord {
     }
 }
 
-/// The request as a readable call: `Data_Exchange 5 out=1010`, `Read_ID1 3A`.
-pub fn describe_request(req: Request) -> String {
+/// The request as a readable call: `Data_Exchange 5 out=1010`, `Read_ID1 3A`; with `ab`
+/// (an A/B slave) Data_Exchange and Write_Parameter show the select and three bits:
+/// `Data_Exchange 5B out=011`.
+pub fn describe_request(req: Request, ab: bool) -> String {
     let call = req.call();
     let name = call.name();
+    if ab {
+        if let Some((sel, d)) = req.ab_payload() {
+            let address = req.address();
+            let field = if matches!(call, Call::DataExchange { .. }) {
+                "out"
+            } else {
+                "P"
+            };
+            return format!("{name} {address}{sel} {field}={:03b}", d.get());
+        }
+    }
     match call {
         Call::DataExchange { address, data } => format!("{name} {address} out={data}"),
         Call::WriteParameter { address, parameter } => {
@@ -109,7 +124,7 @@ impl fmt::Display for TransactionRecord {
             "{:>14}  {:<9} {:<32}",
             self.start.to_string(),
             self.kind.label(),
-            describe_request(self.request)
+            describe_request(self.request, self.ab)
         )?;
         if !self.request_failed.is_empty() {
             write!(f, " [request {}]", self.request_failed)?;

@@ -86,6 +86,12 @@ fn sixty_two_ab_slaves_see_twice_the_cycle() {
     assert!(bus.is_running());
     assert_eq!(bus.master().las().len(), 62);
     assert!(bus.master().flags().config_ok());
+    bus.image_mut()
+        .output
+        .set_nibble(a(5), Nibble::from_low_bits(0b0111));
+    bus.image_mut()
+        .output
+        .set_nibble(b(5), Nibble::from_low_bits(0b1010));
     bus.enable_trace(100_000);
     let before = bus.stats().cycles;
     bus.advance_to(ms(200));
@@ -106,4 +112,21 @@ fn sixty_two_ab_slaves_see_twice_the_cycle() {
         assert_eq!(w[2].start - w[0].start, SimDuration::from_micros(64 * 154));
     }
     assert!(to5.iter().all(|r| r.response.is_some()));
+    let shown: Vec<String> = to5[..2].iter().map(|r| r.to_string()).collect();
+    assert!(
+        shown.iter().any(|l| l.contains("Data_Exchange 5A out=111")),
+        "{shown:?}"
+    );
+    assert!(
+        shown.iter().any(|l| l.contains("Data_Exchange 5B out=010")),
+        "D3 of an A/B slave's nibble is not sent: {shown:?}"
+    );
+    // The outputs reached the right slave of the pair (slaves 8 and 9 are 5A and 5B).
+    let out = |i: usize| {
+        bus.device::<IoModule>(asi_master::SlaveId(i))
+            .expect("io")
+            .outputs()
+            .get()
+    };
+    assert_eq!((out(8), out(9)), (0b111, 0b010), "5A and 5B");
 }
