@@ -2,15 +2,22 @@
 //! clock (the target: under 5 s, i.e. at least 5 M transactions per second).
 //!
 //! `cargo run --release -p asi-master --example hour` (an optional argument gives the
-//! simulated seconds, default 3600).
+//! simulated seconds, default 3600; a second argument `lab` runs the lab lift's bus instead,
+//! with its handshake devices and the safety monitor).
 
 use asi_master::devices::AC2726;
-use asi_master::lab::io_bus;
+use asi_master::lab::{io_bus, LabLift};
 use asi_phy::{SimDuration, SimTime};
 use std::time::Instant;
 
 fn main() {
-    let mut bus = match io_bus(31, AC2726) {
+    let lab = std::env::args().nth(2).as_deref() == Some("lab");
+    let bus = if lab {
+        LabLift::new().map(|l| l.bus)
+    } else {
+        io_bus(31, AC2726)
+    };
+    let mut bus = match bus {
         Ok(b) => b,
         Err(e) => {
             eprintln!("{e}");
