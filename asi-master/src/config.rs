@@ -329,6 +329,11 @@ mod tests {
         assert!(e.to_string().contains("occupies both halves"));
         let ok = ProjectedConfig::new([ps(a(3), ab), ps(b(3), ab)]).expect("A/B pair");
         assert_eq!(ok.lps().len(), 2);
+        let e = crate::lab::io_bus(32, std).expect_err("32 modules");
+        assert_eq!(
+            e.to_string(),
+            "master setting number of I/O modules = 32: must be 1..=31 (one per address)"
+        );
         let bad = MasterConfig {
             max_failed_cycles: 0,
             ..MasterConfig::default()

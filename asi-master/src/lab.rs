@@ -207,7 +207,8 @@ impl LabLift {
             _ => false,
         }
     }
-    /// The slave id at lab address `n`.
+    /// The slave id at lab address `n` (the slave put there at construction, wherever it
+    /// is now).
     pub fn slave_id(&self, n: u8) -> Option<SlaveId> {
         self.id(n)
     }
@@ -217,7 +218,11 @@ impl LabLift {
 /// the reference bus of the cycle-time formulas (SPEC §7) and of the benchmark.
 pub fn io_bus(n: u8, codes: SlaveCodes) -> Result<Bus, ConfigError> {
     if !(1..=31).contains(&n) {
-        return Err(ConfigError::TooManyDevices(n as usize));
+        return Err(ConfigError::Setting {
+            field: "number of I/O modules",
+            value: n.to_string(),
+            rule: "must be 1..=31 (one per address)",
+        });
     }
     let mut projected = Vec::new();
     let mut slaves = Vec::new();
