@@ -1,0 +1,125 @@
+//! Plain digital modules: a generic 4DI/4DO module, the converter I/O and the load sensor.
+
+use super::any_impls;
+use crate::slave::Peripheral;
+use asi_phy::{Nibble, SimTime};
+
+/// A plain 4-input/4-output module (IFM AC2726, AC2258 or any S-7.x.x I/O slave): the inputs
+/// are sampled when the slave receives a Data_Exchange, then the outputs are driven.
+#[derive(Clone, Debug, Default)]
+pub struct IoModule {
+    inputs: Nibble,
+    outputs: Nibble,
+    fault: bool,
+}
+
+impl IoModule {
+    /// A module with all pins low.
+    pub fn new() -> IoModule {
+        IoModule::default()
+    }
+    /// The input pins D3..D0.
+    pub fn set_inputs(&mut self, v: Nibble) {
+        self.inputs = v;
+    }
+    /// The input pins.
+    pub fn inputs(&self) -> Nibble {
+        self.inputs
+    }
+    /// The output pins as last driven (0000 after reset).
+    pub fn outputs(&self) -> Nibble {
+        self.outputs
+    }
+    /// Peripheral fault (status S1), a fault hook.
+    pub fn set_periphery_fault(&mut self, on: bool) {
+        self.fault = on;
+    }
+}
+
+impl Peripheral for IoModule {
+    fn exchange(&mut self, _now: SimTime, outputs: Nibble) -> Nibble {
+        self.outputs = outputs;
+        self.inputs
+    }
+    fn reset(&mut self) {
+        self.outputs = Nibble::ZERO;
+    }
+    fn periphery_fault(&self) -> bool {
+        self.fault
+    }
+    any_impls!();
+}
+
+/// The converter's I/O module at address 7 (AC2258; SPEC §3): out D0 = run, D1 = direction
+/// (1 up, 0 down); in D0 = converter ready, D1 = converter fault.
+#[derive(Clone, Debug, Default)]
+pub struct Converter {
+    io: IoModule,
+}
+
+impl Converter {
+    /// Outputs off, converter not ready.
+    pub fn new() -> Converter {
+        Converter::default()
+    }
+    /// The output bits as last received.
+    pub fn outputs(&self) -> Nibble {
+        self.io.outputs
+    }
+    /// Output D0: run the converter.
+    pub fn run(&self) -> bool {
+        self.io.outputs.bit(0)
+    }
+    /// Output D1: direction, `true` = up.
+    pub fn direction_up(&self) -> bool {
+        self.io.outputs.bit(1)
+    }
+    /// Input D0: the converter is ready.
+    pub fn set_ready(&mut self, on: bool) {
+        self.io.inputs = self.io.inputs.with_bit(0, on);
+    }
+    /// Input D1: the converter reports a fault.
+    pub fn set_fault(&mut self, on: bool) {
+        self.io.inputs = self.io.inputs.with_bit(1, on);
+    }
+}
+
+impl Peripheral for Converter {
+    fn exchange(&mut self, now: SimTime, outputs: Nibble) -> Nibble {
+        self.io.exchange(now, outputs)
+    }
+    fn reset(&mut self) {
+        self.io.reset();
+    }
+    any_impls!();
+}
+
+/// The IFM IG5886 load sensor at address 8 (S-1.1; SPEC §3 decision): inputs D1..D0 = load
+/// level 0 empty, 1 loaded, 2 full, 3 overloaded; D2 = operation ready (S-1.1, always 1 while
+/// powered); D3 is an output (IO code 1) and reads back as sent.
+#[derive(Clone, Debug, Default)]
+pub struct LoadSensor {
+    level: u8,
+}
+
+impl LoadSensor {
+    /// An empty cabin.
+    pub fn new() -> LoadSensor {
+        LoadSensor::default()
+    }
+    /// The load level 0..=3 (higher values are taken as 3, overloaded).
+    pub fn set_level(&mut self, level: u8) {
+        self.level = level.min(3);
+    }
+    /// The load level.
+    pub fn level(&self) -> u8 {
+        self.level
+    }
+}
+
+impl Peripheral for LoadSensor {
+    fn exchange(&mut self, _now: SimTime, outputs: Nibble) -> Nibble {
+        Nibble::from_low_bits(self.level | 0b0100 | (outputs.get() & 0b1000))
+    }
+    any_impls!();
+}
