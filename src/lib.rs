@@ -2,4 +2,6 @@
 //! its safety logic together on one simulated clock (SPEC §0).
 
 pub mod phy_tools;
+pub mod report;
+pub mod rig;
 pub mod scenario;

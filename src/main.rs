@@ -1,8 +1,10 @@
 //! The `asi-lift` command.
 
 use asi_lift::phy_tools::{decode_capture, describe, parse_call, waveform_csv, DecodeOptions};
+use asi_lift::rig::Rig;
+use asi_lift::scenario::Scenario;
 use asi_phy::waveform::WaveformConfig;
-use asi_phy::Expect;
+use asi_phy::{Expect, SimDuration};
 use clap::{Parser, Subcommand, ValueEnum};
 use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
@@ -18,6 +20,28 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
+    /// Run the lab lift: the AS-i bus, the lift, the PLC program and the safety logic on one
+    /// simulated clock, driven by a scenario file (the built-in demo without one).
+    Run {
+        /// The scenario file (TOML). Without it, the built-in demo runs.
+        scenario: Option<PathBuf>,
+        /// Use this seed instead of the scenario's.
+        #[arg(long)]
+        seed: Option<u64>,
+        /// Stop the simulation at this time (e.g. 30s, 2min) if earlier than the scenario's
+        /// duration.
+        #[arg(long, value_name = "DURATION")]
+        until: Option<String>,
+        /// Where the report goes: a file, or `-` for standard output.
+        #[arg(long, value_name = "FILE|-", default_value = "-")]
+        report: PathBuf,
+        /// The report's format.
+        #[arg(long, value_enum, default_value_t = Format::Text)]
+        format: Format,
+        /// Overwrite the report file if it exists.
+        #[arg(long)]
+        force: bool,
+    },
     /// Show how a master call or slave response travels on the line: bits, Manchester levels,
     /// APM pulses; optionally write its line voltage as CSV.
     ///
@@ -58,6 +82,14 @@ enum Command {
     },
 }
 
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum Format {
+    /// The readable log of the run and a summary.
+    Text,
+    /// The report as JSON.
+    Json,
+}
+
 #[derive(Clone, Copy, ValueEnum)]
 enum Listen {
     /// Master requests only.
@@ -68,9 +100,12 @@ enum Listen {
     Both,
 }
 
+/// Exit code of a run that found safety violations.
+const EXIT_VIOLATIONS: u8 = 3;
+
 fn main() -> ExitCode {
     match run(Cli::parse()) {
-        Ok(()) => ExitCode::SUCCESS,
+        Ok(code) => ExitCode::from(code),
         Err(msg) => {
             eprintln!("asi-lift: {msg}");
             ExitCode::FAILURE
@@ -78,8 +113,53 @@ fn main() -> ExitCode {
     }
 }
 
-fn run(cli: Cli) -> Result<(), String> {
+fn run(cli: Cli) -> Result<u8, String> {
     match cli.command {
+        Command::Run {
+            scenario,
+            seed,
+            until,
+            report,
+            format,
+            force,
+        } => {
+            let mut sc = match &scenario {
+                None => Scenario::demo(),
+                Some(path) => {
+                    let text = read_input(path)?;
+                    Scenario::from_toml(&path.display().to_string(), &text)
+                        .map_err(|e| e.to_string())?
+                }
+            };
+            if let Some(s) = seed {
+                sc.seed = s;
+            }
+            let until = match until {
+                None => None,
+                Some(u) => Some(
+                    u.parse::<SimDuration>()
+                        .map_err(|e| format!("--until: {e}"))?,
+                ),
+            };
+            let rig = Rig::new(sc).map_err(|e| e.to_string())?;
+            let rep = rig.run(until);
+            let body = match format {
+                Format::Text => rep.to_text(),
+                Format::Json => rep.to_json() + "\n",
+            };
+            write_output(&report, &body, force)?;
+            if report != Path::new("-") {
+                let text = rep.to_text();
+                let summary = text.split("\nsummary").nth(1).unwrap_or("");
+                print!("summary{summary}");
+                println!("report written to {}", report.display());
+            }
+            Ok(if rep.violations.is_empty() {
+                0
+            } else {
+                EXIT_VIOLATIONS
+            })
+        }
         Command::Encode {
             call,
             csv,
@@ -106,7 +186,7 @@ fn run(cli: Cli) -> Result<(), String> {
                     }
                 }
             }
-            Ok(())
+            Ok(0)
         }
         Command::Decode {
             file,
@@ -122,7 +202,7 @@ fn run(cli: Cli) -> Result<(), String> {
             let out = decode_capture(&text, DecodeOptions { nominal, expect })
                 .map_err(|e| format!("{}: {e}", file.display()))?;
             print!("{out}");
-            Ok(())
+            Ok(0)
         }
     }
 }

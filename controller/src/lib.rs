@@ -9,10 +9,12 @@
 //!
 //! - [`program`]: the logic over plain inputs and outputs, testable on its own;
 //! - [`dispatch`]: the seed's FIFO memories and the collective selective control (§5.2.3);
-//! - [`fifo`]: FIFO_Kabina and FIFO_Patra.
+//! - [`fifo`]: FIFO_Kabina and FIFO_Patra;
+//! - [`plc`]: the I/O routines over the master's process image and the handshakes.
 
 pub mod dispatch;
 pub mod fifo;
+pub mod plc;
 pub mod program;
 
 pub use dispatch::{Algorithm, Dir, HallDir, ServedCall, Source};

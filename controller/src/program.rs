@@ -32,6 +32,11 @@ pub struct ControllerConfig {
     pub restart_every: SimDuration,
     /// A cabin word older than this means the cabin slave is lost.
     pub stale_after: SimDuration,
+    /// How long the cabin stands at a floor after arriving before it departs again.
+    ///
+    /// **Decision**: 2 s. The seed's automat departs in the scan after it arrives, so an
+    /// intermediate stop would never come to rest; a lift stands for its passengers.
+    pub dwell: SimDuration,
 }
 
 impl Default for ControllerConfig {
@@ -47,6 +52,7 @@ impl Default for ControllerConfig {
             init_timer: SimDuration::from_secs(2),
             restart_every: SimDuration::from_millis(500),
             stale_after: SimDuration::from_secs(1),
+            dwell: SimDuration::from_secs(2),
         }
     }
 }
@@ -356,6 +362,8 @@ pub struct Program {
     restart_high: bool,
     next_restart: SimTime,
     initialised_at: Option<SimTime>,
+    /// No departure before this time (dwell after an arrival).
+    depart_after: SimTime,
     dispatch: Dispatcher,
     out: Outputs,
     events: Vec<Event>,
@@ -390,6 +398,7 @@ impl Program {
             restart_high: false,
             next_restart: SimTime::ZERO,
             initialised_at: None,
+            depart_after: SimTime::ZERO,
             dispatch,
             out: Outputs {
                 setpoint_ua: cfg.standstill_ua,
@@ -605,6 +614,7 @@ impl Program {
                 } else {
                     self.choose_target(now);
                     if self.target != self.current
+                        && now >= self.depart_after
                         && door_closed
                         && inp.converter_ready
                         && !inp.converter_fault
@@ -761,6 +771,7 @@ impl Program {
         self.hold();
         let floor = self.current;
         self.target = floor;
+        self.depart_after = now + self.cfg.dwell;
         self.event(now, EventKind::Arrived { floor });
         self.serve(now, self.dir);
         if self.stop_pending {

@@ -1,0 +1,245 @@
+//! The report of a run: what happened, in the form `asi-lift run --format json` writes and the
+//! end-to-end tests assert.
+
+use serde::Serialize;
+use std::fmt::Write as _;
+
+/// Everything a run produced.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Report {
+    /// The scenario's name.
+    pub scenario: String,
+    /// Its seed.
+    pub seed: u64,
+    /// Simulated time, seconds.
+    pub simulated_s: f64,
+    /// When the controller finished its initialisation (the first time), or null.
+    pub initialised_at_s: Option<f64>,
+    /// Every stop level at a floor, in order.
+    pub arrivals: Vec<Arrival>,
+    /// Every call served.
+    pub served: Vec<Served>,
+    /// The state at the end.
+    #[serde(rename = "final")]
+    pub final_state: FinalState,
+    /// Bus statistics.
+    pub bus: BusReport,
+    /// Safety trips.
+    pub safety: SafetyReport,
+    /// Safety invariants the rig found broken; empty in a correct run.
+    pub violations: Vec<Violation>,
+    /// The readable log of the run, one line per event.
+    #[serde(skip)]
+    pub log: Vec<LogLine>,
+}
+
+/// The cabin came to rest level at a floor.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Arrival {
+    /// The floor.
+    pub floor: u8,
+    /// When, seconds.
+    pub at_s: f64,
+    /// The cabin height above the floor-1 level, mm.
+    pub position_mm: f64,
+}
+
+/// A call served.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Served {
+    /// The floor.
+    pub floor: u8,
+    /// `cabin` or `hall`.
+    pub source: String,
+    /// When the passenger pressed the button (or, if no press matches, when the controller
+    /// stored the call), seconds.
+    pub requested_at_s: f64,
+    /// When the cabin stopped there, seconds.
+    pub served_at_s: f64,
+}
+
+/// The state at the end of the run.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct FinalState {
+    /// The controller's current floor (Aktualni_Patro).
+    pub floor: u8,
+    /// The cabin height, mm.
+    pub position_mm: f64,
+    /// The controller's state in words.
+    pub state: String,
+    /// The cabin moves.
+    pub moving: bool,
+    /// K1's main contacts are closed.
+    pub contactor_closed: bool,
+    /// FIFO_Kabina (collective: pending cabin calls ascending).
+    pub fifo_cabin: Vec<u8>,
+    /// FIFO_Patra (collective: pending hall calls ascending).
+    pub fifo_hall: Vec<u8>,
+}
+
+/// Bus figures.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct BusReport {
+    /// Transactions, repeats included.
+    pub transactions: u64,
+    /// Immediate repeats.
+    pub repeats: u64,
+    /// Erroneous telegrams by primary check class, requests and responses together.
+    pub errors: ErrorCounts,
+    /// Cycle time of normal operation, µs.
+    pub cycle_us: CycleTimes,
+}
+
+/// Errors per receiver check, and missing responses.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct ErrorCounts {
+    /// Start bit.
+    pub start_bit: u64,
+    /// Alternation.
+    pub alternation: u64,
+    /// Pause.
+    pub pause: u64,
+    /// Information.
+    pub information: u64,
+    /// Parity.
+    pub parity: u64,
+    /// End bit.
+    pub end_bit: u64,
+    /// Length.
+    pub length: u64,
+    /// A response was due and none came.
+    pub no_response: u64,
+}
+
+/// Minimum, mean and maximum.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct CycleTimes {
+    /// Shortest.
+    pub min: f64,
+    /// Mean.
+    pub mean: f64,
+    /// Longest.
+    pub max: f64,
+}
+
+/// The safety logic's trips.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct SafetyReport {
+    /// Every trip and error, in order.
+    pub trips: Vec<Trip>,
+}
+
+/// One safety trip.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Trip {
+    /// When, seconds.
+    pub at_s: f64,
+    /// Why, in words.
+    pub cause: String,
+}
+
+/// A safety invariant broken.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Violation {
+    /// When it was found, seconds.
+    pub at_s: f64,
+    /// Which invariant: `door-open-moving`, `overloaded-moving`, `k1-in-overtravel`,
+    /// `mechanical-end`, `stop-ignored`.
+    pub kind: String,
+    /// What was seen.
+    pub detail: String,
+}
+
+/// One line of the run's log.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LogLine {
+    /// Seconds.
+    pub at_s: f64,
+    /// Who: `scenario`, `controller`, `plant`, `safety`, `bus`, `rig`.
+    pub who: &'static str,
+    /// What.
+    pub text: String,
+}
+
+impl Report {
+    /// The report as pretty JSON.
+    pub fn to_json(&self) -> String {
+        serde_json::to_string_pretty(self).unwrap_or_else(|e| format!("{{\"error\": \"{e}\"}}"))
+    }
+
+    /// The readable log and a summary.
+    pub fn to_text(&self) -> String {
+        let mut s = String::new();
+        let _ = writeln!(s, "scenario \"{}\", seed {}", self.scenario, self.seed);
+        for l in &self.log {
+            let _ = writeln!(s, "{:>10.3} s  {:<10}  {}", l.at_s, l.who, l.text);
+        }
+        let _ = writeln!(s, "\nsummary after {:.3} s", self.simulated_s);
+        match self.initialised_at_s {
+            Some(t) => {
+                let _ = writeln!(s, "  initialised at     {t:.3} s");
+            }
+            None => {
+                let _ = writeln!(s, "  initialised at     never");
+            }
+        }
+        let stops: Vec<String> = self.arrivals.iter().map(|a| a.floor.to_string()).collect();
+        let _ = writeln!(
+            s,
+            "  stops at floors    {}",
+            if stops.is_empty() {
+                "none".into()
+            } else {
+                stops.join(", ")
+            }
+        );
+        let _ = writeln!(s, "  calls served       {}", self.served.len());
+        if !self.served.is_empty() {
+            let waits: Vec<f64> = self
+                .served
+                .iter()
+                .map(|c| c.served_at_s - c.requested_at_s)
+                .collect();
+            let mean = waits.iter().sum::<f64>() / waits.len() as f64;
+            let max = waits.iter().cloned().fold(0.0, f64::max);
+            let _ = writeln!(s, "  time to serve      mean {mean:.1} s, max {max:.1} s");
+        }
+        let f = &self.final_state;
+        let _ = writeln!(
+            s,
+            "  final              floor {} at {:.1} mm, {}, {}, K1 {}",
+            f.floor,
+            f.position_mm,
+            f.state,
+            if f.moving { "moving" } else { "at rest" },
+            if f.contactor_closed { "closed" } else { "open" }
+        );
+        let _ = writeln!(
+            s,
+            "  pending calls      cabin {:?}, hall {:?}",
+            f.fifo_cabin, f.fifo_hall
+        );
+        let b = &self.bus;
+        let e = &b.errors;
+        let _ = writeln!(
+            s,
+            "  bus                {} transactions, {} repeats; errors: start {} alt {} pause {} info {} parity {} end {} length {}, no response {}",
+            b.transactions, b.repeats, e.start_bit, e.alternation, e.pause, e.information, e.parity, e.end_bit, e.length, e.no_response
+        );
+        let _ = writeln!(
+            s,
+            "  AS-i cycle         min {:.0} µs, mean {:.1} µs, max {:.0} µs",
+            b.cycle_us.min, b.cycle_us.mean, b.cycle_us.max
+        );
+        let _ = writeln!(s, "  safety trips       {}", self.safety.trips.len());
+        if self.violations.is_empty() {
+            let _ = writeln!(s, "  violations         none");
+        } else {
+            let _ = writeln!(s, "  violations         {}", self.violations.len());
+            for v in &self.violations {
+                let _ = writeln!(s, "    {:>10.3} s  {}: {}", v.at_s, v.kind, v.detail);
+            }
+        }
+        s
+    }
+}

@@ -1,0 +1,808 @@
+//! The rig: the AS-i bus with the lab lift's slaves, the lift plant, the PLC and the safety
+//! logic on one simulated clock (SPEC §0), driven by a scenario.
+//!
+//! A discrete-event loop: the next moment is the earliest of the next bus event, the plant's
+//! next edge, the next PLC scan, the next safety scan, the next scenario event and the end of
+//! the run. At each moment the plant is brought up to it first (its edges are exact), its
+//! signals are handed to the slaves' peripheral inputs, the bus runs, and what the slaves drive
+//! (converter run and direction, the speed set-point, the display words) goes to the plant at
+//! that same moment. So a slave samples the plant exactly when its transaction completes, and
+//! the plant sees a new output exactly when the slave takes it. Nothing reads the wall clock;
+//! the only random source is the bus's line noise, seeded from the scenario.
+
+use crate::report::{
+    Arrival, BusReport, CycleTimes, ErrorCounts, FinalState, LogLine, Report, SafetyReport, Served,
+    Trip, Violation,
+};
+use crate::scenario::{Action, Fault, Scenario, ScenarioEvent};
+use asi_master::lab::LabLift;
+use asi_phy::fault::FaultRates;
+use asi_phy::{Check, SimDuration, SimTime};
+use controller::plc::{addr, FromSafety, Plc, ToSafety};
+use controller::{ControllerConfig, EventKind as Ctl, Source};
+use lift_model::{Button, DisplayId, EventKind as Plant, Lift, LiftConfig, LoadLevel};
+use safety::{LiftSafety, LiftSafetyConfig, LiftSafetyInputs, SafeLink, SAFETY_SCAN_PERIOD};
+
+/// Why a rig cannot be built for a scenario.
+#[derive(Debug, thiserror::Error)]
+pub enum RigError {
+    /// The lift plant rejects its configuration.
+    #[error("lift: {0}")]
+    Lift(#[from] lift_model::ConfigError),
+    /// The bus cannot be built.
+    #[error("bus: {0}")]
+    Bus(#[from] asi_master::ConfigError),
+    /// The controller rejects its configuration.
+    #[error("{0}")]
+    Controller(#[from] controller::ControllerConfigError),
+    /// The safety project cannot be built.
+    #[error("safety: {0}")]
+    Safety(#[from] safety::lift::LiftSafetyError),
+    /// The plant refuses the scenario's initial state.
+    #[error("lift: {0}")]
+    Plant(#[from] lift_model::PlantError),
+}
+
+/// How long an operator holds the reset or acknowledge button.
+const OPERATOR_PULSE: SimDuration = SimDuration::from_millis(100);
+/// When the operator presses the safety reset after power-on.
+const POWER_ON_RESET_AT: SimTime = SimTime::from_millis(500);
+/// The AS-i supply's nominal voltage.
+const ASI_VOLTS: f64 = 30.0;
+
+/// Reaction budgets of the invariants (see README "Violations").
+const DOOR_BUDGET: SimDuration = SimDuration::from_millis(1000);
+const OVERLOAD_BUDGET: SimDuration = SimDuration::from_millis(1000);
+const OVERTRAVEL_BUDGET: SimDuration = SimDuration::from_millis(50);
+const STOP_MARGIN: SimDuration = SimDuration::from_millis(200);
+
+/// Something the rig does at a fixed time besides the scenario's events.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Timer {
+    OperatorReset(bool),
+    ErrAck(bool),
+    PowerBack,
+}
+
+/// What the rig last handed the plant from the slaves.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+struct Applied {
+    run: bool,
+    up: bool,
+    setpoint_ua: u16,
+    displays: [Option<u16>; 5],
+}
+
+/// Watches the invariants.
+#[derive(Clone, Debug, Default)]
+struct Watch {
+    door_open_since: Option<SimTime>,
+    overloaded_since: Option<SimTime>,
+    overtravel_k1_since: Option<SimTime>,
+    /// STOP pressed at, and whether K1 has opened since.
+    stop_since: Option<(SimTime, bool)>,
+    reported: [bool; 4],
+}
+
+/// The whole rig.
+pub struct Rig {
+    sc: Scenario,
+    lab: LabLift,
+    lift: Lift,
+    plc: Plc,
+    safety: LiftSafety,
+    estop_delay: SimDuration,
+    now: SimTime,
+    end: SimTime,
+    next_plc: SimTime,
+    next_safety: SimTime,
+    next_event: usize,
+    timers: Vec<(SimTime, Timer)>,
+    applied: Applied,
+    plant_dirty: bool,
+    from_safety: FromSafety,
+    to_safety: ToSafety,
+    k1: bool,
+    operator_reset: bool,
+    err_ack: bool,
+    presses: Vec<(SimTime, Button)>,
+    watch: Watch,
+    report: Report,
+}
+
+impl Rig {
+    /// A rig at power-on for `sc`.
+    pub fn new(sc: Scenario) -> Result<Rig, RigError> {
+        let lift = Lift::new(LiftConfig {
+            floors: sc.floors,
+            initial_position_mm: sc.start_mm,
+            ..LiftConfig::default()
+        })?;
+        let mut lab = LabLift::new()?;
+        lab.bus.enable_trace(0);
+        if sc.pulse_error_rate > 0.0 {
+            lab.bus
+                .set_line_faults(sc.seed, FaultRates::uniform(sc.pulse_error_rate));
+        }
+        let plc = Plc::new(ControllerConfig {
+            floors: sc.floors,
+            algorithm: sc.algorithm,
+            scan: sc.plc_scan,
+            ..ControllerConfig::default()
+        })?;
+        let safety_cfg = LiftSafetyConfig::default();
+        let estop_delay = safety_cfg.estop_delay;
+        let safety = LiftSafety::new(safety_cfg)?;
+        let mut timers = Vec::new();
+        if sc.power_on_reset {
+            timers.push((POWER_ON_RESET_AT, Timer::OperatorReset(true)));
+        }
+        let report = Report {
+            scenario: sc.name.clone(),
+            seed: sc.seed,
+            simulated_s: 0.0,
+            initialised_at_s: None,
+            arrivals: Vec::new(),
+            served: Vec::new(),
+            final_state: FinalState {
+                floor: 1,
+                position_mm: sc.start_mm,
+                state: String::new(),
+                moving: false,
+                contactor_closed: false,
+                fifo_cabin: Vec::new(),
+                fifo_hall: Vec::new(),
+            },
+            bus: BusReport {
+                transactions: 0,
+                repeats: 0,
+                errors: ErrorCounts::default(),
+                cycle_us: CycleTimes {
+                    min: 0.0,
+                    mean: 0.0,
+                    max: 0.0,
+                },
+            },
+            safety: SafetyReport { trips: Vec::new() },
+            violations: Vec::new(),
+            log: Vec::new(),
+        };
+        let mut rig = Rig {
+            end: SimTime::ZERO + sc.duration,
+            lab,
+            lift,
+            plc,
+            safety,
+            estop_delay,
+            now: SimTime::ZERO,
+            next_plc: SimTime::ZERO,
+            next_safety: SimTime::ZERO,
+            next_event: 0,
+            timers,
+            applied: Applied::default(),
+            plant_dirty: true,
+            from_safety: FromSafety::default(),
+            to_safety: ToSafety::default(),
+            k1: false,
+            operator_reset: false,
+            err_ack: false,
+            presses: Vec::new(),
+            watch: Watch::default(),
+            report,
+            sc,
+        };
+        rig.lift.set_load(SimTime::ZERO, rig.sc.load)?;
+        rig.lift.set_door(SimTime::ZERO, rig.sc.door_closed)?;
+        rig.log(
+            "rig",
+            format!(
+                "power on: cabin at {:.1} mm, load {}, door {}, {} control, line error rate {}",
+                rig.sc.start_mm,
+                load_name(rig.sc.load),
+                if rig.sc.door_closed { "closed" } else { "open" },
+                match rig.sc.algorithm {
+                    controller::Algorithm::Fifo => "FIFO",
+                    controller::Algorithm::Collective => "collective",
+                },
+                rig.sc.pulse_error_rate
+            ),
+        );
+        Ok(rig)
+    }
+
+    /// Runs until `until` (at most the scenario's duration) and returns the report.
+    pub fn run(mut self, until: Option<SimDuration>) -> Report {
+        if let Some(u) = until {
+            self.end = self.end.min(SimTime::ZERO + u);
+        }
+        loop {
+            let t = self.next_moment();
+            if t > self.end {
+                break;
+            }
+            self.step(t);
+            if t == self.end {
+                break;
+            }
+        }
+        self.finish()
+    }
+
+    fn next_moment(&self) -> SimTime {
+        let mut t = self.end;
+        t = t.min(self.lab.bus.poll_at());
+        if let Some(e) = self.lift.next_event() {
+            t = t.min(e);
+        }
+        t = t.min(self.next_plc).min(self.next_safety);
+        if let Some(e) = self.sc.events.get(self.next_event) {
+            t = t.min(e.at);
+        }
+        if let Some((at, _)) = self.timers.iter().min_by_key(|(at, _)| *at) {
+            t = t.min(*at);
+        }
+        t.max(self.now)
+    }
+
+    fn step(&mut self, t: SimTime) {
+        self.now = t;
+        self.advance_plant(t);
+        while let Some(ev) = self
+            .sc
+            .events
+            .get(self.next_event)
+            .filter(|e| e.at <= t)
+            .cloned()
+        {
+            self.next_event += 1;
+            self.apply(t, &ev);
+        }
+        self.fire_timers(t);
+        if self.plant_dirty {
+            self.plant_to_slaves();
+        }
+        self.lab.bus.advance_to(t);
+        self.slaves_to_plant(t);
+        if t >= self.next_safety {
+            self.safety_scan(t);
+            self.next_safety = t + SAFETY_SCAN_PERIOD;
+        }
+        if t >= self.next_plc {
+            self.plc_scan(t);
+            self.next_plc = t + self.sc.plc_scan;
+        }
+        self.check_invariants(t);
+    }
+
+    fn advance_plant(&mut self, t: SimTime) {
+        let events: Result<Vec<_>, _> = self.lift.advance_to(t).map(|ev| ev.collect());
+        let events = match events {
+            Ok(ev) => ev,
+            Err(e) => {
+                self.log("plant", format!("error: {e}"));
+                return;
+            }
+        };
+        if events.is_empty() {
+            return;
+        }
+        self.plant_dirty = true;
+        for e in events {
+            match e.kind {
+                Plant::Stopped { position_mm } => self.stopped(e.at, position_mm),
+                Plant::Crash { end, impact_mm_s } => {
+                    let text =
+                        format!("crash into the mechanical end ({end:?}) at {impact_mm_s:.1} mm/s");
+                    self.log_at(e.at, "plant", text.clone());
+                    self.violation(e.at, "mechanical-end", text);
+                }
+                Plant::Overtravel { end, tripped } => {
+                    let text = if tripped {
+                        format!(
+                            "overtravel sensor ({end:?}) tripped at {:.1} mm",
+                            self.lift.position_mm()
+                        )
+                    } else {
+                        format!("overtravel sensor ({end:?}) free again")
+                    };
+                    self.log_at(e.at, "plant", text);
+                }
+                Plant::ConverterFault { fault } => {
+                    self.log_at(e.at, "plant", format!("converter fault: {fault:?}"));
+                }
+                _ => {}
+            }
+        }
+    }
+
+    /// The cabin came to rest: an arrival if it stands level at a floor with the drive
+    /// commanded to stand still.
+    fn stopped(&mut self, at: SimTime, position_mm: f64) {
+        if self.applied.run && self.applied.setpoint_ua > 4000 {
+            return;
+        }
+        let pitch = 400.0;
+        let floor = (position_mm / pitch).round() + 1.0;
+        if !(1.0..=self.sc.floors as f64).contains(&floor) {
+            return;
+        }
+        let level = (floor - 1.0) * pitch;
+        if (position_mm - level).abs() <= 10.0 {
+            self.report.arrivals.push(Arrival {
+                floor: floor as u8,
+                at_s: at.as_secs_f64(),
+                position_mm: round3(position_mm),
+            });
+            self.log_at(
+                at,
+                "plant",
+                format!(
+                    "cabin at rest level at floor {floor} ({:+.1} mm)",
+                    position_mm - level
+                ),
+            );
+        }
+    }
+
+    fn apply(&mut self, t: SimTime, ev: &ScenarioEvent) {
+        let what = describe(&ev.action);
+        self.log("scenario", what);
+        let result = match &ev.action {
+            Action::Press { button, hold } => {
+                self.presses.push((t, *button));
+                self.lift.press(t, *button, *hold)
+            }
+            Action::Load(l) => self.lift.set_load(t, *l),
+            Action::Door { closed } => self.lift.set_door(t, *closed),
+            Action::Crank { mm } => self.lift.crank(t, *mm),
+            Action::Reset => {
+                self.operator_reset = true;
+                self.timers
+                    .push((t + OPERATOR_PULSE, Timer::OperatorReset(false)));
+                Ok(())
+            }
+            Action::Ack => {
+                self.err_ack = true;
+                self.timers.push((t + OPERATOR_PULSE, Timer::ErrAck(false)));
+                Ok(())
+            }
+            Action::Fault(f) => {
+                self.fault(t, *f);
+                Ok(())
+            }
+        };
+        if let Err(e) = result {
+            self.log("scenario", format!("refused by the plant: {e}"));
+        }
+        self.plant_dirty = true;
+    }
+
+    fn fault(&mut self, t: SimTime, f: Fault) {
+        match f {
+            Fault::SlaveOffline { slave } | Fault::SlaveOnline { slave } => {
+                let Some(id) = self.lab.slave_id(slave) else {
+                    self.log(
+                        "scenario",
+                        format!("no slave at address {slave} on the lab bus"),
+                    );
+                    return;
+                };
+                if matches!(f, Fault::SlaveOffline { .. }) {
+                    self.lab.bus.detach(id);
+                } else {
+                    self.lab.bus.attach(id);
+                    self.plant_dirty = true;
+                }
+            }
+            Fault::PowerFail { duration } => {
+                self.lab.bus.set_supply_voltage(0.0);
+                self.timers.push((t + duration, Timer::PowerBack));
+            }
+            Fault::SafeLinkDrop { duration } => {
+                self.safety.drop_link(SafeLink::CabinStop, t, duration)
+            }
+        }
+    }
+
+    fn fire_timers(&mut self, t: SimTime) {
+        let mut due: Vec<Timer> = Vec::new();
+        self.timers.retain(|(at, timer)| {
+            if *at <= t {
+                due.push(*timer);
+                false
+            } else {
+                true
+            }
+        });
+        for timer in due {
+            match timer {
+                Timer::OperatorReset(on) => {
+                    self.operator_reset = on;
+                    if on {
+                        self.log(
+                            "rig",
+                            "operator presses the safety reset after power-on".into(),
+                        );
+                        self.timers
+                            .push((t + OPERATOR_PULSE, Timer::OperatorReset(false)));
+                    }
+                }
+                Timer::ErrAck(on) => self.err_ack = on,
+                Timer::PowerBack => {
+                    self.lab.bus.set_supply_voltage(ASI_VOLTS);
+                    self.log("rig", "AS-i power back".into());
+                    self.plant_dirty = true;
+                }
+            }
+        }
+    }
+
+    /// The plant's signals on the slaves' peripheral inputs.
+    fn plant_to_slaves(&mut self) {
+        self.plant_dirty = false;
+        let l = &self.lift;
+        let floors = self.sc.floors;
+        for f in 1..=floors.min(addr::FLOOR_STATIONS) {
+            let up = l.is_pressed(Button::HallUp(f));
+            let down = l.is_pressed(Button::HallDown(f));
+            if let Some(st) = self.lab.floor_mut(f) {
+                st.set_buttons(up, down);
+            }
+        }
+        let cabin: Vec<bool> = (1..=floors)
+            .map(|f| l.is_pressed(Button::Cabin(f)))
+            .collect();
+        let (bell, stop, door, left, right) = (
+            l.is_pressed(Button::Bell),
+            l.stop_pressed(),
+            l.door_closed(),
+            l.vane_left(),
+            l.vane_right(),
+        );
+        let (ready, fault, load) = (l.converter_ready(), l.converter_fault(), l.load().code());
+        let (bottom, top) = (l.overtravel_bottom_free(), l.overtravel_top_free());
+        if let Some(p) = self.lab.cabin_panel_mut() {
+            for (i, on) in cabin.iter().enumerate() {
+                p.set_floor_button(i as u8 + 1, *on);
+            }
+            p.set_bell(bell);
+            p.set_stop(stop);
+            p.set_door_closed(door);
+            p.set_vane_left(left);
+            p.set_vane_right(right);
+        }
+        if let Some(c) = self.lab.converter_mut() {
+            c.set_ready(ready);
+            c.set_fault(fault);
+        }
+        if let Some(s) = self.lab.load_sensor_mut() {
+            s.set_level(load);
+        }
+        if let Some(s) = self.lab.safety_sensor_mut(11) {
+            s.set_free(bottom);
+        }
+        if let Some(s) = self.lab.safety_sensor_mut(12) {
+            s.set_free(top);
+        }
+    }
+
+    /// What the slaves drive, to the plant, at the moment they drive it.
+    fn slaves_to_plant(&mut self, t: SimTime) {
+        let (run, up) = self
+            .lab
+            .converter()
+            .map_or((false, false), |c| (c.run(), c.direction_up()));
+        let ua = self.lab.analog_output().map_or(0, |a| a.current_ua(1));
+        let mut displays = [None; 5];
+        for f in 1..=addr::FLOOR_STATIONS {
+            displays[f as usize - 1] = self
+                .lab
+                .floor(f)
+                .and_then(|s| s.display())
+                .map(|w| w.bits());
+        }
+        displays[4] = self
+            .lab
+            .cabin_display()
+            .and_then(|d| d.display())
+            .map(|w| w.bits());
+        let mut result = Ok(());
+        if (run, up) != (self.applied.run, self.applied.up) {
+            result = result.and(self.lift.set_run_direction(t, run, up));
+        }
+        if ua != self.applied.setpoint_ua {
+            result = result.and(self.lift.set_setpoint(t, ua));
+        }
+        for (i, d) in displays.iter().enumerate() {
+            if *d != self.applied.displays[i] {
+                if let Some(raw) = d {
+                    let id = if i < 4 {
+                        DisplayId::Floor(i as u8 + 1)
+                    } else {
+                        DisplayId::Cabin
+                    };
+                    if i < 4 && i as u8 >= self.sc.floors {
+                        continue;
+                    }
+                    result = result.and(self.lift.set_display(t, id, *raw));
+                }
+            }
+        }
+        if let Err(e) = result {
+            self.log("plant", format!("error: {e}"));
+        }
+        self.applied = Applied {
+            run,
+            up,
+            setpoint_ua: ua,
+            displays,
+        };
+        self.plant_dirty = true;
+    }
+
+    fn safety_scan(&mut self, t: SimTime) {
+        let [ch1, ch2] = self.lift.stop_channels();
+        let inputs = LiftSafetyInputs {
+            stop_ch1: ch1,
+            stop_ch2: ch2,
+            overtravel_bottom_released: self.lab.released(11),
+            overtravel_top_released: self.lab.released(12),
+            overloaded: self.to_safety.overloaded,
+            k1_aux: self.lift.k1_aux_closed(),
+            operator_reset: self.operator_reset,
+            err_ack: self.err_ack,
+            controller_restart: self.to_safety.restart,
+        };
+        let out = self.safety.scan(t, &inputs);
+        for e in &out.events {
+            if e.is_trip() {
+                self.report.safety.trips.push(Trip {
+                    at_s: e.at_s(),
+                    cause: e.cause.clone(),
+                });
+            }
+            self.report.log.push(LogLine {
+                at_s: e.at_s(),
+                who: "safety",
+                text: e.cause.clone(),
+            });
+        }
+        self.from_safety = FromSafety {
+            estop_out: out.estop_out,
+        };
+        if out.k1 != self.k1 {
+            self.k1 = out.k1;
+            if let Err(e) = self.lift.set_contactor(t, out.k1) {
+                self.log("plant", format!("error: {e}"));
+            }
+            self.plant_dirty = true;
+        }
+    }
+
+    fn plc_scan(&mut self, t: SimTime) {
+        self.to_safety = self.plc.scan(t, self.lab.bus.image_mut(), self.from_safety);
+        let events: Vec<_> = self.plc.program_mut().drain_events().collect();
+        for e in events {
+            match e.kind {
+                Ctl::Initialised if self.report.initialised_at_s.is_none() => {
+                    self.report.initialised_at_s = Some(e.at.as_secs_f64());
+                }
+                Ctl::Served(s) => {
+                    let requested = self.take_press(s.floor, s.source, s.stored_at);
+                    self.report.served.push(Served {
+                        floor: s.floor,
+                        source: match s.source {
+                            Source::Cabin => "cabin".into(),
+                            Source::Hall => "hall".into(),
+                        },
+                        requested_at_s: requested.as_secs_f64(),
+                        served_at_s: e.at.as_secs_f64(),
+                    });
+                }
+                _ => {}
+            }
+            self.log_at(e.at, "controller", e.kind.to_string());
+        }
+    }
+
+    /// The passenger's press behind a served call: the earliest press of a matching button up
+    /// to the time the call was stored; falls back to the storing time.
+    fn take_press(&mut self, floor: u8, source: Source, stored_at: SimTime) -> SimTime {
+        let matches = |b: &Button| match (source, b) {
+            (Source::Cabin, Button::Cabin(f)) => *f == floor,
+            (Source::Hall, Button::HallUp(f) | Button::HallDown(f)) => *f == floor,
+            _ => false,
+        };
+        let found = self
+            .presses
+            .iter()
+            .filter(|(at, b)| *at <= stored_at && matches(b))
+            .map(|(at, _)| *at)
+            .min();
+        // Every press of those buttons until now is answered by this stop.
+        let now = self.now;
+        self.presses.retain(|(at, b)| !(matches(b) && *at <= now));
+        found.unwrap_or(stored_at)
+    }
+
+    fn check_invariants(&mut self, t: SimTime) {
+        let moving = self.lift.velocity_mm_s() != 0.0;
+        let door_open = !self.lift.door_closed();
+        let overloaded = self.lift.load() == LoadLevel::Overloaded;
+        let tripped = !self.lift.overtravel_bottom_free() || !self.lift.overtravel_top_free();
+        let k1 = self.lift.k1_closed();
+        let stop = self.lift.stop_channels() != [true, true];
+
+        self.watch.door_open_since = if door_open {
+            self.watch.door_open_since.or(Some(t))
+        } else {
+            None
+        };
+        self.watch.overloaded_since = if overloaded {
+            self.watch.overloaded_since.or(Some(t))
+        } else {
+            None
+        };
+        self.watch.overtravel_k1_since = if tripped && k1 {
+            self.watch.overtravel_k1_since.or(Some(t))
+        } else {
+            None
+        };
+        match (&mut self.watch.stop_since, stop) {
+            (None, true) => self.watch.stop_since = Some((t, !k1)),
+            (Some((_, opened)), _) => *opened |= !k1,
+            _ => {}
+        }
+
+        let over =
+            |since: Option<SimTime>, budget: SimDuration| since.is_some_and(|s| t - s > budget);
+        if moving && over(self.watch.door_open_since, DOOR_BUDGET) {
+            self.violation_once(
+                0,
+                t,
+                "door-open-moving",
+                format!("the cabin moves with the door open for more than {DOOR_BUDGET}"),
+            );
+        }
+        if moving && over(self.watch.overloaded_since, OVERLOAD_BUDGET) {
+            self.violation_once(
+                1,
+                t,
+                "overloaded-moving",
+                format!("the cabin moves overloaded for more than {OVERLOAD_BUDGET}"),
+            );
+        }
+        if over(self.watch.overtravel_k1_since, OVERTRAVEL_BUDGET) {
+            self.violation_once(
+                2,
+                t,
+                "k1-in-overtravel",
+                format!(
+                    "K1 closed with an overtravel sensor tripped for more than {OVERTRAVEL_BUDGET}"
+                ),
+            );
+        }
+        if let Some((since, opened)) = self.watch.stop_since {
+            if t - since > self.estop_delay + STOP_MARGIN {
+                if !opened {
+                    self.violation(
+                        t,
+                        "stop-ignored",
+                        format!(
+                            "K1 still closed {} after STOP",
+                            self.estop_delay + STOP_MARGIN
+                        ),
+                    );
+                }
+                self.watch.stop_since = None;
+            }
+        }
+        if !door_open {
+            self.watch.reported[0] = false;
+        }
+        if !overloaded {
+            self.watch.reported[1] = false;
+        }
+        if !(tripped && k1) {
+            self.watch.reported[2] = false;
+        }
+    }
+
+    fn violation_once(&mut self, slot: usize, t: SimTime, kind: &str, detail: String) {
+        if !self.watch.reported[slot] {
+            self.watch.reported[slot] = true;
+            self.violation(t, kind, detail);
+        }
+    }
+
+    fn violation(&mut self, t: SimTime, kind: &str, detail: String) {
+        self.log_at(t, "rig", format!("VIOLATION {kind}: {detail}"));
+        self.report.violations.push(Violation {
+            at_s: t.as_secs_f64(),
+            kind: kind.into(),
+            detail,
+        });
+    }
+
+    fn log(&mut self, who: &'static str, text: String) {
+        self.log_at(self.now, who, text);
+    }
+
+    fn log_at(&mut self, at: SimTime, who: &'static str, text: String) {
+        self.report.log.push(LogLine {
+            at_s: at.as_secs_f64(),
+            who,
+            text,
+        });
+    }
+
+    fn finish(mut self) -> Report {
+        let p = self.plc.program();
+        let stats = self.lab.bus.stats();
+        let (min, mean, max) = stats.cycle_time_us();
+        self.report.simulated_s = self.now.as_secs_f64();
+        self.report.final_state = FinalState {
+            floor: p.current_floor(),
+            position_mm: round3(self.lift.position_mm()),
+            state: p.state_name().into(),
+            moving: self.lift.velocity_mm_s() != 0.0,
+            contactor_closed: self.lift.k1_closed(),
+            fifo_cabin: p.fifo_cabin(),
+            fifo_hall: p.fifo_hall(),
+        };
+        self.report.bus = BusReport {
+            transactions: stats.transactions,
+            repeats: stats.repeats,
+            errors: ErrorCounts {
+                start_bit: stats.errors(Check::StartBit),
+                alternation: stats.errors(Check::Alternation),
+                pause: stats.errors(Check::Pause),
+                information: stats.errors(Check::Information),
+                parity: stats.errors(Check::Parity),
+                end_bit: stats.errors(Check::EndBit),
+                length: stats.errors(Check::Length),
+                no_response: stats.no_response,
+            },
+            cycle_us: CycleTimes {
+                min: round3(min),
+                mean: round3(mean),
+                max: round3(max),
+            },
+        };
+        // Lines from different sources come in scan order; keep them in time order.
+        self.report.log.sort_by(|a, b| a.at_s.total_cmp(&b.at_s));
+        self.report
+    }
+}
+
+fn round3(x: f64) -> f64 {
+    (x * 1000.0).round() / 1000.0
+}
+
+fn load_name(l: LoadLevel) -> &'static str {
+    match l {
+        LoadLevel::Empty => "empty",
+        LoadLevel::Loaded => "loaded",
+        LoadLevel::Full => "full",
+        LoadLevel::Overloaded => "overloaded",
+    }
+}
+
+fn describe(a: &Action) -> String {
+    match a {
+        Action::Press { button, hold } => format!("{button} pressed for {hold}"),
+        Action::Load(l) => format!("load becomes {}", load_name(*l)),
+        Action::Door { closed } => format!("door {}", if *closed { "closed" } else { "opened" }),
+        Action::Crank { mm } => format!("hand crank {mm:+.1} mm"),
+        Action::Reset => "operator presses the safety reset".into(),
+        Action::Ack => "operator acknowledges the safety group error".into(),
+        Action::Fault(f) => match f {
+            Fault::SlaveOffline { slave } => format!("fault: slave {slave} taken off the bus"),
+            Fault::SlaveOnline { slave } => format!("fault cleared: slave {slave} back on the bus"),
+            Fault::PowerFail { duration } => format!("fault: AS-i power fails for {duration}"),
+            Fault::SafeLinkDrop { duration } => {
+                format!("fault: the cabin STOP safe link is silent for {duration}")
+            }
+        },
+    }
+}
