@@ -587,6 +587,14 @@ impl Rig {
                 Ctl::Initialised if self.report.initialised_at_s.is_none() => {
                     self.report.initialised_at_s = Some(e.at.as_secs_f64());
                 }
+                Ctl::StopDemanded {
+                    dropped: Some(f), ..
+                } => {
+                    // The dropped target's presses are not the request of a later call.
+                    let at = e.at;
+                    self.presses
+                        .retain(|(t, b)| !(button_floor(b) == Some(f) && *t <= at));
+                }
                 Ctl::Served(s) => {
                     let requested = self.take_press(s.floor, s.source, s.stored_at);
                     self.report.served.push(Served {
@@ -608,10 +616,13 @@ impl Rig {
     /// The passenger's press behind a served call: the earliest press of a matching button up
     /// to the time the call was stored; falls back to the storing time.
     fn take_press(&mut self, floor: u8, source: Source, stored_at: SimTime) -> SimTime {
-        let matches = |b: &Button| match (source, b) {
-            (Source::Cabin, Button::Cabin(f)) => *f == floor,
-            (Source::Hall, Button::HallUp(f) | Button::HallDown(f)) => *f == floor,
-            _ => false,
+        let matches = |b: &Button| {
+            button_floor(b) == Some(floor)
+                && matches!(
+                    (source, b),
+                    (Source::Cabin, Button::Cabin(_))
+                        | (Source::Hall, Button::HallUp(_) | Button::HallDown(_))
+                )
         };
         let found = self
             .presses
@@ -772,6 +783,14 @@ impl Rig {
         // Lines from different sources come in scan order; keep them in time order.
         self.report.log.sort_by(|a, b| a.at_s.total_cmp(&b.at_s));
         self.report
+    }
+}
+
+/// The floor a call button belongs to.
+fn button_floor(b: &Button) -> Option<u8> {
+    match b {
+        Button::Cabin(f) | Button::HallUp(f) | Button::HallDown(f) => Some(*f),
+        Button::Bell | Button::Stop => None,
     }
 }
 

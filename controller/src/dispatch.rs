@@ -319,6 +319,19 @@ impl Dispatcher {
         }
     }
 
+    /// Stores `floor` again as the next target, after a trip the program had to give up
+    /// without losing the call (a bus fault that needs a new initialisation). FIFO: at the
+    /// front of the memory the target came from; collective: its call is still pending.
+    pub fn requeue(&mut self, floor: u8) {
+        if self.algorithm == Algorithm::Fifo {
+            let fifo = match self.target_source {
+                Some(Source::Hall) => &mut self.fifo_hall,
+                _ => &mut self.fifo_cabin,
+            };
+            fifo.offer_front(floor);
+        }
+    }
+
     /// Forgets every call (after a fault that ends service).
     pub fn clear(&mut self) {
         self.fifo_cabin.clear();

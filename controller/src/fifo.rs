@@ -50,6 +50,23 @@ impl<const N: usize> RequestFifo<N> {
         }
     }
 
+    /// Offers `floor` at the front (a request given back): it is unloaded next. A full memory
+    /// drops its newest entry to make room.
+    pub fn offer_front(&mut self, floor: u8) -> Offer {
+        if self.contains(floor) {
+            self.remove(floor);
+        } else if self.len == N {
+            self.len -= 1;
+        }
+        if N == 0 {
+            return Offer::Full;
+        }
+        self.items.copy_within(0..self.len, 1);
+        self.items[0] = floor;
+        self.len += 1;
+        Offer::Stored
+    }
+
     /// Takes the oldest floor out (FIFO Unload).
     pub fn unload(&mut self) -> Option<u8> {
         if self.len == 0 {
@@ -118,5 +135,18 @@ mod tests {
         assert_eq!(f.unload(), Some(1));
         assert_eq!(f.unload(), Some(2));
         assert_eq!(f.unload(), None);
+    }
+
+    #[test]
+    fn a_request_given_back_goes_first() {
+        let mut f = RequestFifo::<4>::new();
+        f.offer(2);
+        f.offer(3);
+        assert_eq!(f.offer_front(4), Offer::Stored);
+        assert_eq!(f.offer_front(3), Offer::Stored);
+        assert_eq!(f.as_slice(), &[3, 4, 2]);
+        f.offer(1);
+        f.offer_front(5);
+        assert_eq!(f.as_slice(), &[5, 3, 4, 2]);
     }
 }

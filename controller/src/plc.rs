@@ -101,7 +101,6 @@ impl Plc {
         let input = &image.input;
         let output = &mut image.output;
         let flags = input.word(0);
-        let bus_ok = flags & (F0_CONFIG_ERROR | F1_APF) == 0;
 
         // Komunikuj: the master side of the floor, cabin display and cabin button handshakes.
         let mut hall_up = 0u32;
@@ -143,7 +142,8 @@ impl Plc {
                 estop_ok: safety.estop_out,
                 converter_ready: converter.bit(0),
                 converter_fault: converter.bit(1),
-                bus_ok,
+                bus_ok: flags & F0_CONFIG_ERROR == 0,
+                power_ok: flags & F1_APF == 0,
             },
         );
         self.write_outputs(&out, output);

@@ -147,8 +147,10 @@ pub struct Inputs {
     pub converter_ready: bool,
     /// The converter reports a fault.
     pub converter_fault: bool,
-    /// The master runs in normal operation without configuration error or power fail.
+    /// No configuration error (flag F0 of word 0): every projected slave is on the bus.
     pub bus_ok: bool,
+    /// No AS-i power fail (flag F1 of word 0).
+    pub power_ok: bool,
 }
 
 /// What a passenger sees on the floor and cabin displays (seed tables 4.2/4.4).
@@ -339,7 +341,13 @@ enum Phase {
     WaitInputs,
     Init(InitStep),
     Service(Step),
-    BusFault,
+    /// The bus is not healthy: the cabin is held. `resume` is the step to go back to if the
+    /// program never lost sight of the cabin (`blind` = the cabin word went stale or the power
+    /// failed, after which the program initialises again).
+    BusFault {
+        resume: Option<Step>,
+        blind: bool,
+    },
 }
 
 /// The lift's PLC program.
@@ -424,10 +432,10 @@ impl Program {
         let edges = self.read_inputs(now, inp);
         self.out.overloaded = inp.load >= 3;
         let stop_demand = !inp.estop_ok || self.cabin.stop;
-        let bus_ok = inp.bus_ok
-            && self
-                .last_cabin_at
-                .is_some_and(|t| now.saturating_duration_since(t) <= self.cfg.stale_after);
+        let fresh = self
+            .last_cabin_at
+            .is_some_and(|t| now.saturating_duration_since(t) <= self.cfg.stale_after);
+        let bus_ok = inp.bus_ok && inp.power_ok && fresh;
         let mut want_restart = false;
         match self.phase {
             Phase::WaitInputs => {
@@ -438,7 +446,7 @@ impl Program {
             }
             Phase::Init(step) => {
                 if !bus_ok {
-                    self.bus_fault(now);
+                    self.bus_fault(now, None, true);
                 } else {
                     want_restart = !inp.estop_ok;
                     self.init(now, step, edges, stop_demand);
@@ -446,16 +454,26 @@ impl Program {
             }
             Phase::Service(step) => {
                 if !bus_ok {
-                    self.bus_fault(now);
+                    self.bus_fault(now, Some(step), !fresh || !inp.power_ok);
                 } else {
                     want_restart = self.service(now, step, edges, inp, stop_demand);
                 }
             }
-            Phase::BusFault => {
+            Phase::BusFault { resume, blind } => {
                 self.hold();
+                let blind = blind || !fresh || !inp.power_ok;
+                self.phase = Phase::BusFault { resume, blind };
                 if bus_ok {
                     self.event(now, EventKind::BusRestored);
-                    self.start_init(now);
+                    match resume {
+                        Some(step) if !blind => self.resume(step),
+                        _ => {
+                            if self.target != self.current {
+                                self.dispatch.requeue(self.target);
+                            }
+                            self.start_init(now);
+                        }
+                    }
                 }
             }
         }
@@ -484,7 +502,11 @@ impl Program {
             self.last_cabin_at = Some(now);
             for f in floors(pressed, self.cfg.floors) {
                 self.store(now, f, Source::Cabin, None);
-                if self.phase == Phase::Service(Step::StopFault) {
+                // The cabin request that ends a STOP (seed §6.3) also restarts the STOP circuit.
+                let stopped = !inp.estop_ok
+                    || self.stop_pending
+                    || self.phase == Phase::Service(Step::StopFault);
+                if matches!(self.phase, Phase::Service(_)) && stopped {
                     self.restart_wanted = true;
                 }
             }
@@ -576,14 +598,28 @@ impl Program {
         self.dir = None;
         self.stop_pending = false;
         self.initialised_at = Some(now);
+        self.depart_after = now + self.cfg.dwell;
         self.event(now, EventKind::Initialised);
         self.phase = Phase::Service(Step::AtFloor);
     }
 
-    fn bus_fault(&mut self, now: SimTime) {
+    fn bus_fault(&mut self, now: SimTime, resume: Option<Step>, blind: bool) {
         self.hold();
-        self.phase = Phase::BusFault;
+        self.phase = Phase::BusFault { resume, blind };
         self.event(now, EventKind::BusFault);
+    }
+
+    /// Back to `step` after a bus fault in which the program kept sight of the cabin.
+    fn resume(&mut self, step: Step) {
+        self.phase = Phase::Service(step);
+        let speed = match step {
+            Step::Travel => self.cfg.travel_ua,
+            Step::Braking => self.cfg.creep_ua,
+            _ => return,
+        };
+        self.out.run = true;
+        self.out.up = self.dir == Some(Dir::Up);
+        self.out.setpoint_ua = speed;
     }
 
     /// Motor off: run cleared, standstill set-point.
@@ -601,6 +637,17 @@ impl Program {
         inp: &Inputs,
         stop_demand: bool,
     ) -> bool {
+        if self.restart_wanted && inp.estop_ok && !self.cabin.stop {
+            // The STOP circuit runs again after a cabin request: service resumes.
+            self.restart_wanted = false;
+            self.stop_pending = false;
+            self.event(now, EventKind::Resumed);
+            if step == Step::StopFault {
+                self.phase = Phase::Service(Step::AtFloor);
+                return false;
+            }
+        }
+        let want_restart = self.restart_wanted && !inp.estop_ok;
         let door_closed = self.cabin.door_closed;
         let overloaded = inp.load >= 3;
         let both = self.cabin.vane_left && self.cabin.vane_right;
@@ -680,22 +727,14 @@ impl Program {
                     self.phase = Phase::Service(if braking { Step::Braking } else { Step::Travel });
                 }
             }
-            Step::StopFault => {
-                if self.restart_wanted && inp.estop_ok && !self.cabin.stop {
-                    self.restart_wanted = false;
-                    self.event(now, EventKind::Resumed);
-                    self.phase = Phase::Service(Step::AtFloor);
-                }
-                return self.restart_wanted;
-            }
+            Step::StopFault => {}
         }
-        false
+        want_restart
     }
 
     fn enter(&mut self, now: SimTime, step: Step) {
         if step == Step::StopFault {
             self.hold();
-            self.restart_wanted = false;
             self.event(now, EventKind::StopFault);
         }
         self.phase = Phase::Service(step);
@@ -806,7 +845,7 @@ impl Program {
         let (moving, fault) = match self.phase {
             Phase::WaitInputs => (false, false),
             Phase::Init(_) => (self.out.run, false),
-            Phase::BusFault => (false, true),
+            Phase::BusFault { .. } => (false, true),
             Phase::Service(step) => match step {
                 Step::AtFloor => (false, false),
                 Step::Travel | Step::Braking => (true, false),
@@ -877,7 +916,7 @@ impl Program {
         match self.phase {
             Phase::WaitInputs => "waiting for inputs",
             Phase::Init(_) => "initialising",
-            Phase::BusFault => "bus fault",
+            Phase::BusFault { .. } => "bus fault",
             Phase::Service(step) => match step {
                 Step::AtFloor => "at floor",
                 Step::Overload => "overload fault",

@@ -75,6 +75,7 @@ impl Loop {
             converter_ready: l.converter_ready(),
             converter_fault: l.converter_fault(),
             bus_ok: true,
+            power_ok: true,
         };
         let out = self.prog.scan(self.now, &inp);
         self.lift
