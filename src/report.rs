@@ -19,6 +19,10 @@ pub struct Report {
     pub arrivals: Vec<Arrival>,
     /// Every call served.
     pub served: Vec<Served>,
+    /// Every button press of the scenario's passengers, and when the cabin answered it: the
+    /// measure for comparing control algorithms (a press on a call already pending waits
+    /// with it).
+    pub passengers: Vec<Passenger>,
     /// The state at the end.
     #[serde(rename = "final")]
     pub final_state: FinalState,
@@ -51,11 +55,38 @@ pub struct Served {
     pub floor: u8,
     /// `cabin` or `hall`.
     pub source: String,
+    /// For a hall call, `up` or `down`.
+    pub direction: Option<String>,
     /// When the passenger pressed the button (or, if no press matches, when the controller
     /// stored the call), seconds.
     pub requested_at_s: f64,
     /// When the cabin stopped there, seconds.
     pub served_at_s: f64,
+}
+
+/// One passenger's press and its answer.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Passenger {
+    /// The button, as in the scenario: `cabin:3`, `hall-up:2`.
+    pub button: String,
+    /// When it was pressed, seconds.
+    pub pressed_at_s: f64,
+    /// When the cabin stopped to serve it, or null if it never did (or the call was dropped
+    /// by STOP).
+    pub served_at_s: Option<f64>,
+}
+
+/// Mean waiting times over the passengers who were served.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Waits {
+    /// Hall calls: press to the cabin's arrival (the lift engineer's waiting time).
+    pub hall_mean_s: f64,
+    /// Cabin calls: press to arrival at the destination.
+    pub cabin_mean_s: f64,
+    /// All served presses.
+    pub all_mean_s: f64,
+    /// Presses never answered.
+    pub unserved: usize,
 }
 
 /// The state at the end of the run.
@@ -162,6 +193,33 @@ pub struct LogLine {
 }
 
 impl Report {
+    /// Mean waiting times per passenger press.
+    pub fn waits(&self) -> Waits {
+        let mean = |f: &dyn Fn(&Passenger) -> bool| {
+            let w: Vec<f64> = self
+                .passengers
+                .iter()
+                .filter(|p| f(p))
+                .filter_map(|p| p.served_at_s.map(|s| s - p.pressed_at_s))
+                .collect();
+            if w.is_empty() {
+                0.0
+            } else {
+                w.iter().sum::<f64>() / w.len() as f64
+            }
+        };
+        Waits {
+            hall_mean_s: mean(&|p| p.button.starts_with("hall")),
+            cabin_mean_s: mean(&|p| p.button.starts_with("cabin")),
+            all_mean_s: mean(&|_| true),
+            unserved: self
+                .passengers
+                .iter()
+                .filter(|p| p.served_at_s.is_none())
+                .count(),
+        }
+    }
+
     /// The report as pretty JSON.
     pub fn to_json(&self) -> String {
         serde_json::to_string_pretty(self).unwrap_or_else(|e| format!("{{\"error\": \"{e}\"}}"))
@@ -194,15 +252,17 @@ impl Report {
             }
         );
         let _ = writeln!(s, "  calls served       {}", self.served.len());
-        if !self.served.is_empty() {
-            let waits: Vec<f64> = self
-                .served
-                .iter()
-                .map(|c| c.served_at_s - c.requested_at_s)
-                .collect();
-            let mean = waits.iter().sum::<f64>() / waits.len() as f64;
-            let max = waits.iter().cloned().fold(0.0, f64::max);
-            let _ = writeln!(s, "  time to serve      mean {mean:.1} s, max {max:.1} s");
+        if !self.passengers.is_empty() {
+            let w = self.waits();
+            let _ = writeln!(
+                s,
+                "  passenger waits    hall calls {:.1} s, cabin calls {:.1} s, all {:.1} s (mean over {} presses, {} unanswered)",
+                w.hall_mean_s,
+                w.cabin_mean_s,
+                w.all_mean_s,
+                self.passengers.len(),
+                w.unserved
+            );
         }
         let f = &self.final_state;
         let _ = writeln!(

@@ -11,15 +11,15 @@
 //! the only random source is the bus's line noise, seeded from the scenario.
 
 use crate::report::{
-    Arrival, BusReport, CycleTimes, ErrorCounts, FinalState, LogLine, Report, SafetyReport, Served,
-    Trip, Violation,
+    Arrival, BusReport, CycleTimes, ErrorCounts, FinalState, LogLine, Passenger, Report,
+    SafetyReport, Served, Trip, Violation,
 };
 use crate::scenario::{Action, Fault, Scenario, ScenarioEvent};
 use asi_master::lab::LabLift;
 use asi_phy::fault::FaultRates;
 use asi_phy::{Check, SimDuration, SimTime};
 use controller::plc::{addr, FromSafety, Plc, ToSafety};
-use controller::{ControllerConfig, EventKind as Ctl, Source};
+use controller::{ControllerConfig, EventKind as Ctl, HallDir, Source};
 use lift_model::{Button, DisplayId, EventKind as Plant, Lift, LiftConfig, LoadLevel};
 use safety::{LiftSafety, LiftSafetyConfig, LiftSafetyInputs, SafeLink, SAFETY_SCAN_PERIOD};
 
@@ -106,6 +106,8 @@ pub struct Rig {
     operator_reset: bool,
     err_ack: bool,
     presses: Vec<(SimTime, Button)>,
+    /// Every press of a call button: (time, button, served at).
+    passengers: Vec<(SimTime, Button, Option<SimTime>)>,
     watch: Watch,
     report: Report,
 }
@@ -144,6 +146,7 @@ impl Rig {
             initialised_at_s: None,
             arrivals: Vec::new(),
             served: Vec::new(),
+            passengers: Vec::new(),
             final_state: FinalState {
                 floor: 1,
                 position_mm: sc.start_mm,
@@ -187,6 +190,7 @@ impl Rig {
             operator_reset: false,
             err_ack: false,
             presses: Vec::new(),
+            passengers: Vec::new(),
             watch: Watch::default(),
             report,
             sc,
@@ -350,6 +354,9 @@ impl Rig {
         let result = match &ev.action {
             Action::Press { button, hold } => {
                 self.presses.push((t, *button));
+                if button_floor(button).is_some() {
+                    self.passengers.push((t, *button, None));
+                }
                 self.lift.press(t, *button, *hold)
             }
             Action::Load(l) => self.lift.set_load(t, *l),
@@ -597,12 +604,27 @@ impl Rig {
                 }
                 Ctl::Served(s) => {
                     let requested = self.take_press(s.floor, s.source, s.stored_at);
+                    for (at, b, served) in &mut self.passengers {
+                        let same = match (s.hall, *b) {
+                            (None, Button::Cabin(f)) => f == s.floor,
+                            (Some(HallDir::Up), Button::HallUp(f)) => f == s.floor,
+                            (Some(HallDir::Down), Button::HallDown(f)) => f == s.floor,
+                            _ => false,
+                        };
+                        if same && served.is_none() && *at <= e.at {
+                            *served = Some(e.at);
+                        }
+                    }
                     self.report.served.push(Served {
                         floor: s.floor,
                         source: match s.source {
                             Source::Cabin => "cabin".into(),
                             Source::Hall => "hall".into(),
                         },
+                        direction: s.hall.map(|d| match d {
+                            HallDir::Up => "up".into(),
+                            HallDir::Down => "down".into(),
+                        }),
                         requested_at_s: requested.as_secs_f64(),
                         served_at_s: e.at.as_secs_f64(),
                     });
@@ -780,6 +802,21 @@ impl Rig {
                 max: round3(max),
             },
         };
+        self.report.passengers = self
+            .passengers
+            .iter()
+            .map(|(at, b, served)| Passenger {
+                button: match b {
+                    Button::Cabin(f) => format!("cabin:{f}"),
+                    Button::HallUp(f) => format!("hall-up:{f}"),
+                    Button::HallDown(f) => format!("hall-down:{f}"),
+                    Button::Bell => "bell".into(),
+                    Button::Stop => "stop".into(),
+                },
+                pressed_at_s: at.as_secs_f64(),
+                served_at_s: served.map(|s| s.as_secs_f64()),
+            })
+            .collect();
         // Lines from different sources come in scan order; keep them in time order.
         self.report.log.sort_by(|a, b| a.at_s.total_cmp(&b.at_s));
         self.report

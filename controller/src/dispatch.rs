@@ -81,6 +81,8 @@ pub struct ServedCall {
     pub floor: u8,
     /// Cabin or hall.
     pub source: Source,
+    /// For a hall call, the button: up or down.
+    pub hall: Option<HallDir>,
     /// When the program stored it.
     pub stored_at: SimTime,
 }
@@ -268,11 +270,17 @@ impl Dispatcher {
     /// the cabin arrived in (`None` when it did not move).
     pub fn serve(&mut self, floor: u8, dir: Option<Dir>, out: &mut Vec<ServedCall>) {
         let b = Self::bit(floor);
-        let mut take = |s: &mut Self, kind: usize, source: Source| {
+        let mut take = |s: &mut Self, kind: usize| {
+            let (source, hall) = match kind {
+                0 => (Source::Cabin, None),
+                1 => (Source::Hall, Some(HallDir::Up)),
+                _ => (Source::Hall, Some(HallDir::Down)),
+            };
             if let Some(stored_at) = s.slot(kind, floor).take() {
                 out.push(ServedCall {
                     floor,
                     source,
+                    hall,
                     stored_at,
                 });
             }
@@ -281,23 +289,23 @@ impl Dispatcher {
             Algorithm::Fifo => {
                 self.fifo_cabin.remove(floor);
                 self.fifo_hall.remove(floor);
-                take(self, 0, Source::Cabin);
-                take(self, 1, Source::Hall);
-                take(self, 2, Source::Hall);
+                take(self, 0);
+                take(self, 1);
+                take(self, 2);
             }
             Algorithm::Collective => {
                 self.cabin &= !b;
-                take(self, 0, Source::Cabin);
+                take(self, 0);
                 // The hall call in the direction of travel; both when the cabin turns here or
                 // stood still.
                 let turning = dir.is_none_or(|d| !self.calls_beyond(floor, d));
                 if dir == Some(Dir::Up) || turning {
                     self.up &= !b;
-                    take(self, 1, Source::Hall);
+                    take(self, 1);
                 }
                 if dir == Some(Dir::Down) || turning {
                     self.down &= !b;
-                    take(self, 2, Source::Hall);
+                    take(self, 2);
                 }
             }
         }
