@@ -1,0 +1,82 @@
+//! Helpers of the end-to-end tests: run a scenario file of `scenarios/` or a built scenario on
+//! the whole rig and read its report.
+
+use asi_lift::report::Report;
+use asi_lift::rig::Rig;
+use asi_lift::scenario::Scenario;
+use std::path::PathBuf;
+
+/// The scenario `scenarios/<name>.toml` of the repository.
+pub fn scenario(name: &str) -> Scenario {
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("..")
+        .join("scenarios")
+        .join(format!("{name}.toml"));
+    let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    Scenario::from_toml(&path.display().to_string(), &text).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// Runs `sc` to its end.
+pub fn run(sc: Scenario) -> Report {
+    Rig::new(sc)
+        .unwrap_or_else(|e| panic!("rig: {e}"))
+        .run(None)
+}
+
+/// Runs the scenario file `name`.
+pub fn run_file(name: &str) -> Report {
+    run(scenario(name))
+}
+
+/// The floors the cabin came to rest at, in order.
+pub fn stops(r: &Report) -> Vec<u8> {
+    r.arrivals.iter().map(|a| a.floor).collect()
+}
+
+/// The floors the cabin came to rest at within `from_s..to_s`.
+pub fn stops_between(r: &Report, from_s: f64, to_s: f64) -> Vec<u8> {
+    r.arrivals
+        .iter()
+        .filter(|a| a.at_s >= from_s && a.at_s < to_s)
+        .map(|a| a.floor)
+        .collect()
+}
+
+/// The calls served as (floor, source), in order.
+pub fn served(r: &Report) -> Vec<(u8, String)> {
+    r.served
+        .iter()
+        .map(|s| (s.floor, s.source.clone()))
+        .collect()
+}
+
+/// `true` if a log line of `who` contains `text`.
+pub fn logged(r: &Report, who: &str, text: &str) -> bool {
+    r.log.iter().any(|l| l.who == who && l.text.contains(text))
+}
+
+/// The first time a log line of `who` contains `text`.
+pub fn logged_at(r: &Report, who: &str, text: &str) -> Option<f64> {
+    r.log
+        .iter()
+        .find(|l| l.who == who && l.text.contains(text))
+        .map(|l| l.at_s)
+}
+
+/// The first time after `after_s` a log line of `who` contains `text`.
+pub fn logged_after(r: &Report, who: &str, text: &str, after_s: f64) -> Option<f64> {
+    r.log
+        .iter()
+        .find(|l| l.at_s > after_s && l.who == who && l.text.contains(text))
+        .map(|l| l.at_s)
+}
+
+/// Asserts that the run broke no safety invariant, printing the log if it did.
+pub fn assert_no_violations(r: &Report) {
+    assert!(
+        r.violations.is_empty(),
+        "violations: {:?}\n{}",
+        r.violations,
+        r.to_text()
+    );
+}

@@ -1,0 +1,382 @@
+//! End-to-end runs of the whole rig: AS-i bus at pulse level with the lab lift's slaves, the
+//! lift plant, the PLC program and the safety logic on one simulated clock. Each test runs a
+//! scenario (most of them the files in `scenarios/`, which users can run themselves) and
+//! asserts its report.
+
+use asi_lift::scenario::{Action, Scenario, ScenarioEvent};
+use asi_lift_tests::*;
+use asi_phy::{SimDuration, SimTime};
+use lift_model::Button;
+
+fn at(s: f64) -> SimTime {
+    SimTime::ZERO + SimDuration::from_secs_f64(s).expect("time")
+}
+
+fn press(s: f64, button: Button) -> ScenarioEvent {
+    ScenarioEvent {
+        at: at(s),
+        action: Action::Press {
+            button,
+            hold: SimDuration::from_millis(300),
+        },
+        line: 0,
+    }
+}
+
+#[test]
+fn initialises_from_several_heights_including_floor_1() {
+    // Level at floor 1 (which the seed's routine cannot handle), inside floor 1's vane above
+    // and below level, between floors, level at floors 2 and 4, inside floor 3's vane.
+    for start in [0.0, 30.0, -30.0, 650.0, 400.0, 1200.0, 1000.0, 830.0] {
+        let sc = Scenario {
+            name: format!("init from {start} mm"),
+            start_mm: start,
+            duration: SimDuration::from_secs(40),
+            ..Scenario::defaults()
+        };
+        let r = run(sc);
+        assert_no_violations(&r);
+        let init = r
+            .initialised_at_s
+            .unwrap_or_else(|| panic!("from {start} mm: not initialised\n{}", r.to_text()));
+        // Down at 68.8 mm/s at most 1.2 m, plus the slow phases: well under 30 s.
+        assert!(init < 30.0, "from {start} mm: initialised only at {init} s");
+        let first = &r.arrivals[0];
+        assert_eq!(first.floor, 1, "from {start} mm");
+        assert!(
+            first.position_mm.abs() <= 10.0,
+            "from {start} mm: {} mm off level",
+            first.position_mm
+        );
+        assert_eq!(r.final_state.state, "at floor");
+        assert!(
+            r.safety.trips.is_empty(),
+            "from {start} mm: {:?}",
+            r.safety.trips
+        );
+    }
+}
+
+#[test]
+fn the_demo_serves_a_cabin_call_and_a_hall_call_stored_meanwhile() {
+    let r = run(Scenario::demo());
+    assert_no_violations(&r);
+    assert_eq!(stops(&r), [1, 3, 4, 1]);
+    assert_eq!(
+        served(&r),
+        [(3, "cabin".into()), (4, "hall".into()), (1, "cabin".into())]
+    );
+    for a in &r.arrivals {
+        let level = (a.floor as f64 - 1.0) * 400.0;
+        assert!((a.position_mm - level).abs() <= 10.0, "{a:?}");
+    }
+    // The hall call (pressed at 20 s) waits for the cabin call (pressed at 15 s).
+    let hall = &r.served[1];
+    assert_eq!(hall.requested_at_s, 20.0);
+    assert!(hall.served_at_s > r.served[0].served_at_s);
+    assert!(r.bus.transactions > 500_000);
+    assert_eq!(r.bus.repeats, 0);
+    // 11 slaves in the lab bus: (n + 2) · 154 µs.
+    assert_eq!(r.bus.cycle_us.mean, 13.0 * 154.0);
+}
+
+#[test]
+fn cabin_calls_are_served_in_fifo_order_then_the_hall_call() {
+    let r = run_file("fifo");
+    assert_no_violations(&r);
+    // Pressed 3, 2, 4 (2 would be nearer after 3, but FIFO keeps the order); then the hall call
+    // at floor 1, stored while the cabin calls were served.
+    assert_eq!(stops(&r), [1, 3, 2, 4, 1]);
+    assert_eq!(
+        served(&r),
+        [
+            (3, "cabin".into()),
+            (2, "cabin".into()),
+            (4, "cabin".into()),
+            (1, "hall".into())
+        ]
+    );
+    assert!(
+        r.served[3].requested_at_s < r.served[0].served_at_s,
+        "the hall call was pressed early"
+    );
+}
+
+#[test]
+fn stop_while_moving_stops_at_the_next_floor_and_resumes_only_on_a_cabin_request() {
+    let r = run_file("stop");
+    assert_no_violations(&r);
+    // Heading up from 1 to 4, STOP at 18 s between floors 1 and 2: the cabin stops at 2.
+    assert_eq!(stops_between(&r, 0.0, 50.0), [1, 2]);
+    assert!(r.arrivals[1].at_s < 25.0);
+    assert!(logged(
+        &r,
+        "controller",
+        "STOP: stops at floor 2, target 4 dropped"
+    ));
+    // The safety logic demanded the stop at once and took drive power after its delay.
+    assert!(r
+        .safety
+        .trips
+        .iter()
+        .any(|t| t.at_s == 18.0 && t.cause.contains("STOP demanded")));
+    let k1_off = logged_at(&r, "safety", "K1 opened").expect("K1 opened");
+    assert!((27.0..27.2).contains(&k1_off), "{k1_off}");
+    // The hall call at 40 s does not resume service; the cabin request at 50 s does.
+    assert!(logged_at(&r, "controller", "service resumes").is_some_and(|t| t > 50.0));
+    assert_eq!(stops_between(&r, 50.0, 90.0), [4, 3]);
+    assert_eq!(served(&r), [(4, "cabin".into()), (3, "hall".into())]);
+    assert_eq!(
+        r.served[0].requested_at_s, 50.0,
+        "the dropped press at 12 s is not the request"
+    );
+}
+
+#[test]
+fn overload_blocks_departure_until_the_load_drops() {
+    let r = run_file("overload");
+    assert_no_violations(&r);
+    assert_eq!(stops_between(&r, 0.0, 30.0), [1]);
+    assert!(logged(&r, "controller", "overloaded: no departure"));
+    assert!(r
+        .safety
+        .trips
+        .iter()
+        .any(|t| t.cause.contains("overloaded")));
+    let departs = logged_at(&r, "controller", "departs floor 1 for floor 3").expect("departs");
+    assert!((30.0..31.0).contains(&departs), "{departs}");
+    assert_eq!(stops(&r), [1, 3]);
+}
+
+#[test]
+fn an_open_door_blocks_departure() {
+    let r = run_file("door");
+    assert_no_violations(&r);
+    let departs = logged_at(&r, "controller", "departs floor 1 for floor 2").expect("departs");
+    assert!(
+        (25.0..26.0).contains(&departs),
+        "left at {departs} s with the door open until 25 s"
+    );
+    assert_eq!(stops(&r), [1, 2]);
+}
+
+#[test]
+fn the_door_opened_during_travel_halts_the_cabin_between_floors() {
+    let mut sc = Scenario {
+        name: "door during travel".into(),
+        start_mm: 0.0,
+        duration: SimDuration::from_secs(60),
+        ..Scenario::defaults()
+    };
+    sc.events = vec![
+        press(5.0, Button::Cabin(3)),
+        ScenarioEvent {
+            at: at(12.0),
+            action: Action::Door { closed: false },
+            line: 0,
+        },
+        ScenarioEvent {
+            at: at(20.0),
+            action: Action::Door { closed: true },
+            line: 0,
+        },
+    ];
+    let r = run(sc);
+    assert_no_violations(&r);
+    let halted = logged_at(&r, "controller", "halted between floors: door open").expect("halted");
+    assert!((12.0..12.5).contains(&halted), "{halted}");
+    assert!(logged_at(&r, "controller", "continues travel").is_some_and(|t| t >= 20.0));
+    assert_eq!(stops(&r), [1, 3]);
+}
+
+#[test]
+fn an_overtravel_trip_takes_power_until_cranked_back_reset_and_restarted() {
+    let r = run_file("overtravel");
+    assert_no_violations(&r);
+    let trip = r
+        .safety
+        .trips
+        .iter()
+        .find(|t| t.cause.contains("overtravel bottom"))
+        .expect("overtravel trip");
+    // Cranked at 10 mm/s from -3 mm: the sensor at -60 mm trips about 5.7 s after 25 s.
+    assert!((30.5..31.0).contains(&trip.at_s), "{}", trip.at_s);
+    assert!(logged(&r, "plant", "overtravel sensor (Bottom) free again"));
+    assert!(logged_after(
+        &r,
+        "safety",
+        "overtravel monitor reset by the operator",
+        30.0
+    )
+    .is_some_and(|t| t > 55.0));
+    let k1_on = r
+        .log
+        .iter()
+        .filter(|l| l.who == "safety" && l.text.contains("K1 closed"))
+        .map(|l| l.at_s)
+        .next_back()
+        .expect("K1 closed again");
+    assert!(
+        k1_on > 60.0,
+        "power came back before the cabin request: {k1_on}"
+    );
+    assert_eq!(stops_between(&r, 60.0, 120.0), [3]);
+}
+
+#[test]
+fn a_lost_cabin_slave_stops_the_cabin_and_service_resumes_after_it_returns() {
+    let r = run_file("lost-cabin-slave");
+    assert_no_violations(&r);
+    let lost =
+        logged_at(&r, "controller", "cabin slave or bus lost: cabin stopped").expect("reported");
+    assert!((20.0..20.1).contains(&lost), "{lost}");
+    // No stop while it is away, and no stop anywhere but at floors.
+    assert_eq!(stops_between(&r, 20.0, 40.0), Vec::<u8>::new());
+    assert!(r.bus.errors.no_response > 0);
+    // Back at 40 s: the program initialises again and serves the interrupted call.
+    assert!(logged_after(&r, "controller", "initialisation", 20.0).is_some_and(|t| t > 40.0));
+    assert_eq!(stops_between(&r, 40.0, 90.0), [1, 4]);
+    assert_eq!(served(&r), [(4, "cabin".into())]);
+}
+
+#[test]
+fn traffic_on_a_noisy_line_is_served_correctly_with_repeats() {
+    let r = run_file("noise");
+    assert_no_violations(&r);
+    assert!(r.bus.repeats > 10_000, "{:?}", r.bus);
+    let e = &r.bus.errors;
+    assert!(
+        e.alternation > 0 && e.start_bit > 0 && e.pause > 0 && e.information > 0 && e.parity > 0
+    );
+    assert_eq!(
+        served(&r),
+        [
+            (3, "cabin".into()),
+            (2, "hall".into()),
+            (4, "cabin".into()),
+            (3, "hall".into()),
+            (1, "cabin".into())
+        ]
+    );
+    for a in &r.arrivals {
+        assert!((a.position_mm - (a.floor as f64 - 1.0) * 400.0).abs() <= 10.0);
+    }
+    // Repeats stretch the cycle.
+    assert!(r.bus.cycle_us.max > r.bus.cycle_us.mean);
+}
+
+#[test]
+fn a_silent_safe_link_trips_com_err_and_needs_acknowledge_reset_and_a_request() {
+    let r = run_file("safe-link-drop");
+    assert_no_violations(&r);
+    assert!(r
+        .safety
+        .trips
+        .iter()
+        .any(|t| t.cause.contains("COM_ERR: watchdog expired")));
+    let k1_off = logged_at(&r, "safety", "K1 opened: group error (COM_ERR)").expect("K1 off");
+    assert!((18.0..18.2).contains(&k1_off), "{k1_off}");
+    assert!(logged(
+        &r,
+        "controller",
+        "halted between floors: no drive power"
+    ));
+    assert!(logged_at(&r, "safety", "ERR_ACK accepted").is_some_and(|t| t >= 30.0));
+    // The cabin request at 35 s restarts the STOP circuit; the cabin completes its stop at
+    // floor 2 and then serves the request.
+    assert!(logged_after(
+        &r,
+        "safety",
+        "STOP circuit restarted by the controller",
+        18.0
+    )
+    .is_some_and(|t| t > 35.0));
+    assert_eq!(stops_between(&r, 18.0, 90.0), [2, 4]);
+}
+
+#[test]
+fn an_asi_power_fail_takes_the_lift_out_until_power_reset_and_request() {
+    let r = run_file("power-fail");
+    assert_no_violations(&r);
+    assert!(logged_at(&r, "controller", "cabin slave or bus lost")
+        .is_some_and(|t| (15.0..15.1).contains(&t)));
+    // The safety monitor loses the overtravel sensors' codes: the overtravel function trips.
+    assert!(r
+        .safety
+        .trips
+        .iter()
+        .any(|t| (15.0..15.2).contains(&t.at_s)));
+    assert!(
+        logged_after(&r, "controller", "initialised at floor 1", 15.0).is_some_and(|t| t > 25.0)
+    );
+    assert_eq!(stops_between(&r, 30.0, 90.0), [2]);
+}
+
+#[test]
+fn cranking_into_the_mechanical_end_is_a_violation() {
+    // With power off after STOP, a technician cranks far below floor 1: the report must say so.
+    let mut sc = Scenario {
+        name: "crank into the end".into(),
+        start_mm: 0.0,
+        duration: SimDuration::from_secs(60),
+        ..Scenario::defaults()
+    };
+    sc.events = vec![
+        ScenarioEvent {
+            at: at(5.0),
+            action: Action::Press {
+                button: Button::Stop,
+                hold: SimDuration::from_secs(1),
+            },
+            line: 0,
+        },
+        ScenarioEvent {
+            at: at(20.0),
+            action: Action::Crank { mm: -200.0 },
+            line: 0,
+        },
+    ];
+    let r = run(sc);
+    let kinds: Vec<&str> = r.violations.iter().map(|v| v.kind.as_str()).collect();
+    assert_eq!(kinds, ["mechanical-end"], "{}", r.to_text());
+    // -3.4 mm to the end at -140 mm at 10 mm/s: about 13.7 s after 20 s.
+    assert!(
+        (33.0..34.5).contains(&r.violations[0].at_s),
+        "{}",
+        r.violations[0].at_s
+    );
+}
+
+#[test]
+fn a_run_is_deterministic_and_the_seed_matters() {
+    let a = run_file("noise").to_json();
+    let b = run_file("noise").to_json();
+    assert_eq!(a, b);
+    let mut sc = scenario("noise");
+    sc.seed = 8;
+    let c = run(sc);
+    assert_ne!(c.to_json(), a);
+    assert_no_violations(&c);
+}
+
+#[test]
+fn the_collective_control_beats_fifo_on_the_busy_scenario() {
+    let fifo = run_file("busy");
+    let mut sc = scenario("busy");
+    sc.algorithm = controller::Algorithm::Collective;
+    let coll = run(sc);
+    assert_no_violations(&fifo);
+    assert_no_violations(&coll);
+    let (f, c) = (fifo.waits(), coll.waits());
+    assert_eq!((f.unserved, c.unserved), (0, 0));
+    assert_eq!(fifo.passengers.len(), 64);
+    assert!(
+        c.all_mean_s < f.all_mean_s,
+        "collective {c:?} vs fifo {f:?}"
+    );
+    assert!(
+        c.hall_mean_s < f.hall_mean_s,
+        "collective {c:?} vs fifo {f:?}"
+    );
+    println!("busy scenario, mean passenger wait: fifo {f:?}, collective {c:?}");
+}
