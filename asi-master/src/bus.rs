@@ -38,7 +38,7 @@ use crate::slave::{Peripheral, Slave};
 use crate::trace::{BusStats, TraceRing, TransactionRecord};
 use asi_phy::{
     BusTiming, Call, Checks, Expect, FaultInjector, FaultRates, Frame, Listener, PulseFault,
-    PulseTrain, Request, Response, SimTime, TelegramKind,
+    PulseTrain, Request, Response, SimTime,
 };
 
 /// A slave's place on the bus.
@@ -380,17 +380,10 @@ impl Bus {
         let mut responders = 0u64;
         let mut request = None;
         let ngroups = self.groups.len();
-        let mut keys: [(bool, bool); 8] = [(false, false); 8];
         for (gi, g) in self.groups.iter_mut().enumerate() {
             let r = g.listener.accept(f);
             if gi == 0 && !f.line_failed.is_empty() {
                 cur.line_error = true;
-            }
-            if gi < keys.len() {
-                keys[gi] = (
-                    r.kind == TelegramKind::Request,
-                    g.listener.is_synchronised(),
-                );
             }
             if matches!(role, Role::Request) {
                 if gi == 0 {
@@ -408,7 +401,7 @@ impl Bus {
             }
         }
         if ngroups > 1 {
-            self.merge_groups(&keys[..ngroups.min(keys.len())]);
+            self.merge_groups();
         }
         for m in &mut self.monitors {
             m.on_frame(now, f);
@@ -426,21 +419,15 @@ impl Bus {
         }
     }
 
-    fn merge_groups(&mut self, keys: &[(bool, bool)]) {
-        let n = keys.len();
-        let mut target: [usize; 8] = [0, 1, 2, 3, 4, 5, 6, 7];
-        for i in 0..n {
-            for j in 0..i {
-                if target[j] == j && keys[j] == keys[i] {
-                    target[i] = j;
-                    break;
-                }
-            }
-        }
-        for i in (0..n).rev() {
-            if target[i] != i {
+    /// Merges slave groups whose listeners have come to the same state: from then on they
+    /// react alike to every frame.
+    fn merge_groups(&mut self) {
+        let mut i = self.groups.len();
+        while i > 1 {
+            i -= 1;
+            if let Some(j) = (0..i).find(|&j| self.groups[j].listener == self.groups[i].listener) {
                 let m = self.groups[i].members;
-                self.groups[target[i]].members |= m;
+                self.groups[j].members |= m;
                 self.groups.remove(i);
             }
         }
@@ -723,9 +710,5 @@ impl Bus {
 }
 
 fn cur_checks(acc: Checks, new: Checks) -> Checks {
-    let mut out = acc;
-    for c in new.iter() {
-        out = out.with(c);
-    }
-    out
+    acc | new
 }

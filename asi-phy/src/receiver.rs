@@ -108,6 +108,21 @@ impl Checks {
         Checks(self.0 | (1 << check as u8))
     }
 
+    /// Every check failed in `self` or in `other`.
+    pub const fn union(self, other: Checks) -> Checks {
+        Checks(self.0 | other.0)
+    }
+
+    /// The set whose bit `k` stands for the check `Check::ALL[k]`; bits 7 and up are ignored.
+    pub const fn from_bits(bits: u8) -> Checks {
+        Checks(bits & 0x7F)
+    }
+
+    /// The set as bits, bit `k` for `Check::ALL[k]`.
+    pub const fn bits(self) -> u8 {
+        self.0
+    }
+
     /// The set with `check` added if `failed`.
     pub const fn with_if(self, check: Check, failed: bool) -> Checks {
         Checks(self.0 | ((failed as u8) << check as u8))
@@ -129,6 +144,19 @@ impl Checks {
     /// Number of failed checks.
     pub const fn len(self) -> u32 {
         self.0.count_ones()
+    }
+}
+
+impl core::ops::BitOr for Checks {
+    type Output = Checks;
+    fn bitor(self, rhs: Checks) -> Checks {
+        self.union(rhs)
+    }
+}
+
+impl core::ops::BitOrAssign for Checks {
+    fn bitor_assign(&mut self, rhs: Checks) {
+        *self = self.union(rhs);
     }
 }
 
@@ -700,7 +728,7 @@ fn level_bits(occupied: u64, positive: u64, cells: u32) -> u32 {
 /// After a telegram that failed any check the listener is asynchronous and accepts the next
 /// one only after [`BusTiming::async_pause`] of silence (A²SI §7.1.2.1); a fresh listener has
 /// heard nothing, so its first telegram needs no pause.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Listener {
     expect: Expect,
     async_pause: u64,

@@ -82,7 +82,9 @@ setters! {
     tolerance,
     /// The shortest silence that ends a telegram.
     min_pause,
-    /// The silence a receiver needs before it accepts a telegram after an erroneous one.
+    /// The silence a receiver needs before it accepts a telegram after an erroneous one. A
+    /// master must leave at least this much after a corrupt or colliding telegram before its
+    /// repeat, or the slaves, still asynchronous, ignore the repeat too.
     async_pause,
     /// The slaves' reply delay: last pulse of the request to first pulse of the response.
     master_pause,
