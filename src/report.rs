@@ -76,15 +76,15 @@ pub struct Passenger {
     pub served_at_s: Option<f64>,
 }
 
-/// Mean waiting times over the passengers who were served.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// Mean waiting times over the passengers who were served (`None` without any).
+#[derive(Clone, Copy, Debug, PartialEq, PartialOrd)]
 pub struct Waits {
     /// Hall calls: press to the cabin's arrival (the lift engineer's waiting time).
-    pub hall_mean_s: f64,
+    pub hall_mean_s: Option<f64>,
     /// Cabin calls: press to arrival at the destination.
-    pub cabin_mean_s: f64,
+    pub cabin_mean_s: Option<f64>,
     /// All served presses.
-    pub all_mean_s: f64,
+    pub all_mean_s: Option<f64>,
     /// Presses never answered.
     pub unserved: usize,
 }
@@ -202,11 +202,7 @@ impl Report {
                 .filter(|p| f(p))
                 .filter_map(|p| p.served_at_s.map(|s| s - p.pressed_at_s))
                 .collect();
-            if w.is_empty() {
-                0.0
-            } else {
-                w.iter().sum::<f64>() / w.len() as f64
-            }
+            (!w.is_empty()).then(|| w.iter().sum::<f64>() / w.len() as f64)
         };
         Waits {
             hall_mean_s: mean(&|p| p.button.starts_with("hall")),
@@ -254,12 +250,13 @@ impl Report {
         let _ = writeln!(s, "  calls served       {}", self.served.len());
         if !self.passengers.is_empty() {
             let w = self.waits();
+            let show = |m: Option<f64>| m.map_or("none".to_string(), |v| format!("{v:.1} s"));
             let _ = writeln!(
                 s,
-                "  passenger waits    hall calls {:.1} s, cabin calls {:.1} s, all {:.1} s (mean over {} presses, {} unanswered)",
-                w.hall_mean_s,
-                w.cabin_mean_s,
-                w.all_mean_s,
+                "  passenger waits    hall calls {}, cabin calls {}, all {} (mean over {} presses, {} unanswered)",
+                show(w.hall_mean_s),
+                show(w.cabin_mean_s),
+                show(w.all_mean_s),
                 self.passengers.len(),
                 w.unserved
             );

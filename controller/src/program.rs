@@ -441,6 +441,7 @@ impl Program {
             Phase::WaitInputs => {
                 if bus_ok {
                     self.start_init(now);
+                    // Power-on: the STOP circuit needs one Restart before K1 can close.
                     want_restart = true;
                 }
             }
@@ -448,7 +449,10 @@ impl Program {
                 if !bus_ok {
                     self.bus_fault(now, None, true);
                 } else {
-                    want_restart = !inp.estop_ok;
+                    if self.restart_wanted && inp.estop_ok {
+                        self.restart_wanted = false;
+                    }
+                    want_restart = self.restart_wanted && !inp.estop_ok;
                     self.init(now, step, edges, stop_demand);
                 }
             }
@@ -506,7 +510,7 @@ impl Program {
                 let stopped = !inp.estop_ok
                     || self.stop_pending
                     || self.phase == Phase::Service(Step::StopFault);
-                if matches!(self.phase, Phase::Service(_)) && stopped {
+                if matches!(self.phase, Phase::Service(_) | Phase::Init(_)) && stopped {
                     self.restart_wanted = true;
                 }
             }

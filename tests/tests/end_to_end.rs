@@ -133,6 +133,36 @@ fn stop_while_moving_stops_at_the_next_floor_and_resumes_only_on_a_cabin_request
 }
 
 #[test]
+fn stop_during_initialisation_holds_it_until_a_cabin_request() {
+    let mut sc = Scenario {
+        name: "stop during initialisation".into(),
+        start_mm: 650.0,
+        duration: SimDuration::from_secs(70),
+        ..Scenario::defaults()
+    };
+    sc.events = vec![
+        ScenarioEvent {
+            at: at(3.0),
+            action: Action::Press {
+                button: Button::Stop,
+                hold: SimDuration::from_secs(1),
+            },
+            line: 0,
+        },
+        press(25.0, Button::Cabin(3)),
+    ];
+    let r = run(sc);
+    assert_no_violations(&r);
+    // K1 opens after the STOP delay and stays open: no restart without a cabin request.
+    let off = logged_at(&r, "safety", "K1 opened").expect("K1 opened");
+    assert!((12.0..12.2).contains(&off), "{off}");
+    let on_again = logged_after(&r, "safety", "K1 closed", off).expect("K1 closed again");
+    assert!(on_again > 25.0, "restarted without a request at {on_again}");
+    assert!(r.initialised_at_s.is_some_and(|t| t > 25.0));
+    assert_eq!(stops(&r), [1, 3]);
+}
+
+#[test]
 fn overload_blocks_departure_until_the_load_drops() {
     let r = run_file("overload");
     assert_no_violations(&r);
