@@ -437,12 +437,11 @@ impl LineDecoder {
         } = self.run;
         let mut same = false;
         let mut off = false;
-        for p in rest {
-            let at = p.at.as_nanos();
-            let pos = p.polarity == Polarity::Positive;
-            // A pulse that goes back in time wraps to a huge gap: it is no pause.
-            if at.wrapping_sub(last_t) >= pause && at >= last_t {
-                let done = Run {
+        // The locals back in a run, with the checks the loop collected. Any pulse added makes a
+        // clean run's stored bits stale.
+        macro_rules! packed {
+            () => {
+                Run {
                     t0,
                     last_t,
                     next_at,
@@ -454,10 +453,16 @@ impl LineDecoder {
                     failed: failed
                         .with_if(Check::Alternation, same)
                         .with_if(Check::Pause, off),
-                    // Any pulse added makes a clean run's stored bits stale.
                     clean: None,
-                };
-                out(done.finish());
+                }
+            };
+        }
+        for p in rest {
+            let at = p.at.as_nanos();
+            let pos = p.polarity == Polarity::Positive;
+            // A pulse that goes back in time wraps to a huge gap: it is no pause.
+            if at.wrapping_sub(last_t) >= pause && at >= last_t {
+                out(packed!().finish());
                 Run {
                     t0,
                     last_t,
@@ -495,20 +500,7 @@ impl LineDecoder {
             last_positive = pos;
             count = count.saturating_add(1);
         }
-        self.run = Run {
-            t0,
-            last_t,
-            next_at,
-            last_g,
-            last_positive,
-            count,
-            occupied,
-            positive,
-            failed: failed
-                .with_if(Check::Alternation, same)
-                .with_if(Check::Pause, off),
-            clean: None,
-        };
+        self.run = packed!();
     }
 
     /// Takes a whole encoded pulse train; the same result as pushing its pulses one by one,
