@@ -20,7 +20,7 @@ use asi_phy::fault::FaultRates;
 use asi_phy::{Check, SimDuration, SimTime};
 use controller::plc::{addr, FromSafety, Plc, ToSafety};
 use controller::{ControllerConfig, EventKind as Ctl, HallDir, Source};
-use lift_model::{Button, DisplayId, EventKind as Plant, Lift, LiftConfig, LoadLevel};
+use lift_model::{Button, DisplayId, EventKind as Plant, Lift, LiftConfig, LoadLevel, SensorFault};
 use safety::{LiftSafety, LiftSafetyConfig, LiftSafetyInputs, SafeLink, SAFETY_SCAN_PERIOD};
 
 /// Why a rig cannot be built for a scenario.
@@ -407,6 +407,12 @@ impl Rig {
             }
             Fault::SafeLinkDrop { duration } => {
                 self.safety.drop_link(SafeLink::CabinStop, t, duration)
+            }
+            Fault::Vane { sensor, fault } => {
+                if let Err(e) = self.lift.set_vane_fault(t, sensor, fault) {
+                    self.log("plant", format!("error: {e}"));
+                }
+                self.plant_dirty = true;
             }
         }
     }
@@ -859,6 +865,11 @@ fn describe(a: &Action) -> String {
             Fault::SafeLinkDrop { duration } => {
                 format!("fault: the cabin STOP safe link is silent for {duration}")
             }
+            Fault::Vane { sensor, fault } => match fault {
+                SensorFault::None => format!("fault cleared: the {sensor} vane sensor works again"),
+                SensorFault::StuckOn => format!("fault: the {sensor} vane sensor is stuck on"),
+                SensorFault::StuckOff => format!("fault: the {sensor} vane sensor is stuck off"),
+            },
         },
     }
 }

@@ -5,7 +5,7 @@
 
 use asi_phy::{SimDuration, SimTime};
 use controller::Algorithm;
-use lift_model::{Button, LoadLevel};
+use lift_model::{Button, LoadLevel, SensorFault, VaneSensor};
 use serde::Deserialize;
 use std::fmt;
 use std::ops::Range;
@@ -104,6 +104,13 @@ pub enum Fault {
     SafeLinkDrop {
         /// How long.
         duration: SimDuration,
+    },
+    /// A vane sensor's output fails (stuck on or off) or is repaired.
+    Vane {
+        /// Which sensor.
+        sensor: VaneSensor,
+        /// Its fault from now on (`SensorFault::None` = repaired).
+        fault: SensorFault,
     },
 }
 
@@ -204,6 +211,7 @@ struct RawFault {
     kind: Spanned<String>,
     slave: Option<Spanned<i64>>,
     duration: Option<Spanned<String>>,
+    sensor: Option<Spanned<String>>,
 }
 
 /// Turns byte offsets into lines and columns, and names errors.
@@ -593,6 +601,7 @@ fn fault(loc: &Locator<'_>, field: &str, f: &Spanned<RawFault>) -> Result<Fault,
     match kind {
         "slave-offline" | "slave-online" => {
             unused(raw.duration.is_some(), "duration")?;
+            unused(raw.sensor.is_some(), "sensor")?;
             let s = slave()?;
             Ok(if kind == "slave-offline" {
                 Fault::SlaveOffline { slave: s }
@@ -602,6 +611,7 @@ fn fault(loc: &Locator<'_>, field: &str, f: &Spanned<RawFault>) -> Result<Fault,
         }
         "power-fail" | "safe-link-drop" => {
             unused(raw.slave.is_some(), "slave")?;
+            unused(raw.sensor.is_some(), "sensor")?;
             let d = dur()?;
             Ok(if kind == "power-fail" {
                 Fault::PowerFail { duration: d }
@@ -609,10 +619,37 @@ fn fault(loc: &Locator<'_>, field: &str, f: &Spanned<RawFault>) -> Result<Fault,
                 Fault::SafeLinkDrop { duration: d }
             })
         }
+        "vane-stuck-on" | "vane-stuck-off" | "vane-repaired" => {
+            unused(raw.slave.is_some(), "slave")?;
+            unused(raw.duration.is_some(), "duration")?;
+            let s = raw.sensor.as_ref().ok_or_else(|| {
+                loc.error(Some(f.span()), format!("{field}.sensor"), format!("`{kind}` needs `sensor = \"left\"` or `\"right\"`"))
+            })?;
+            let sensor = match s.get_ref().as_str() {
+                "left" => VaneSensor::Left,
+                "right" => VaneSensor::Right,
+                other => {
+                    return Err(loc.error(
+                        Some(s.span()),
+                        format!("{field}.sensor"),
+                        format!("unknown sensor `{other}`: use left (Snimac_1) or right (Snimac_2)"),
+                    ))
+                }
+            };
+            let fault = match kind {
+                "vane-stuck-on" => SensorFault::StuckOn,
+                "vane-stuck-off" => SensorFault::StuckOff,
+                _ => SensorFault::None,
+            };
+            Ok(Fault::Vane { sensor, fault })
+        }
         other => Err(loc.error(
             Some(raw.kind.span()),
             format!("{field}.kind"),
-            format!("unknown fault `{other}`: use slave-offline, slave-online, power-fail or safe-link-drop"),
+            format!(
+                "unknown fault `{other}`: use slave-offline, slave-online, power-fail, safe-link-drop, \
+                 vane-stuck-on, vane-stuck-off or vane-repaired"
+            ),
         )),
     }
 }

@@ -81,6 +81,30 @@ pub enum ContactFault {
     StuckOpen,
 }
 
+/// A fault of a sensor's output, injected to test what the controller and the safety logic do
+/// when a sensor fails.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum SensorFault {
+    /// The sensor works.
+    #[default]
+    None,
+    /// The output reads "on" whatever the sensor sees.
+    StuckOn,
+    /// The output reads "off" whatever the sensor sees (a broken wire).
+    StuckOff,
+}
+
+impl SensorFault {
+    /// What the output reads when the sensor sees `level`.
+    pub fn reads(self, level: bool) -> bool {
+        match self {
+            SensorFault::None => level,
+            SensorFault::StuckOn => true,
+            SensorFault::StuckOff => false,
+        }
+    }
+}
+
 impl ContactFault {
     /// What an NC contact reads (`true` = closed) when the button is `pressed`.
     pub(crate) fn nc_reads(self, pressed: bool) -> bool {

@@ -67,7 +67,7 @@ mod motion;
 mod shaft;
 
 pub use config::{ConfigError, LiftConfig};
-pub use controls::{Button, ContactFault, LoadLevel, StopChannel};
+pub use controls::{Button, ContactFault, LoadLevel, SensorFault, StopChannel};
 pub use display::{DisplayId, DisplayState, DisplayWord, DisplayWordError};
 pub use drive::{converter_frequency_hz, DriveConfig};
 pub use event::{Crash, EventKind, PlantEvent};

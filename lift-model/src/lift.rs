@@ -5,7 +5,7 @@ use std::collections::VecDeque;
 use asi_phy::{SimDuration, SimTime};
 
 use crate::config::{ConfigError, LiftConfig};
-use crate::controls::{Button, Buttons, ContactFault, LoadLevel, StopChannel};
+use crate::controls::{Button, Buttons, ContactFault, LoadLevel, SensorFault, StopChannel};
 use crate::display::{DisplayId, DisplayState};
 use crate::event::{Crash, EventKind, PlantEvent};
 use crate::motion::{Segment, SegmentEnd};
@@ -149,6 +149,8 @@ pub struct Lift {
     crank_target_mm: Option<f64>,
     buttons: Buttons,
     stop_faults: [ContactFault; 2],
+    /// Faults of the left and right vane sensors' outputs.
+    vane_faults: [SensorFault; 2],
     door_closed: bool,
     load: LoadLevel,
     /// Floors 1..N, then the cabin.
@@ -192,6 +194,7 @@ impl Lift {
             crank_target_mm: None,
             buttons: Buttons::new(floors),
             stop_faults: [ContactFault::None; 2],
+            vane_faults: [SensorFault::None; 2],
             door_closed: true,
             load: LoadLevel::Empty,
             displays: vec![DisplayState::Blank; usize::from(floors) + 1],
@@ -276,6 +279,12 @@ impl Lift {
     }
 
     fn emit(&mut self, kind: EventKind) {
+        // A failed sensor's output does not follow the vane: no edge to report.
+        if let EventKind::Vane { sensor, .. } = kind {
+            if self.vane_faults[sensor as usize] != SensorFault::None {
+                return;
+            }
+        }
         self.events.push_back(PlantEvent { at: self.now, kind });
     }
 
@@ -561,6 +570,20 @@ impl Lift {
         Ok(())
     }
 
+    /// Makes a vane sensor's output fail (or work again, with [`SensorFault::None`]). While it
+    /// fails, its output reads the stuck value and the plant reports no edges of it; the change
+    /// itself is an input, not an event.
+    pub fn set_vane_fault(
+        &mut self,
+        now: SimTime,
+        sensor: VaneSensor,
+        fault: SensorFault,
+    ) -> Result<(), PlantError> {
+        self.catch_up(now)?;
+        self.vane_faults[sensor as usize] = fault;
+        Ok(())
+    }
+
     /// The lab door, moved by hand (SPEC §4): `true` closed.
     pub fn set_door(&mut self, now: SimTime, closed: bool) -> Result<(), PlantError> {
         self.catch_up(now)?;
@@ -656,24 +679,26 @@ impl Lift {
 
     /// The level of a vane sensor: `true` over a vane track (seed 003 §6.4).
     pub fn vane(&self, sensor: VaneSensor) -> bool {
-        match sensor {
+        let level = match sensor {
             VaneSensor::Left => self.levels.left,
             VaneSensor::Right => self.levels.right,
-        }
+        };
+        self.vane_faults[sensor as usize].reads(level)
     }
 
     /// `Snimac_1`, the left vane sensor (seed 003 table 6.1).
     pub fn vane_left(&self) -> bool {
-        self.levels.left
+        self.vane(VaneSensor::Left)
     }
 
     /// `Snimac_2`, the right vane sensor (seed 003 table 6.1).
     pub fn vane_right(&self) -> bool {
-        self.levels.right
+        self.vane(VaneSensor::Right)
     }
 
-    /// Both vane sensors on: the cabin is in the level zone of a floor (seed 003 tables 6.4,
-    /// 6.5: "Dobrždění → Aktuální patro").
+    /// The cabin is in the level zone of a floor, where both vane tracks overlap (seed 003
+    /// tables 6.4, 6.5: "Dobrždění → Aktuální patro"); the physical position, whatever the
+    /// sensors report.
     pub fn in_level_zone(&self) -> bool {
         self.levels.left && self.levels.right
     }

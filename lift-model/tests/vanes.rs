@@ -230,3 +230,40 @@ fn any_number_of_floors_from_2_to_24_is_counted_the_same_way() {
         assert!(near(trips[0], top + 60.0), "{floors}: {trips:?}");
     }
 }
+
+#[test]
+fn a_stuck_sensor_reads_its_stuck_value_and_reports_no_edges() {
+    use lift_model::SensorFault;
+    // Up from floor 1 at travel speed past floor 2 with the right sensor's wire broken.
+    let mut lift = driving(0.0, true, 10_000);
+    let now = lift.now();
+    lift.set_vane_fault(now, Right, SensorFault::StuckOff)
+        .expect("fault");
+    assert!(
+        !lift.vane_right(),
+        "reads off at once, although level at floor 1"
+    );
+    assert!(
+        lift.in_level_zone(),
+        "the cabin is still level: the zone is physical"
+    );
+    let mut edges = Vec::new();
+    let end = lift.now() + SimDuration::from_secs(10);
+    while lift.now() < end {
+        let next = lift.next_event().unwrap_or(end).min(end);
+        for e in lift.advance_to(next).expect("advance") {
+            if let EventKind::Vane { sensor, on } = e.kind {
+                edges.push((sensor, on));
+            }
+        }
+        assert!(!lift.vane_right());
+    }
+    // Floor 1's left track ends, floor 2's left track begins: only the left sensor's edges.
+    assert!(edges.iter().all(|(s, _)| *s == Left), "{edges:?}");
+    assert!(edges.contains(&(Left, true)), "{edges:?}");
+    // Repaired: it follows the vane again.
+    let now = lift.now();
+    lift.set_vane_fault(now, Right, SensorFault::None)
+        .expect("repair");
+    assert_eq!(lift.vane_right(), lift.vane(Right));
+}

@@ -254,6 +254,37 @@ fn an_overtravel_trip_takes_power_until_cranked_back_reset_and_restarted() {
 }
 
 #[test]
+fn a_runaway_past_the_top_floor_is_stopped_by_the_overtravel_function() {
+    let r = run_file("overtravel-runaway");
+    assert_no_violations(&r);
+    // With the right sensor stuck off the controller brakes at floor 4 but never sees "both
+    // on": it creeps into the top overtravel sensor (60 mm above floor 4 = 1260 mm).
+    let tripped = logged_at(&r, "plant", "overtravel sensor (Top) tripped").expect("trip");
+    let k1_off =
+        logged_at(&r, "safety", "K1 opened: overtravel top sensor tripped").expect("K1 off");
+    assert!(
+        k1_off - tripped < 0.005,
+        "K1 dropped {} s after the trip",
+        k1_off - tripped
+    );
+    assert!(r
+        .safety
+        .trips
+        .iter()
+        .any(|t| t.cause.contains("overtravel top")));
+    assert!(logged(
+        &r,
+        "controller",
+        "halted between floors: no drive power"
+    ));
+    // Power back only after the repair, the crank and the operator's reset.
+    let k1_on = logged_after(&r, "safety", "K1 closed", k1_off).expect("K1 closed again");
+    assert!((62.0..62.2).contains(&k1_on), "{k1_on}");
+    assert_eq!(stops(&r), [1, 4, 1]);
+    assert_eq!(served(&r), [(4, "cabin".into()), (1, "cabin".into())]);
+}
+
+#[test]
 fn a_lost_cabin_slave_stops_the_cabin_and_service_resumes_after_it_returns() {
     let r = run_file("lost-cabin-slave");
     assert_no_violations(&r);
