@@ -544,13 +544,15 @@ impl Rig {
         if let Err(e) = result {
             self.log("plant", format!("error: {e}"));
         }
-        self.applied = Applied {
+        let new = Applied {
             run,
             up,
             setpoint_ua: ua,
             displays,
         };
-        self.plant_dirty = true;
+        // What the plant shows the slaves can change with what it is given.
+        self.plant_dirty |= new != self.applied;
+        self.applied = new;
     }
 
     fn safety_scan(&mut self, t: SimTime) {
