@@ -38,7 +38,11 @@ enum Command {
         /// The report's format.
         #[arg(long, value_enum, default_value_t = Format::Text)]
         format: Format,
-        /// Overwrite the report file if it exists.
+        /// Write every bus transaction, one line each, to this file (`-` for standard
+        /// output, in place of the log).
+        #[arg(long, value_name = "FILE|-")]
+        trace: Option<PathBuf>,
+        /// Overwrite the report and trace files if they exist.
         #[arg(long)]
         force: bool,
     },
@@ -121,6 +125,7 @@ fn run(cli: Cli) -> Result<u8, String> {
             until,
             report,
             format,
+            trace,
             force,
         } => {
             let mut sc = match &scenario {
@@ -141,7 +146,16 @@ fn run(cli: Cli) -> Result<u8, String> {
                         .map_err(|e| format!("--until: {e}"))?,
                 ),
             };
-            let rig = Rig::new(sc).map_err(|e| e.to_string())?;
+            let mut rig = Rig::new(sc).map_err(|e| e.to_string())?;
+            if let Some(path) = &trace {
+                if path == Path::new("-") && report == Path::new("-") {
+                    return Err(
+                        "--trace - and the report both want standard output: give --report FILE"
+                            .into(),
+                    );
+                }
+                rig.trace_to(open_output(path, force)?);
+            }
             let rep = rig.run(until);
             let body = match format {
                 Format::Text => rep.to_text(),
@@ -220,10 +234,17 @@ fn read_input(path: &Path) -> Result<String, String> {
 
 /// Writes `text` to `path`, never replacing a file the user has unless `force` is given.
 fn write_output(path: &Path, text: &str, force: bool) -> Result<(), String> {
+    let mut out = open_output(path, force)?;
+    out.write_all(text.as_bytes())
+        .and_then(|()| out.flush())
+        .map_err(|e| format!("{}: {e}", path.display()))
+}
+
+/// Opens `path` for writing (`-` = standard output), never replacing a file the user has
+/// unless `force` is given.
+fn open_output(path: &Path, force: bool) -> Result<Box<dyn Write>, String> {
     if path == Path::new("-") {
-        return std::io::stdout()
-            .write_all(text.as_bytes())
-            .map_err(|e| format!("standard output: {e}"));
+        return Ok(Box::new(std::io::BufWriter::new(std::io::stdout())));
     }
     let mut options = std::fs::OpenOptions::new();
     options.write(true);
@@ -232,12 +253,11 @@ fn write_output(path: &Path, text: &str, force: bool) -> Result<(), String> {
     } else {
         options.create_new(true);
     }
-    let mut f = options.open(path).map_err(|e| match e.kind() {
+    let f = options.open(path).map_err(|e| match e.kind() {
         std::io::ErrorKind::AlreadyExists => {
             format!("{} exists; pass --force to overwrite it", path.display())
         }
         _ => format!("{}: {e}", path.display()),
     })?;
-    f.write_all(text.as_bytes())
-        .map_err(|e| format!("{}: {e}", path.display()))
+    Ok(Box::new(std::io::BufWriter::new(f)))
 }

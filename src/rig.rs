@@ -22,6 +22,7 @@ use controller::plc::{addr, FromSafety, Plc, ToSafety};
 use controller::{ControllerConfig, EventKind as Ctl, HallDir, Source};
 use lift_model::{Button, DisplayId, EventKind as Plant, Lift, LiftConfig, LoadLevel, SensorFault};
 use safety::{LiftSafety, LiftSafetyConfig, LiftSafetyInputs, SafeLink, SAFETY_SCAN_PERIOD};
+use std::io::Write as _;
 
 /// Why a rig cannot be built for a scenario.
 #[derive(Debug, thiserror::Error)]
@@ -110,6 +111,9 @@ pub struct Rig {
     passengers: Vec<(SimTime, Button, Option<SimTime>)>,
     watch: Watch,
     report: Report,
+    /// Where the bus's transaction trace goes, if anywhere.
+    trace: Option<Box<dyn std::io::Write>>,
+    trace_error: Option<String>,
 }
 
 impl Rig {
@@ -193,6 +197,8 @@ impl Rig {
             passengers: Vec::new(),
             watch: Watch::default(),
             report,
+            trace: None,
+            trace_error: None,
             sc,
         };
         rig.lift.set_load(SimTime::ZERO, rig.sc.load)?;
@@ -212,6 +218,32 @@ impl Rig {
             ),
         );
         Ok(rig)
+    }
+
+    /// Streams every bus transaction, one readable line each, to `out` (drained from the
+    /// master's trace ring at every PLC scan and at the end).
+    pub fn trace_to(&mut self, out: Box<dyn std::io::Write>) {
+        // A PLC scan spans about 65 transactions of the lab bus; the ring holds far more.
+        self.lab.bus.enable_trace(1 << 16);
+        self.trace = Some(out);
+    }
+
+    /// The first error writing the trace, if any.
+    pub fn trace_error(&self) -> Option<&str> {
+        self.trace_error.as_deref()
+    }
+
+    fn flush_trace(&mut self) {
+        let Some(out) = self.trace.as_mut() else {
+            return;
+        };
+        for r in self.lab.bus.drain_trace() {
+            if let Err(e) = writeln!(out, "{r}") {
+                self.trace_error.get_or_insert_with(|| e.to_string());
+                self.trace = None;
+                return;
+            }
+        }
     }
 
     /// Runs until `until` (at most the scenario's duration) and returns the report.
@@ -274,6 +306,7 @@ impl Rig {
         if t >= self.next_plc {
             self.plc_scan(t);
             self.next_plc = t + self.sc.plc_scan;
+            self.flush_trace();
         }
         self.check_invariants(t);
     }
@@ -778,6 +811,16 @@ impl Rig {
     }
 
     fn finish(mut self) -> Report {
+        self.flush_trace();
+        if let Some(out) = self.trace.as_mut() {
+            if let Err(e) = out.flush() {
+                self.trace_error.get_or_insert_with(|| e.to_string());
+            }
+        }
+        if let Some(e) = self.trace_error.take() {
+            let text = format!("the bus trace could not be written: {e}");
+            self.log("rig", text);
+        }
         let p = self.plc.program();
         let stats = self.lab.bus.stats();
         let (min, mean, max) = stats.cycle_time_us();

@@ -14,3 +14,32 @@ fn demo_log() {
 fn demo_report_json() {
     insta::assert_snapshot!(run(Scenario::demo()).to_json());
 }
+
+/// A writer the test can read back after the rig has written to it.
+#[derive(Clone, Default)]
+struct Shared(std::rc::Rc<std::cell::RefCell<Vec<u8>>>);
+
+impl std::io::Write for Shared {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        self.0.borrow_mut().extend_from_slice(buf);
+        Ok(buf.len())
+    }
+    fn flush(&mut self) -> std::io::Result<()> {
+        Ok(())
+    }
+}
+
+#[test]
+fn demo_bus_trace_at_power_on() {
+    use asi_lift::rig::Rig;
+    use asi_phy::SimDuration;
+    let out = Shared::default();
+    let mut rig = Rig::new(Scenario::demo()).expect("rig");
+    rig.trace_to(Box::new(out.clone()));
+    let report = rig.run(Some(SimDuration::from_millis(30)));
+    assert!(report.log.iter().all(|l| !l.text.contains("trace could not be written")));
+    let text = String::from_utf8(out.0.borrow().clone()).expect("utf-8");
+    // Detection of all 32 addresses, activation of the 11 projected slaves, first cycles.
+    assert!(text.lines().count() > 150, "{}", text.lines().count());
+    insta::assert_snapshot!(text);
+}
