@@ -37,7 +37,10 @@ fn demo_bus_trace_at_power_on() {
     let mut rig = Rig::new(Scenario::demo()).expect("rig");
     rig.trace_to(Box::new(out.clone()));
     let report = rig.run(Some(SimDuration::from_millis(30)));
-    assert!(report.log.iter().all(|l| !l.text.contains("trace could not be written")));
+    assert!(report
+        .log
+        .iter()
+        .all(|l| !l.text.contains("trace could not be written")));
     let text = String::from_utf8(out.0.borrow().clone()).expect("utf-8");
     // Detection of all 32 addresses, activation of the 11 projected slaves, first cycles.
     assert!(text.lines().count() > 150, "{}", text.lines().count());
