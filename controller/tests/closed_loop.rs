@@ -120,6 +120,16 @@ impl Loop {
             .collect()
     }
 
+    fn served(&self) -> Vec<(u8, Source)> {
+        self.events
+            .iter()
+            .filter_map(|(_, e)| match e {
+                EventKind::Served(s) => Some((s.floor, s.source)),
+                _ => None,
+            })
+            .collect()
+    }
+
     fn level_at(&self, floor: u8) -> bool {
         let level = (floor as f64 - 1.0) * 400.0;
         (self.lift.position_mm() - level).abs() <= 10.0 && self.lift.velocity_mm_s() == 0.0
@@ -181,14 +191,7 @@ fn cabin_calls_are_served_first_in_order_then_hall_calls() {
     // The cabin call to 4, then the cabin call to 3 pressed later, then the hall call at 2;
     // the hall call at 4 is served by the first stop there.
     assert_eq!(l.arrivals(), [4, 3, 2]);
-    let served: Vec<(u8, Source)> = l
-        .events
-        .iter()
-        .filter_map(|(_, e)| match e {
-            EventKind::Served(s) => Some((s.floor, s.source)),
-            _ => None,
-        })
-        .collect();
+    let served = l.served();
     assert_eq!(
         served,
         [
@@ -249,14 +252,7 @@ fn collective_control_stops_on_the_way_in_the_direction_of_travel() {
     assert!(l.run_until(SimDuration::from_secs(120), |l| l.arrivals().len() >= 3));
     // Up: 2 (hall up), 4 (cabin), then down: 3 (hall down).
     assert_eq!(l.arrivals(), [2, 4, 3]);
-    let served: Vec<(u8, Source)> = l
-        .events
-        .iter()
-        .filter_map(|(_, e)| match e {
-            EventKind::Served(s) => Some((s.floor, s.source)),
-            _ => None,
-        })
-        .collect();
+    let served = l.served();
     assert_eq!(
         served,
         [(2, Source::Hall), (4, Source::Cabin), (3, Source::Hall)]
