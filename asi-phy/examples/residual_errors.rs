@@ -13,10 +13,9 @@
 //! The published claim to compare with: an effective Hamming distance of 5
 //! (feldbusse.de, reference/asi.md §3.2).
 
-use asi_phy::fault::{apply_faults, FaultInjector, FaultRates, PulseFault};
+use asi_phy::fault::{apply_faults, single_faults, FaultInjector, FaultRates, PulseFault};
 use asi_phy::{
-    BusTiming, Expect, Nibble, Polarity, Pulse, PulseTrain, Receiver, Request, Response,
-    SimDuration, SimTime,
+    BusTiming, Expect, Nibble, Polarity, Pulse, PulseTrain, Receiver, Request, Response, SimTime,
 };
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -120,31 +119,6 @@ fn minimum_distance(kind: Kind) -> (u32, u64, String) {
         }
     }
     (best, count, example)
-}
-
-fn single_faults(train: &PulseTrain) -> Vec<PulseFault> {
-    let h = train.half_bit().as_nanos() as i64;
-    let mut faults = Vec::new();
-    for index in 0..train.len() as usize {
-        faults.push(PulseFault::Drop { index });
-        faults.push(PulseFault::Flip { index });
-        faults.push(PulseFault::Shift { index, by_ns: h });
-        faults.push(PulseFault::Shift { index, by_ns: -h });
-    }
-    for k in 0..train.grid_points() {
-        if train.pulse_at(k).is_none() {
-            let at = train.start() + SimDuration::from_nanos(k as u64 * h as u64);
-            faults.push(PulseFault::Insert {
-                at,
-                polarity: Polarity::Negative,
-            });
-            faults.push(PulseFault::Insert {
-                at,
-                polarity: Polarity::Positive,
-            });
-        }
-    }
-    faults
 }
 
 /// Counts of outcomes.

@@ -7,7 +7,7 @@
 //! seen at the wrong time (shift). Noise bursts on a sampled waveform live in
 //! [`crate::waveform`].
 
-use crate::pulse::{Polarity, Pulse};
+use crate::pulse::{Polarity, Pulse, PulseTrain};
 use crate::time::{SimDuration, SimTime};
 use crate::waveform::{NoiseBurst, Waveform};
 use rand::{Rng, SeedableRng};
@@ -40,6 +40,36 @@ pub enum PulseFault {
         /// Signed shift in nanoseconds.
         by_ns: i64,
     },
+}
+
+/// Every single fault of the four kinds on an encoded `train`, relative to its own grid: drop,
+/// flip, and shift by one grid step either way of each pulse, and a pulse of either sign at each
+/// free grid point of the telegram's span. The fault set of the exhaustive single-fault test and
+/// of the residual-error measurement.
+pub fn single_faults(train: &PulseTrain) -> Vec<PulseFault> {
+    let h = train.half_bit().as_nanos();
+    let mut faults = Vec::new();
+    for index in 0..train.len() as usize {
+        faults.push(PulseFault::Drop { index });
+        faults.push(PulseFault::Flip { index });
+        faults.push(PulseFault::Shift {
+            index,
+            by_ns: h as i64,
+        });
+        faults.push(PulseFault::Shift {
+            index,
+            by_ns: -(h as i64),
+        });
+    }
+    for k in 0..train.grid_points() {
+        if train.pulse_at(k).is_none() {
+            let at = train.start() + SimDuration::from_nanos(k as u64 * h);
+            for polarity in [Polarity::Negative, Polarity::Positive] {
+                faults.push(PulseFault::Insert { at, polarity });
+            }
+        }
+    }
+    faults
 }
 
 /// Applies `faults` to `pulses`, writing the result in time order to `out` (cleared first).

@@ -4,11 +4,11 @@
 //!   Manchester half-bits, APM pulses and the default waveform.
 //! - Every single pulse fault on every valid telegram is reported by the receiver.
 
-use asi_phy::fault::{apply_faults, PulseFault};
+use asi_phy::fault::{apply_faults, single_faults};
 use asi_phy::waveform::{render, DemodConfig, Demodulator, WaveformConfig};
 use asi_phy::{
-    BusTiming, Expect, HalfBits, Nibble, Polarity, Pulse, PulseTrain, Received, Receiver, Request,
-    Response, SimDuration, SimTime,
+    BusTiming, Expect, HalfBits, Nibble, Pulse, PulseTrain, Received, Receiver, Request, Response,
+    SimDuration, SimTime,
 };
 
 fn all_requests() -> impl Iterator<Item = Request> {
@@ -98,28 +98,6 @@ fn every_response_round_trips_through_bits_manchester_pulses_and_waveform() {
             pulses
         );
     }
-}
-
-/// Every single fault of the four kinds on `train`, relative to its own grid.
-pub fn single_faults(train: &PulseTrain) -> Vec<PulseFault> {
-    let h = train.half_bit().as_nanos() as i64;
-    let n = train.len() as usize;
-    let mut faults = Vec::new();
-    for index in 0..n {
-        faults.push(PulseFault::Drop { index });
-        faults.push(PulseFault::Flip { index });
-        faults.push(PulseFault::Shift { index, by_ns: h });
-        faults.push(PulseFault::Shift { index, by_ns: -h });
-    }
-    for k in 0..train.grid_points() {
-        if train.pulse_at(k).is_none() {
-            let at = train.start() + SimDuration::from_nanos(k as u64 * h as u64);
-            for polarity in [Polarity::Negative, Polarity::Positive] {
-                faults.push(PulseFault::Insert { at, polarity });
-            }
-        }
-    }
-    faults
 }
 
 #[test]
