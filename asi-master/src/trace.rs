@@ -95,25 +95,7 @@ pub fn describe_request(req: Request, ab: bool) -> String {
             return format!("{name} {address}{sel} {field}={:03b}", d.get());
         }
     }
-    match call {
-        Call::DataExchange { address, data } => format!("{name} {address} out={data}"),
-        Call::WriteParameter { address, parameter } => {
-            format!("{name} {address} P={parameter}")
-        }
-        Call::AddressAssignment { new_address } => format!("{name} new={new_address}"),
-        Call::WriteExtendedId1 { id1 } => format!("{name} ID1={id1}"),
-        Call::DeleteAddress { address, select }
-        | Call::ResetSlave { address, select }
-        | Call::ReadIoConfiguration { address, select }
-        | Call::ReadIdCode { address, select }
-        | Call::ReadId1 { address, select }
-        | Call::ReadId2 { address, select }
-        | Call::ReadStatus { address, select } => format!("{name} {address}{select}"),
-        Call::BroadcastReset => name.to_string(),
-        Call::Unknown { cb, address, info } => {
-            format!("{name} CB={} A={address} I={info:05b}", cb as u8)
-        }
-    }
+    call.to_string()
 }
 
 impl fmt::Display for TransactionRecord {

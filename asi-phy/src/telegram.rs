@@ -700,27 +700,27 @@ impl Call {
 }
 
 impl fmt::Display for Call {
-    /// A short readable form for traces: `Data_Exchange 5 out=1010`, `Read_ID1 7B`.
+    /// The readable form of traces and logs: `Data_Exchange 5 out=1010`, `Read_ID1 7B`,
+    /// `Read_Status 2A`, `Address_Assignment new=12`.
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let name = self.name();
-        let sel = |s: &Select| if *s == Select::B { "B" } else { "" };
         match self {
             Call::DataExchange { address, data } => write!(f, "{name} {address} out={data}"),
             Call::WriteParameter { address, parameter } => {
-                write!(f, "{name} {address} par={parameter}")
+                write!(f, "{name} {address} P={parameter}")
             }
-            Call::AddressAssignment { new_address } => write!(f, "{name} 0 -> {new_address}"),
-            Call::WriteExtendedId1 { id1 } => write!(f, "{name} 0 id1={id1}"),
+            Call::AddressAssignment { new_address } => write!(f, "{name} new={new_address}"),
+            Call::WriteExtendedId1 { id1 } => write!(f, "{name} ID1={id1}"),
             Call::DeleteAddress { address, select }
             | Call::ResetSlave { address, select }
             | Call::ReadIoConfiguration { address, select }
             | Call::ReadIdCode { address, select }
             | Call::ReadId1 { address, select }
             | Call::ReadId2 { address, select }
-            | Call::ReadStatus { address, select } => write!(f, "{name} {address}{}", sel(select)),
+            | Call::ReadStatus { address, select } => write!(f, "{name} {address}{select}"),
             Call::BroadcastReset => f.write_str(name),
             Call::Unknown { cb, address, info } => {
-                write!(f, "{name} cb={} a={address} i={info:05b}", *cb as u8)
+                write!(f, "{name} CB={} A={address} I={info:05b}", *cb as u8)
             }
         }
     }
