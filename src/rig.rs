@@ -65,6 +65,17 @@ enum Timer {
     PowerBack,
 }
 
+/// A passenger's press of a call button.
+#[derive(Clone, Copy, Debug)]
+struct Press {
+    at: SimTime,
+    button: Button,
+    /// When a stop answered it.
+    served: Option<SimTime>,
+    /// Its call was the target STOP dropped: not the request of a later call.
+    dropped: bool,
+}
+
 /// What the rig last handed the plant from the slaves.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 struct Applied {
@@ -106,9 +117,8 @@ pub struct Rig {
     k1: bool,
     operator_reset: bool,
     err_ack: bool,
-    presses: Vec<(SimTime, Button)>,
-    /// Every press of a call button: (time, button, served at).
-    passengers: Vec<(SimTime, Button, Option<SimTime>)>,
+    /// Every press of a call button, for the passengers' waits and the served calls' requests.
+    presses: Vec<Press>,
     watch: Watch,
     report: Report,
     /// Where the bus's transaction trace goes, if anywhere.
@@ -194,7 +204,6 @@ impl Rig {
             operator_reset: false,
             err_ack: false,
             presses: Vec::new(),
-            passengers: Vec::new(),
             watch: Watch::default(),
             report,
             trace: None,
@@ -386,9 +395,13 @@ impl Rig {
         self.log("scenario", what);
         let result = match &ev.action {
             Action::Press { button, hold } => {
-                self.presses.push((t, *button));
                 if button_floor(button).is_some() {
-                    self.passengers.push((t, *button, None));
+                    self.presses.push(Press {
+                        at: t,
+                        button: *button,
+                        served: None,
+                        dropped: false,
+                    });
                 }
                 self.lift.press(t, *button, *hold)
             }
@@ -639,21 +652,36 @@ impl Rig {
                     dropped: Some(f), ..
                 } => {
                     // The dropped target's presses are not the request of a later call.
-                    let at = e.at;
-                    self.presses
-                        .retain(|(t, b)| !(button_floor(b) == Some(f) && *t <= at));
+                    for p in &mut self.presses {
+                        if button_floor(&p.button) == Some(f) && p.at <= e.at && p.served.is_none()
+                        {
+                            p.dropped = true;
+                        }
+                    }
                 }
                 Ctl::Served(s) => {
-                    let requested = self.take_press(s.floor, s.source, s.stored_at);
-                    for (at, b, served) in &mut self.passengers {
-                        let same = match (s.hall, *b) {
-                            (None, Button::Cabin(f)) => f == s.floor,
-                            (Some(HallDir::Up), Button::HallUp(f)) => f == s.floor,
-                            (Some(HallDir::Down), Button::HallDown(f)) => f == s.floor,
-                            _ => false,
-                        };
-                        if same && served.is_none() && *at <= e.at {
-                            *served = Some(e.at);
+                    // The request: the earliest pending press of the served button up to the
+                    // time the call was stored (else the storing time). Every pending press of
+                    // that button until now is answered by this stop.
+                    let calls = |p: &Press| {
+                        p.served.is_none()
+                            && match (s.hall, p.button) {
+                                (None, Button::Cabin(f)) => f == s.floor,
+                                (Some(HallDir::Up), Button::HallUp(f)) => f == s.floor,
+                                (Some(HallDir::Down), Button::HallDown(f)) => f == s.floor,
+                                _ => false,
+                            }
+                    };
+                    let requested = self
+                        .presses
+                        .iter()
+                        .filter(|p| calls(p) && !p.dropped && p.at <= s.stored_at)
+                        .map(|p| p.at)
+                        .min()
+                        .unwrap_or(s.stored_at);
+                    for p in &mut self.presses {
+                        if calls(p) && p.at <= e.at {
+                            p.served = Some(e.at);
                         }
                     }
                     self.report.served.push(Served {
@@ -674,29 +702,6 @@ impl Rig {
             }
             self.log_at(e.at, "controller", e.kind.to_string());
         }
-    }
-
-    /// The passenger's press behind a served call: the earliest press of a matching button up
-    /// to the time the call was stored; falls back to the storing time.
-    fn take_press(&mut self, floor: u8, source: Source, stored_at: SimTime) -> SimTime {
-        let matches = |b: &Button| {
-            button_floor(b) == Some(floor)
-                && matches!(
-                    (source, b),
-                    (Source::Cabin, Button::Cabin(_))
-                        | (Source::Hall, Button::HallUp(_) | Button::HallDown(_))
-                )
-        };
-        let found = self
-            .presses
-            .iter()
-            .filter(|(at, b)| *at <= stored_at && matches(b))
-            .map(|(at, _)| *at)
-            .min();
-        // Every press of those buttons until now is answered by this stop.
-        let now = self.now;
-        self.presses.retain(|(at, b)| !(matches(b) && *at <= now));
-        found.unwrap_or(stored_at)
     }
 
     fn check_invariants(&mut self, t: SimTime) {
@@ -854,18 +859,18 @@ impl Rig {
             },
         };
         self.report.passengers = self
-            .passengers
+            .presses
             .iter()
-            .map(|(at, b, served)| Passenger {
-                button: match b {
+            .map(|p| Passenger {
+                button: match p.button {
                     Button::Cabin(f) => format!("cabin:{f}"),
                     Button::HallUp(f) => format!("hall-up:{f}"),
                     Button::HallDown(f) => format!("hall-down:{f}"),
                     Button::Bell => "bell".into(),
                     Button::Stop => "stop".into(),
                 },
-                pressed_at_s: at.as_secs_f64(),
-                served_at_s: served.map(|s| s.as_secs_f64()),
+                pressed_at_s: p.at.as_secs_f64(),
+                served_at_s: p.served.map(|s| s.as_secs_f64()),
             })
             .collect();
         // Lines from different sources come in scan order; keep them in time order.
