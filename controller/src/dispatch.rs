@@ -339,16 +339,6 @@ impl Dispatcher {
             fifo.offer_front(floor);
         }
     }
-
-    /// Forgets every call (after a fault that ends service).
-    pub fn clear(&mut self) {
-        self.fifo_cabin.clear();
-        self.fifo_hall.clear();
-        self.cabin = 0;
-        self.up = 0;
-        self.down = 0;
-        self.stored_at = [[None; MAX_FLOORS]; 3];
-    }
 }
 
 fn offer(fifo: &mut RequestFifo<4>, floor: u8) -> Stored {

@@ -107,11 +107,6 @@ impl<const N: usize> RequestFifo<N> {
     pub fn is_empty(&self) -> bool {
         self.len == 0
     }
-
-    /// Forgets everything.
-    pub fn clear(&mut self) {
-        self.len = 0;
-    }
 }
 
 #[cfg(test)]
