@@ -5,3 +5,4 @@ pub mod phy_tools;
 pub mod report;
 pub mod rig;
 pub mod scenario;
+pub mod telegrams;
