@@ -134,7 +134,7 @@ impl Rig {
             initial_position_mm: sc.start_mm,
             ..LiftConfig::default()
         })?;
-        let mut lab = LabLift::new()?;
+        let mut lab = LabLift::with_extra(asi_master::MasterConfig::default(), sc.extra_slaves)?;
         lab.bus.enable_trace(0);
         if sc.pulse_error_rate > 0.0 {
             lab.bus

@@ -32,6 +32,9 @@ pub struct Scenario {
     pub door_closed: bool,
     /// Probability that a pulse on the line is corrupted.
     pub pulse_error_rate: f64,
+    /// Plain I/O modules added to the lab bus at its free addresses (0..=20): the lift on a
+    /// fuller bus.
+    pub extra_slaves: u8,
     /// The PLC scan period.
     pub plc_scan: SimDuration,
     /// Whether the operator presses the safety reset once after power-on, as at the lab
@@ -177,6 +180,7 @@ struct RawLift {
 #[serde(deny_unknown_fields)]
 struct RawBus {
     pulse_error_rate: Option<Spanned<f64>>,
+    extra_slaves: Option<Spanned<i64>>,
 }
 
 #[derive(Deserialize)]
@@ -420,6 +424,19 @@ impl Scenario {
                 }
                 sc.pulse_error_rate = v;
             }
+            if let Some(n) = &b.extra_slaves {
+                let v = *n.get_ref();
+                sc.extra_slaves = u8::try_from(v)
+                    .ok()
+                    .filter(|v| *v as usize <= asi_master::lab::EXTRA_ADDRESSES.len())
+                    .ok_or_else(|| {
+                        loc.error(
+                            Some(n.span()),
+                            "bus.extra_slaves",
+                            format!("{v}: the lab bus has room for 0..=20 more slaves"),
+                        )
+                    })?;
+            }
         }
         if let Some(c) = &raw.controller {
             if let Some(s) = &c.scan {
@@ -538,6 +555,7 @@ impl Scenario {
             load: LoadLevel::Empty,
             door_closed: true,
             pulse_error_rate: 0.0,
+            extra_slaves: 0,
             plc_scan: SimDuration::from_millis(10),
             power_on_reset: true,
             events: Vec::new(),
@@ -734,6 +752,10 @@ fault = { kind = "safe-link-drop", duration = "300ms" }
         assert!(
             err("[[event]]\nat = \"5s\"\nfault = { kind = \"slave-offline\" }\n")
                 .contains("needs `slave = N`")
+        );
+        assert_eq!(
+            err("[bus]\nextra_slaves = 21\n"),
+            "t.toml:2:16: bus.extra_slaves: 21: the lab bus has room for 0..=20 more slaves"
         );
         assert!(err("algorithm = \"scan\"\n")
             .contains("t.toml:1:13: algorithm: unknown algorithm `scan`"));

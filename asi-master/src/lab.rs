@@ -57,6 +57,21 @@ pub const LAB_SLAVES: [(u8, &str, SlaveCodes); 11] = [
     (SAFETY_TOP, "top overtravel", GG505S),
 ];
 
+/// The addresses the lab lift leaves free, in the order extra I/O modules take them.
+pub const EXTRA_ADDRESSES: [u8; 20] = [
+    9, 13, 14, 15, 16, 17, 18, 19, 20, 21, 22, 23, 24, 25, 26, 27, 28, 29, 30, 31,
+];
+
+fn extra_addresses(n: u8) -> Result<&'static [u8], ConfigError> {
+    EXTRA_ADDRESSES
+        .get(..n as usize)
+        .ok_or_else(|| ConfigError::Setting {
+            field: "extra I/O modules",
+            value: n.to_string(),
+            rule: "must be 0..=20 (the addresses the lab leaves free)",
+        })
+}
+
 /// The lab lift's bus with typed access to its devices.
 #[derive(Debug)]
 pub struct LabLift {
@@ -83,7 +98,16 @@ impl LabLift {
 
     /// The projected configuration of the lab lift.
     pub fn projected() -> Result<ProjectedConfig, ConfigError> {
-        ProjectedConfig::new(LAB_SLAVES.iter().map(|&(n, _, codes)| ProjectedSlave {
+        LabLift::projected_with(0)
+    }
+
+    /// The projected configuration of the lab lift with `extra` plain I/O modules at the
+    /// addresses the lab leaves free ([`EXTRA_ADDRESSES`], in that order).
+    pub fn projected_with(extra: u8) -> Result<ProjectedConfig, ConfigError> {
+        let extra = extra_addresses(extra)?;
+        let lab = LAB_SLAVES.iter().map(|&(n, _, codes)| (n, codes));
+        let io = extra.iter().map(|&n| (n, AC2726));
+        ProjectedConfig::new(lab.chain(io).map(|(n, codes)| ProjectedSlave {
             addr: SlaveAddr {
                 address: Address::new(n).unwrap_or_default(),
                 select: asi_phy::Select::A,
@@ -110,8 +134,16 @@ impl LabLift {
 
     /// The lab bus with master settings `cfg`.
     pub fn with_config(cfg: MasterConfig) -> Result<LabLift, ConfigError> {
+        LabLift::with_extra(cfg, 0)
+    }
+
+    /// The lab bus with master settings `cfg` and `extra` (0..=20) plain 4I/4O modules
+    /// (AC2726, all pins low) at the free addresses [`EXTRA_ADDRESSES`], projected too: the
+    /// lab lift on a fuller bus, for cycle-time and latency studies (SPEC §7).
+    pub fn with_extra(cfg: MasterConfig, extra: u8) -> Result<LabLift, ConfigError> {
         let timing = cfg.timing;
-        let mut bus = Bus::new(cfg, LabLift::projected()?, Vec::new())?;
+        let extra = extra_addresses(extra)?;
+        let mut bus = Bus::new(cfg, LabLift::projected_with(extra.len() as u8)?, Vec::new())?;
         let mut ids = [None; 32];
         for &(n, name, codes) in &LAB_SLAVES {
             let device = LabLift::device_for(n).ok_or_else(|| ConfigError::Slave {
@@ -119,6 +151,15 @@ impl LabLift {
                 why: "no device".into(),
             })?;
             let id = bus.add_slave(Slave::new(name, addr(n)?, codes, device))?;
+            ids[n as usize] = Some(id);
+        }
+        for &n in extra {
+            let id = bus.add_slave(Slave::new(
+                format!("io {n}"),
+                addr(n)?,
+                AC2726,
+                Box::new(IoModule::new()),
+            ))?;
             ids[n as usize] = Some(id);
         }
         let monitor = bus.add_monitor(SafetyMonitor::new(

@@ -130,3 +130,23 @@ fn sixty_two_ab_slaves_see_twice_the_cycle() {
     };
     assert_eq!((out(8), out(9)), (0b111, 0b010), "5A and 5B");
 }
+
+/// The lab lift with 20 extra I/O modules fills all 31 addresses: (31 + 1) · 154 µs, and with
+/// 9 extra modules 20 slaves: (20 + 2) · 154 µs (SPEC §2).
+#[test]
+fn the_lab_bus_with_extra_modules_follows_the_same_formula() {
+    use asi_master::lab::LabLift;
+    for (extra, want) in [(0u8, 13u64), (9, 22), (20, 32)] {
+        let mut lab = LabLift::with_extra(MasterConfig::default(), extra).expect("lab bus");
+        lab.bus.advance_to(ms(60));
+        assert!(lab.bus.is_running(), "extra = {extra}");
+        assert_eq!(lab.bus.master().las().len(), 11 + extra as u32);
+        let before = lab.bus.stats();
+        lab.bus.advance_to(ms(200));
+        let s = lab.bus.stats();
+        assert!(s.cycles > before.cycles + 10);
+        assert_eq!(s.cycle_min, us(want * 154), "extra = {extra}");
+        assert_eq!(s.cycle_max, us(want * 154), "extra = {extra}");
+    }
+    assert!(LabLift::with_extra(MasterConfig::default(), 21).is_err());
+}
