@@ -492,6 +492,18 @@ impl Bus {
 
     // ----- application access -----------------------------------------------------------
 
+    /// Starts (`true`) or stops recording the line: every pulse as it is on the line (after
+    /// faults, colliding answers superimposed), for waveform and VCD export.
+    pub fn record_line(&mut self, on: bool) {
+        self.medium.record_pulses(on);
+    }
+
+    /// The pulses put on the line since the last call, in the order they went on it (a
+    /// pulse that a fault shifted may be slightly out of time order).
+    pub fn take_line_pulses(&mut self) -> Vec<asi_phy::Pulse> {
+        self.medium.take_pulses()
+    }
+
     /// The master.
     pub fn master(&self) -> &Master {
         &self.master

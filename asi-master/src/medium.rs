@@ -33,6 +33,8 @@ pub struct Medium {
     faults_injected: u64,
     pause: asi_phy::SimDuration,
     pending: Option<(PulseTrain, Frame)>,
+    /// Every pulse put on the line (after faults), when someone records the line.
+    tap: Option<Vec<Pulse>>,
 }
 
 impl Medium {
@@ -47,6 +49,7 @@ impl Medium {
             faults_injected: 0,
             pause: timing.min_pause(),
             pending: None,
+            tap: None,
         }
     }
 
@@ -72,6 +75,17 @@ impl Medium {
         self.faults_injected + self.injector.as_ref().map_or(0, |i| i.injected())
     }
 
+    /// Starts (`true`) or stops recording every pulse that goes on the line, as it is there:
+    /// after faults, with colliding answers superimposed.
+    pub fn record_pulses(&mut self, on: bool) {
+        self.tap = on.then(|| self.tap.take().unwrap_or_default());
+    }
+
+    /// Takes the pulses recorded since the last call (in the order they went on the line).
+    pub fn take_pulses(&mut self) -> Vec<Pulse> {
+        self.tap.as_mut().map(core::mem::take).unwrap_or_default()
+    }
+
     /// Puts the encoded telegram `train` on the line; `raw` holds its `bits` bits (first bit
     /// highest) as the transmitter sent them. `done` gets every frame the line completes on the
     /// way.
@@ -82,7 +96,11 @@ impl Medium {
         bits: u32,
         done: &mut impl FnMut(Frame),
     ) {
-        if self.injector.is_none() && self.one_shot.is_empty() && self.decoder.poll_at().is_none() {
+        let clean = self.injector.is_none() && self.one_shot.is_empty();
+        if let (Some(tap), true) = (self.tap.as_mut(), clean) {
+            tap.extend(train.iter());
+        }
+        if clean && self.decoder.poll_at().is_none() {
             let quiet = match &self.pending {
                 None => true,
                 Some((p, _)) => train.start() >= p.end() && train.start() - p.end() >= self.pause,
@@ -106,7 +124,7 @@ impl Medium {
             }
         }
         self.flush_pending(done);
-        if self.injector.is_none() && self.one_shot.is_empty() {
+        if clean {
             if let Some(f) = self.decoder.push_train(train) {
                 done(f);
             }
@@ -169,6 +187,9 @@ impl Medium {
         if let Some(inj) = &mut self.injector {
             inj.corrupt(pulses.iter().copied(), &mut self.scratch);
             core::mem::swap(pulses, &mut self.scratch);
+        }
+        if let Some(tap) = self.tap.as_mut() {
+            tap.extend_from_slice(pulses);
         }
         for p in pulses.iter() {
             if let Some(f) = self.decoder.push(*p) {

@@ -98,21 +98,49 @@ pub fn describe_request(req: Request, ab: bool) -> String {
     call.to_string()
 }
 
+/// A request's 14 bits grouped as SPEC §1 writes them: `ST CB A4..A0 I4..I0 PB EB`.
+pub fn request_bits(req: Request) -> String {
+    let b = req.bits();
+    format!(
+        "{} {} {:05b} {:05b} {} {}",
+        b >> 13 & 1,
+        b >> 12 & 1,
+        b >> 7 & 0x1F,
+        b >> 2 & 0x1F,
+        b >> 1 & 1,
+        b & 1
+    )
+}
+
+/// A response's 7 bits grouped as SPEC §1 writes them: `ST I3..I0 PB EB`.
+pub fn response_bits(resp: Response) -> String {
+    let b = resp.bits();
+    format!(
+        "{} {:04b} {} {}",
+        b >> 6 & 1,
+        b >> 2 & 0xF,
+        b >> 1 & 1,
+        b & 1
+    )
+}
+
 impl fmt::Display for TransactionRecord {
-    /// One line: `  0.005154000 s  detect    Read_IO_Configuration 1A  -> 0111`.
+    /// One line: time, phase, the request's bits and call, and the response's bits:
+    /// ` 0.005154000 s  detect    0 1 00001 10000 0 1  Read_IO_Configuration 1A        -> 0 0111 1 1`.
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(
             f,
-            "{:>14}  {:<9} {:<32}",
+            "{:>14}  {:<9} {}  {:<30}",
             self.start.to_string(),
             self.kind.label(),
+            request_bits(self.request),
             describe_request(self.request, self.ab)
         )?;
         if !self.request_failed.is_empty() {
             write!(f, " [request {}]", self.request_failed)?;
         }
         match (self.response, self.no_response) {
-            (Some(r), _) => write!(f, " -> {}", r.data())?,
+            (Some(r), _) => write!(f, " -> {}", response_bits(r))?,
             (None, true) => f.write_str(" -> no response")?,
             (None, false) => write!(f, " -> corrupt ({})", self.response_failed)?,
         }
@@ -277,5 +305,34 @@ impl fmt::Display for BusStats {
             " cycles {} cycle_us min {min:.0} mean {mean:.1} max {max:.0}",
             self.cycles
         )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use asi_phy::{Address, Nibble};
+
+    #[test]
+    fn bits_are_grouped_as_the_spec_writes_them() {
+        // SPEC §1 worked vectors.
+        let q = Request::data_exchange(
+            Address::new(5).expect("address"),
+            Nibble::from_low_bits(0b1010),
+        )
+        .expect("valid");
+        assert_eq!(request_bits(q), "0 0 00101 01010 0 1");
+        assert_eq!(
+            request_bits(Request::broadcast_reset()),
+            "0 1 11111 10101 1 1"
+        );
+        assert_eq!(
+            response_bits(Response::new(Nibble::from_low_bits(0b0110))),
+            "0 0110 0 1"
+        );
+        assert_eq!(
+            response_bits(Response::new(Nibble::from_low_bits(0))),
+            "0 0000 0 1"
+        );
     }
 }
