@@ -6,3 +6,6 @@ pub mod report;
 pub mod rig;
 pub mod scenario;
 pub mod telegrams;
+pub mod trace;
+pub mod vcd;
+pub mod waves;

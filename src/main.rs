@@ -3,10 +3,13 @@
 use asi_lift::phy_tools::{decode_capture, describe, parse_call, waveform_csv, DecodeOptions};
 use asi_lift::rig::Rig;
 use asi_lift::scenario::Scenario;
+use asi_lift::trace::TraceFormat;
+use asi_lift::waves::WaveOutputs;
 use asi_phy::waveform::WaveformConfig;
+use asi_phy::SimTime;
 use asi_phy::{Expect, SimDuration};
 use clap::{Parser, Subcommand, ValueEnum};
-use std::io::{Read, Write};
+use std::io::{IsTerminal, Read, Write};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -39,10 +42,26 @@ enum Command {
         #[arg(long, value_enum, default_value_t = Format::Text)]
         format: Format,
         /// Write every bus transaction, one line each, to this file (`-` for standard
-        /// output, in place of the log).
+        /// output): JSON lines for a `.jsonl` or `.json` file, readable text otherwise.
         #[arg(long, value_name = "FILE|-")]
         trace: Option<PathBuf>,
-        /// Overwrite the report and trace files if they exist.
+        /// The trace's form, overriding the file name's.
+        #[arg(long, value_enum)]
+        trace_format: Option<TraceForm>,
+        /// Write a Value Change Dump (GTKWave, Surfer) of the whole run: the line's pulses,
+        /// the telegram fields, the plant, the controller and the safety logic; the line
+        /// voltage for the waveform window.
+        #[arg(long, value_name = "FILE")]
+        vcd: Option<PathBuf>,
+        /// Write the line voltage of the waveform window as `time_s,voltage_v` CSV, as an
+        /// oscilloscope exports it.
+        #[arg(long, value_name = "FILE")]
+        csv: Option<PathBuf>,
+        /// The window of line voltage in the VCD and the CSV, START..END in simulated time
+        /// (e.g. 5s..5.01s).
+        #[arg(long, value_name = "START..END", default_value = "0ms..10ms")]
+        waveform_window: String,
+        /// Overwrite the report, trace, VCD and CSV files if they exist.
         #[arg(long)]
         force: bool,
     },
@@ -95,6 +114,14 @@ enum Format {
 }
 
 #[derive(Clone, Copy, ValueEnum)]
+enum TraceForm {
+    /// One readable line per transaction.
+    Text,
+    /// One JSON object per transaction.
+    Jsonl,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
 enum Listen {
     /// Master requests only.
     Requests,
@@ -126,6 +153,10 @@ fn run(cli: Cli) -> Result<u8, String> {
             report,
             format,
             trace,
+            trace_format,
+            vcd,
+            csv,
+            waveform_window,
             force,
         } => {
             let mut sc = match &scenario {
@@ -146,17 +177,59 @@ fn run(cli: Cli) -> Result<u8, String> {
                         .map_err(|e| format!("--until: {e}"))?,
                 ),
             };
+            let window = parse_window(&waveform_window)?;
+            let outputs: Vec<(&str, &PathBuf)> = [
+                ("--report", Some(&report)),
+                ("--trace", trace.as_ref()),
+                ("--vcd", vcd.as_ref()),
+                ("--csv", csv.as_ref()),
+            ]
+            .into_iter()
+            .filter_map(|(k, p)| p.map(|p| (k, p)))
+            .collect();
+            for (i, (a, pa)) in outputs.iter().enumerate() {
+                for (b, pb) in &outputs[i + 1..] {
+                    if pa == pb {
+                        return Err(if *pa == Path::new("-") {
+                            format!("{a} and {b} both want standard output: give one a file")
+                        } else {
+                            format!("{a} and {b} both name {}", pa.display())
+                        });
+                    }
+                }
+            }
             let mut rig = Rig::new(sc).map_err(|e| e.to_string())?;
             if let Some(path) = &trace {
-                if path == Path::new("-") && report == Path::new("-") {
-                    return Err(
-                        "--trace - and the report both want standard output: give --report FILE"
-                            .into(),
+                let form = match trace_format {
+                    Some(TraceForm::Text) => TraceFormat::Text,
+                    Some(TraceForm::Jsonl) => TraceFormat::Jsonl,
+                    None => TraceFormat::for_path(path),
+                };
+                rig.trace_to(open_output(path, force)?, form);
+            }
+            if vcd.is_some() || csv.is_some() {
+                let vcd = vcd.as_deref().map(|p| open_output(p, force)).transpose()?;
+                let csv = csv.as_deref().map(|p| open_output(p, force)).transpose()?;
+                rig.waves_to(WaveOutputs { vcd, csv, window });
+            }
+            let wall = std::time::Instant::now();
+            let show = std::io::stderr().is_terminal();
+            let mut shown = false;
+            let mut progress = |t: SimTime, end: SimTime| {
+                if show && wall.elapsed().as_secs_f64() > 1.0 {
+                    shown = true;
+                    let pct = t.as_secs_f64() / end.as_secs_f64().max(1e-9) * 100.0;
+                    eprint!(
+                        "\r  simulated {:.1} s of {:.1} s ({pct:.0} %)",
+                        t.as_secs_f64(),
+                        end.as_secs_f64()
                     );
                 }
-                rig.trace_to(open_output(path, force)?);
+            };
+            let rep = rig.run_observed(until, &mut progress);
+            if shown {
+                eprint!("\r{:60}\r", "");
             }
-            let rep = rig.run(until);
             let body = match format {
                 Format::Text => rep.to_text(),
                 Format::Json => rep.to_json() + "\n",
@@ -219,6 +292,20 @@ fn run(cli: Cli) -> Result<u8, String> {
             Ok(0)
         }
     }
+}
+
+/// Parses `START..END` in simulated time.
+fn parse_window(s: &str) -> Result<(SimTime, SimTime), String> {
+    let err = |why: String| format!("--waveform-window {s}: {why}");
+    let (a, b) = s
+        .split_once("..")
+        .ok_or_else(|| err("expected START..END, e.g. 0ms..10ms".into()))?;
+    let a: SimDuration = a.trim().parse().map_err(|e| err(format!("{e}")))?;
+    let b: SimDuration = b.trim().parse().map_err(|e| err(format!("{e}")))?;
+    if b <= a {
+        return Err(err("END must be after START".into()));
+    }
+    Ok((SimTime::ZERO + a, SimTime::ZERO + b))
 }
 
 fn read_input(path: &Path) -> Result<String, String> {

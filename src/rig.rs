@@ -15,6 +15,8 @@ use crate::report::{
     SafetyReport, Served, Trip, Violation,
 };
 use crate::scenario::{Action, Fault, Scenario, ScenarioEvent};
+use crate::trace::{write_record, TraceFormat};
+use crate::waves::{RigSample, WaveOutputs, Waves};
 use asi_master::lab::LabLift;
 use asi_phy::fault::FaultRates;
 use asi_phy::{Check, SimDuration, SimTime};
@@ -22,7 +24,6 @@ use controller::plc::{addr, FromSafety, Plc, ToSafety};
 use controller::{ControllerConfig, EventKind as Ctl, HallDir, Source};
 use lift_model::{Button, DisplayId, EventKind as Plant, Lift, LiftConfig, LoadLevel, SensorFault};
 use safety::{LiftSafety, LiftSafetyConfig, LiftSafetyInputs, SafeLink, SAFETY_SCAN_PERIOD};
-use std::io::Write as _;
 
 /// Why a rig cannot be built for a scenario.
 #[derive(Debug, thiserror::Error)]
@@ -121,9 +122,13 @@ pub struct Rig {
     presses: Vec<Press>,
     watch: Watch,
     report: Report,
-    /// Where the bus's transaction trace goes, if anywhere.
-    trace: Option<Box<dyn std::io::Write>>,
+    /// Where the bus's transaction trace goes, if anywhere, and in which form.
+    trace: Option<(Box<dyn std::io::Write>, TraceFormat)>,
     trace_error: Option<String>,
+    /// The VCD and line-voltage outputs, if wanted.
+    waves: Option<Waves>,
+    /// The safety logic's last outputs, for the VCD.
+    safety_out: Option<safety::lift::LiftSafetyDiag>,
 }
 
 impl Rig {
@@ -208,6 +213,8 @@ impl Rig {
             report,
             trace: None,
             trace_error: None,
+            waves: None,
+            safety_out: None,
             sc,
         };
         rig.lift.set_load(SimTime::ZERO, rig.sc.load)?;
@@ -229,43 +236,114 @@ impl Rig {
         Ok(rig)
     }
 
-    /// Streams every bus transaction, one readable line each, to `out` (drained from the
+    /// Streams every bus transaction, one line each in `format`, to `out` (drained from the
     /// master's trace ring at every PLC scan and at the end).
-    pub fn trace_to(&mut self, out: Box<dyn std::io::Write>) {
+    pub fn trace_to(&mut self, out: Box<dyn std::io::Write>, format: TraceFormat) {
+        self.enable_trace_ring();
+        self.trace = Some((out, format));
+    }
+
+    /// Writes the VCD and the line-voltage CSV of the run (see [`crate::waves`]).
+    pub fn waves_to(&mut self, out: WaveOutputs) {
+        self.enable_trace_ring();
+        self.lab.bus.record_line(true);
+        self.waves = Some(Waves::new(out, self.lab.bus.timing()));
+    }
+
+    fn enable_trace_ring(&mut self) {
         // A PLC scan spans about 65 transactions of the lab bus; the ring holds far more.
         self.lab.bus.enable_trace(1 << 16);
-        self.trace = Some(out);
     }
 
-    /// The first error writing the trace, if any.
+    /// The first error writing the trace or the waveforms, if any.
     pub fn trace_error(&self) -> Option<&str> {
-        self.trace_error.as_deref()
+        self.trace_error
+            .as_deref()
+            .or_else(|| self.waves.as_ref().and_then(|w| w.error()))
     }
 
+    /// Hands the transactions and line pulses since the last call to the trace and the
+    /// waveform outputs.
     fn flush_trace(&mut self) {
-        let Some(out) = self.trace.as_mut() else {
+        if self.trace.is_none() && self.waves.is_none() {
             return;
-        };
-        for r in self.lab.bus.drain_trace() {
-            if let Err(e) = writeln!(out, "{r}") {
-                self.trace_error.get_or_insert_with(|| e.to_string());
-                self.trace = None;
-                return;
+        }
+        let records = self.lab.bus.drain_trace();
+        if let Some((out, format)) = self.trace.as_mut() {
+            for r in &records {
+                if let Err(e) = write_record(out, r, *format) {
+                    self.trace_error.get_or_insert_with(|| e.to_string());
+                    self.trace = None;
+                    break;
+                }
             }
+        }
+        if let Some(w) = self.waves.as_mut() {
+            w.pulses(&self.lab.bus.take_line_pulses());
+            for r in &records {
+                w.transaction(r);
+            }
+            w.flush(self.now);
+        }
+    }
+
+    /// The rig's state for the VCD.
+    fn sample(&self) -> RigSample {
+        let l = &self.lift;
+        let p = self.plc.program();
+        let diag = self.safety_out.as_ref();
+        RigSample {
+            position_mm: l.position_mm(),
+            velocity_mm_s: l.velocity_mm_s(),
+            vane_left: l.vane_left(),
+            vane_right: l.vane_right(),
+            overtravel_bottom_free: l.overtravel_bottom_free(),
+            overtravel_top_free: l.overtravel_top_free(),
+            k1: l.k1_closed(),
+            door_closed: l.door_closed(),
+            converter_run: self.applied.run,
+            converter_up: self.applied.up,
+            setpoint_ua: self.applied.setpoint_ua,
+            controller_state: p.state_name(),
+            floor: p.current_floor(),
+            target_floor: p.target(),
+            fifo_cabin: p.fifo_cabin().len() as u8,
+            fifo_hall: p.fifo_hall().len() as u8,
+            estop_out: self.from_safety.estop_out,
+            group_state: diag.map_or("STOP", |d| d.group.state.name()),
+            fb_err: diag.is_some_and(|d| d.group.errors.fb_err),
+            com_err: diag.is_some_and(|d| d.group.errors.com_err),
+            out_err: diag.is_some_and(|d| d.group.errors.out_err),
+            supply_v: self.lab.bus.supply_voltage(),
         }
     }
 
     /// Runs until `until` (at most the scenario's duration) and returns the report.
-    pub fn run(mut self, until: Option<SimDuration>) -> Report {
+    pub fn run(self, until: Option<SimDuration>) -> Report {
+        self.run_observed(until, &mut |_, _| {})
+    }
+
+    /// As [`Rig::run`], telling `progress` the simulated time and the end after every PLC
+    /// scan (for a progress indicator; the simulation does not depend on it).
+    pub fn run_observed(
+        mut self,
+        until: Option<SimDuration>,
+        progress: &mut dyn FnMut(SimTime, SimTime),
+    ) -> Report {
         if let Some(u) = until {
             self.end = self.end.min(SimTime::ZERO + u);
         }
+        let mut scans = self.next_plc;
         loop {
             let t = self.next_moment();
             if t > self.end {
                 break;
             }
             self.step(t);
+            if self.next_plc != scans {
+                scans = self.next_plc;
+                progress(t, self.end);
+            }
             if t == self.end {
                 break;
             }
@@ -318,6 +396,12 @@ impl Rig {
             self.flush_trace();
         }
         self.check_invariants(t);
+        if self.waves.is_some() {
+            let sample = self.sample();
+            if let Some(w) = self.waves.as_mut() {
+                w.sample(t, &sample);
+            }
+        }
     }
 
     fn advance_plant(&mut self, t: SimTime) {
@@ -631,6 +715,7 @@ impl Rig {
         self.from_safety = FromSafety {
             estop_out: out.estop_out,
         };
+        self.safety_out = Some(out.diag);
         if out.k1 != self.k1 {
             self.k1 = out.k1;
             if let Err(e) = self.lift.set_contactor(t, out.k1) {
@@ -817,12 +902,15 @@ impl Rig {
 
     fn finish(mut self) -> Report {
         self.flush_trace();
-        if let Some(out) = self.trace.as_mut() {
+        if let Some((out, _)) = self.trace.as_mut() {
             if let Err(e) = out.flush() {
                 self.trace_error.get_or_insert_with(|| e.to_string());
             }
         }
-        if let Some(e) = self.trace_error.take() {
+        if let Some(w) = self.waves.as_mut() {
+            w.finish(self.now);
+        }
+        if let Some(e) = self.trace_error().map(str::to_owned) {
             let text = format!("the bus trace could not be written: {e}");
             self.log("rig", text);
         }

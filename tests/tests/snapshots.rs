@@ -35,7 +35,7 @@ fn demo_bus_trace_at_power_on() {
     use asi_phy::SimDuration;
     let out = Shared::default();
     let mut rig = Rig::new(Scenario::demo()).expect("rig");
-    rig.trace_to(Box::new(out.clone()));
+    rig.trace_to(Box::new(out.clone()), asi_lift::trace::TraceFormat::Text);
     let report = rig.run(Some(SimDuration::from_millis(30)));
     assert!(report
         .log

@@ -1,0 +1,308 @@
+//! A Value Change Dump writer (IEEE 1364 §18) for GTKWave and Surfer.
+//!
+//! Variables are declared first (scope, name, kind); then changes arrive in any order within a
+//! window and [`VcdWriter::flush_until`] writes those up to a time, sorted by time (changes at
+//! one time keep the order they were given in). A change that repeats a variable's value is
+//! dropped, except for variables declared with `every_record` (the AS-i pulse wire: every pulse
+//! is a record, even two pulses of one polarity). The time unit is 1 ns, the simulator's clock.
+
+use std::io::{self, Write};
+
+/// What a variable holds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum VarKind {
+    /// A wire of `width` bits (1 = scalar).
+    Wire(u32),
+    /// A real number.
+    Real,
+    /// A string (GTKWave and Surfer show it as text); spaces become underscores.
+    Text,
+}
+
+/// A value of a variable.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Value {
+    /// A scalar or vector value (low `width` bits).
+    Bits(u64),
+    /// All bits unknown (`x`): no value, e.g. no response.
+    Unknown,
+    /// A real number.
+    Real(f64),
+    /// A string.
+    Text(String),
+}
+
+impl From<bool> for Value {
+    fn from(b: bool) -> Value {
+        Value::Bits(b as u64)
+    }
+}
+
+/// A declared variable.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct VarId(usize);
+
+#[derive(Debug)]
+struct Var {
+    scope: Vec<&'static str>,
+    name: &'static str,
+    kind: VarKind,
+    code: String,
+    every_record: bool,
+    last: Option<Value>,
+}
+
+/// Writes a VCD file.
+pub struct VcdWriter<W: Write> {
+    out: W,
+    vars: Vec<Var>,
+    pending: Vec<(u64, VarId, Value)>,
+    header_done: bool,
+    time: Option<u64>,
+    flushed_to: u64,
+}
+
+impl<W: Write> VcdWriter<W> {
+    /// A writer to `out`; nothing is written until the first flush.
+    pub fn new(out: W) -> VcdWriter<W> {
+        VcdWriter {
+            out,
+            vars: Vec::new(),
+            pending: Vec::new(),
+            header_done: false,
+            time: None,
+            flushed_to: 0,
+        }
+    }
+
+    /// Declares a variable in `scope` (outermost first), e.g. `["rig", "bus"]`.
+    pub fn var(&mut self, scope: &[&'static str], name: &'static str, kind: VarKind) -> VarId {
+        self.declare(scope, name, kind, false)
+    }
+
+    /// Declares a variable whose every record is written, even one that repeats the value.
+    pub fn var_every_record(
+        &mut self,
+        scope: &[&'static str],
+        name: &'static str,
+        kind: VarKind,
+    ) -> VarId {
+        self.declare(scope, name, kind, true)
+    }
+
+    fn declare(
+        &mut self,
+        scope: &[&'static str],
+        name: &'static str,
+        kind: VarKind,
+        every_record: bool,
+    ) -> VarId {
+        let id = VarId(self.vars.len());
+        self.vars.push(Var {
+            scope: scope.to_vec(),
+            name,
+            kind,
+            code: id_code(id.0),
+            every_record,
+            last: None,
+        });
+        id
+    }
+
+    /// Records that `var` takes `value` at `t_ns` (written at the next flush that reaches it).
+    /// A change earlier than the last flush is written at the flush time.
+    pub fn change(&mut self, t_ns: u64, var: VarId, value: Value) {
+        self.pending.push((t_ns.max(self.flushed_to), var, value));
+    }
+
+    /// Writes every recorded change up to and including `t_ns`, in time order.
+    pub fn flush_until(&mut self, t_ns: u64) -> io::Result<()> {
+        self.header()?;
+        // Stable: changes at one time keep their order.
+        self.pending.sort_by_key(|(t, _, _)| *t);
+        let n = self.pending.partition_point(|(t, _, _)| *t <= t_ns);
+        let due: Vec<_> = self.pending.drain(..n).collect();
+        for (t, var, value) in due {
+            self.write_change(t, var, value)?;
+        }
+        self.flushed_to = self.flushed_to.max(t_ns);
+        Ok(())
+    }
+
+    /// Writes everything and the closing time stamp `end_ns`; returns the output.
+    pub fn finish(mut self, end_ns: u64) -> io::Result<W> {
+        self.flush_until(u64::MAX)?;
+        if self.time.is_none_or(|t| t < end_ns) {
+            writeln!(self.out, "#{end_ns}")?;
+        }
+        self.out.flush()?;
+        Ok(self.out)
+    }
+
+    fn header(&mut self) -> io::Result<()> {
+        if self.header_done {
+            return Ok(());
+        }
+        self.header_done = true;
+        let o = &mut self.out;
+        writeln!(o, "$comment asi-lift: the AS-i lab lift, simulated $end")?;
+        writeln!(o, "$timescale 1 ns $end")?;
+        let mut open: Vec<&'static str> = Vec::new();
+        let mut order: Vec<usize> = (0..self.vars.len()).collect();
+        order.sort_by(|a, b| self.vars[*a].scope.cmp(&self.vars[*b].scope));
+        for i in order {
+            let v = &self.vars[i];
+            let common = open
+                .iter()
+                .zip(&v.scope)
+                .take_while(|(a, b)| a == b)
+                .count();
+            for _ in common..open.len() {
+                writeln!(o, "$upscope $end")?;
+            }
+            open.truncate(common);
+            for s in &v.scope[common..] {
+                writeln!(o, "$scope module {s} $end")?;
+                open.push(s);
+            }
+            let (ty, width) = match v.kind {
+                VarKind::Wire(w) => ("wire", w),
+                VarKind::Real => ("real", 64),
+                VarKind::Text => ("string", 1),
+            };
+            match v.kind {
+                VarKind::Wire(w) if w > 1 => writeln!(
+                    o,
+                    "$var {ty} {width} {} {} [{}:0] $end",
+                    v.code,
+                    v.name,
+                    w - 1
+                )?,
+                _ => writeln!(o, "$var {ty} {width} {} {} $end", v.code, v.name)?,
+            }
+        }
+        for _ in &open {
+            writeln!(o, "$upscope $end")?;
+        }
+        writeln!(o, "$enddefinitions $end")?;
+        Ok(())
+    }
+
+    fn write_change(&mut self, t: u64, var: VarId, value: Value) -> io::Result<()> {
+        let v = &mut self.vars[var.0];
+        if !v.every_record && v.last.as_ref() == Some(&value) {
+            return Ok(());
+        }
+        if self.time != Some(t) {
+            writeln!(self.out, "#{t}")?;
+            self.time = Some(t);
+        }
+        let o = &mut self.out;
+        match (&value, v.kind) {
+            (Value::Bits(b), VarKind::Wire(1)) => writeln!(o, "{}{}", b & 1, v.code)?,
+            (Value::Unknown, VarKind::Wire(1)) => writeln!(o, "x{}", v.code)?,
+            (Value::Bits(b), VarKind::Wire(w)) => {
+                let digits: String = (0..w)
+                    .rev()
+                    .map(|i| if b >> i & 1 == 1 { '1' } else { '0' })
+                    .collect();
+                writeln!(o, "b{digits} {}", v.code)?
+            }
+            (Value::Unknown, VarKind::Wire(_)) => writeln!(o, "bx {}", v.code)?,
+            (Value::Real(x), _) => writeln!(o, "r{x} {}", v.code)?,
+            (Value::Text(s), _) => {
+                let s: String = s
+                    .chars()
+                    .map(|c| if c.is_whitespace() { '_' } else { c })
+                    .collect();
+                writeln!(o, "s{s} {}", v.code)?
+            }
+            (Value::Unknown, _) => writeln!(o, "s? {}", v.code)?,
+            (Value::Bits(b), _) => writeln!(o, "r{b} {}", v.code)?,
+        }
+        v.last = Some(value);
+        Ok(())
+    }
+}
+
+/// The short identifier code of variable `i`: printable ASCII `!`..`~`, base 94.
+fn id_code(mut i: usize) -> String {
+    let mut s = String::new();
+    loop {
+        s.push((b'!' + (i % 94) as u8) as char);
+        i /= 94;
+        if i == 0 {
+            return s;
+        }
+        i -= 1;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn id_codes_are_distinct_and_printable() {
+        let codes: Vec<String> = (0..10_000).map(id_code).collect();
+        let set: std::collections::HashSet<&String> = codes.iter().collect();
+        assert_eq!(set.len(), codes.len());
+        assert_eq!(codes[0], "!");
+        assert_eq!(codes[93], "~");
+        assert_eq!(codes[94], "!!");
+        assert!(codes
+            .iter()
+            .all(|c| c.bytes().all(|b| (b'!'..=b'~').contains(&b))));
+    }
+
+    #[test]
+    fn writes_a_header_and_changes_in_time_order() {
+        let mut w = VcdWriter::new(Vec::new());
+        let k1 = w.var(&["rig", "plant"], "k1", VarKind::Wire(1));
+        let pos = w.var(&["rig", "plant"], "cabin_position_mm", VarKind::Real);
+        let req = w.var(&["rig", "bus"], "request", VarKind::Wire(14));
+        let line = w.var_every_record(&["rig", "bus"], "manchester", VarKind::Wire(1));
+        let st = w.var(&["rig"], "state", VarKind::Text);
+        w.change(0, st, Value::Text("init down".into()));
+        w.change(20, k1, true.into());
+        w.change(5, req, Value::Bits(0b00001010101001));
+        w.change(5, line, false.into());
+        w.change(8, line, false.into());
+        w.change(10, pos, Value::Real(650.5));
+        w.change(30, k1, true.into());
+        w.flush_until(25).expect("write");
+        w.change(40, req, Value::Unknown);
+        let text = String::from_utf8(w.finish(50).expect("write")).expect("utf-8");
+        let want = "\
+$comment asi-lift: the AS-i lab lift, simulated $end
+$timescale 1 ns $end
+$scope module rig $end
+$var string 1 % state $end
+$scope module bus $end
+$var wire 14 # request [13:0] $end
+$var wire 1 $ manchester $end
+$upscope $end
+$scope module plant $end
+$var wire 1 ! k1 $end
+$var real 64 \" cabin_position_mm $end
+$upscope $end
+$upscope $end
+$enddefinitions $end
+#0
+sinit_down %
+#5
+b00001010101001 #
+0$
+#8
+0$
+#10
+r650.5 \"
+#20
+1!
+#40
+bx #
+#50
+";
+        assert_eq!(text, want);
+    }
+}

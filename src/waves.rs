@@ -1,0 +1,406 @@
+//! Waveform outputs of a run: the VCD of `asi-lift run --vcd` and the line-voltage CSV of
+//! `--csv` (SPEC §1 "Waveform", §7).
+//!
+//! The VCD holds, for the whole run, the AS-i line as the Manchester level (one record per
+//! pulse, so a pulse that repeats the level — a line fault — is still a record), the decoded
+//! telegram fields of every transaction, and the rig's state: the plant, the controller, the
+//! safety logic. The line voltage itself (`line_voltage`, the sampled sin² pulses as they are
+//! on the line, faults included) is written only for a window, default the first 10 ms, so a
+//! long run stays small; the CSV holds the same window as `time_s,voltage_v`.
+
+use crate::vcd::{Value, VarId, VarKind, VcdWriter};
+use asi_master::trace::{describe_request, TransactionRecord};
+use asi_phy::waveform::{render, WaveformConfig};
+use asi_phy::{BusTiming, Polarity, Pulse, SimDuration, SimTime};
+use std::fmt::Write as _;
+use std::io::{self, Write};
+
+/// Where the waveform outputs go and which window of line voltage they hold.
+pub struct WaveOutputs {
+    /// The VCD, if wanted.
+    pub vcd: Option<Box<dyn Write>>,
+    /// The line-voltage CSV, if wanted.
+    pub csv: Option<Box<dyn Write>>,
+    /// The window of line voltage, `[start, end)`.
+    pub window: (SimTime, SimTime),
+}
+
+/// The default window of line voltage: the first 10 ms.
+pub const DEFAULT_WINDOW: (SimTime, SimTime) = (SimTime::ZERO, SimTime::from_millis(10));
+
+/// How far behind the bus the VCD is written: a transaction is recorded when it ends, up to
+/// a few hundred µs after its request started.
+const LAG: SimDuration = SimDuration::from_millis(2);
+/// Cabin position and velocity are sampled at most this often while they change.
+const REAL_PERIOD: SimDuration = SimDuration::from_millis(1);
+
+/// The rig's state at one moment, as the VCD shows it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RigSample {
+    /// Cabin height above the floor-1 level, mm.
+    pub position_mm: f64,
+    /// Cabin velocity, mm/s (positive up).
+    pub velocity_mm_s: f64,
+    /// Left vane sensor.
+    pub vane_left: bool,
+    /// Right vane sensor.
+    pub vane_right: bool,
+    /// Bottom overtravel sensor free.
+    pub overtravel_bottom_free: bool,
+    /// Top overtravel sensor free.
+    pub overtravel_top_free: bool,
+    /// Contactor K1 closed.
+    pub k1: bool,
+    /// Door closed.
+    pub door_closed: bool,
+    /// Converter run command.
+    pub converter_run: bool,
+    /// Converter direction: up.
+    pub converter_up: bool,
+    /// Speed set-point on the current loop, µA.
+    pub setpoint_ua: u16,
+    /// The controller's state.
+    pub controller_state: &'static str,
+    /// The floor the controller believes the cabin at.
+    pub floor: u8,
+    /// The controller's target floor (0 = none).
+    pub target_floor: u8,
+    /// Calls in the cabin FIFO.
+    pub fifo_cabin: u8,
+    /// Calls in the hall FIFO.
+    pub fifo_hall: u8,
+    /// ESTOP's output to the controller (`false` = STOP demanded).
+    pub estop_out: bool,
+    /// The safety group's state (RUN, STOP, ERROR, RESET).
+    pub group_state: &'static str,
+    /// FB_ERR.
+    pub fb_err: bool,
+    /// COM_ERR.
+    pub com_err: bool,
+    /// OUT_ERR.
+    pub out_err: bool,
+    /// The AS-i supply, V.
+    pub supply_v: f64,
+}
+
+struct Ids {
+    manchester: VarId,
+    line_voltage: VarId,
+    request: VarId,
+    call: VarId,
+    address: VarId,
+    info: VarId,
+    response: VarId,
+    data: VarId,
+    errors: VarId,
+    repeat: VarId,
+    supply: VarId,
+    position: VarId,
+    velocity: VarId,
+    vane_left: VarId,
+    vane_right: VarId,
+    ot_bottom: VarId,
+    ot_top: VarId,
+    k1: VarId,
+    door: VarId,
+    run: VarId,
+    up: VarId,
+    setpoint: VarId,
+    state: VarId,
+    floor: VarId,
+    target: VarId,
+    fifo_cabin: VarId,
+    fifo_hall: VarId,
+    estop_out: VarId,
+    group: VarId,
+    fb_err: VarId,
+    com_err: VarId,
+    out_err: VarId,
+}
+
+fn declare(w: &mut VcdWriter<Box<dyn Write>>) -> Ids {
+    const BUS: &[&str] = &["rig", "bus"];
+    const PLANT: &[&str] = &["rig", "plant"];
+    const CTL: &[&str] = &["rig", "controller"];
+    const SAFETY: &[&str] = &["rig", "safety"];
+    Ids {
+        manchester: w.var_every_record(BUS, "manchester", VarKind::Wire(1)),
+        line_voltage: w.var(BUS, "line_voltage", VarKind::Real),
+        request: w.var(BUS, "request", VarKind::Wire(14)),
+        call: w.var(BUS, "call", VarKind::Text),
+        address: w.var(BUS, "address", VarKind::Wire(5)),
+        info: w.var(BUS, "info", VarKind::Wire(5)),
+        response: w.var(BUS, "response", VarKind::Wire(7)),
+        data: w.var(BUS, "data", VarKind::Wire(4)),
+        errors: w.var(BUS, "errors", VarKind::Text),
+        repeat: w.var(BUS, "repeat", VarKind::Wire(1)),
+        supply: w.var(BUS, "supply_voltage", VarKind::Real),
+        position: w.var(PLANT, "cabin_position_mm", VarKind::Real),
+        velocity: w.var(PLANT, "cabin_velocity_mm_s", VarKind::Real),
+        vane_left: w.var(PLANT, "vane_left", VarKind::Wire(1)),
+        vane_right: w.var(PLANT, "vane_right", VarKind::Wire(1)),
+        ot_bottom: w.var(PLANT, "overtravel_bottom_free", VarKind::Wire(1)),
+        ot_top: w.var(PLANT, "overtravel_top_free", VarKind::Wire(1)),
+        k1: w.var(PLANT, "k1", VarKind::Wire(1)),
+        door: w.var(PLANT, "door_closed", VarKind::Wire(1)),
+        run: w.var(PLANT, "converter_run", VarKind::Wire(1)),
+        up: w.var(PLANT, "converter_up", VarKind::Wire(1)),
+        setpoint: w.var(PLANT, "converter_setpoint_ua", VarKind::Wire(16)),
+        state: w.var(CTL, "state", VarKind::Text),
+        floor: w.var(CTL, "floor", VarKind::Wire(5)),
+        target: w.var(CTL, "target_floor", VarKind::Wire(5)),
+        fifo_cabin: w.var(CTL, "fifo_cabin_fill", VarKind::Wire(5)),
+        fifo_hall: w.var(CTL, "fifo_hall_fill", VarKind::Wire(5)),
+        estop_out: w.var(SAFETY, "estop_out", VarKind::Wire(1)),
+        group: w.var(SAFETY, "group_state", VarKind::Text),
+        fb_err: w.var(SAFETY, "fb_err", VarKind::Wire(1)),
+        com_err: w.var(SAFETY, "com_err", VarKind::Wire(1)),
+        out_err: w.var(SAFETY, "out_err", VarKind::Wire(1)),
+    }
+}
+
+/// The waveform outputs of one run.
+pub struct Waves {
+    vcd: Option<(VcdWriter<Box<dyn Write>>, Ids)>,
+    csv: Option<Box<dyn Write>>,
+    window: (SimTime, SimTime),
+    window_pulses: Vec<Pulse>,
+    /// The line voltage is written up to here.
+    rendered_to: SimTime,
+    csv_header: bool,
+    wave: WaveformConfig,
+    response_after: SimDuration,
+    last_real: Option<(SimTime, f64, f64)>,
+    error: Option<String>,
+}
+
+impl Waves {
+    /// Waveform outputs for a bus of `timing`.
+    pub fn new(out: WaveOutputs, timing: &BusTiming) -> Waves {
+        let vcd = out.vcd.map(|o| {
+            let mut w = VcdWriter::new(o);
+            let ids = declare(&mut w);
+            (w, ids)
+        });
+        Waves {
+            vcd,
+            csv: out.csv,
+            window: out.window,
+            window_pulses: Vec::new(),
+            rendered_to: out.window.0,
+            csv_header: false,
+            wave: WaveformConfig::default(),
+            response_after: timing.request_span() + timing.master_pause(),
+            last_real: None,
+            error: None,
+        }
+    }
+
+    /// The first error writing an output, if any.
+    pub fn error(&self) -> Option<&str> {
+        self.error.as_deref()
+    }
+
+    /// Pulses that went on the line.
+    pub fn pulses(&mut self, pulses: &[Pulse]) {
+        let (from, until) = self.window;
+        let margin = self.wave.pulse_width;
+        for p in pulses {
+            if p.at + margin > from.max(self.rendered_to) && p.at < until + margin {
+                self.window_pulses.push(*p);
+            }
+            if let Some((w, ids)) = &mut self.vcd {
+                let level = matches!(p.polarity, Polarity::Positive);
+                w.change(p.at.as_nanos(), ids.manchester, level.into());
+            }
+        }
+    }
+
+    /// A finished transaction: its telegram fields at the times they were on the line.
+    pub fn transaction(&mut self, r: &TransactionRecord) {
+        let Some((w, ids)) = &mut self.vcd else {
+            return;
+        };
+        let t = r.start.as_nanos();
+        w.change(t, ids.request, Value::Bits(r.request.bits() as u64));
+        w.change(t, ids.call, Value::Text(describe_request(r.request, r.ab)));
+        w.change(
+            t,
+            ids.address,
+            Value::Bits(r.request.address().get() as u64),
+        );
+        w.change(t, ids.info, Value::Bits(r.request.info() as u64));
+        w.change(t, ids.repeat, r.repeat.into());
+        let failed = r.request_failed.union(r.response_failed);
+        let mut errors = String::new();
+        for c in failed.iter() {
+            let _ = write!(
+                errors,
+                "{}{}",
+                if errors.is_empty() { "" } else { "+" },
+                crate::telegrams::check_key(c)
+            );
+        }
+        if errors.is_empty() {
+            errors.push_str(if r.no_response { "no_response" } else { "ok" });
+        }
+        w.change(t, ids.errors, Value::Text(errors));
+        let tr = (r.start + self.response_after).as_nanos();
+        match r.response {
+            Some(resp) => {
+                w.change(tr, ids.response, Value::Bits(resp.bits() as u64));
+                w.change(tr, ids.data, Value::Bits(resp.data().get() as u64));
+            }
+            None => {
+                w.change(tr, ids.response, Value::Unknown);
+                w.change(tr, ids.data, Value::Unknown);
+            }
+        }
+    }
+
+    /// The rig's state at `t`.
+    pub fn sample(&mut self, t: SimTime, s: &RigSample) {
+        let Some((w, ids)) = &mut self.vcd else {
+            return;
+        };
+        let n = t.as_nanos();
+        let real_due = match self.last_real {
+            None => true,
+            Some((at, p, v)) => {
+                v != s.velocity_mm_s || (p != s.position_mm && t - at >= REAL_PERIOD)
+            }
+        };
+        if real_due {
+            w.change(n, ids.position, Value::Real(round3(s.position_mm)));
+            w.change(n, ids.velocity, Value::Real(round3(s.velocity_mm_s)));
+            self.last_real = Some((t, s.position_mm, s.velocity_mm_s));
+        }
+        let bits = [
+            (ids.vane_left, s.vane_left),
+            (ids.vane_right, s.vane_right),
+            (ids.ot_bottom, s.overtravel_bottom_free),
+            (ids.ot_top, s.overtravel_top_free),
+            (ids.k1, s.k1),
+            (ids.door, s.door_closed),
+            (ids.run, s.converter_run),
+            (ids.up, s.converter_up),
+            (ids.estop_out, s.estop_out),
+            (ids.fb_err, s.fb_err),
+            (ids.com_err, s.com_err),
+            (ids.out_err, s.out_err),
+        ];
+        for (id, b) in bits {
+            w.change(n, id, b.into());
+        }
+        let words = [
+            (ids.setpoint, s.setpoint_ua as u64),
+            (ids.floor, s.floor as u64),
+            (ids.target, s.target_floor as u64),
+            (ids.fifo_cabin, s.fifo_cabin as u64),
+            (ids.fifo_hall, s.fifo_hall as u64),
+        ];
+        for (id, v) in words {
+            w.change(n, id, Value::Bits(v));
+        }
+        w.change(n, ids.state, Value::Text(s.controller_state.into()));
+        w.change(n, ids.group, Value::Text(s.group_state.into()));
+        w.change(n, ids.supply, Value::Real(s.supply_v));
+    }
+
+    /// Writes what is complete up to `now` (the bus's time).
+    pub fn flush(&mut self, now: SimTime) {
+        let upto = now.as_nanos().saturating_sub(LAG.as_nanos());
+        self.write_window(SimTime::from_nanos(upto));
+        if let Some((w, _)) = &mut self.vcd {
+            if let Err(e) = w.flush_until(upto) {
+                self.fail(e);
+            }
+        }
+    }
+
+    /// Writes everything; `end` is the end of the run.
+    pub fn finish(&mut self, end: SimTime) {
+        self.write_window(end);
+        if let Some((w, _)) = self.vcd.take() {
+            if let Err(e) = w.finish(end.as_nanos()) {
+                self.fail(e);
+            }
+        }
+        if let Some(mut c) = self.csv.take() {
+            if let Err(e) = c.flush() {
+                self.fail(e);
+            }
+        }
+    }
+
+    /// Renders the window's line voltage up to `upto` into the VCD and the CSV, a piece at a
+    /// time on the sample grid of the window (every pulse that reaches into a piece is kept
+    /// until the piece is written, so the pieces join seamlessly).
+    fn write_window(&mut self, upto: SimTime) {
+        let (from, until) = self.window;
+        let period = self.wave.sample_period.as_nanos();
+        let end = upto.min(until);
+        if end <= self.rendered_to {
+            return;
+        }
+        // The next piece ends on the sample grid of the window.
+        let whole = (end.as_nanos() - from.as_nanos()) / period * period;
+        let end = if end == until {
+            end
+        } else {
+            SimTime::from_nanos(from.as_nanos() + whole)
+        };
+        if end <= self.rendered_to {
+            return;
+        }
+        let start = self.rendered_to;
+        let wf = match render(self.window_pulses.iter().copied(), start, end, &self.wave) {
+            Ok(wf) => wf,
+            Err(e) => {
+                self.error.get_or_insert_with(|| e.to_string());
+                self.rendered_to = until;
+                return;
+            }
+        };
+        self.rendered_to = start + SimDuration::from_nanos(wf.samples.len() as u64 * period);
+        let half = self.wave.pulse_width.as_nanos() / 2;
+        let done = self.rendered_to.as_nanos();
+        self.window_pulses.retain(|p| p.at.as_nanos() + half > done);
+        if let Some((w, ids)) = &mut self.vcd {
+            for (i, v) in wf.samples.iter().enumerate() {
+                let t = wf.time_of(i as f64).as_nanos();
+                w.change(t, ids.line_voltage, Value::Real(round5(*v)));
+            }
+        }
+        if let Some(c) = &mut self.csv {
+            let mut result = Ok(());
+            if !self.csv_header {
+                self.csv_header = true;
+                result = writeln!(c, "time_s,voltage_v");
+            }
+            for (i, v) in wf.samples.iter().enumerate() {
+                if result.is_err() {
+                    break;
+                }
+                result = writeln!(c, "{:.9},{v:.5}", wf.time_of(i as f64).as_secs_f64());
+            }
+            if let Err(e) = result {
+                self.fail(e);
+            }
+        }
+    }
+
+    fn fail(&mut self, e: io::Error) {
+        self.error.get_or_insert_with(|| e.to_string());
+        self.vcd = None;
+        self.csv = None;
+    }
+}
+
+fn round5(x: f32) -> f64 {
+    (x as f64 * 1e5).round() / 1e5
+}
+
+fn round3(x: f64) -> f64 {
+    (x * 1000.0).round() / 1000.0
+}
