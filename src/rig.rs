@@ -127,6 +127,8 @@ pub struct Rig {
     trace_error: Option<String>,
     /// The VCD and line-voltage outputs, if wanted.
     waves: Option<Waves>,
+    /// Who else wants every transaction.
+    observer: Option<Box<dyn FnMut(&asi_master::trace::TransactionRecord)>>,
     /// The safety logic's last outputs, for the VCD.
     safety_out: Option<safety::lift::LiftSafetyDiag>,
 }
@@ -214,6 +216,7 @@ impl Rig {
             trace: None,
             trace_error: None,
             waves: None,
+            observer: None,
             safety_out: None,
             sc,
         };
@@ -250,6 +253,12 @@ impl Rig {
         self.waves = Some(Waves::new(out, self.lab.bus.timing()));
     }
 
+    /// Hands every bus transaction to `f` (at every PLC scan and at the end, in order).
+    pub fn on_transaction(&mut self, f: Box<dyn FnMut(&asi_master::trace::TransactionRecord)>) {
+        self.enable_trace_ring();
+        self.observer = Some(f);
+    }
+
     fn enable_trace_ring(&mut self) {
         // A PLC scan spans about 65 transactions of the lab bus; the ring holds far more.
         self.lab.bus.enable_trace(1 << 16);
@@ -265,10 +274,13 @@ impl Rig {
     /// Hands the transactions and line pulses since the last call to the trace and the
     /// waveform outputs.
     fn flush_trace(&mut self) {
-        if self.trace.is_none() && self.waves.is_none() {
+        if self.trace.is_none() && self.waves.is_none() && self.observer.is_none() {
             return;
         }
         let records = self.lab.bus.drain_trace();
+        if let Some(f) = self.observer.as_mut() {
+            records.iter().for_each(|r| f(r));
+        }
         if let Some((out, format)) = self.trace.as_mut() {
             for r in &records {
                 if let Err(e) = write_record(out, r, *format) {
