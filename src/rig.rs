@@ -58,6 +58,9 @@ const OVERLOAD_BUDGET: SimDuration = SimDuration::from_millis(1000);
 const OVERTRAVEL_BUDGET: SimDuration = SimDuration::from_millis(50);
 const STOP_MARGIN: SimDuration = SimDuration::from_millis(200);
 
+/// Receives every bus transaction of a run ([`Rig::on_transaction`]).
+pub type TransactionObserver = Box<dyn FnMut(&asi_master::trace::TransactionRecord)>;
+
 /// Something the rig does at a fixed time besides the scenario's events.
 #[derive(Clone, Copy, Debug, PartialEq)]
 enum Timer {
@@ -128,7 +131,7 @@ pub struct Rig {
     /// The VCD and line-voltage outputs, if wanted.
     waves: Option<Waves>,
     /// Who else wants every transaction.
-    observer: Option<Box<dyn FnMut(&asi_master::trace::TransactionRecord)>>,
+    observer: Option<TransactionObserver>,
     /// The safety logic's last outputs, for the VCD.
     safety_out: Option<safety::lift::LiftSafetyDiag>,
 }
@@ -254,7 +257,7 @@ impl Rig {
     }
 
     /// Hands every bus transaction to `f` (at every PLC scan and at the end, in order).
-    pub fn on_transaction(&mut self, f: Box<dyn FnMut(&asi_master::trace::TransactionRecord)>) {
+    pub fn on_transaction(&mut self, f: TransactionObserver) {
         self.enable_trace_ring();
         self.observer = Some(f);
     }
@@ -279,7 +282,7 @@ impl Rig {
         }
         let records = self.lab.bus.drain_trace();
         if let Some(f) = self.observer.as_mut() {
-            records.iter().for_each(|r| f(r));
+            records.iter().for_each(f);
         }
         if let Some((out, format)) = self.trace.as_mut() {
             for r in &records {
