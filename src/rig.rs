@@ -145,6 +145,19 @@ impl Rig {
             ..LiftConfig::default()
         })?;
         let mut lab = LabLift::with_extra(asi_master::MasterConfig::default(), sc.extra_slaves)?;
+        // The slaves whose outputs drive the plant: the floor displays, the cabin display,
+        // the converter I/O and the speed set-point.
+        let drives_plant = [
+            1,
+            2,
+            3,
+            4,
+            addr::CABIN_DISPLAY,
+            addr::CONVERTER,
+            addr::SPEED,
+        ];
+        lab.bus
+            .watch_outputs(drives_plant.iter().fold(0, |m, a| m | 1 << a));
         lab.bus.enable_trace(0);
         if sc.pulse_error_rate > 0.0 {
             lab.bus
@@ -354,6 +367,12 @@ impl Rig {
             if t > self.end {
                 break;
             }
+            // The bus runs on its own up to the rig's next moment, and stops where a slave
+            // takes a new output for the plant, which gets it at that moment.
+            if let Some(at) = self.lab.bus.advance_before(t) {
+                self.output_taken(at);
+                continue;
+            }
             self.step(t);
             if self.next_plc != scans {
                 scans = self.next_plc;
@@ -368,7 +387,6 @@ impl Rig {
 
     fn next_moment(&self) -> SimTime {
         let mut t = self.end;
-        t = t.min(self.lab.bus.poll_at());
         if let Some(e) = self.lift.next_event() {
             t = t.min(e);
         }
@@ -380,6 +398,23 @@ impl Rig {
             t = t.min(*at);
         }
         t.max(self.now)
+    }
+
+    /// A slave took a new output at `t` (before the rig's next moment): the plant gets it.
+    fn output_taken(&mut self, t: SimTime) {
+        self.now = t;
+        self.advance_plant(t);
+        self.slaves_to_plant(t);
+        if self.plant_dirty {
+            self.plant_to_slaves();
+        }
+        self.check_invariants(t);
+        if self.waves.is_some() {
+            let sample = self.sample();
+            if let Some(w) = self.waves.as_mut() {
+                w.sample(t, &sample);
+            }
+        }
     }
 
     fn step(&mut self, t: SimTime) {

@@ -41,6 +41,9 @@ use asi_phy::{
     PulseTrain, Request, Response, SimTime,
 };
 
+/// No output nibble taken yet (or lost with a reset).
+const NO_OUTPUT: u8 = 0xFF;
+
 /// A slave's place on the bus.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub struct SlaveId(pub usize);
@@ -115,6 +118,12 @@ pub struct Bus {
     slaves_powered: bool,
     cur: Option<Current>,
     stats: BusStats,
+    /// Addresses whose new output nibbles end [`Bus::advance_before`] early.
+    watch: u32,
+    /// The last output nibble each address took in a Data_Exchange.
+    last_out: [u8; 32],
+    /// A watched address took a new output nibble in the current event.
+    output_taken: bool,
     ring: Option<TraceRing>,
     callback: Option<TraceCallback>,
 }
@@ -155,6 +164,9 @@ impl Bus {
             slaves_powered: true,
             cur: None,
             stats: BusStats::default(),
+            watch: 0,
+            last_out: [NO_OUTPUT; 32],
+            output_taken: false,
             ring: None,
             callback: None,
         };
@@ -224,6 +236,42 @@ impl Bus {
     /// Processes every event up to and including `now`.
     pub fn advance_to(&mut self, now: SimTime) {
         while self.next_event <= now {
+            self.event();
+        }
+        if now > self.now {
+            self.now = now;
+            for m in &mut self.monitors {
+                m.poll(now);
+            }
+        }
+    }
+
+    /// Sets the addresses whose slaves drive something outside the bus (a plant): when one of
+    /// them takes a Data_Exchange whose output nibble differs from its last one,
+    /// [`Bus::advance_before`] returns at that moment, so the application can hand the new
+    /// output on exactly then.
+    pub fn watch_outputs(&mut self, addresses: u32) {
+        self.watch = addresses;
+    }
+
+    /// Processes the events before `until`, returning early with the event's time when a
+    /// watched slave ([`Bus::watch_outputs`]) took a new output nibble in it; `None` when
+    /// every event before `until` is done. The bus's time stays at the last event processed,
+    /// so an application that drives the bus this way runs long stretches without stepping
+    /// at every event, and still sees every output change at its moment.
+    pub fn advance_before(&mut self, until: SimTime) -> Option<SimTime> {
+        while self.next_event < until {
+            self.event();
+            if core::mem::take(&mut self.output_taken) {
+                return Some(self.now);
+            }
+        }
+        None
+    }
+
+    /// Processes the next event.
+    fn event(&mut self) {
+        {
             let t = self.next_event;
             self.now = t;
             match self.state {
@@ -236,12 +284,6 @@ impl Bus {
                     }
                     _ => self.start_transaction(t),
                 },
-            }
-        }
-        if now > self.now {
-            self.now = now;
-            for m in &mut self.monitors {
-                m.poll(now);
             }
         }
     }
@@ -419,6 +461,37 @@ impl Bus {
         }
     }
 
+    /// Notes whether `req`, taken by a slave, can change what a watched slave drives: a
+    /// Data_Exchange with a new output nibble, or any call that writes (parameter, address,
+    /// reset), after which the next Data_Exchange counts as new too.
+    fn note_output(&mut self, req: Request) {
+        let a = req.address().get() as usize;
+        let watched = self.watch >> a & 1 == 1;
+        match req.call() {
+            Call::DataExchange { data, .. } => {
+                if watched && self.last_out[a] != data.get() {
+                    self.last_out[a] = data.get();
+                    self.output_taken = true;
+                }
+            }
+            Call::ReadIoConfiguration { .. }
+            | Call::ReadIdCode { .. }
+            | Call::ReadId1 { .. }
+            | Call::ReadId2 { .. }
+            | Call::ReadStatus { .. } => {}
+            Call::BroadcastReset => {
+                self.last_out = [NO_OUTPUT; 32];
+                self.output_taken |= self.watch != 0;
+            }
+            _ => {
+                if watched {
+                    self.last_out[a] = NO_OUTPUT;
+                    self.output_taken = true;
+                }
+            }
+        }
+    }
+
     /// Merges slave groups whose listeners have come to the same state: from then on they
     /// react alike to every frame.
     fn merge_groups(&mut self) {
@@ -462,6 +535,7 @@ impl Bus {
                 n += 1;
             }
         }
+        self.note_output(req);
         if readdressed || matches!(req.call(), Call::BroadcastReset | Call::ResetSlave { .. }) {
             self.reindex();
         }
@@ -626,6 +700,7 @@ impl Bus {
             if !s.attached {
                 s.attached = true;
                 s.slave.reset();
+                self.last_out = [NO_OUTPUT; 32];
                 if powered {
                     self.join(id.0);
                 }
@@ -649,6 +724,7 @@ impl Bus {
             0.0
         };
         self.volts = volts;
+        self.last_out = [NO_OUTPUT; 32];
         let now = self.now;
         let slaves_ok = volts >= SLAVE_MIN_VOLTS;
         if !slaves_ok && self.slaves_powered {

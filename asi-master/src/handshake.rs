@@ -453,6 +453,11 @@ impl DisplaySender {
 pub struct FloorStationMaster {
     sender: DisplaySender,
     calls: FloorCalls,
+    /// Buttons reported after the last word but one: held, if reported again.
+    held: FloorCalls,
+    /// A report arrived since the last word.
+    reported: bool,
+    presses: FloorCalls,
 }
 
 impl Default for FloorStationMaster {
@@ -467,6 +472,9 @@ impl FloorStationMaster {
         FloorStationMaster {
             sender: DisplaySender::new(&FOUR_STEPS),
             calls: FloorCalls::default(),
+            held: FloorCalls::default(),
+            reported: false,
+            presses: FloorCalls::default(),
         }
     }
 
@@ -479,16 +487,40 @@ impl FloorStationMaster {
     /// output image out.
     pub fn step(&mut self, input: Nibble) -> Nibble {
         let (out, ev) = self.sender.step(input, floor_transport);
-        if let Some(AnswererEvent::Extra(c)) = ev {
-            self.calls.up |= c == CODE_UP || c == CODE_BOTH;
-            self.calls.down |= c == CODE_DOWN || c == CODE_BOTH;
+        match ev {
+            Some(AnswererEvent::Extra(c)) => {
+                let now = FloorCalls {
+                    up: c == CODE_UP || c == CODE_BOTH,
+                    down: c == CODE_DOWN || c == CODE_BOTH,
+                };
+                self.calls.up |= now.up;
+                self.calls.down |= now.down;
+                self.presses.up |= now.up && !self.held.up;
+                self.presses.down |= now.down && !self.held.down;
+                self.held = now;
+                self.reported = true;
+            }
+            Some(AnswererEvent::WordDone) => {
+                // A word with no report after the one before: the buttons are released.
+                if !core::mem::take(&mut self.reported) {
+                    self.held = FloorCalls::default();
+                }
+            }
+            _ => {}
         }
         out
     }
 
-    /// The calls reported since the last take, cleared.
+    /// The calls reported since the last take, cleared: a held button is in every take
+    /// after a word.
     pub fn take_calls(&mut self) -> FloorCalls {
         core::mem::take(&mut self.calls)
+    }
+
+    /// The presses since the last take, cleared: a button counts again only after a word
+    /// went by without it (released), so a held button is one press.
+    pub fn take_presses(&mut self) -> FloorCalls {
+        core::mem::take(&mut self.presses)
     }
 
     /// Number of whole words sent.
@@ -500,6 +532,9 @@ impl FloorStationMaster {
     pub fn reset(&mut self) {
         self.sender.answerer.reset();
         self.calls = FloorCalls::default();
+        self.held = FloorCalls::default();
+        self.reported = false;
+        self.presses = FloorCalls::default();
     }
 }
 

@@ -175,3 +175,44 @@ fn one_s73_value_to_the_current_loop_output() {
     let trace = lab.bus.drain_trace();
     insta::assert_snapshot!(folded(&exchanges_with(&trace, 10)));
 }
+
+/// A held floor button is reported after every word (table 4.3) but is one press; released
+/// for a word and pressed again, it is a second press.
+#[test]
+fn a_held_floor_button_is_one_press() {
+    let mut lab = running_lab(30);
+    let mut plc = FloorStationMaster::new();
+    let (mut reports, mut presses) = (0, 0);
+    let mut scans = 0;
+    let mut at = ms(30);
+    let mut scan_until =
+        |lab: &mut LabLift, until: SimTime, reports: &mut u32, presses: &mut u32| {
+            while at < until {
+                lab.bus.advance_to(at);
+                plc_step(&mut lab.bus, 1, |i| plc.step(i));
+                *reports += plc.take_calls().up as u32;
+                *presses += plc.take_presses().up as u32;
+                at += SCAN;
+                scans += 1;
+            }
+        };
+    if let Some(f) = lab.floor_mut(1) {
+        f.set_buttons(true, false);
+    }
+    scan_until(&mut lab, ms(600), &mut reports, &mut presses);
+    assert!(
+        reports >= 5,
+        "a held button is reported after every word: {reports}"
+    );
+    assert_eq!(presses, 1);
+    if let Some(f) = lab.floor_mut(1) {
+        f.set_buttons(false, false);
+    }
+    scan_until(&mut lab, ms(800), &mut reports, &mut presses);
+    if let Some(f) = lab.floor_mut(1) {
+        f.set_buttons(true, false);
+    }
+    scan_until(&mut lab, ms(1000), &mut reports, &mut presses);
+    assert_eq!(presses, 2);
+    assert!(scans > 90);
+}

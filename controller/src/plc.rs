@@ -110,7 +110,7 @@ impl Plc {
                 continue;
             };
             output.set_nibble(a, station.step(input.nibble(a)));
-            let calls = station.take_calls();
+            let calls = station.take_presses();
             hall_up |= (calls.up as u32) << i;
             hall_down |= (calls.down as u32) << i;
         }

@@ -441,3 +441,26 @@ fn the_collective_control_beats_fifo_on_the_busy_scenario() {
     );
     println!("busy scenario, mean passenger wait: fifo {f:?}, collective {c:?}");
 }
+
+#[test]
+fn a_held_hall_button_at_the_cabins_floor_is_served_once() {
+    // The floor station reports a held button after every word (about every 50 ms); the PLC
+    // takes it as one press, so the call is served once, not once per report.
+    let sc = Scenario {
+        name: "held hall button".into(),
+        start_mm: 0.0,
+        duration: SimDuration::from_secs(20),
+        events: vec![ScenarioEvent {
+            at: at(15.0),
+            action: Action::Press {
+                button: Button::HallUp(1),
+                hold: SimDuration::from_secs(2),
+            },
+            line: 0,
+        }],
+        ..Scenario::defaults()
+    };
+    let r = run(sc);
+    assert_no_violations(&r);
+    assert_eq!(served(&r), [(1, "hall".to_string())], "{}", r.to_text());
+}
