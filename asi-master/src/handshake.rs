@@ -502,7 +502,8 @@ impl FloorStationMaster {
             }
             Some(AnswererEvent::WordDone) => {
                 // A word with no report after the one before: the buttons are released.
-                if !core::mem::take(&mut self.reported) {
+                let reported = core::mem::take(&mut self.reported);
+                if !reported {
                     self.held = FloorCalls::default();
                 }
             }
