@@ -7,5 +7,5 @@ pub mod rig;
 pub mod scenario;
 pub mod telegrams;
 pub mod trace;
-pub mod vcd;
+pub mod vcd_write;
 pub mod waves;
