@@ -1,6 +1,9 @@
 //! The `asi-lift` command.
 
-use asi_lift::phy_tools::{decode_capture, describe, parse_call, waveform_csv, DecodeOptions};
+use asi_lift::capture::{
+    decode_capture, summary, to_json_lines, to_text, CaptureFormat, DecodeOptions,
+};
+use asi_lift::phy_tools::{describe, parse_call, waveform_csv};
 use asi_lift::rig::Rig;
 use asi_lift::scenario::Scenario;
 use asi_lift::trace::TraceFormat;
@@ -9,7 +12,7 @@ use asi_phy::waveform::WaveformConfig;
 use asi_phy::SimTime;
 use asi_phy::{Expect, SimDuration};
 use clap::{Parser, Subcommand, ValueEnum};
-use std::io::{IsTerminal, Read, Write};
+use std::io::{BufRead, IsTerminal, Read, Write};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -91,18 +94,50 @@ enum Command {
         #[arg(long, default_value_t = 0)]
         seed: u64,
     },
-    /// Decode an oscilloscope capture (`time,voltage` CSV, seconds and volts) into telegrams
-    /// with the comparator rule and the seven receiver checks.
+    /// Decode a capture of the line into telegrams, through the comparator and the seven
+    /// receiver checks.
+    ///
+    /// A capture is an oscilloscope's CSV (`time,voltage` in seconds and volts; a header line
+    /// and `#` comments allowed) or a VCD with the line voltage (a real signal) or the
+    /// demodulated line (a 1-bit wire, idle high: every record is one pulse, 0 negative, 1
+    /// positive). Prints one line per telegram: time in seconds in the capture's own time
+    /// base, type (request, response, unknown), bits ST..EB, call, address, info or data, and
+    /// the failed checks; then a summary. A capture without telegrams says "no telegrams
+    /// found" and exits with 0.
     Decode {
         /// The capture file (`-` for standard input).
         file: PathBuf,
-        /// Nominal pulse amplitude in volts (estimated from the capture if not given).
+        /// The file format [default: VCD if the file starts with `$` or is named *.vcd, else
+        /// CSV].
+        #[arg(long, value_enum)]
+        format: Option<InputFormat>,
+        /// The VCD signal: its name (`line_voltage`) or dotted path (`rig.bus.line_voltage`);
+        /// needed when the file has more than one.
+        #[arg(long, value_name = "NAME")]
+        signal: Option<String>,
+        /// Write one JSON object per telegram and line (t_ns, type, bits, call, address, info,
+        /// data, errors) and nothing else; the summary goes to standard error.
         #[arg(long)]
+        json: bool,
+        /// Nominal pulse amplitude in volts (estimated from the capture if not given).
+        #[arg(long, value_name = "V")]
         nominal: Option<f32>,
         /// What the receiver listens for.
         #[arg(long, value_enum, default_value_t = Listen::Both)]
         expect: Listen,
+        /// Sampling period for a VCD real signal, e.g. 40ns [default: the smallest spacing of
+        /// its changes, at most 100 ns].
+        #[arg(long, value_name = "DURATION")]
+        sample_period: Option<String>,
     },
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum InputFormat {
+    /// `time,voltage` lines.
+    Csv,
+    /// A Value Change Dump.
+    Vcd,
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -277,18 +312,44 @@ fn run(cli: Cli) -> Result<u8, String> {
         }
         Command::Decode {
             file,
+            format,
+            signal,
+            json,
             nominal,
             expect,
+            sample_period,
         } => {
-            let text = read_input(&file)?;
-            let expect = match expect {
-                Listen::Requests => Expect::Requests,
-                Listen::Responses => Expect::Responses,
-                Listen::Both => Expect::Both,
+            let sample_period = match sample_period {
+                None => None,
+                Some(p) => match p.parse::<SimDuration>() {
+                    Ok(d) if !d.is_zero() => Some(d),
+                    Ok(_) => return Err("--sample-period must be longer than zero".into()),
+                    Err(e) => return Err(format!("--sample-period: {e}")),
+                },
             };
-            let out = decode_capture(&text, DecodeOptions { nominal, expect })
-                .map_err(|e| format!("{}: {e}", file.display()))?;
-            print!("{out}");
+            let opts = DecodeOptions {
+                format: match format {
+                    Some(InputFormat::Csv) => Some(CaptureFormat::Csv),
+                    Some(InputFormat::Vcd) => Some(CaptureFormat::Vcd),
+                    None => CaptureFormat::of_path(&file),
+                },
+                signal,
+                nominal,
+                expect: match expect {
+                    Listen::Requests => Expect::Requests,
+                    Listen::Responses => Expect::Responses,
+                    Listen::Both => Expect::Both,
+                },
+                sample_period,
+            };
+            let (name, input) = open_input(&file)?;
+            let decoded = decode_capture(input, &opts).map_err(|e| format!("{name}: {e}"))?;
+            if json {
+                print_out(&to_json_lines(&decoded))?;
+                eprintln!("{}", summary(&decoded));
+            } else {
+                print_out(&to_text(&decoded))?;
+            }
             Ok(0)
         }
     }
@@ -306,6 +367,27 @@ fn parse_window(s: &str) -> Result<(SimTime, SimTime), String> {
         return Err(err("END must be after START".into()));
     }
     Ok((SimTime::ZERO + a, SimTime::ZERO + b))
+}
+
+/// Writes `text` to standard output; a reader that has gone (`| head`) is no error.
+fn print_out(text: &str) -> Result<(), String> {
+    let mut out = std::io::stdout().lock();
+    match out.write_all(text.as_bytes()).and_then(|()| out.flush()) {
+        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => {
+            Err(format!("standard output: {e}"))
+        }
+        _ => Ok(()),
+    }
+}
+
+/// A file (`-` = standard input) to read line by line, and its name for messages.
+fn open_input(path: &Path) -> Result<(String, Box<dyn BufRead>), String> {
+    if path == Path::new("-") {
+        return Ok(("standard input".into(), Box::new(std::io::stdin().lock())));
+    }
+    let name = path.display().to_string();
+    let f = std::fs::File::open(path).map_err(|e| format!("{name}: {e}"))?;
+    Ok((name, Box::new(std::io::BufReader::new(f))))
 }
 
 fn read_input(path: &Path) -> Result<String, String> {

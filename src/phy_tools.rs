@@ -1,10 +1,10 @@
-//! The physical-layer tools of the `asi-lift` command: show how a master call travels on the
-//! line (`encode`), and read an oscilloscope capture back into telegrams (`decode`).
+//! The physical-layer tool of the `asi-lift` command: show how a master call travels on the
+//! line (`encode`). Reading a capture back into telegrams (`decode`) is [`crate::capture`].
 
-use asi_phy::waveform::{read_capture, render, DemodConfig, Demodulator, Waveform, WaveformConfig};
+use asi_phy::waveform::{render, WaveformConfig};
 use asi_phy::{
-    Address, BusTiming, Expect, HalfBits, Nibble, PulseTrain, Received, Receiver, Request,
-    Response, Select, SimDuration, SimTime, TelegramKind,
+    Address, BusTiming, HalfBits, Nibble, PulseTrain, Request, Response, Select, SimDuration,
+    SimTime,
 };
 use std::fmt::Write as _;
 
@@ -178,85 +178,6 @@ pub fn waveform_csv(
     Ok(s)
 }
 
-/// Settings for [`decode_capture`].
-#[derive(Clone, Copy, Debug)]
-pub struct DecodeOptions {
-    /// Nominal pulse amplitude in volts; `None` estimates it from the capture.
-    pub nominal: Option<f32>,
-    /// What the receiver listens for.
-    pub expect: Expect,
-}
-
-/// A robust estimate of the pulse amplitude: the 99.5th percentile of the distance from the
-/// median sample (the median is the idle line).
-pub fn estimate_amplitude(wf: &Waveform) -> Option<f32> {
-    let mut v: Vec<f32> = wf
-        .samples
-        .iter()
-        .copied()
-        .filter(|x| x.is_finite())
-        .collect();
-    if v.is_empty() {
-        return None;
-    }
-    v.sort_by(f32::total_cmp);
-    let median = v[v.len() / 2];
-    let mut d: Vec<f32> = v.iter().map(|x| (x - median).abs()).collect();
-    d.sort_by(f32::total_cmp);
-    let a = d[((d.len() - 1) as f64 * 0.995) as usize];
-    (a > 0.0).then_some(a)
-}
-
-/// Reads a capture and lists the telegrams found in it, one line each, and a summary.
-pub fn decode_capture(text: &str, opts: DecodeOptions) -> Result<String, String> {
-    let cap = read_capture(text).map_err(|e| e.to_string())?;
-    let nominal = match opts.nominal {
-        Some(a) => a,
-        None => {
-            estimate_amplitude(&cap.waveform).ok_or("the capture is flat: no pulses to find")?
-        }
-    };
-    let demod = DemodConfig {
-        nominal_amplitude: nominal,
-        ..DemodConfig::default()
-    };
-    let pulses = Demodulator::demodulate(demod, &cap.waveform).map_err(|e| e.to_string())?;
-    let mut rx = Receiver::new(BusTiming::default().receiver(opts.expect));
-    let found: Vec<Received> = rx.decode(pulses.iter().copied()).collect();
-    let mut s = String::new();
-    let _ = writeln!(
-        s,
-        "{} samples at {:.3} MS/s from {:.9} s; nominal amplitude {nominal:.3} V; {} pulses",
-        cap.waveform.samples.len(),
-        1e3 / cap.waveform.period_ns,
-        cap.first_time_s,
-        pulses.len()
-    );
-    let mut valid = 0;
-    for r in &found {
-        let at_us = r.start.as_nanos() as f64 / 1e3 + cap.first_time_s * 1e6;
-        let what = match (r.request(), r.response()) {
-            (Some(q), _) => q.call().to_string(),
-            (_, Some(p)) => format!("response {}", p.data()),
-            _ => format!("{:?} with {} bits", r.kind, r.bit_count),
-        };
-        valid += r.is_valid() as usize;
-        let kind = match r.kind {
-            TelegramKind::Request => "req ",
-            TelegramKind::Response => "resp",
-        };
-        let _ = writeln!(
-            s,
-            "{at_us:>12.3} µs  {kind}  {:<16}  {:<28}  {}",
-            r.bit_string(),
-            r.failed.to_string(),
-            what
-        );
-    }
-    let _ = writeln!(s, "{} telegrams, {valid} valid", found.len());
-    Ok(s)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -327,21 +248,5 @@ mod tests {
             "pulses      0- 1+ 2- 3+ 4- 5+ 6- 7+ 9- 11+ 13- 15+ 17- 19+ 21- 23+ 24- 25+ 27- 28+"
         ));
         assert!(d.contains("84 µs from first to last pulse, 20 pulses"));
-    }
-
-    #[test]
-    fn a_written_waveform_decodes_back() {
-        let t = parse_call(&args("rid1 7")).expect("call");
-        let csv = waveform_csv(t, &WaveformConfig::default()).expect("render");
-        let out = decode_capture(
-            &csv,
-            DecodeOptions {
-                nominal: None,
-                expect: Expect::Both,
-            },
-        )
-        .expect("decode");
-        assert!(out.contains("Read_ID1 7"), "{out}");
-        assert!(out.ends_with("1 telegrams, 1 valid\n"), "{out}");
     }
 }

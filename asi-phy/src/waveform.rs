@@ -578,6 +578,9 @@ pub struct CaptureError {
 pub fn read_capture(text: &str) -> Result<Capture, CaptureError> {
     let mut times: Vec<(usize, f64)> = Vec::new();
     let mut samples = Vec::new();
+    // The header lines before the first sample: the first one and how many.
+    let mut header: Option<(usize, &str)> = None;
+    let mut header_lines = 0;
     for (n, line) in text.lines().enumerate() {
         let line_no = n + 1;
         let l = line.trim();
@@ -587,6 +590,8 @@ pub fn read_capture(text: &str) -> Result<Capture, CaptureError> {
         let mut fields = l.split([',', ';', '\t', ' ']).filter(|f| !f.is_empty());
         let (Some(t), Some(v)) = (fields.next(), fields.next()) else {
             if samples.is_empty() {
+                header.get_or_insert((line_no, l));
+                header_lines += 1;
                 continue;
             }
             return Err(CaptureError {
@@ -596,7 +601,11 @@ pub fn read_capture(text: &str) -> Result<Capture, CaptureError> {
         };
         let (t, v) = match (t.parse::<f64>(), v.parse::<f32>()) {
             (Ok(t), Ok(v)) if t.is_finite() && v.is_finite() => (t, v),
-            _ if samples.is_empty() => continue,
+            _ if samples.is_empty() => {
+                header.get_or_insert((line_no, l));
+                header_lines += 1;
+                continue;
+            }
             _ => {
                 return Err(CaptureError {
                     line: line_no,
@@ -616,10 +625,25 @@ pub fn read_capture(text: &str) -> Result<Capture, CaptureError> {
         samples.push(v);
     }
     if samples.len() < 2 {
-        return Err(CaptureError {
-            line: text.lines().count().max(1),
-            cause: "fewer than two samples".into(),
-        });
+        let last = text.lines().count().max(1);
+        let (line, cause) = match (times.first(), header) {
+            (Some(&(line, _)), _) => (line, "only one sample: a capture needs two or more".into()),
+            (None, Some((line, l))) if header_lines == 1 => (
+                line,
+                format!("`{l}` is a header and no `time,voltage` sample follows"),
+            ),
+            (None, Some((line, l))) => (
+                line,
+                format!(
+                    "no samples: `{l}` and the {} lines after it are not `time,voltage` \
+                     (seconds, volts)",
+                    header_lines - 1
+                ),
+            ),
+            (None, None) if text.trim().is_empty() => (last, "the file is empty".into()),
+            (None, None) => (last, "no samples: the file holds only comments".into()),
+        };
+        return Err(CaptureError { line, cause });
     }
     let (first, last) = (times[0].1, times[times.len() - 1].1);
     let period_s = (last - first) / (times.len() - 1) as f64;
@@ -848,6 +872,33 @@ mod tests {
         assert_eq!(e.line, 3);
         let e = read_capture("0,1\n0,1\n").expect_err("not increasing");
         assert_eq!(e.line, 2);
-        assert!(read_capture("").is_err());
+    }
+
+    #[test]
+    fn a_capture_without_samples_says_why() {
+        let cases = [
+            ("", 1, "the file is empty"),
+            ("\n  \n", 2, "the file is empty"),
+            ("# scope\n#\n", 2, "no samples: the file holds only comments"),
+            (
+                "# export\ntime_s,voltage\n",
+                2,
+                "`time_s,voltage` is a header and no `time,voltage` sample follows",
+            ),
+            (
+                "hello\nworld\nagain\n",
+                1,
+                "no samples: `hello` and the 2 lines after it are not `time,voltage` (seconds, volts)",
+            ),
+            (
+                "t,v\n0,1\n",
+                2,
+                "only one sample: a capture needs two or more",
+            ),
+        ];
+        for (text, line, cause) in cases {
+            let e = read_capture(text).expect_err(text);
+            assert_eq!((e.line, e.cause.as_str()), (line, cause), "{text:?}");
+        }
     }
 }
