@@ -877,6 +877,65 @@ impl Rig {
         self.report.log.sort_by(|a, b| a.at_s.total_cmp(&b.at_s));
         self.report
     }
+
+    // ----- probes: stepping and state for timing studies (`asi-lift timing`) ----------------
+
+    /// Runs the next moment of the rig if it comes no later than `until` and before the
+    /// scenario's end; returns its time. A caller can look at the rig between moments and
+    /// [`Rig::schedule`] actions in reaction to what it sees.
+    pub fn step_until(&mut self, until: SimTime) -> Option<SimTime> {
+        let t = self.next_moment();
+        if t > until || t >= self.end {
+            return None;
+        }
+        self.step(t);
+        Some(t)
+    }
+
+    /// Schedules `action` at `at` as if the scenario had it (a time before the next moment
+    /// takes effect at the next moment).
+    pub fn schedule(&mut self, at: SimTime, action: Action) {
+        let later = &self.sc.events[self.next_event..];
+        let pos = self.next_event + later.partition_point(|e| e.at <= at);
+        self.sc.events.insert(
+            pos,
+            ScenarioEvent {
+                at,
+                action,
+                line: 0,
+            },
+        );
+    }
+
+    /// The simulated time reached.
+    pub fn now(&self) -> SimTime {
+        self.now
+    }
+
+    /// The lab bus and its devices.
+    pub fn lab(&self) -> &LabLift {
+        &self.lab
+    }
+
+    /// The lab bus, mutable (to trace it).
+    pub fn lab_mut(&mut self) -> &mut LabLift {
+        &mut self.lab
+    }
+
+    /// The PLC.
+    pub fn plc(&self) -> &Plc {
+        &self.plc
+    }
+
+    /// The lift plant.
+    pub fn lift(&self) -> &Lift {
+        &self.lift
+    }
+
+    /// The safety logic's EStopOut as the controller last got it (`true` = no STOP demand).
+    pub fn estop_out(&self) -> bool {
+        self.from_safety.estop_out
+    }
 }
 
 /// The floor a call button belongs to.
