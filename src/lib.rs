@@ -6,3 +6,4 @@ pub mod report;
 pub mod rig;
 pub mod scenario;
 pub mod telegrams;
+pub mod timing;
