@@ -94,19 +94,34 @@ enum Command {
         #[arg(long, default_value = "lab", value_parser = parse_bus)]
         bus: BusChoice,
         /// Plain I/O modules added to the lab bus at its free addresses (0..20).
-        #[arg(long, value_name = "N")]
+        #[arg(long, value_name = "N", allow_negative_numbers = true)]
         extra_slaves: Option<u8>,
         /// Probability that a pulse on the line is corrupted (0 <= P < 1).
-        #[arg(long, value_name = "P", default_value_t = 0.0)]
+        #[arg(
+            long,
+            value_name = "P",
+            default_value_t = 0.0,
+            allow_negative_numbers = true
+        )]
         error_rate: f64,
         /// Seed of the line noise and of the press moments.
-        #[arg(long, default_value_t = 1)]
+        #[arg(long, default_value_t = 1, allow_negative_numbers = true)]
         seed: u64,
         /// Simulated measurement window of the bus statistics (e.g. 60s, 2min).
-        #[arg(long, value_name = "DURATION", default_value = "60s")]
+        #[arg(
+            long,
+            value_name = "DURATION",
+            default_value = "60s",
+            allow_hyphen_values = true
+        )]
         duration: String,
         /// Latency samples of each chain (lab bus).
-        #[arg(long, value_name = "K", default_value_t = 100)]
+        #[arg(
+            long,
+            value_name = "K",
+            default_value_t = 100,
+            allow_negative_numbers = true
+        )]
         samples: u32,
         /// Write the report as JSON instead of the table.
         #[arg(long)]
@@ -375,4 +390,61 @@ fn open_output(path: &Path, force: bool) -> Result<Box<dyn Write>, String> {
         _ => format!("{}: {e}", path.display()),
     })?;
     Ok(Box::new(std::io::BufWriter::new(f)))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn timing(args: &[&str]) -> Result<u8, String> {
+        let cli = Cli::try_parse_from(["asi-lift", "timing"].iter().chain(args))
+            .map_err(|e| e.to_string())?;
+        run(cli)
+    }
+
+    fn fails_naming(args: &[&str], what: &str) {
+        match timing(args) {
+            Ok(_) => panic!("{args:?} was accepted"),
+            Err(e) => assert!(e.contains(what), "{args:?}: {e}"),
+        }
+    }
+
+    #[test]
+    fn bad_timing_arguments_are_named() {
+        fails_naming(&["--bus", "lift"], "--bus");
+        fails_naming(&["--bus", "lift"], "expected lab");
+        fails_naming(&["--bus", "0"], "1..31");
+        fails_naming(&["--bus", "32"], "1..31");
+        fails_naming(&["--bus", "62"], "62ab");
+        fails_naming(&["--error-rate", "1.5"], "--error-rate");
+        fails_naming(&["--error-rate", "1"], "--error-rate");
+        fails_naming(&["--error-rate", "-0.1"], "--error-rate");
+        fails_naming(&["--error-rate", "NaN"], "--error-rate");
+        fails_naming(&["--error-rate", "often"], "--error-rate");
+        fails_naming(&["--extra-slaves", "21"], "--extra-slaves");
+        fails_naming(&["--bus", "31", "--extra-slaves", "1"], "--extra-slaves");
+        fails_naming(&["--duration", "0s"], "--duration");
+        fails_naming(&["--duration", "soon"], "--duration");
+        fails_naming(&["--duration", "2h"], "--duration");
+        fails_naming(&["--samples", "20000"], "--samples");
+        fails_naming(&["--seed", "-1"], "--seed");
+        fails_naming(&["--samples", "-3"], "--samples");
+        fails_naming(&["--extra-slaves", "-3"], "--extra-slaves");
+        fails_naming(&["--duration", "-3s"], "--duration");
+    }
+
+    #[test]
+    fn the_timing_svg_is_not_overwritten_without_force() {
+        let path = std::env::temp_dir().join(format!("asi-lift-timing-{}.svg", std::process::id()));
+        let p = path.to_string_lossy().to_string();
+        std::fs::write(&path, "keep").expect("temp file");
+        let args = ["--bus", "2", "--duration", "50ms", "--svg", p.as_str()];
+        fails_naming(&args, "--force");
+        assert_eq!(std::fs::read_to_string(&path).ok().as_deref(), Some("keep"));
+        let forced = [&args[..], &["--force", "--json"]].concat();
+        assert_eq!(timing(&forced), Ok(0));
+        let svg = std::fs::read_to_string(&path).unwrap_or_default();
+        assert!(svg.starts_with("<svg"), "{svg}");
+        let _ = std::fs::remove_file(&path);
+    }
 }
