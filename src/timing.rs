@@ -114,7 +114,7 @@ impl core::str::FromStr for BusChoice {
     fn from_str(s: &str) -> Result<BusChoice, String> {
         match s.trim().to_ascii_lowercase().as_str() {
             "lab" => Ok(BusChoice::Lab { extra: 0 }),
-            "62ab" | "ab" => Ok(BusChoice::AbPairs),
+            "62ab" => Ok(BusChoice::AbPairs),
             t => match t.parse::<u32>() {
                 Ok(n @ 1..=31) => Ok(BusChoice::Standard { n: n as u8 }),
                 Ok(n) => Err(format!(
@@ -808,7 +808,7 @@ fn run_plain(opts: &TimingOptions) -> Result<(Collector, BusWindow), TimingError
     let after = bus.stats();
     bus.set_trace_callback(None);
     drop(bus);
-    let collector = std::mem::replace(&mut *lock(&shared), dummy_collector());
+    let collector = take(&shared);
     Ok((
         collector,
         BusWindow {
@@ -818,8 +818,13 @@ fn run_plain(opts: &TimingOptions) -> Result<(Collector, BusWindow), TimingError
     ))
 }
 
-fn dummy_collector() -> Collector {
-    Collector::new(&BusTiming::default(), 0.0, None)
+/// The statistics out of their shared place (the bus holds a clone of it until its trace
+/// callback is removed).
+fn take(shared: &Mutex<Collector>) -> Collector {
+    std::mem::replace(
+        &mut *lock(shared),
+        Collector::new(&BusTiming::default(), 0.0, None),
+    )
 }
 
 /// What the bus statistics say about the window.
@@ -1062,7 +1067,7 @@ fn run_lab(
     let latencies = sample_latencies(&mut rig, &shared, opts);
     rig.lab_mut().bus.set_trace_callback(None);
     drop(rig);
-    let collector = std::mem::replace(&mut *lock(&shared), dummy_collector());
+    let collector = take(&shared);
     let lab = LabTiming {
         plc_scan_ms: ms(plc_scan),
         safety_scan_ms: ms(safety::SAFETY_SCAN_PERIOD),
