@@ -7,6 +7,7 @@ pub mod report;
 pub mod rig;
 pub mod scenario;
 pub mod telegrams;
+pub mod timing;
 pub mod trace;
 pub mod vcd;
 pub mod vcd_write;

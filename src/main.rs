@@ -6,6 +6,7 @@ use asi_lift::capture::{
 use asi_lift::phy_tools::{describe, parse_call, waveform_csv};
 use asi_lift::rig::Rig;
 use asi_lift::scenario::Scenario;
+use asi_lift::timing::{analyse, BusChoice, TimingOptions, MAX_DURATION, MAX_SAMPLES};
 use asi_lift::trace::TraceFormat;
 use asi_lift::waves::WaveOutputs;
 use asi_phy::waveform::WaveformConfig;
@@ -130,6 +131,58 @@ enum Command {
         #[arg(long, value_name = "DURATION")]
         sample_period: Option<String>,
     },
+    /// Timing analysis (SPEC §7): transaction and cycle time, per-slave update period,
+    /// repeats, handshake word times and end-to-end latencies, analytic and simulated side by
+    /// side, compared with the seed's T = (n + 2) · 154 µs.
+    Timing {
+        /// The bus: `lab` (the lab lift, whole rig), a number 1..31 of standard slaves, or
+        /// `62ab` (62 A/B slaves).
+        #[arg(long, default_value = "lab", value_parser = parse_bus)]
+        bus: BusChoice,
+        /// Plain I/O modules added to the lab bus at its free addresses (0..20).
+        #[arg(long, value_name = "N", allow_negative_numbers = true)]
+        extra_slaves: Option<u8>,
+        /// Probability that a pulse on the line is corrupted (0 <= P < 1).
+        #[arg(
+            long,
+            value_name = "P",
+            default_value_t = 0.0,
+            allow_negative_numbers = true
+        )]
+        error_rate: f64,
+        /// Seed of the line noise and of the press moments.
+        #[arg(long, default_value_t = 1, allow_negative_numbers = true)]
+        seed: u64,
+        /// Simulated measurement window of the bus statistics (e.g. 60s, 2min).
+        #[arg(
+            long,
+            value_name = "DURATION",
+            default_value = "60s",
+            allow_hyphen_values = true
+        )]
+        duration: String,
+        /// Latency samples of each chain (lab bus).
+        #[arg(
+            long,
+            value_name = "K",
+            default_value_t = 100,
+            allow_negative_numbers = true
+        )]
+        samples: u32,
+        /// Write the report as JSON instead of the table.
+        #[arg(long)]
+        json: bool,
+        /// Also write an SVG with histograms of the cycle time and of the latencies.
+        #[arg(long, value_name = "FILE")]
+        svg: Option<PathBuf>,
+        /// Overwrite the SVG file if it exists.
+        #[arg(long)]
+        force: bool,
+    },
+}
+
+fn parse_bus(s: &str) -> Result<BusChoice, String> {
+    s.parse()
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -352,6 +405,39 @@ fn run(cli: Cli) -> Result<u8, String> {
             }
             Ok(0)
         }
+        Command::Timing {
+            bus,
+            extra_slaves,
+            error_rate,
+            seed,
+            duration,
+            samples,
+            json,
+            svg,
+            force,
+        } => {
+            let opts = timing_options(bus, extra_slaves, error_rate, seed, &duration, samples)?;
+            // Refuse an existing SVG before spending the simulation on it.
+            let mut svg_out = match &svg {
+                Some(path) => Some((path, open_output(path, force)?)),
+                None => None,
+            };
+            let rep = analyse(&opts).map_err(|e| e.to_string())?;
+            if json {
+                println!("{}", rep.to_json());
+            } else {
+                print!("{}", rep.to_text());
+            }
+            if let Some((path, out)) = &mut svg_out {
+                out.write_all(rep.to_svg().as_bytes())
+                    .and_then(|()| out.flush())
+                    .map_err(|e| format!("{}: {e}", path.display()))?;
+                if !json {
+                    println!("SVG written to {}", path.display());
+                }
+            }
+            Ok(0)
+        }
     }
 }
 
@@ -388,6 +474,50 @@ fn open_input(path: &Path) -> Result<(String, Box<dyn BufRead>), String> {
     let name = path.display().to_string();
     let f = std::fs::File::open(path).map_err(|e| format!("{name}: {e}"))?;
     Ok((name, Box::new(std::io::BufReader::new(f))))
+}
+
+/// The timing options from the command line, each bad value named by its argument.
+fn timing_options(
+    bus: BusChoice,
+    extra_slaves: Option<u8>,
+    error_rate: f64,
+    seed: u64,
+    duration: &str,
+    samples: u32,
+) -> Result<TimingOptions, String> {
+    let bus = match (bus, extra_slaves) {
+        (BusChoice::Lab { .. }, Some(extra)) if extra > 20 => {
+            return Err(format!(
+                "--extra-slaves: {extra}: the lab bus has 20 free addresses (0..20)"
+            ))
+        }
+        (BusChoice::Lab { .. }, Some(extra)) => BusChoice::Lab { extra },
+        (_, Some(_)) => {
+            return Err("--extra-slaves applies to --bus lab only".into());
+        }
+        (b, None) => b,
+    };
+    if !(error_rate.is_finite() && (0.0..1.0).contains(&error_rate)) {
+        return Err(format!(
+            "--error-rate: {error_rate}: a pulse error probability is 0 <= P < 1"
+        ));
+    }
+    let duration: SimDuration = duration.parse().map_err(|e| format!("--duration: {e}"))?;
+    if duration.is_zero() || duration > MAX_DURATION {
+        return Err(format!(
+            "--duration: {duration}: must be more than 0 and at most 1 h"
+        ));
+    }
+    if samples > MAX_SAMPLES {
+        return Err(format!("--samples: {samples}: at most {MAX_SAMPLES}"));
+    }
+    Ok(TimingOptions {
+        bus,
+        pulse_error_rate: error_rate,
+        seed,
+        duration,
+        samples,
+    })
 }
 
 fn read_input(path: &Path) -> Result<String, String> {
@@ -429,4 +559,61 @@ fn open_output(path: &Path, force: bool) -> Result<Box<dyn Write>, String> {
         _ => format!("{}: {e}", path.display()),
     })?;
     Ok(Box::new(std::io::BufWriter::new(f)))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn timing(args: &[&str]) -> Result<u8, String> {
+        let cli = Cli::try_parse_from(["asi-lift", "timing"].iter().chain(args))
+            .map_err(|e| e.to_string())?;
+        run(cli)
+    }
+
+    fn fails_naming(args: &[&str], what: &str) {
+        match timing(args) {
+            Ok(_) => panic!("{args:?} was accepted"),
+            Err(e) => assert!(e.contains(what), "{args:?}: {e}"),
+        }
+    }
+
+    #[test]
+    fn bad_timing_arguments_are_named() {
+        fails_naming(&["--bus", "lift"], "--bus");
+        fails_naming(&["--bus", "lift"], "expected lab");
+        fails_naming(&["--bus", "0"], "1..31");
+        fails_naming(&["--bus", "32"], "1..31");
+        fails_naming(&["--bus", "62"], "62ab");
+        fails_naming(&["--error-rate", "1.5"], "--error-rate");
+        fails_naming(&["--error-rate", "1"], "--error-rate");
+        fails_naming(&["--error-rate", "-0.1"], "--error-rate");
+        fails_naming(&["--error-rate", "NaN"], "--error-rate");
+        fails_naming(&["--error-rate", "often"], "--error-rate");
+        fails_naming(&["--extra-slaves", "21"], "--extra-slaves");
+        fails_naming(&["--bus", "31", "--extra-slaves", "1"], "--extra-slaves");
+        fails_naming(&["--duration", "0s"], "--duration");
+        fails_naming(&["--duration", "soon"], "--duration");
+        fails_naming(&["--duration", "2h"], "--duration");
+        fails_naming(&["--samples", "20000"], "--samples");
+        fails_naming(&["--seed", "-1"], "--seed");
+        fails_naming(&["--samples", "-3"], "--samples");
+        fails_naming(&["--extra-slaves", "-3"], "--extra-slaves");
+        fails_naming(&["--duration", "-3s"], "--duration");
+    }
+
+    #[test]
+    fn the_timing_svg_is_not_overwritten_without_force() {
+        let path = std::env::temp_dir().join(format!("asi-lift-timing-{}.svg", std::process::id()));
+        let p = path.to_string_lossy().to_string();
+        std::fs::write(&path, "keep").expect("temp file");
+        let args = ["--bus", "2", "--duration", "50ms", "--svg", p.as_str()];
+        fails_naming(&args, "--force");
+        assert_eq!(std::fs::read_to_string(&path).ok().as_deref(), Some("keep"));
+        let forced = [&args[..], &["--force", "--json"]].concat();
+        assert_eq!(timing(&forced), Ok(0));
+        let svg = std::fs::read_to_string(&path).unwrap_or_default();
+        assert!(svg.starts_with("<svg"), "{svg}");
+        let _ = std::fs::remove_file(&path);
+    }
 }

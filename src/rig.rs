@@ -362,18 +362,7 @@ impl Rig {
             self.end = self.end.min(SimTime::ZERO + u);
         }
         let mut scans = self.next_plc;
-        loop {
-            let t = self.next_moment();
-            if t > self.end {
-                break;
-            }
-            // The bus runs on its own up to the rig's next moment, and stops where a slave
-            // takes a new output for the plant, which gets it at that moment.
-            if let Some(at) = self.lab.bus.advance_before(t) {
-                self.output_taken(at);
-                continue;
-            }
-            self.step(t);
+        while let Some(t) = self.advance(self.end) {
             if self.next_plc != scans {
                 scans = self.next_plc;
                 progress(t, self.end);
@@ -398,6 +387,22 @@ impl Rig {
             t = t.min(*at);
         }
         t.max(self.now)
+    }
+
+    /// Handles the rig's next moment, or a slave's new output before it, if it comes no later
+    /// than `limit`; returns its time. The bus runs on its own up to the rig's next moment and
+    /// stops where a slave takes a new output for the plant, which gets it at that moment.
+    fn advance(&mut self, limit: SimTime) -> Option<SimTime> {
+        let t = self.next_moment();
+        if t > limit {
+            return None;
+        }
+        if let Some(at) = self.lab.bus.advance_before(t) {
+            self.output_taken(at);
+            return Some(at);
+        }
+        self.step(t);
+        Some(t)
     }
 
     /// A slave took a new output at `t` (before the rig's next moment): the plant gets it.
@@ -1014,6 +1019,63 @@ impl Rig {
         // Lines from different sources come in scan order; keep them in time order.
         self.report.log.sort_by(|a, b| a.at_s.total_cmp(&b.at_s));
         self.report
+    }
+
+    // ----- probes: stepping and state for timing studies (`asi-lift timing`) ----------------
+
+    /// Runs the next moment of the rig if it comes no later than `until` and before the
+    /// scenario's end; returns its time. A caller can look at the rig between moments and
+    /// [`Rig::schedule`] actions in reaction to what it sees.
+    pub fn step_until(&mut self, until: SimTime) -> Option<SimTime> {
+        if self.next_moment() >= self.end {
+            return None;
+        }
+        self.advance(until)
+    }
+
+    /// Schedules `action` at `at` as if the scenario had it (a time before the next moment
+    /// takes effect at the next moment).
+    pub fn schedule(&mut self, at: SimTime, action: Action) {
+        let later = &self.sc.events[self.next_event..];
+        let pos = self.next_event + later.partition_point(|e| e.at <= at);
+        self.sc.events.insert(
+            pos,
+            ScenarioEvent {
+                at,
+                action,
+                line: 0,
+            },
+        );
+    }
+
+    /// The simulated time reached.
+    pub fn now(&self) -> SimTime {
+        self.now
+    }
+
+    /// The lab bus and its devices.
+    pub fn lab(&self) -> &LabLift {
+        &self.lab
+    }
+
+    /// The lab bus, mutable (to trace it).
+    pub fn lab_mut(&mut self) -> &mut LabLift {
+        &mut self.lab
+    }
+
+    /// The PLC.
+    pub fn plc(&self) -> &Plc {
+        &self.plc
+    }
+
+    /// The lift plant.
+    pub fn lift(&self) -> &Lift {
+        &self.lift
+    }
+
+    /// The safety logic's EStopOut as the controller last got it (`true` = no STOP demand).
+    pub fn estop_out(&self) -> bool {
+        self.from_safety.estop_out
     }
 }
 

@@ -68,7 +68,7 @@ fn every_transaction_is_one_record_everywhere() {
     assert_eq!(ring.dropped() as usize, n - 16);
     let text = first.lock().map(|s| s.clone()).unwrap_or_default();
     assert!(
-        text.contains("0.005000000 s  detect    Read_IO_Configuration 0A"),
+        text.contains("0.005000000 s  detect    0 1 00000 10000 0 1  Read_IO_Configuration 0A"),
         "{text}"
     );
 }

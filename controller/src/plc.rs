@@ -95,6 +95,12 @@ impl Plc {
         &mut self.program
     }
 
+    /// The master side of the cabin panel handshake (its word log tells when 32-bit words
+    /// arrive, for timing studies).
+    pub fn cabin_panel(&self) -> &CabinPanelMaster {
+        &self.panel
+    }
+
     /// One PLC scan: read the input image, run the handshakes and the program, write the
     /// output image. Returns the signals for the safety logic.
     pub fn scan(&mut self, now: SimTime, image: &mut ProcessImage, safety: FromSafety) -> ToSafety {
