@@ -1087,7 +1087,8 @@ fn button_floor(b: &Button) -> Option<u8> {
     }
 }
 
-fn round3(x: f64) -> f64 {
+/// `x` rounded to three decimals (reports and waveforms).
+pub(crate) fn round3(x: f64) -> f64 {
     (x * 1000.0).round() / 1000.0
 }
 

@@ -8,6 +8,7 @@
 //! on the line, faults included) is written only for a window, default the first 10 ms, so a
 //! long run stays small; the CSV holds the same window as `time_s,voltage_v`.
 
+use crate::rig::round3;
 use crate::vcd_write::{Value, VarId, VarKind, VcdWriter};
 use asi_master::trace::{describe_request, TransactionRecord};
 use asi_phy::waveform::{render, WaveformConfig};
@@ -399,8 +400,4 @@ impl Waves {
 
 fn round5(x: f32) -> f64 {
     (x as f64 * 1e5).round() / 1e5
-}
-
-fn round3(x: f64) -> f64 {
-    (x * 1000.0).round() / 1000.0
 }

@@ -8,29 +8,8 @@ use asi_lift::scenario::Scenario;
 use asi_lift::telegrams::TelegramRecord;
 use asi_lift::trace::TraceFormat;
 use asi_lift::waves::WaveOutputs;
+use asi_lift_tests::Shared;
 use asi_phy::{Nibble, Request, Response, SimDuration};
-use std::cell::RefCell;
-use std::rc::Rc;
-
-/// A writer the test can read back after the rig has written to it.
-#[derive(Clone, Default)]
-struct Shared(Rc<RefCell<Vec<u8>>>);
-
-impl std::io::Write for Shared {
-    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
-        self.0.borrow_mut().extend_from_slice(buf);
-        Ok(buf.len())
-    }
-    fn flush(&mut self) -> std::io::Result<()> {
-        Ok(())
-    }
-}
-
-impl Shared {
-    fn bytes(&self) -> Vec<u8> {
-        self.0.borrow().clone()
-    }
-}
 
 /// The telegrams of a JSON-lines trace: each request at its start, each response 102 µs later
 /// (84 µs of request and the 18 µs master pause, SPEC §1).

@@ -3,7 +3,7 @@
 //! (`INSTA_UPDATE=always cargo test -p asi-lift-tests --test snapshots`, then read the .snap).
 
 use asi_lift::scenario::Scenario;
-use asi_lift_tests::run;
+use asi_lift_tests::{run, Shared};
 
 #[test]
 fn demo_log() {
@@ -13,20 +13,6 @@ fn demo_log() {
 #[test]
 fn demo_report_json() {
     insta::assert_snapshot!(run(Scenario::demo()).to_json());
-}
-
-/// A writer the test can read back after the rig has written to it.
-#[derive(Clone, Default)]
-struct Shared(std::rc::Rc<std::cell::RefCell<Vec<u8>>>);
-
-impl std::io::Write for Shared {
-    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
-        self.0.borrow_mut().extend_from_slice(buf);
-        Ok(buf.len())
-    }
-    fn flush(&mut self) -> std::io::Result<()> {
-        Ok(())
-    }
 }
 
 #[test]
@@ -41,7 +27,7 @@ fn demo_bus_trace_at_power_on() {
         .log
         .iter()
         .all(|l| !l.text.contains("trace could not be written")));
-    let text = String::from_utf8(out.0.borrow().clone()).expect("utf-8");
+    let text = String::from_utf8(out.bytes()).expect("utf-8");
     // Detection of all 32 addresses, activation of the 11 projected slaves, first cycles.
     assert!(text.lines().count() > 150, "{}", text.lines().count());
     insta::assert_snapshot!(text);
