@@ -688,6 +688,8 @@ impl Bus {
         if let Some(s) = self.slaves.get_mut(id.0) {
             if s.attached {
                 s.attached = false;
+                // Unplugged, it has no power: its outputs are off at once.
+                s.slave.reset();
                 self.leave(id.0);
             }
         }
@@ -730,6 +732,11 @@ impl Bus {
         if !slaves_ok && self.slaves_powered {
             self.slaves_powered = false;
             self.groups.clear();
+            // Without power a slave's outputs are off (the converter's run bit, the set-point
+            // loop, the displays), not frozen at their last value.
+            for s in self.slaves.iter_mut().filter(|s| s.attached) {
+                s.slave.reset();
+            }
         } else if slaves_ok && !self.slaves_powered {
             self.slaves_powered = true;
             let mut members = 0u64;

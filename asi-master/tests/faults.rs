@@ -173,6 +173,35 @@ fn power_fail_sets_apf_goes_offline_and_restarts() {
 }
 
 #[test]
+fn slaves_without_power_drop_their_outputs_at_once() {
+    // The converter's run bit and the speed loop must not stay frozen at their last value
+    // while the AS-i supply is down or the module is unplugged: the drive would run on.
+    let mut lab = running_lab(40);
+    lab.bus.image_mut().output.set_analog(10, 1, 11_000);
+    lab.bus
+        .image_mut()
+        .output
+        .set_nibble(asi_master::SlaveAddr::a(7).expect("7"), Nibble::ALL);
+    lab.bus.advance_to(ms(100));
+    assert!(lab.converter().expect("converter").run());
+    assert_eq!(lab.analog_output().expect("out").current_ua(1), 11_000);
+    lab.bus.set_supply_voltage(0.0);
+    assert!(!lab.converter().expect("converter").run(), "power fail: run off");
+    assert_eq!(lab.analog_output().expect("out").current_ua(1), 0);
+
+    let mut lab = running_lab(40);
+    lab.bus
+        .image_mut()
+        .output
+        .set_nibble(asi_master::SlaveAddr::a(7).expect("7"), Nibble::ALL);
+    lab.bus.advance_to(ms(100));
+    assert!(lab.converter().expect("converter").run());
+    let id = lab.slave_id(7).expect("converter I/O");
+    lab.bus.detach(id);
+    assert!(!lab.converter().expect("converter").run(), "unplugged: run off");
+}
+
+#[test]
 fn a_brown_out_above_the_slaves_minimum_stops_only_the_master() {
     let mut lab = running_lab(40);
     lab.bus.set_supply_voltage(19.0);
