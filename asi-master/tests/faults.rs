@@ -186,7 +186,10 @@ fn slaves_without_power_drop_their_outputs_at_once() {
     assert!(lab.converter().expect("converter").run());
     assert_eq!(lab.analog_output().expect("out").current_ua(1), 11_000);
     lab.bus.set_supply_voltage(0.0);
-    assert!(!lab.converter().expect("converter").run(), "power fail: run off");
+    assert!(
+        !lab.converter().expect("converter").run(),
+        "power fail: run off"
+    );
     assert_eq!(lab.analog_output().expect("out").current_ua(1), 0);
 
     let mut lab = running_lab(40);
@@ -198,7 +201,10 @@ fn slaves_without_power_drop_their_outputs_at_once() {
     assert!(lab.converter().expect("converter").run());
     let id = lab.slave_id(7).expect("converter I/O");
     lab.bus.detach(id);
-    assert!(!lab.converter().expect("converter").run(), "unplugged: run off");
+    assert!(
+        !lab.converter().expect("converter").run(),
+        "unplugged: run off"
+    );
 }
 
 #[test]

@@ -136,7 +136,11 @@ impl Plc {
             });
         }
         let converter = SlaveAddr::a(addr::CONVERTER).map_or(Nibble::ZERO, |a| input.nibble(a));
-        let load = SlaveAddr::a(addr::LOAD).map_or(0, |a| input.nibble(a).get() & 0b11);
+        // D2 is the load sensor's "operation ready" bit (S-1.1): 0 when the slave is off the
+        // bus, without power or not ready, and then the load counts as unknown (overloaded).
+        let load_nibble = SlaveAddr::a(addr::LOAD).map_or(Nibble::ZERO, |a| input.nibble(a));
+        let load = load_nibble.get() & 0b11;
+        let load_lost = !load_nibble.bit(2);
 
         let out = self.program.scan(
             now,
@@ -145,6 +149,7 @@ impl Plc {
                 hall_up,
                 hall_down,
                 load,
+                load_lost,
                 estop_ok: safety.estop_out,
                 converter_ready: converter.bit(0),
                 converter_fault: converter.bit(1),

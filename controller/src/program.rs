@@ -141,6 +141,9 @@ pub struct Inputs {
     pub hall_down: u32,
     /// Zatizeni_Kabiny: 0 empty, 1 loaded, 2 full, 3 overloaded.
     pub load: u8,
+    /// The load cannot be read (the load sensor is off the bus or not ready): it counts as
+    /// overloaded, its unsafe value.
+    pub load_lost: bool,
     /// The safety logic's EStopOut: `true` = no STOP demand.
     pub estop_ok: bool,
     /// The converter reports ready (it has power and no fault).
@@ -196,6 +199,8 @@ pub enum HaltReason {
     ConverterFault,
     /// The converter lost its power (K1 open).
     NoPower,
+    /// STOP is demanded (initialisation only; in service STOP has its own states).
+    Stop,
 }
 
 impl fmt::Display for HaltReason {
@@ -205,6 +210,7 @@ impl fmt::Display for HaltReason {
             HaltReason::Overload => "overloaded",
             HaltReason::ConverterFault => "converter fault",
             HaltReason::NoPower => "no drive power (K1 open)",
+            HaltReason::Stop => "STOP circuit open",
         })
     }
 }
@@ -280,6 +286,41 @@ pub enum EventKind {
     BusFault,
     /// The bus is back; the program initialises again.
     BusRestored,
+    /// Initialisation is held (the cabin does not move) until the reason is gone; then it
+    /// starts again from what the vane sensors show.
+    InitHeld(HaltReason),
+    /// The vane sensors contradict the counted floor, or changed while the program did not
+    /// move the cabin (a hand crank): the position is not trusted and is found again by
+    /// initialisation before the next journey.
+    PositionLost {
+        /// What gave it away.
+        why: LostReason,
+    },
+}
+
+/// Why the program stopped trusting its floor count.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LostReason {
+    /// A vane edge while the program did not move the cabin (moved by hand).
+    MovedByHand,
+    /// Floor 1's turned vane (the left sensor first) where the count expected another floor,
+    /// or another floor's vane where it expected floor 1.
+    WrongVane,
+    /// A vane beyond the last floor in the direction of travel.
+    BeyondEndFloor,
+    /// The cabin left its stop floor's vane without ever standing level in it.
+    MissedLevel,
+}
+
+impl fmt::Display for LostReason {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            LostReason::MovedByHand => "the cabin moved while the drive was off",
+            LostReason::WrongVane => "the vane seen is not the floor counted",
+            LostReason::BeyondEndFloor => "a vane beyond the end floor",
+            LostReason::MissedLevel => "the stop floor's level was passed",
+        })
+    }
 }
 
 /// An event with the scan time it happened in.
@@ -376,7 +417,23 @@ pub struct Program {
     out: Outputs,
     events: Vec<Event>,
     served: Vec<ServedCall>,
+    /// Initialisation is held for this reason; it starts again when the reason is gone.
+    init_held: Option<HaltReason>,
+    /// The converter reported ready in the last scan.
+    ready_before: bool,
+    /// When the program last took the drive off (a halt, an arrival, a bus fault): vane edges
+    /// within [`COAST`] of it are the cabin coming to rest, later ones are a hand's work.
+    drive_off_at: SimTime,
+    /// The floor count is not trusted: initialise before the next journey.
+    lost: bool,
+    /// At the last vane counted: whether the left sensor rose first.
+    vane_shape: Option<bool>,
 }
+
+/// How long the cabin may go on moving after the program took the drive off: the converter
+/// ramps 15.4 Hz down at 50 Hz/s in 0.31 s, the brake stops it in 0.12 s without power; the
+/// cabin word that shows the last edge can come a word time (140 ms at a 10 ms scan) later.
+const COAST: SimDuration = SimDuration::from_secs(1);
 
 /// Edges seen in this scan's inputs.
 #[derive(Clone, Copy, Debug, Default)]
@@ -387,6 +444,12 @@ struct Edges {
     right_fall: bool,
     /// "Left OR right in log. 1" rose: the cabin reaches a floor's vane (tables 6.4/6.5).
     vane_rise: bool,
+    /// "Left OR right" fell: the cabin leaves a vane.
+    vane_fall: bool,
+    /// At a vane rise: `Some(true)` if the left sensor came first (floor 1's turned vane, seed
+    /// 003 §6.4), `Some(false)` if the right one did (floors 2..), `None` if both came in one
+    /// word.
+    floor1_vane: Option<bool>,
 }
 
 impl Program {
@@ -419,6 +482,11 @@ impl Program {
             cfg,
             events: Vec::new(),
             served: Vec::new(),
+            init_held: None,
+            ready_before: false,
+            drive_off_at: SimTime::ZERO,
+            lost: false,
+            vane_shape: None,
         })
     }
 
@@ -430,7 +498,7 @@ impl Program {
     /// One scan: reads `inp`, runs the routines, returns the outputs to write.
     pub fn scan(&mut self, now: SimTime, inp: &Inputs) -> Outputs {
         let edges = self.read_inputs(now, inp);
-        self.out.overloaded = inp.load >= 3;
+        self.out.overloaded = overloaded(inp);
         let stop_demand = !inp.estop_ok || self.cabin.stop;
         let fresh = self
             .last_cabin_at
@@ -453,7 +521,7 @@ impl Program {
                         self.restart_wanted = false;
                     }
                     want_restart = self.restart_wanted && !inp.estop_ok;
-                    self.init(now, step, edges, stop_demand);
+                    self.init(now, step, edges, inp, stop_demand);
                 }
             }
             Phase::Service(step) => {
@@ -465,7 +533,9 @@ impl Program {
             }
             Phase::BusFault { resume, blind } => {
                 self.hold();
-                let blind = blind || !fresh || !inp.power_ok;
+                let settled = now.saturating_duration_since(self.drive_off_at) > COAST;
+                let moved = settled && (edges.vane_rise || edges.vane_fall);
+                let blind = blind || !fresh || !inp.power_ok || moved;
                 self.phase = Phase::BusFault { resume, blind };
                 if bus_ok {
                     self.event(now, EventKind::BusRestored);
@@ -483,6 +553,7 @@ impl Program {
         }
         self.pulse_restart(now, want_restart);
         self.update_display();
+        self.ready_before = inp.converter_ready;
         self.out
     }
 
@@ -497,6 +568,10 @@ impl Program {
             e.right_rise = w.vane_right && !old.vane_right && !first;
             e.left_fall = !w.vane_left && old.vane_left;
             e.right_fall = !w.vane_right && old.vane_right;
+            e.vane_fall = !(w.vane_left || w.vane_right) && (old.vane_left || old.vane_right);
+            if e.vane_rise && w.vane_left != w.vane_right {
+                e.floor1_vane = Some(w.vane_left);
+            }
             let pressed = if first {
                 w.buttons
             } else {
@@ -548,6 +623,8 @@ impl Program {
             InitStart::Seed => InitStep::Run,
         };
         self.initialised_at = None;
+        self.init_held = None;
+        self.lost = false;
         self.event(now, EventKind::InitStarted { start });
         self.phase = Phase::Init(step);
         self.drive_init(step);
@@ -570,11 +647,43 @@ impl Program {
         self.dir = Some(if up { Dir::Up } else { Dir::Down });
     }
 
-    fn init(&mut self, now: SimTime, step: InitStep, e: Edges, stop_demand: bool) {
-        if stop_demand {
-            // Hold still while STOP is demanded; carry on once it is released and restarted.
-            self.hold();
-            return;
+    fn init(&mut self, now: SimTime, step: InitStep, e: Edges, inp: &Inputs, stop_demand: bool) {
+        // The cabin never moves with the door open, overloaded or under STOP, not even to find
+        // floor 1. A hold (these, or the drive losing power, as when the run reaches an
+        // overtravel sensor) ends when every reason is gone and the drive has power again;
+        // then initialisation starts afresh from what the sensors show, because the edges the
+        // steps wait for may have passed during the hold.
+        let reason = if stop_demand {
+            Some(HaltReason::Stop)
+        } else if !self.cabin.door_closed {
+            Some(HaltReason::DoorOpen)
+        } else if overloaded(inp) {
+            Some(HaltReason::Overload)
+        } else if inp.converter_fault {
+            Some(HaltReason::ConverterFault)
+        } else if !inp.converter_ready && (self.ready_before || self.init_held.is_some()) {
+            Some(HaltReason::NoPower)
+        } else {
+            None
+        };
+        match (self.init_held, reason) {
+            (None, Some(r)) => {
+                self.hold();
+                self.init_held = Some(r);
+                self.drive_off_at = now;
+                self.event(now, EventKind::InitHeld(r));
+                return;
+            }
+            (Some(_), Some(_)) => {
+                self.hold();
+                return;
+            }
+            (Some(_), None) => {
+                self.init_held = None;
+                self.start_init(now);
+                return;
+            }
+            (None, None) => {}
         }
         let c = self.cabin;
         let next = match step {
@@ -588,6 +697,9 @@ impl Program {
             InitStep::Probe if e.right_fall && c.vane_left => Some(InitStep::Floor1Up),
             InitStep::Probe if e.left_fall => Some(InitStep::Run),
             InitStep::Floor1Up if c.vane_left && c.vane_right => return self.initialised(now),
+            // Out of the long track without ever standing level: the sensors disagree with the
+            // floor-1 vane's shape; start again from what they show now.
+            InitStep::Floor1Up if e.left_fall => return self.start_init(now),
             _ => None,
         };
         let step = next.unwrap_or(step);
@@ -609,6 +721,7 @@ impl Program {
 
     fn bus_fault(&mut self, now: SimTime, resume: Option<Step>, blind: bool) {
         self.hold();
+        self.drive_off_at = now;
         self.phase = Phase::BusFault { resume, blind };
         self.event(now, EventKind::BusFault);
     }
@@ -653,12 +766,24 @@ impl Program {
         }
         let want_restart = self.restart_wanted && !inp.estop_ok;
         let door_closed = self.cabin.door_closed;
-        let overloaded = inp.load >= 3;
+        let overloaded = overloaded(inp);
         let both = self.cabin.vane_left && self.cabin.vane_right;
+        let settled = now.saturating_duration_since(self.drive_off_at) > COAST;
+        if matches!(step, Step::AtFloor | Step::Overload | Step::StopFault)
+            && settled
+            && (e.vane_rise || e.vane_fall)
+        {
+            self.mark_lost(now, LostReason::MovedByHand);
+        }
         match step {
             Step::AtFloor => {
                 if stop_demand {
                     self.enter(now, Step::StopFault);
+                } else if self.lost {
+                    if door_closed && !overloaded && inp.converter_ready && !inp.converter_fault {
+                        // Find the position again before any journey; the calls wait.
+                        self.start_init(now);
+                    }
                 } else if overloaded {
                     self.event(now, EventKind::OverloadFault);
                     self.phase = Phase::Service(Step::Overload);
@@ -698,28 +823,51 @@ impl Program {
                 };
                 if let Some(reason) = halt {
                     self.hold();
+                    self.drive_off_at = now;
                     self.event(now, EventKind::Halted(reason));
                     self.phase = Phase::Service(Step::Halted { reason, braking });
+                    // The edges of this scan still count.
+                    self.coast(now, e, braking);
                 } else if braking {
                     if both {
                         self.arrive(now);
+                    } else if e.vane_fall {
+                        self.lose_now(now, LostReason::MissedLevel);
                     }
                 } else if e.vane_rise {
-                    self.pass_floor(now);
+                    self.pass_floor(now, e);
                 }
             }
             Step::Halted { reason, braking } => {
                 if stop_demand && !self.stop_pending {
                     self.stop_demanded(now, braking);
                 }
+                if settled {
+                    if e.vane_rise || e.vane_fall {
+                        self.mark_lost(now, LostReason::MovedByHand);
+                    }
+                } else {
+                    self.coast(now, e, braking);
+                }
+                let braking = match self.phase {
+                    Phase::Service(Step::Halted { braking, .. }) => braking,
+                    _ => braking,
+                };
                 let cleared = match reason {
                     HaltReason::DoorOpen => door_closed,
                     HaltReason::Overload => !overloaded,
+                    HaltReason::Stop => inp.estop_ok,
                     HaltReason::ConverterFault | HaltReason::NoPower => {
                         !inp.converter_fault && inp.converter_ready
                     }
                 };
-                if cleared && door_closed && !overloaded && inp.estop_ok {
+                if cleared && door_closed && !overloaded && inp.estop_ok && self.lost {
+                    if inp.converter_ready && !inp.converter_fault {
+                        // The count is not trusted: find floor 1 first, then the target.
+                        self.dispatch.requeue(self.target);
+                        self.start_init(now);
+                    }
+                } else if cleared && door_closed && !overloaded && inp.estop_ok {
                     self.event(now, EventKind::Continued);
                     self.out.run = true;
                     self.out.up = self.dir == Some(Dir::Up);
@@ -778,9 +926,12 @@ impl Program {
 
     /// A rising vane edge during travel: the cabin reaches the next floor's vane (seed tables
     /// 6.4/6.5, "Rozdil" counting); at the target it brakes to the creep speed.
-    fn pass_floor(&mut self, now: SimTime) {
+    fn pass_floor(&mut self, now: SimTime, e: Edges) {
         let Some(dir) = self.dir else { return };
-        let floor = dir.next(self.current).clamp(1, self.cfg.floors);
+        let floor = match self.count_vane(dir, e) {
+            Ok(f) => f,
+            Err(why) => return self.lose_now(now, why),
+        };
         self.current = floor;
         if !self.stop_pending
             && self.dispatch.algorithm() == Algorithm::Collective
@@ -795,6 +946,67 @@ impl Program {
         } else {
             self.event(now, EventKind::Passed { floor });
         }
+    }
+
+    /// The floor whose vane the cabin reaches moving `dir`: the next one counted, never one
+    /// beyond the end floors. Which sensor came first is kept, to check the floor against the
+    /// vane's shape when the cabin stands level in it (see [`Program::arrive`]).
+    fn count_vane(&mut self, dir: Dir, e: Edges) -> Result<u8, LostReason> {
+        let next = match dir {
+            Dir::Up => self.current.checked_add(1),
+            Dir::Down => self.current.checked_sub(1),
+        };
+        self.vane_shape = e.floor1_vane;
+        next.filter(|f| (1..=self.cfg.floors).contains(f))
+            .ok_or(LostReason::BeyondEndFloor)
+    }
+
+    /// While the cabin comes to rest after a halt: a vane reached on the way is counted (the
+    /// halt then continues as braking if it is the target's); leaving the stop floor's vane
+    /// while braking means its level was passed.
+    fn coast(&mut self, now: SimTime, e: Edges, braking: bool) {
+        if braking {
+            if e.vane_fall {
+                self.mark_lost(now, LostReason::MissedLevel);
+            }
+            return;
+        }
+        if !e.vane_rise {
+            return;
+        }
+        let Some(dir) = self.dir else { return };
+        match self.count_vane(dir, e) {
+            Ok(floor) => {
+                self.current = floor;
+                if floor == self.target {
+                    if let Phase::Service(Step::Halted { reason, .. }) = self.phase {
+                        self.phase = Phase::Service(Step::Halted {
+                            reason,
+                            braking: true,
+                        });
+                    }
+                }
+            }
+            Err(why) => self.mark_lost(now, why),
+        }
+    }
+
+    /// The floor count is not trusted any more: initialise before the next journey.
+    fn mark_lost(&mut self, now: SimTime, why: LostReason) {
+        if !self.lost {
+            self.lost = true;
+            self.event(now, EventKind::PositionLost { why });
+        }
+    }
+
+    /// The count failed while the cabin travels: stop and find floor 1 again; the target is
+    /// kept for afterwards.
+    fn lose_now(&mut self, now: SimTime, why: LostReason) {
+        self.hold();
+        self.mark_lost(now, why);
+        // The journey did not end with an arrival: its target is still wanted.
+        self.dispatch.requeue(self.target);
+        self.start_init(now);
     }
 
     /// STOP during travel: stop at the next floor in the direction of travel (seed §6.3, "Porucha
@@ -812,7 +1024,19 @@ impl Program {
 
     fn arrive(&mut self, now: SimTime) {
         self.hold();
+        self.drive_off_at = now;
         let floor = self.current;
+        // Level in a vane whose long track came first: the left one only at floor 1 (its vane
+        // is turned, seed 003 §6.4). A mismatch means the count is off: the calls of this stop
+        // are served (the cabin stands level at a floor), and the position is found again
+        // before the next journey. Checked only here, where both sensors are seen working.
+        if self
+            .vane_shape
+            .is_some_and(|left_first| left_first != (floor == 1))
+        {
+            self.mark_lost(now, LostReason::WrongVane);
+        }
+        self.vane_shape = None;
         self.target = floor;
         self.depart_after = now + self.cfg.dwell;
         self.event(now, EventKind::Arrived { floor });
@@ -934,6 +1158,11 @@ impl Program {
     }
 }
 
+/// Overloaded, or the load cannot be read: its unsafe value.
+fn overloaded(inp: &Inputs) -> bool {
+    inp.load >= 3 || inp.load_lost
+}
+
 /// The floors whose bits are set, ascending.
 fn floors(bits: u32, n: u8) -> impl Iterator<Item = u8> {
     (1..=n).filter(move |f| bits & (1 << (f - 1)) != 0)
@@ -981,6 +1210,10 @@ impl fmt::Display for EventKind {
             EventKind::Continued => f.write_str("continues travel"),
             EventKind::BusFault => f.write_str("cabin slave or bus lost: cabin stopped"),
             EventKind::BusRestored => f.write_str("bus restored: initialising again"),
+            EventKind::InitHeld(r) => write!(f, "initialisation held: {r}"),
+            EventKind::PositionLost { why } => {
+                write!(f, "floor count not trusted ({why}): initialising again")
+            }
         }
     }
 }

@@ -71,6 +71,7 @@ impl Loop {
             hall_up,
             hall_down,
             load: l.load().code(),
+            load_lost: false,
             estop_ok: self.estop_ok && !l.stop_pressed(),
             converter_ready: l.converter_ready(),
             converter_fault: l.converter_fault(),
