@@ -845,7 +845,9 @@ impl Rig {
     }
 
     fn check_invariants(&mut self, t: SimTime) {
-        let moving = self.lift.velocity_mm_s() != 0.0;
+        // Motion by the hand crank (K1 open, the operator at the motor) is the operator's, not
+        // the drive's: the door and overload invariants judge the drive.
+        let moving = self.lift.velocity_mm_s() != 0.0 && !self.lift.hand_cranking();
         let door_open = !self.lift.door_closed();
         let overloaded = self.lift.load() == LoadLevel::Overloaded;
         let tripped = !self.lift.overtravel_bottom_free() || !self.lift.overtravel_top_free();

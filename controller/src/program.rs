@@ -674,8 +674,12 @@ impl Program {
                 self.event(now, EventKind::InitHeld(r));
                 return;
             }
-            (Some(_), Some(_)) => {
+            (Some(held), Some(r)) => {
                 self.hold();
+                if held != r {
+                    self.init_held = Some(r);
+                    self.event(now, EventKind::InitHeld(r));
+                }
                 return;
             }
             (Some(_), None) => {

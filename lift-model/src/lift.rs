@@ -636,6 +636,12 @@ impl Lift {
         Ok(())
     }
 
+    /// `true` while a hand-crank turn moves the cabin (the operator at the motor, K1 open):
+    /// motion that is not the drive's.
+    pub fn hand_cranking(&self) -> bool {
+        self.crank_target_mm.is_some()
+    }
+
     /// A complete display word for a display, as the rig received it through the AS-i
     /// handshake (seed 003 tables 4.3, 4.5); the display shows it from `now` on.
     pub fn set_display(&mut self, now: SimTime, id: DisplayId, raw: u16) -> Result<(), PlantError> {

@@ -23,6 +23,12 @@ pub fn run(sc: Scenario) -> Report {
         .run(None)
 }
 
+/// Runs a scenario given as the body of a scenario file (a reproducer pasted from an issue or
+/// a campaign).
+pub fn run_toml(name: &str, body: &str) -> Report {
+    run(Scenario::from_toml(name, body).unwrap_or_else(|e| panic!("{e}")))
+}
+
 /// Runs the scenario file `name`.
 pub fn run_file(name: &str) -> Report {
     run(scenario(name))

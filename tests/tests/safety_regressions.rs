@@ -1,0 +1,292 @@
+//! Regressions of unsafe or unrecoverable runs that the fault campaign found (issue 12, part 2).
+//! Each test is the reproducer as a scenario file body, run on the whole rig, and asserts what
+//! a safety engineer expects of it: no invariant broken, the fault ends in a safe reported
+//! state, and service resumes once the fault is repaired.
+
+use asi_lift::report::Report;
+use asi_lift_tests::*;
+
+/// The times the safety logic closed K1.
+fn k1_closed_at(r: &Report) -> Vec<f64> {
+    r.log
+        .iter()
+        .filter(|l| l.who == "safety" && l.text.contains("K1 closed"))
+        .map(|l| l.at_s)
+        .collect()
+}
+
+/// Arrivals where the controller's floor and the floor the cabin stands level at agree.
+fn assert_arrivals_agree(r: &Report) {
+    for a in &r.arrivals {
+        let level = (f64::from(a.floor) - 1.0) * 400.0;
+        assert!((a.position_mm - level).abs() <= 10.0, "{a:?}");
+    }
+    for line in r
+        .log
+        .iter()
+        .filter(|l| l.text.starts_with("arrives at floor"))
+    {
+        let floor: u8 = line.text["arrives at floor ".len()..]
+            .parse()
+            .expect("floor");
+        let rest = r
+            .arrivals
+            .iter()
+            .find(|a| a.at_s >= line.at_s)
+            .unwrap_or_else(|| panic!("no stop after {line:?}"));
+        assert_eq!(
+            rest.floor, floor,
+            "controller said {line:?}, cabin at {rest:?}"
+        );
+    }
+}
+
+#[test]
+fn door_open_at_power_on_holds_the_initialisation() {
+    let r = run_toml(
+        "door open at power-on",
+        r#"
+duration = "50s"
+[lift]
+door = "open"
+[[event]]
+at = "20s"
+door = "closed"
+"#,
+    );
+    assert_no_violations(&r);
+    assert!(logged(&r, "controller", "initialisation held: door open"));
+    assert!(
+        r.initialised_at_s.is_some_and(|t| t > 20.0),
+        "{:?}",
+        r.initialised_at_s
+    );
+    assert_eq!(stops(&r), [1]);
+}
+
+#[test]
+fn door_open_during_a_new_initialisation_after_a_power_fail_holds_it() {
+    let r = run_toml(
+        "door open in re-initialisation",
+        r#"
+duration = "60s"
+[lift]
+start_mm = 0.0
+[[event]]
+at = "5s"
+fault = { kind = "power-fail", duration = "1s" }
+[[event]]
+at = "6s"
+door = "open"
+[[event]]
+at = "10s"
+reset = true
+[[event]]
+at = "30s"
+door = "closed"
+[[event]]
+at = "35s"
+press = "cabin:2"
+"#,
+    );
+    assert_no_violations(&r);
+    assert_eq!(served(&r), [(2, "cabin".into())]);
+}
+
+#[test]
+fn the_hand_crank_with_the_door_open_is_not_the_drive_moving() {
+    // STOP at floor 2 opens K1 after the STOP delay; then the door is opened and the operator
+    // turns the motor by hand. That is no drive motion with the door open.
+    let r = run_toml(
+        "crank with the door open",
+        r#"
+duration = "60s"
+[lift]
+start_mm = 0.0
+[[event]]
+at = "5s"
+press = "cabin:2"
+[[event]]
+at = "15s"
+press = "stop"
+[[event]]
+at = "26s"
+door = "open"
+[[event]]
+at = "27s"
+crank_mm = 10.0
+"#,
+    );
+    assert_no_violations(&r);
+    assert!(logged(&r, "scenario", "hand crank +10.0 mm"));
+    assert!(
+        !logged(&r, "scenario", "refused by the plant"),
+        "{}",
+        r.to_text()
+    );
+    let at_floor_2 = r.arrivals.get(1).expect("arrival at floor 2");
+    assert_eq!(at_floor_2.floor, 2);
+    let moved = r.final_state.position_mm - at_floor_2.position_mm;
+    assert!((moved - 10.0).abs() < 1e-6, "{moved}");
+}
+
+#[test]
+fn the_load_sensor_leaving_the_bus_keeps_the_overloaded_cabin_still() {
+    let r = run_toml(
+        "load sensor lost while overloaded",
+        r#"
+duration = "40s"
+[lift]
+start_mm = 650.0
+load = "overloaded"
+[[event]]
+at = "5s"
+fault = { kind = "slave-offline", slave = 8 }
+"#,
+    );
+    assert_no_violations(&r);
+    assert!(k1_closed_at(&r).is_empty(), "{}", r.to_text());
+    assert_eq!(r.final_state.position_mm, 650.0);
+}
+
+#[test]
+fn an_as_i_power_fail_keeps_the_overloaded_cabin_still() {
+    let r = run_toml(
+        "power fail while overloaded",
+        r#"
+duration = "40s"
+[lift]
+start_mm = 650.0
+load = "overloaded"
+[[event]]
+at = "5s"
+fault = { kind = "power-fail", duration = "2s" }
+"#,
+    );
+    assert_no_violations(&r);
+    assert!(k1_closed_at(&r).is_empty(), "{}", r.to_text());
+    assert_eq!(r.final_state.position_mm, 650.0);
+}
+
+#[test]
+fn a_lost_load_sensor_is_no_obstacle_once_it_is_back() {
+    let r = run_toml(
+        "load sensor away and back",
+        r#"
+duration = "60s"
+[lift]
+start_mm = 0.0
+[[event]]
+at = "5s"
+fault = { kind = "slave-offline", slave = 8 }
+[[event]]
+at = "10s"
+press = "cabin:2"
+[[event]]
+at = "20s"
+fault = { kind = "slave-online", slave = 8 }
+"#,
+    );
+    assert_no_violations(&r);
+    // No journey while the load is unknown; served after the sensor is back.
+    assert_eq!(served(&r), [(2, "cabin".into())]);
+    assert!(r.served[0].served_at_s > 20.0);
+}
+
+#[test]
+fn the_floor_count_survives_a_halt_between_floors() {
+    let r = run_toml(
+        "halt at a vane",
+        r#"
+duration = "80s"
+[lift]
+start_mm = 0.0
+[[event]]
+at = "5s"
+press = "cabin:3"
+[[event]]
+at = "11.3s"
+door = "open"
+[[event]]
+at = "15s"
+door = "closed"
+[[event]]
+at = "40s"
+press = "cabin:4"
+"#,
+    );
+    assert_no_violations(&r);
+    assert!(r.safety.trips.is_empty(), "{:?}", r.safety.trips);
+    assert_arrivals_agree(&r);
+    assert_eq!(served(&r), [(3, "cabin".into()), (4, "cabin".into())]);
+}
+
+#[test]
+fn the_door_opened_at_every_moment_of_a_journey_never_loses_the_floor() {
+    // A halt near any vane edge: the count must hold wherever the cabin comes to rest.
+    for tenth in 0..30 {
+        let open_at = 9.0 + f64::from(tenth) * 0.1;
+        let r = run_toml(
+            "halt sweep",
+            &format!(
+                r#"
+duration = "70s"
+[lift]
+start_mm = 0.0
+[[event]]
+at = "5s"
+press = "cabin:3"
+[[event]]
+at = "{open_at}s"
+door = "open"
+[[event]]
+at = "{close}s"
+door = "closed"
+[[event]]
+at = "45s"
+press = "cabin:4"
+"#,
+                close = open_at + 3.0
+            ),
+        );
+        assert_no_violations(&r);
+        assert!(
+            r.safety.trips.is_empty(),
+            "door at {open_at}: {:?}",
+            r.safety.trips
+        );
+        assert_arrivals_agree(&r);
+        assert_eq!(
+            served(&r),
+            [(3, "cabin".into()), (4, "cabin".into())],
+            "door at {open_at}"
+        );
+    }
+}
+
+#[test]
+fn stop_during_initialisation_then_a_cabin_call_initialises_and_serves() {
+    let r = run_toml(
+        "STOP while initialising",
+        r#"
+duration = "80s"
+[lift]
+start_mm = 400.0
+[[event]]
+at = "6.5s"
+press = "stop"
+[[event]]
+at = "40s"
+press = "cabin:3"
+"#,
+    );
+    assert_no_violations(&r);
+    assert!(r
+        .safety
+        .trips
+        .iter()
+        .all(|t| !t.cause.contains("overtravel")));
+    assert!(r.initialised_at_s.is_some_and(|t| t > 40.0));
+    assert_arrivals_agree(&r);
+    assert_eq!(served(&r), [(3, "cabin".into())]);
+}
