@@ -405,7 +405,10 @@ pub enum EchoEvent {
 /// each request with the K it answers to on D3 (the echo) and 3 data bits on D2..D0.
 ///
 /// **Decision** on which requests are answered, so that the requester never takes an answer
-/// to a request it did not make:
+/// to a request it did not make (two nibbles the AS-i master puts on the line by itself are
+/// beyond this engine: the default outputs 1111 at activation look like "K = 1, first step",
+/// and the zeroed input of a slave that left LAS like an echo of K = 0; the PLC starts a new
+/// word when the master's flags F0/F1 change, see `controller::plc`):
 /// - the first step code, whenever the request nibble changes to it: a new word, sampled now;
 /// - the next step code of the word in progress, with K toggled;
 /// - nothing else. A request out of sequence (the requester restarted or was re-admitted
