@@ -915,7 +915,9 @@ fn wait_until(
 const OPERATOR_REACTION: SimDuration = SimDuration::from_millis(100);
 
 /// [`wait_until`], with the operator resetting a trip that opens K1 without a STOP demand
-/// (the Safety-at-Work monitor under line noise); counts the resets in `resets`.
+/// (the Safety-at-Work monitor under line noise); counts the resets in `resets`. Before the
+/// program is initialised, only a trip after K1 had closed in this wait counts (at power-on K1
+/// is open until the operator's first reset).
 fn wait_resetting(
     rig: &mut Rig,
     limit: SimDuration,
@@ -924,12 +926,15 @@ fn wait_resetting(
 ) -> Option<SimTime> {
     let deadline = rig.now() + limit;
     let mut reset_at: Option<SimTime> = None;
+    let mut powered = false;
     loop {
         if cond(rig) {
             return Some(rig.now());
         }
-        let tripped =
-            rig.plc().program().is_initialised() && rig.estop_out() && !rig.lift().k1_closed();
+        powered |= rig.lift().k1_closed();
+        let tripped = (rig.plc().program().is_initialised() || powered)
+            && rig.estop_out()
+            && !rig.lift().k1_closed();
         if tripped && reset_at.is_none_or(|t| rig.now() >= t + SimDuration::from_secs(1)) {
             let at = rig.now() + OPERATOR_REACTION;
             rig.schedule(at, Action::Reset);
@@ -997,7 +1002,10 @@ fn run_lab(
         .bus
         .set_trace_callback(Some(Box::new(move |r| lock(&sink).record(r))));
 
-    if wait_until(&mut rig, READY_WITHIN, |r| ready_at(r, 1)).is_none() {
+    // The Safety-at-Work monitor may trip under line noise during initialisation too: the
+    // operator resets it, as during the latency samples.
+    let mut init_resets = 0;
+    if wait_resetting(&mut rig, READY_WITHIN, &mut init_resets, |r| ready_at(r, 1)).is_none() {
         return Err(TimingError::NotReady {
             what: "the lift did not initialise at floor 1",
             within: READY_WITHIN,
@@ -1064,7 +1072,8 @@ fn run_lab(
         floor_words.merge(&t.intervals);
     }
     let safety_cfg = safety::LiftSafetyConfig::default();
-    let latencies = sample_latencies(&mut rig, &shared, opts);
+    let mut latencies = sample_latencies(&mut rig, &shared, opts);
+    latencies.operator_resets += init_resets;
     rig.lab_mut().bus.set_trace_callback(None);
     drop(rig);
     let collector = take(&shared);

@@ -1,27 +1,41 @@
 //! The nibble handshakes of the lab lift (seed 003 §4, tables 4.2–4.7; SPEC §3), both sides,
 //! as plain state machines over 4-bit values with no dependency on the bus.
 //!
-//! **Nibble use** (SPEC §3 decision): the *requester* puts its 3-bit step code on D2..D0 (D3 =
-//! 0); the *answerer* puts 3 data bits on D2..D0 and the toggle bit K on D3. The answerer
-//! answers when it sees the requested code change, toggling K; a step completes when the
-//! requester sees K change; it then reads the data and puts out the next code. Every step is
-//! idempotent: a side may be stepped any number of times with the same input (a PLC scan that is
-//! faster than the AS-i cycle, or a repeated telegram) without advancing.
+//! **Nibble use** (SPEC §3 decision), two kinds of handshake:
+//! - **The answerer owns K** (floor stations, table 4.3; cabin display, table 4.5; S-7.3 of
+//!   [`crate::analog`]): the *requester* puts its 3-bit step code on D2..D0 (D3 = 0); the
+//!   *answerer* puts 3 data bits on D2..D0 and the toggle bit K on D3. The answerer answers when
+//!   it sees the requested code change, toggling K; a step completes when the requester sees K
+//!   change; it then reads the data and puts out the next code ([`Requester`], [`Answerer`]).
+//! - **The requester owns K** (cabin buttons, table 4.7: "K 1 1 1", "K 1 0 1", ...): the master
+//!   puts K on D3 beside the step code on D2..D0 and toggles K with every request; the slave
+//!   answers the 3 data bits on D2..D0 and, **Decision (SPEC §3, revised)**, echoes the K it
+//!   answers to on D3. A step completes when the master sees its own K echoed
+//!   ([`ToggleRequester`], [`EchoAnswerer`]).
+//!
+//! Every step is idempotent: a side may be stepped any number of times with the same input (a
+//! PLC scan that is faster than the AS-i cycle, a repeated telegram, a lost response) without
+//! advancing.
 //!
 //! **Decisions beyond SPEC**:
-//! - Code `110` is used by no sequence of the seed; it is the *sync* code. A requester starts
-//!   (and restarts after a reset) with `110`; the answerer acknowledges it with K toggled and data
-//!   000. This makes the first K change a requester sees after power-up harmless.
-//! - A requester that sees no K change for `stall_limit` steps switches code (to `110`, or from
-//!   `110` to the first step), so that a requester and an answerer that lost step (for example
-//!   one of them was reset while the other waited) always recover.
+//! - Code `110` is used by no sequence of the seed; in the handshakes where the answerer owns
+//!   K it is the *sync* code. A requester starts (and restarts after a reset) with `110`; the
+//!   answerer acknowledges it with K toggled and data 000. This makes the first K change a
+//!   requester sees after power-up harmless. A requester that sees no K change for
+//!   `stall_limit` steps switches code (to `110`, or from `110` to the first step), so that a
+//!   requester and an answerer that lost step (for example one of them was reset while the
+//!   other waited) always recover.
+//! - Where the requester owns K there is no sync code (table 4.7 has none): the requester
+//!   starts with the K that differs from the D3 it sees, the answerer refuses requests out of
+//!   sequence, and a requester without an echo for `stall_limit` steps starts a new word with K
+//!   toggled (see [`ToggleRequester`] and [`EchoAnswerer`]).
 //!
-//! The [`Requester`] and [`Answerer`] engines are generic over the step sequence; the floor
-//! (table 4.3: 4 steps), cabin display (table 4.5: 7 steps, S-7.3 layout) and cabin panel
-//! (tables 4.6/4.7: 7 steps, two halves) protocols, and the S-7.3 analog transfer of
-//! [`crate::analog`], are built on them. The master (PLC) side of each lab protocol is a
-//! `*Master` type the `controller` crate drives from the process image; the device side is the
-//! `*Slave` type inside the slave devices of [`crate::devices`].
+//! The engines are generic over the step sequence; the floor (table 4.3: 4 steps), cabin
+//! display (table 4.5: 7 steps, S-7.3 layout) and cabin panel (tables 4.6/4.7: 7 steps, two
+//! halves) protocols, and the S-7.3 analog transfer of [`crate::analog`], are built on them.
+//! The master (PLC) side of each lab protocol is a `*Master` type the `controller` crate drives
+//! from the process image; the device side is the `*Slave` type inside the slave devices of
+//! [`crate::devices`].
 
 use asi_phy::Nibble;
 
@@ -264,6 +278,220 @@ impl Answerer {
             }
         };
         (self.output(), event)
+    }
+}
+
+/// The requesting side of a handshake in which the *requester* owns the toggle bit K: the
+/// master side of the cabin button slave, seed 003 table 4.7 ("K 1 1 1", "K 1 0 1", ...).
+///
+/// The request nibble is K on D3 and the step code on D2..D0; K toggles with every new
+/// request. **Decision** (SPEC §3, revised): the answerer echoes the K it answers to on D3
+/// beside its 3 data bits, and a step completes when the requester sees its own K echoed.
+///
+/// - **Start** (power-up, [`ToggleRequester::reset`]): the first step only looks at the
+///   answerer's D3 and puts out the first step code with the *other* K, so an answer that was
+///   standing in the input image before the start can never pass for an echo.
+/// - **Stall**: after `stall_limit` steps without the echo the requester abandons the word and
+///   starts a new one: first step code, K toggled. An answerer always answers such a request
+///   (see [`EchoAnswerer`]), so a requester and an answerer that lost step recover within one
+///   stall period.
+///
+/// Idempotent like [`Requester`]: stepping with the same input any number of times (a scan
+/// faster than the AS-i cycle, a repeated telegram, a lost response) does not advance.
+#[derive(Clone, Debug)]
+pub struct ToggleRequester {
+    steps: &'static [u8],
+    pos: usize,
+    /// K of the request put out; `None` before the first step.
+    k: Option<bool>,
+    acc: u32,
+    stall: u32,
+    stall_limit: u32,
+    restarts: u32,
+}
+
+impl ToggleRequester {
+    /// A requester over `steps` that has not yet looked at the answerer.
+    pub fn new(steps: &'static [u8]) -> ToggleRequester {
+        ToggleRequester {
+            steps,
+            pos: 0,
+            k: None,
+            acc: 0,
+            stall: 0,
+            stall_limit: DEFAULT_STALL_LIMIT,
+            restarts: 0,
+        }
+    }
+
+    /// Sets the stall limit in steps (0 = never restart a word).
+    pub fn with_stall_limit(mut self, limit: u32) -> ToggleRequester {
+        self.stall_limit = limit;
+        self
+    }
+
+    /// The stall limit in steps.
+    pub fn stall_limit(&self) -> u32 {
+        self.stall_limit
+    }
+
+    /// Back to the power-up state (keeps the stall limit; the restart count restarts at 0).
+    pub fn reset(&mut self) {
+        *self = ToggleRequester::new(self.steps).with_stall_limit(self.stall_limit);
+    }
+
+    /// The nibble this side puts out: K on D3, the step code on D2..D0 (before the first
+    /// step: the first code with D3 = 0).
+    pub fn output(&self) -> Nibble {
+        let code = self.steps.get(self.pos).copied().unwrap_or(0);
+        Nibble::from_low_bits(((self.k.unwrap_or(false) as u8) << 3) | code)
+    }
+
+    /// Words abandoned after a stall since the last reset.
+    pub fn restarts(&self) -> u32 {
+        self.restarts
+    }
+
+    /// One step with the answerer's nibble; returns the nibble to put out and, when the last
+    /// step of a word was echoed, the word (3 bits per step, first step in the highest bits).
+    pub fn step(&mut self, from_answerer: Nibble) -> (Nibble, Option<u32>) {
+        let echo = from_answerer.bit(3);
+        let Some(k) = self.k else {
+            self.k = Some(!echo);
+            return (self.output(), None);
+        };
+        if echo != k {
+            self.stall = self.stall.saturating_add(1);
+            if self.stall_limit > 0 && self.stall >= self.stall_limit {
+                self.stall = 0;
+                self.pos = 0;
+                self.acc = 0;
+                self.k = Some(!k);
+                self.restarts = self.restarts.wrapping_add(1);
+            }
+            return (self.output(), None);
+        }
+        self.stall = 0;
+        self.acc = (self.acc << 3) | (from_answerer.get() & 7) as u32;
+        self.pos += 1;
+        let word = if self.pos == self.steps.len() {
+            let w = self.acc;
+            self.acc = 0;
+            self.pos = 0;
+            Some(w)
+        } else {
+            None
+        };
+        self.k = Some(!k);
+        (self.output(), word)
+    }
+}
+
+/// What an [`EchoAnswerer`] step did.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum EchoEvent {
+    /// The first step of a word was answered (the word was taken).
+    WordStarted,
+    /// The last step of a word was answered.
+    WordDone,
+    /// A request out of sequence was refused: D3 = the other K, data 000.
+    Refused {
+        /// The request nibble.
+        request: u8,
+    },
+}
+
+/// The answering side of a handshake whose requester owns K (seed 003 table 4.7): answers
+/// each request with the K it answers to on D3 (the echo) and 3 data bits on D2..D0.
+///
+/// **Decision** on which requests are answered, so that the requester never takes an answer
+/// to a request it did not make (two nibbles the AS-i master puts on the line by itself are
+/// beyond this engine: the default outputs 1111 at activation look like "K = 1, first step",
+/// and the zeroed input of a slave that left LAS like an echo of K = 0; the PLC starts a new
+/// word when the master's flags F0/F1 change, see `controller::plc`):
+/// - the first step code, whenever the request nibble changes to it: a new word, sampled now;
+/// - the next step code of the word in progress, with K toggled;
+/// - nothing else. A request out of sequence (the requester restarted or was re-admitted
+///   mid-word, or this side was reset) is *refused*: D3 = the other K, data 000, and the word
+///   in progress is abandoned. The requester sees no echo, stalls and starts a new word.
+///
+/// After a reset the pins read 0000 and the last request is unknown, so the first request seen
+/// is answered only if it is the first step code.
+#[derive(Clone, Debug)]
+pub struct EchoAnswerer {
+    steps: &'static [u8],
+    last: Option<u8>,
+    /// Index of the last step answered in the word in progress.
+    pos: Option<usize>,
+    word: u32,
+    out: Nibble,
+}
+
+impl EchoAnswerer {
+    /// An answerer over `steps` that has just powered up.
+    pub fn new(steps: &'static [u8]) -> EchoAnswerer {
+        EchoAnswerer {
+            steps,
+            last: None,
+            pos: None,
+            word: 0,
+            out: Nibble::ZERO,
+        }
+    }
+
+    /// Back to the power-up state.
+    pub fn reset(&mut self) {
+        *self = EchoAnswerer::new(self.steps);
+    }
+
+    /// The nibble this side puts out: the echoed K on D3, data on D2..D0.
+    pub fn output(&self) -> Nibble {
+        self.out
+    }
+
+    /// One step with the requester's nibble. `word` is asked for the word to send when the
+    /// first step code arrives (so each word is a consistent snapshot).
+    pub fn step_with(
+        &mut self,
+        from_requester: Nibble,
+        word: impl FnOnce() -> u32,
+    ) -> (Nibble, Option<EchoEvent>) {
+        let request = from_requester.get();
+        if self.last == Some(request) {
+            return (self.out, None);
+        }
+        let toggled = self.last.map(|l| (l ^ request) & 0b1000 != 0);
+        self.last = Some(request);
+        let k = request & 0b1000;
+        let code = request & 7;
+        let n = self.steps.len();
+        let next = self
+            .pos
+            .and_then(|p| self.steps.get(p + 1).map(|&c| (p + 1, c)));
+        let i = if self.steps.first() == Some(&code) {
+            self.word = word();
+            Some(0)
+        } else {
+            match next {
+                Some((i, c)) if c == code && toggled == Some(true) => Some(i),
+                _ => None,
+            }
+        };
+        self.pos = i;
+        let Some(i) = i else {
+            self.out = Nibble::from_low_bits(k ^ 0b1000);
+            return (self.out, Some(EchoEvent::Refused { request }));
+        };
+        let data = ((self.word >> (3 * (n - 1 - i))) & 7) as u8;
+        self.out = Nibble::from_low_bits(k | data);
+        let event = if i == 0 {
+            Some(EchoEvent::WordStarted)
+        } else if i == n - 1 {
+            Some(EchoEvent::WordDone)
+        } else {
+            None
+        };
+        (self.out, event)
     }
 }
 
@@ -788,10 +1016,16 @@ impl CabinPanelState {
 }
 
 /// The master (PLC) side of the cabin panel, seed 003 table 4.7: requests the 32-bit word in
-/// two 7-step halves (E = 000, then E = 001) and checks its parity.
+/// two 7-step halves (E = 000, then E = 001) with K in its own request, and checks its parity.
+///
+/// On the bus, one half is the request sequence `K111`, `K101`, `K100`, `K011`, `K010`, `K001`,
+/// `K000` with K toggling at every step (for example `0111`, `1101`, `0100`, `1011`, `0010`,
+/// `1001`, `0000`), each answered by the slave with the same K on D3 and 3 data bits
+/// ([`ToggleRequester`]). A half 1 is taken only after a half 0; a half that fails E, O or V
+/// drops the half 0 before it.
 #[derive(Clone, Debug)]
 pub struct CabinPanelMaster {
-    requester: Requester,
+    requester: ToggleRequester,
     half0: Option<u16>,
     words: WordLog<CabinPanelState>,
     fresh: bool,
@@ -807,7 +1041,7 @@ impl CabinPanelMaster {
     /// A fresh engine.
     pub fn new() -> CabinPanelMaster {
         CabinPanelMaster {
-            requester: Requester::new(&SEVEN_STEPS),
+            requester: ToggleRequester::new(&SEVEN_STEPS),
             half0: None,
             words: WordLog::default(),
             fresh: false,
@@ -822,8 +1056,8 @@ impl CabinPanelMaster {
 
     /// One step: the slave's input nibble in, the output nibble out.
     pub fn step(&mut self, input: Nibble) -> Nibble {
-        let (out, ev) = self.requester.step(input);
-        if let Some(RequesterEvent::Word(bits)) = ev {
+        let (out, word) = self.requester.step(input);
+        if let Some(bits) = word {
             let (e, d, o, v) = split_seven_step_word(bits);
             match (e, v && !o) {
                 (0, true) => self.half0 = Some(d),
@@ -842,6 +1076,11 @@ impl CabinPanelMaster {
             }
         }
         out
+    }
+
+    /// The nibble put out by the last step.
+    pub fn output(&self) -> Nibble {
+        self.requester.output()
     }
 
     /// The last good 32-bit word.
@@ -863,21 +1102,30 @@ impl CabinPanelMaster {
         &self.words
     }
 
-    /// Back to the power-up state.
+    /// Words abandoned after a stall (no echo for the stall limit) since the last reset.
+    pub fn restarts(&self) -> u32 {
+        self.requester.restarts()
+    }
+
+    /// Back to the power-up state: the half in progress is dropped, the next step looks at the
+    /// slave's D3 again and starts a new word with the other K. The word log is kept.
     pub fn reset(&mut self) {
-        let limit = self.requester.stall_limit;
-        *self = CabinPanelMaster::new().with_stall_limit(limit);
+        self.requester.reset();
+        self.half0 = None;
+        self.fresh = false;
     }
 }
 
 /// The device side of the cabin panel (seed 003 tables 4.6/4.7): answers the master's step
-/// requests; the two halves of one 32-bit word are sampled together when half 0 starts.
+/// requests ([`EchoAnswerer`]); the two halves of one 32-bit word are sampled together when
+/// half 0 starts, and the halves alternate with every half answered to its last step.
 #[derive(Clone, Debug)]
 pub struct CabinPanelSlave {
-    answerer: Answerer,
+    answerer: EchoAnswerer,
     signals: CabinPanelState,
     snapshot: (u16, u16),
     next_half: u8,
+    refused: u32,
 }
 
 impl Default for CabinPanelSlave {
@@ -890,10 +1138,11 @@ impl CabinPanelSlave {
     /// A device that has just powered up.
     pub fn new() -> CabinPanelSlave {
         CabinPanelSlave {
-            answerer: Answerer::new(&SEVEN_STEPS),
+            answerer: EchoAnswerer::new(&SEVEN_STEPS),
             signals: CabinPanelState::default(),
             snapshot: (0, 0),
             next_half: 0,
+            refused: 0,
         }
     }
 
@@ -905,6 +1154,11 @@ impl CabinPanelSlave {
     /// The current signal levels.
     pub fn signals(&self) -> &CabinPanelState {
         &self.signals
+    }
+
+    /// Requests refused as out of sequence since power-up.
+    pub fn refused(&self) -> u32 {
+        self.refused
     }
 
     /// One step with the master's output nibble; returns the input nibble to present.
@@ -921,9 +1175,11 @@ impl CabinPanelSlave {
             }
         });
         match ev {
-            Some(AnswererEvent::WordStarted) => self.next_half ^= 1,
-            // A requester that (re)synchronises starts a new 32-bit word with half 0.
-            Some(AnswererEvent::Sync) => self.next_half = 0,
+            // The next half only after this one was answered to its end: a word the master
+            // abandoned (or the activation's default 1111, which looks like a first step) is
+            // sent again from its start.
+            Some(EchoEvent::WordDone) => self.next_half ^= 1,
+            Some(EchoEvent::Refused { .. }) => self.refused = self.refused.wrapping_add(1),
             _ => {}
         }
         out
@@ -1060,6 +1316,149 @@ mod tests {
         let (h0, h1) = s.halves();
         assert_eq!(CabinPanelState::from_halves(h0, h1), Some(s));
         assert_eq!(CabinPanelState::from_halves(h0 ^ 1, h1), None);
+    }
+
+    /// A panel state whose two halves are easy to read off table 4.6: floors 1, 3, 16 and 24,
+    /// STOP and door closed (parity D14 = 0: six ones).
+    fn table_4_6_example() -> CabinPanelState {
+        CabinPanelState {
+            floor_buttons: (1 << 23) | (1 << 15) | 0b101,
+            stop: true,
+            door_closed: true,
+            ..Default::default()
+        }
+    }
+
+    /// Seed 003 table 4.7, worked vector: the master's requests `K111`, `K101`, `K100`, `K011`,
+    /// `K010`, `K001`, `K000` with K toggling at every step, and the slave's answers: the K it
+    /// answers to on D3, then E3E2E1, D16..D14, ..., D1 O V of table 4.6.
+    #[test]
+    fn table_4_7_request_and_answer_nibbles() {
+        let want = table_4_6_example();
+        assert_eq!(want.halves(), (0x8005, 0x1480));
+        let mut m = CabinPanelMaster::new();
+        let mut s = CabinPanelSlave::new();
+        *s.signals_mut() = want;
+        // Before its first step the master looks at the slave's D3 (0 after power-up) and
+        // starts with the other K.
+        let mut out = m.step(Nibble::ZERO);
+        let mut pairs = Vec::new();
+        for _ in 0..14 {
+            let answer = s.step(out);
+            pairs.push((out.get(), answer.get()));
+            out = m.step(answer);
+        }
+        #[rustfmt::skip]
+        let expected: [(u8, u8); 14] = [
+            // Half 0 (E = 000): D16..D1 = floors 16..1 = 1000 0000 0000 0101, O = 0, V = 1.
+            (0b1_111, 0b1_000), // K 111 -> E3 E2 E1     = 000
+            (0b0_101, 0b0_100), // K 101 -> D16 D15 D14  = 100
+            (0b1_100, 0b1_000), // K 100 -> D13 D12 D11  = 000
+            (0b0_011, 0b0_000), // K 011 -> D10 D9 D8    = 000
+            (0b1_010, 0b1_000), // K 010 -> D7 D6 D5     = 000
+            (0b0_001, 0b0_010), // K 001 -> D4 D3 D2     = 010
+            (0b1_000, 0b1_101), // K 000 -> D1 O V       = 101
+            // Half 1 (E = 001): parity 0, door closed, bell 0, STOP, vanes 00, floors 24..17.
+            (0b0_111, 0b0_001), // K 111 -> E3 E2 E1     = 001
+            (0b1_101, 0b1_000), // K 101 -> D16 D15 D14  = 000 (D14 parity)
+            (0b0_100, 0b0_101), // K 100 -> D13 D12 D11  = SnZavD Zvonek Stop = 101
+            (0b1_011, 0b1_001), // K 011 -> D10 D9 D8    = Snim2 Snim1 floor 24 = 001
+            (0b0_010, 0b0_000), // K 010 -> D7 D6 D5     = floors 23..21
+            (0b1_001, 0b1_000), // K 001 -> D4 D3 D2     = floors 20..18
+            (0b0_000, 0b0_001), // K 000 -> D1 O V       = floor 17, O = 0, V = 1
+        ];
+        assert_eq!(pairs, expected);
+        assert_eq!(m.state(), Some(want));
+        assert_eq!((m.words().good(), m.words().bad()), (1, 0));
+        // The next word starts with the other K again.
+        assert_eq!(out.get(), 0b1_111);
+    }
+
+    /// The master completes a step only on its own K echoed: a stale answer (the other K) or
+    /// the same request stepped again does not advance it.
+    #[test]
+    fn a_cabin_panel_step_needs_the_echo() {
+        let mut m = CabinPanelMaster::new();
+        assert_eq!(
+            m.step(Nibble::from_low_bits(0b1_010)).get(),
+            0b0_111,
+            "K = !D3"
+        );
+        assert_eq!(
+            m.step(Nibble::from_low_bits(0b1_000)).get(),
+            0b0_111,
+            "no echo"
+        );
+        assert_eq!(
+            m.step(Nibble::from_low_bits(0b0_000)).get(),
+            0b1_101,
+            "echo: next step"
+        );
+        assert_eq!(
+            m.step(Nibble::from_low_bits(0b0_000)).get(),
+            0b1_101,
+            "stale: wait"
+        );
+        let mut s = CabinPanelSlave::new();
+        let a = s.step(Nibble::from_low_bits(0b0_111));
+        assert_eq!(a.get(), 0b0_000);
+        assert_eq!(s.step(Nibble::from_low_bits(0b0_111)), a, "idempotent");
+        // Out of sequence (K not toggled): refused with the other K.
+        assert_eq!(s.step(Nibble::from_low_bits(0b0_101)).get(), 0b1_000);
+        assert_eq!(s.refused(), 1);
+        // ... until a new word starts.
+        // (half 0 again: the abandoned word is sent again from its start).
+        assert_eq!(s.step(Nibble::from_low_bits(0b1_111)).get(), 0b1_000);
+    }
+
+    /// The slave is reset (power cycle, re-admission) in the middle of a word: it refuses the
+    /// master's request out of sequence, the master gets no echo, starts a new word after its
+    /// stall limit, and the next word arrives whole; no word is taken from the torn one.
+    #[test]
+    fn cabin_panel_slave_reset_mid_word_resynchronises() {
+        let want = table_4_6_example();
+        let mut m = CabinPanelMaster::new().with_stall_limit(5);
+        let mut s = CabinPanelSlave::new();
+        *s.signals_mut() = want;
+        let mut input = Nibble::ZERO;
+        let mut updates = Vec::new();
+        for i in 0..60 {
+            let out = m.step(input);
+            if i == 4 {
+                s.reset();
+            }
+            input = s.step(out);
+            updates.extend(m.take_update());
+        }
+        assert_eq!(s.refused(), 1);
+        assert_eq!(m.restarts(), 1);
+        assert_eq!(m.words().bad(), 0);
+        assert!(!updates.is_empty() && updates.iter().all(|&u| u == want));
+    }
+
+    /// The PLC restarts in the middle of a word: the master starts a new word with the K that
+    /// differs from the D3 it sees, the slave takes it as a new word at once (no stall).
+    #[test]
+    fn cabin_panel_master_restart_mid_word_needs_no_stall() {
+        let want = table_4_6_example();
+        let mut m = CabinPanelMaster::new().with_stall_limit(5);
+        let mut s = CabinPanelSlave::new();
+        *s.signals_mut() = want;
+        let mut input = Nibble::ZERO;
+        let mut updates = Vec::new();
+        for i in 0..60 {
+            if i == 4 {
+                // In the middle of half 0.
+                m.reset();
+            }
+            let out = m.step(input);
+            input = s.step(out);
+            updates.extend(m.take_update());
+        }
+        assert_eq!((m.restarts(), s.refused()), (0, 0));
+        // The slave sends the abandoned half 0 again from its start: nothing is dropped.
+        assert_eq!(m.words().bad(), 0);
+        assert!(updates.len() >= 2 && updates.iter().all(|&u| u == want));
     }
 
     #[test]

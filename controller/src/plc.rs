@@ -33,10 +33,11 @@ pub mod addr {
     pub const FLOOR_STATIONS: u8 = 4;
 }
 
-/// Scans without a K change after which the PLC resynchronises the cabin button handshake:
-/// a step normally completes within a scan or two, and after power-on the panel may have
-/// answered the first code before the PLC's first read, which only a resynchronisation
-/// recovers (250 ms instead of the engine's default 2.5 s at a 10 ms scan).
+/// Scans without the echo of the PLC's own K after which the PLC starts a new cabin button
+/// word (seed 003 table 4.7; SPEC §3): a step normally completes within a scan or two; a panel
+/// that was reset or re-admitted in the middle of a word refuses the request out of sequence,
+/// which only a new word recovers (250 ms instead of the engine's default 2.5 s at a 10 ms
+/// scan).
 pub const PANEL_STALL_LIMIT: u32 = 25;
 
 /// Standard signals from the safety logic.
@@ -62,6 +63,8 @@ pub struct Plc {
     floors: Vec<FloorStationMaster>,
     cabin_display: CabinDisplayMaster,
     panel: CabinPanelMaster,
+    /// The bus was healthy (no configuration error, no AS-i power fail) at the last scan.
+    bus_healthy: bool,
     shown: Option<DisplayWord>,
 }
 
@@ -81,6 +84,7 @@ impl Plc {
             floors,
             cabin_display: CabinDisplayMaster::new(),
             panel: CabinPanelMaster::new().with_stall_limit(PANEL_STALL_LIMIT),
+            bus_healthy: false,
             shown: None,
         })
     }
@@ -124,6 +128,16 @@ impl Plc {
             output.set_nibble(a, self.cabin_display.step(input.nibble(a)));
         }
         let mut cabin = None;
+        let healthy = flags & (F0_CONFIG_ERROR | F1_APF) == 0;
+        if healthy != self.bus_healthy {
+            // A slave left or joined LAS (or the power failed or returned). The cabin word in
+            // progress may hold a nibble the master zeroed when the panel left LAS, which looks
+            // like an echo of K = 0, or an answer to the activation's default outputs 1111,
+            // which look like "K = 1, step 111": start a new word, with the K that differs
+            // from the D3 in the image.
+            self.panel.reset();
+            self.bus_healthy = healthy;
+        }
         if let Some(a) = SlaveAddr::a(addr::CABIN_PANEL) {
             output.set_nibble(a, self.panel.step(input.nibble(a)));
             cabin = self.panel.take_update().map(|s| CabinWord {

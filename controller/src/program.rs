@@ -414,6 +414,11 @@ pub struct Program {
     /// No departure before this time (dwell after an arrival).
     depart_after: SimTime,
     dispatch: Dispatcher,
+    /// The floor number on the displays (Cislo_Patra): set at departure, on arrival and at the
+    /// start of initialisation only (see [`Program::update_display`]).
+    shown_floor: u8,
+    /// The direction arrow on the displays, set and cleared with `shown_floor`.
+    shown_dir: Option<Dir>,
     out: Outputs,
     events: Vec<Event>,
     served: Vec<ServedCall>,
@@ -471,6 +476,8 @@ impl Program {
             initialised_at: None,
             depart_after: SimTime::ZERO,
             dispatch,
+            shown_floor: 1,
+            shown_dir: None,
             out: Outputs {
                 setpoint_ua: cfg.standstill_ua,
                 display: DisplayState {
@@ -625,6 +632,7 @@ impl Program {
         self.initialised_at = None;
         self.init_held = None;
         self.lost = false;
+        (self.shown_floor, self.shown_dir) = (1, Some(Dir::Down));
         self.event(now, EventKind::InitStarted { start });
         self.phase = Phase::Init(step);
         self.drive_init(step);
@@ -918,6 +926,7 @@ impl Program {
         self.out.run = true;
         self.out.up = dir == Some(Dir::Up);
         self.out.setpoint_ua = self.cfg.travel_ua;
+        (self.shown_floor, self.shown_dir) = (self.current, dir);
         self.event(
             now,
             EventKind::Departed {
@@ -1043,6 +1052,7 @@ impl Program {
         self.vane_shape = None;
         self.target = floor;
         self.depart_after = now + self.cfg.dwell;
+        (self.shown_floor, self.shown_dir) = (floor, None);
         self.event(now, EventKind::Arrived { floor });
         self.serve(now, self.dir);
         if self.stop_pending {
@@ -1073,6 +1083,26 @@ impl Program {
         self.out.restart = self.restart_high;
     }
 
+    /// The display word content (seed 003 tables 4.2/4.4), by the rows of tables 6.3–6.5 that
+    /// say what is shown. The floor number and the arrow are latched: they change only at
+    /// these rows, not while floors are passed.
+    ///
+    /// - Table 6.3, state "Jede" (set in `start_init`): floor 1 and "down" from the start of
+    ///   initialisation, through every step of it ("Brzdí", and the creeping steps asi-lift
+    ///   adds for a start at floor 1, whatever the motor's direction there).
+    /// - Table 6.3, "Brzdí → 1. Patro": "Zobrazení směru jízdy dolů": floor 1 and "down" stay
+    ///   after initialisation, until the automat's first departure.
+    /// - Tables 6.4/6.5, "Aktuální patro → Jede dolů/nahoru" (set in `depart`): the current
+    ///   floor, the arrow of the direction of travel, the other arrow off. Passing a floor
+    ///   ("Jede → Jede") and starting to brake ("Jede → Dobrždění") change nothing shown.
+    /// - Tables 6.4/6.5, "Dobrždění → Aktuální patro" (set in `arrive`): the current floor, no
+    ///   arrow. A STOP ends this way too ("Porucha Stop → Dobrždění → Aktuální patro").
+    /// - Tables 6.4/6.5, "Aktuální patro ↔ Porucha přetížení": the floor number, no arrow.
+    ///
+    /// D3 "Jede / stojí" is set while the drive is commanded to move; D2 "Porucha" in the
+    /// fault states (overload, STOP fault, a hold between floors, a bus fault). The tables say
+    /// nothing of the display in a bus fault or a hold: **Decision**: the floor and arrow shown
+    /// stay as they were (a trip that resumes keeps its arrow), with D3 = 0 and D2 = 1.
     fn update_display(&mut self) {
         let (moving, fault) = match self.phase {
             Phase::WaitInputs => (false, false),
@@ -1084,11 +1114,13 @@ impl Program {
                 Step::Overload | Step::StopFault | Step::Halted { .. } => (false, true),
             },
         };
-        let dir = if moving { self.dir } else { None };
+        if self.phase == Phase::Service(Step::Overload) {
+            (self.shown_floor, self.shown_dir) = (self.current, None);
+        }
         self.out.display = DisplayState {
-            floor: self.current,
-            up: dir == Some(Dir::Up),
-            down: dir == Some(Dir::Down),
+            floor: self.shown_floor,
+            up: self.shown_dir == Some(Dir::Up),
+            down: self.shown_dir == Some(Dir::Down),
             moving,
             fault,
         };
