@@ -290,3 +290,104 @@ press = "cabin:3"
     assert_arrivals_agree(&r);
     assert_eq!(served(&r), [(3, "cabin".into())]);
 }
+
+#[test]
+fn starts_beyond_what_initialisation_can_find_recover_by_the_documented_procedure() {
+    // Below floor 1's vane the run down meets the bottom overtravel sensor (nothing tells
+    // -50 mm from 1250 mm, where the same run is right); beyond a sensor K1 never closes. Both
+    // recover as at the lab: crank back, safety reset, and the controller initialises.
+    for (start, crank) in [(-45.0, 40.0), (-70.0, 60.0), (1290.0, -60.0)] {
+        let r = run_toml(
+            "start beyond",
+            &format!(
+                r#"
+duration = "70s"
+[lift]
+start_mm = {start}
+[[event]]
+at = "4s"
+crank_mm = {crank}
+[[event]]
+at = "8s"
+reset = true
+[[event]]
+at = "9s"
+ack = true
+[[event]]
+at = "40s"
+press = "cabin:3"
+"#
+            ),
+        );
+        assert_no_violations(&r);
+        assert!(
+            !logged(&r, "scenario", "refused by the plant"),
+            "start {start}: {}",
+            r.to_text()
+        );
+        assert!(
+            r.initialised_at_s.is_some(),
+            "start {start}: {}",
+            r.to_text()
+        );
+        assert_arrivals_agree(&r);
+        assert_eq!(served(&r), [(3, "cabin".into())], "start {start}");
+    }
+}
+
+#[test]
+fn the_scan_range_initialises_everywhere_and_sees_every_short_press() {
+    // The limits of the documented PLC scan range (1..20 ms): initialisation from heights
+    // around every vane and a 300 ms press at any phase of the 14-scan cabin word.
+    for scan in ["1ms", "20ms"] {
+        for (start, press_at) in [
+            (-35.0, 5.000),
+            (20.0, 5.047),
+            (380.0, 5.113),
+            (650.0, 5.181),
+            (1000.0, 5.257),
+            (1250.0, 5.311),
+            (0.0, 5.383),
+            (1200.0, 5.419),
+        ] {
+            let r = run_toml(
+                "scan range",
+                &format!(
+                    r#"
+duration = "75s"
+[lift]
+start_mm = {start}
+[controller]
+scan = "{scan}"
+[[event]]
+at = "30s"
+press = "cabin:3"
+[[event]]
+at = "{press}s"
+press = "hall-up:2"
+"#,
+                    press = press_at + 35.0
+                ),
+            );
+            assert_no_violations(&r);
+            assert!(
+                r.safety.trips.is_empty(),
+                "{scan} from {start}: {:?}",
+                r.safety.trips
+            );
+            let floors: Vec<u8> = r.served.iter().map(|s| s.floor).collect();
+            assert_eq!(floors, [3, 2], "{scan} from {start}:\n{}", r.to_text());
+        }
+    }
+}
+
+#[test]
+fn a_scan_beyond_20_ms_is_refused_with_the_reason() {
+    let e = asi_lift::scenario::Scenario::from_toml("s.toml", "[controller]\nscan = \"30ms\"\n")
+        .expect_err("30 ms");
+    let text = e.to_string();
+    assert!(
+        text.contains("controller.scan") && text.contains("1..20 ms"),
+        "{text}"
+    );
+}
