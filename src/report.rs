@@ -106,6 +106,9 @@ pub struct FinalState {
     pub moving: bool,
     /// K1's main contacts are closed.
     pub contactor_closed: bool,
+    /// Why the safety logic keeps K1 open (absent while it is closed).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub k1_open_cause: Option<String>,
     /// FIFO_Kabina (collective: pending cabin calls ascending).
     pub fifo_cabin: Vec<u8>,
     /// FIFO_Patra (collective: pending hall calls ascending).
@@ -322,6 +325,9 @@ impl Report {
             if f.moving { "moving" } else { "at rest" },
             if f.contactor_closed { "closed" } else { "open" }
         );
+        if let Some(c) = &f.k1_open_cause {
+            let _ = writeln!(s, "  K1 open because    {c}");
+        }
         let _ = writeln!(
             s,
             "  pending calls      cabin {:?}, hall {:?}",

@@ -128,15 +128,17 @@ impl LasWatch {
             return (0, 0);
         };
         let left = before & !now;
-        let back = now & !before;
+        let mut back = now & !before;
         for i in 0..32 {
             if left & (1 << i) != 0 {
                 self.count[i] += 1;
                 self.out_since[i] = Some(t);
             }
             if back & (1 << i) != 0 {
-                if let Some(s) = self.out_since[i].take() {
-                    self.out[i] += t - s;
+                match self.out_since[i].take() {
+                    Some(s) => self.out[i] += t - s,
+                    // Joined for the first time (start-up): not a return.
+                    None => back &= !(1 << i),
                 }
             }
         }
@@ -246,6 +248,7 @@ impl Rig {
                 state: String::new(),
                 moving: false,
                 contactor_closed: false,
+                k1_open_cause: None,
                 fifo_cabin: Vec::new(),
                 fifo_hall: Vec::new(),
             },
@@ -1118,6 +1121,12 @@ impl Rig {
             state: p.state_name().into(),
             moving: self.lift.velocity_mm_s() != 0.0,
             contactor_closed: self.lift.k1_closed(),
+            k1_open_cause: self
+                .safety_out
+                .as_ref()
+                .and_then(|d| d.k1_open_cause)
+                .filter(|_| !self.lift.k1_closed())
+                .map(|c| c.to_string()),
             fifo_cabin: p.fifo_cabin(),
             fifo_hall: p.fifo_hall(),
         };
