@@ -1126,7 +1126,7 @@ impl Rig {
                 .as_ref()
                 .and_then(|d| d.k1_open_cause)
                 .filter(|_| !self.lift.k1_closed())
-                .map(|c| c.to_string()),
+                .map(|c| self.k1_cause_text(c)),
             fifo_cabin: p.fifo_cabin(),
             fifo_hall: p.fifo_hall(),
         };
@@ -1168,6 +1168,35 @@ impl Rig {
         // Lines from different sources come in scan order; keep them in time order.
         self.report.log.sort_by(|a, b| a.at_s.total_cmp(&b.at_s));
         self.report
+    }
+
+    /// Why K1 is open, in words; an overtravel sensor the monitor does not release is told
+    /// apart: tripped (0000) or not heard.
+    fn k1_cause_text(&self, c: safety::lift::K1Cause) -> String {
+        let safety::lift::K1Cause::Overtravel { bottom, top } = c else {
+            return c.to_string();
+        };
+        let monitor = self.lab.monitor();
+        let why = |address: u8| {
+            let state =
+                asi_phy::Address::new(address).and_then(|a| monitor.and_then(|m| m.state(a)));
+            match state {
+                Some(Err(NotReleased::Tripped)) => "tripped",
+                Some(Err(NotReleased::Missing)) => "not heard for the monitor's tolerance time",
+                Some(Err(NotReleased::WrongCode { .. } | NotReleased::Frozen { .. })) => {
+                    "sending a wrong code sequence"
+                }
+                _ => "not yet released again by the monitor",
+            }
+        };
+        let mut parts = Vec::new();
+        if bottom {
+            parts.push(format!("overtravel bottom sensor (11) {}", why(11)));
+        }
+        if top {
+            parts.push(format!("overtravel top sensor (12) {}", why(12)));
+        }
+        parts.join("; ")
     }
 
     // ----- probes: stepping and state for timing studies (`asi-lift timing`) ----------------
