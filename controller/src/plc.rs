@@ -102,10 +102,10 @@ impl LasReader {
             self.waited = 0;
         }
         self.essential_ok = match self.las {
+            _ if self.waited >= LAS_STALE_SCANS => false,
             Some(las) => addr::ESSENTIAL
                 .iter()
                 .all(|&n| SlaveAddr::a(n).is_some_and(|a| las.contains(a))),
-            None if self.waited >= LAS_STALE_SCANS => false,
             None => self.essential_ok,
         };
         self.essential_ok
@@ -260,5 +260,48 @@ impl Plc {
                 self.cabin_display.set_word(word);
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use asi_master::image::MAILBOX_WORD;
+
+    /// The master's answer to the posted job: `las` (A slots) with result Ok.
+    fn answer(input: &mut Image, output: &Image, las: &[u8]) {
+        let bits = las.iter().fold(0u64, |m, &n| m | 1 << n);
+        for (k, b) in bits.to_le_bytes().iter().enumerate() {
+            input.set_mailbox_byte(k + 1, *b);
+        }
+        input.set_word(MAILBOX_WORD, output.word(MAILBOX_WORD) & 0xFF80);
+    }
+
+    #[test]
+    fn the_las_decides_only_while_f0_is_set_and_only_for_the_essential_slaves() {
+        let mut r = LasReader::new();
+        let mut input = Image::default();
+        let mut output = Image::default();
+        assert!(r.essential_present(false, &input, &mut output));
+        assert_eq!(output.word(MAILBOX_WORD), 0, "no job without F0");
+        // F0 rises: a Read_List(LAS) job is posted; the last verdict holds for this scan.
+        assert!(r.essential_present(true, &input, &mut output));
+        assert_eq!(output.word(MAILBOX_WORD) >> 8, Command::ReadList as u16);
+        assert_eq!(output.mailbox_byte(1), 1, "list 1 = LAS");
+        // A floor station and the cabin display are out: the cabin may move.
+        answer(&mut input, &output, &[1, 3, 4, 6, 7, 8, 10, 11, 12]);
+        assert!(r.essential_present(true, &input, &mut output));
+        // The converter I/O is out: hold.
+        answer(&mut input, &output, &[1, 2, 3, 4, 5, 6, 8, 10, 11, 12]);
+        assert!(!r.essential_present(true, &input, &mut output));
+        // Back: the cabin may move again.
+        answer(&mut input, &output, &[1, 2, 3, 4, 5, 6, 7, 8, 10, 11, 12]);
+        assert!(r.essential_present(true, &input, &mut output));
+        // The mailbox stops answering: the last verdict for two scans, then "missing".
+        assert!(r.essential_present(true, &input, &mut output));
+        assert!(r.essential_present(true, &input, &mut output));
+        assert!(!r.essential_present(true, &input, &mut output));
+        // F0 clears: every projected slave is there.
+        assert!(r.essential_present(false, &input, &mut output));
     }
 }
