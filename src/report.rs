@@ -32,6 +32,10 @@ pub struct Report {
     pub safety: SafetyReport,
     /// Safety invariants the rig found broken; empty in a correct run.
     pub violations: Vec<Violation>,
+    /// How long the controller held the cabin for bus faults (absent when it never did);
+    /// `bus.dropouts` and `safety.monitor` say what the bus and the safety monitor did.
+    #[serde(skip_serializing_if = "Availability::is_clear")]
+    pub availability: Availability,
     /// The readable log of the run, one line per event.
     #[serde(skip)]
     pub log: Vec<LogLine>,
@@ -102,6 +106,9 @@ pub struct FinalState {
     pub moving: bool,
     /// K1's main contacts are closed.
     pub contactor_closed: bool,
+    /// Why the safety logic keeps K1 open (absent while it is closed).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub k1_open_cause: Option<String>,
     /// FIFO_Kabina (collective: pending cabin calls ascending).
     pub fifo_cabin: Vec<u8>,
     /// FIFO_Patra (collective: pending hall calls ascending).
@@ -119,6 +126,37 @@ pub struct BusReport {
     pub errors: ErrorCounts,
     /// Cycle time of normal operation, µs.
     pub cycle_us: CycleTimes,
+    /// Slaves that left LAS in normal operation (absent when none did), by address.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub dropouts: Vec<SlaveDropouts>,
+}
+
+/// A slave's absences from LAS in normal operation.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct SlaveDropouts {
+    /// The slave's address.
+    pub address: u8,
+    /// How often the master dropped it from LAS.
+    pub count: u32,
+    /// Time out of LAS in all, seconds (to the millisecond; up to the end of the run).
+    pub out_of_las_s: f64,
+}
+
+/// Why the lift could not serve.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct Availability {
+    /// Times the controller held the cabin for a bus fault (an essential slave out of LAS, a
+    /// stale cabin word, AS-i power fail).
+    pub bus_fault_holds: u32,
+    /// Time held for bus faults, seconds (up to the end of the run).
+    pub bus_fault_s: f64,
+}
+
+impl Availability {
+    /// Nothing held the lift.
+    pub fn is_clear(&self) -> bool {
+        *self == Availability::default()
+    }
 }
 
 /// Errors per receiver check, and missing responses.
@@ -158,6 +196,22 @@ pub struct CycleTimes {
 pub struct SafetyReport {
     /// Every trip and error, in order.
     pub trips: Vec<Trip>,
+    /// Every time the Safety-at-Work monitor dropped the release of a safety sensor, in order
+    /// (absent when it never did).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub monitor: Vec<MonitorTrip>,
+}
+
+/// The Safety-at-Work monitor dropped a sensor's release.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct MonitorTrip {
+    /// When, seconds.
+    pub at_s: f64,
+    /// The safety sensor's address (11 bottom, 12 top).
+    pub address: u8,
+    /// `0000` (the sensor is tripped), `wrong-code`, `frozen-code`, or `silence` (no valid
+    /// code within the monitor's tolerance time).
+    pub cause: String,
 }
 
 /// One safety trip.
@@ -186,7 +240,7 @@ pub struct Violation {
 pub struct LogLine {
     /// Seconds.
     pub at_s: f64,
-    /// Who: `scenario`, `controller`, `plant`, `safety`, `bus`, `rig`.
+    /// Who: `scenario`, `controller`, `plant`, `safety`, `monitor`, `bus`, `rig`.
     pub who: &'static str,
     /// What.
     pub text: String,
@@ -271,6 +325,9 @@ impl Report {
             if f.moving { "moving" } else { "at rest" },
             if f.contactor_closed { "closed" } else { "open" }
         );
+        if let Some(c) = &f.k1_open_cause {
+            let _ = writeln!(s, "  K1 open because    {c}");
+        }
         let _ = writeln!(
             s,
             "  pending calls      cabin {:?}, hall {:?}",
@@ -288,7 +345,34 @@ impl Report {
             "  AS-i cycle         min {:.0} µs, mean {:.1} µs, max {:.0} µs",
             b.cycle_us.min, b.cycle_us.mean, b.cycle_us.max
         );
+        for d in &b.dropouts {
+            let _ = writeln!(
+                s,
+                "  slave {:<2} left LAS  {} times, out {:.3} s",
+                d.address, d.count, d.out_of_las_s
+            );
+        }
         let _ = writeln!(s, "  safety trips       {}", self.safety.trips.len());
+        if !self.safety.monitor.is_empty() {
+            let mut causes: Vec<(String, usize)> = Vec::new();
+            for m in &self.safety.monitor {
+                let key = format!("{} at {}", m.cause, m.address);
+                match causes.iter_mut().find(|(k, _)| *k == key) {
+                    Some((_, n)) => *n += 1,
+                    None => causes.push((key, 1)),
+                }
+            }
+            let list: Vec<String> = causes.iter().map(|(k, n)| format!("{n} × {k}")).collect();
+            let _ = writeln!(s, "  monitor drops      {}", list.join(", "));
+        }
+        let a = &self.availability;
+        if a.bus_fault_holds > 0 {
+            let _ = writeln!(
+                s,
+                "  bus-fault holds    {}, {:.3} s in all",
+                a.bus_fault_holds, a.bus_fault_s
+            );
+        }
         if self.violations.is_empty() {
             let _ = writeln!(s, "  violations         none");
         } else {

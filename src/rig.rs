@@ -11,13 +11,14 @@
 //! the only random source is the bus's line noise, seeded from the scenario.
 
 use crate::report::{
-    Arrival, BusReport, CycleTimes, ErrorCounts, FinalState, LogLine, Passenger, Report,
-    SafetyReport, Served, Trip, Violation,
+    Arrival, Availability, BusReport, CycleTimes, ErrorCounts, FinalState, LogLine, MonitorTrip,
+    Passenger, Report, SafetyReport, Served, SlaveDropouts, Trip, Violation,
 };
 use crate::scenario::{Action, Fault, Scenario, ScenarioEvent};
 use crate::trace::{write_record, TraceFormat};
 use crate::waves::{RigSample, WaveOutputs, Waves};
 use asi_master::lab::LabLift;
+use asi_master::safety::NotReleased;
 use asi_phy::fault::FaultRates;
 use asi_phy::{Check, SimDuration, SimTime};
 use controller::plc::{addr, FromSafety, Plc, ToSafety};
@@ -100,6 +101,59 @@ struct Watch {
     reported: [bool; 4],
 }
 
+/// Watches the master's LAS in normal operation: drop-outs and time out of LAS per address.
+#[derive(Clone, Debug, Default)]
+struct LasWatch {
+    /// The LAS (A slots) last seen in normal operation, `None` outside it.
+    las: Option<u32>,
+    /// Since when each address is out of LAS.
+    out_since: [Option<SimTime>; 32],
+    /// Drop-outs per address.
+    count: [u32; 32],
+    /// Time out of LAS per address, closed intervals.
+    out: [SimDuration; 32],
+}
+
+impl LasWatch {
+    /// The LAS at `t` (`None` when the master is not in normal operation); returns the
+    /// addresses that left and that came back.
+    fn update(&mut self, t: SimTime, las: Option<u32>) -> (u32, u32) {
+        let Some(now) = las else {
+            // Offline (power fail, start-up): no drop-outs, close the open absences.
+            self.close(t);
+            self.las = None;
+            return (0, 0);
+        };
+        let Some(before) = self.las.replace(now) else {
+            return (0, 0);
+        };
+        let left = before & !now;
+        let mut back = now & !before;
+        for i in 0..32 {
+            if left & (1 << i) != 0 {
+                self.count[i] += 1;
+                self.out_since[i] = Some(t);
+            }
+            if back & (1 << i) != 0 {
+                match self.out_since[i].take() {
+                    Some(s) => self.out[i] += t - s,
+                    // Joined for the first time (start-up): not a return.
+                    None => back &= !(1 << i),
+                }
+            }
+        }
+        (left, back)
+    }
+
+    fn close(&mut self, t: SimTime) {
+        for i in 0..32 {
+            if let Some(s) = self.out_since[i].take() {
+                self.out[i] += t - s;
+            }
+        }
+    }
+}
+
 /// The whole rig.
 pub struct Rig {
     sc: Scenario,
@@ -134,6 +188,10 @@ pub struct Rig {
     observer: Option<TransactionObserver>,
     /// The safety logic's last outputs, for the VCD.
     safety_out: Option<safety::lift::LiftSafetyDiag>,
+    /// Drop-outs from LAS.
+    las_watch: LasWatch,
+    /// Since when the controller holds the cabin for a bus fault.
+    bus_fault_since: Option<SimTime>,
 }
 
 impl Rig {
@@ -190,6 +248,7 @@ impl Rig {
                 state: String::new(),
                 moving: false,
                 contactor_closed: false,
+                k1_open_cause: None,
                 fifo_cabin: Vec::new(),
                 fifo_hall: Vec::new(),
             },
@@ -202,9 +261,14 @@ impl Rig {
                     mean: 0.0,
                     max: 0.0,
                 },
+                dropouts: Vec::new(),
             },
-            safety: SafetyReport { trips: Vec::new() },
+            safety: SafetyReport {
+                trips: Vec::new(),
+                monitor: Vec::new(),
+            },
             violations: Vec::new(),
+            availability: Availability::default(),
             log: Vec::new(),
         };
         let mut rig = Rig {
@@ -234,6 +298,8 @@ impl Rig {
             waves: None,
             observer: None,
             safety_out: None,
+            las_watch: LasWatch::default(),
+            bus_fault_since: None,
             sc,
         };
         rig.lift.set_load(SimTime::ZERO, rig.sc.load)?;
@@ -740,7 +806,56 @@ impl Rig {
         self.applied = new;
     }
 
+    /// The master's LAS and the safety monitor's drops since the last look, to the report
+    /// and the log (every safety scan, 1 ms).
+    fn watch_bus(&mut self, t: SimTime) {
+        let m = self.lab.bus.master();
+        let las = (m.phase() == asi_master::Phase::NormalOperation).then(|| m.las().bits() as u32);
+        let (left, back) = self.las_watch.update(t, las);
+        for i in 1..32u8 {
+            if left & (1 << i) != 0 {
+                self.log_at(t, "bus", format!("slave {i} dropped out of LAS"));
+            }
+            if back & (1 << i) != 0 {
+                self.log_at(t, "bus", format!("slave {i} back in LAS"));
+            }
+        }
+        let id = self.lab.monitor;
+        let drops = self
+            .lab
+            .bus
+            .monitor_mut(id)
+            .map(|m| m.take_drops())
+            .unwrap_or_default();
+        for d in drops {
+            let (cause, text) = match d.why {
+                NotReleased::Tripped => ("0000", "the sensor sends 0000".to_string()),
+                NotReleased::WrongCode { expected, got } => (
+                    "wrong-code",
+                    format!("wrong code {got:04b} (expected {expected:04b})"),
+                ),
+                NotReleased::Frozen { code } => ("frozen-code", format!("frozen code {code:04b}")),
+                _ => (
+                    "silence",
+                    "no valid code within the tolerance time".to_string(),
+                ),
+            };
+            let address = d.address.get();
+            self.log_at(
+                d.at,
+                "monitor",
+                format!("safety sensor {address} not released: {text}"),
+            );
+            self.report.safety.monitor.push(MonitorTrip {
+                at_s: d.at.as_secs_f64(),
+                address,
+                cause: cause.into(),
+            });
+        }
+    }
+
     fn safety_scan(&mut self, t: SimTime) {
+        self.watch_bus(t);
         let [ch1, ch2] = self.lift.stop_channels();
         let inputs = LiftSafetyInputs {
             stop_ch1: ch1,
@@ -782,6 +897,18 @@ impl Rig {
 
     fn plc_scan(&mut self, t: SimTime) {
         self.to_safety = self.plc.scan(t, self.lab.bus.image_mut(), self.from_safety);
+        let held = self.plc.program().state_name() == "bus fault";
+        match (self.bus_fault_since, held) {
+            (None, true) => {
+                self.bus_fault_since = Some(t);
+                self.report.availability.bus_fault_holds += 1;
+            }
+            (Some(s), false) => {
+                self.report.availability.bus_fault_s += (t - s).as_secs_f64();
+                self.bus_fault_since = None;
+            }
+            _ => {}
+        }
         let events: Vec<_> = self.plc.program_mut().drain_events().collect();
         for e in events {
             match e.kind {
@@ -971,6 +1098,21 @@ impl Rig {
             let text = format!("the bus trace could not be written: {e}");
             self.log("rig", text);
         }
+        let now = self.now;
+        self.watch_bus(now);
+        self.las_watch.close(now);
+        if let Some(s) = self.bus_fault_since.take() {
+            self.report.availability.bus_fault_s += (now - s).as_secs_f64();
+        }
+        self.report.availability.bus_fault_s = round3(self.report.availability.bus_fault_s);
+        let dropouts: Vec<SlaveDropouts> = (1..32u8)
+            .filter(|&i| self.las_watch.count[i as usize] > 0)
+            .map(|i| SlaveDropouts {
+                address: i,
+                count: self.las_watch.count[i as usize],
+                out_of_las_s: round3(self.las_watch.out[i as usize].as_secs_f64()),
+            })
+            .collect();
         let p = self.plc.program();
         let stats = self.lab.bus.stats();
         let (min, mean, max) = stats.cycle_time_us();
@@ -981,6 +1123,12 @@ impl Rig {
             state: p.state_name().into(),
             moving: self.lift.velocity_mm_s() != 0.0,
             contactor_closed: self.lift.k1_closed(),
+            k1_open_cause: self
+                .safety_out
+                .as_ref()
+                .and_then(|d| d.k1_open_cause)
+                .filter(|_| !self.lift.k1_closed())
+                .map(|c| self.k1_cause_text(c)),
             fifo_cabin: p.fifo_cabin(),
             fifo_hall: p.fifo_hall(),
         };
@@ -1002,6 +1150,7 @@ impl Rig {
                 mean: round3(mean),
                 max: round3(max),
             },
+            dropouts,
         };
         self.report.passengers = self
             .presses
@@ -1021,6 +1170,35 @@ impl Rig {
         // Lines from different sources come in scan order; keep them in time order.
         self.report.log.sort_by(|a, b| a.at_s.total_cmp(&b.at_s));
         self.report
+    }
+
+    /// Why K1 is open, in words; an overtravel sensor the monitor does not release is told
+    /// apart: tripped (0000) or not heard.
+    fn k1_cause_text(&self, c: safety::lift::K1Cause) -> String {
+        let safety::lift::K1Cause::Overtravel { bottom, top } = c else {
+            return c.to_string();
+        };
+        let monitor = self.lab.monitor();
+        let why = |address: u8| {
+            let state =
+                asi_phy::Address::new(address).and_then(|a| monitor.and_then(|m| m.state(a)));
+            match state {
+                Some(Err(NotReleased::Tripped)) => "tripped",
+                Some(Err(NotReleased::Missing)) => "not heard for the monitor's tolerance time",
+                Some(Err(NotReleased::WrongCode { .. } | NotReleased::Frozen { .. })) => {
+                    "sending a wrong code sequence"
+                }
+                _ => "not yet released again by the monitor",
+            }
+        };
+        let mut parts = Vec::new();
+        if bottom {
+            parts.push(format!("overtravel bottom sensor (11) {}", why(11)));
+        }
+        if top {
+            parts.push(format!("overtravel top sensor (12) {}", why(12)));
+        }
+        parts.join("; ")
     }
 
     // ----- probes: stepping and state for timing studies (`asi-lift timing`) ----------------

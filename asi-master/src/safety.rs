@@ -2,20 +2,35 @@
 //! §3, §6).
 //!
 //! A free safe slave sends, cycle after cycle, the 8 values of its own code table; tripped it
-//! sends 0000. The [`SafetyMonitor`] listens on the bus with its own receiver (so it trusts
-//! only telegrams that pass the seven checks), pairs each Data_Exchange to a monitored address
-//! with its response, learns each slave's table and reports released / not released.
+//! sends 0000. The [`SafetyMonitor`] listens on the bus with its own receiver (so it judges only
+//! telegrams that pass the seven checks), pairs each Data_Exchange to a monitored address with
+//! its response, learns each slave's table and reports released / not released.
 //!
-//! **Decisions** (the public sources give the principle, not the rule; reference/asi.md §7):
+//! **What the sources say** (asi-master/README.md, "Safety at Work under line noise"): the
+//! monitor listens passively and evaluates the safe slave's Data_Exchange answers (Leuze RS4/AS-i
+//! manual; Siemens 3RK3 manual); the slave holds its code for 224 µs + 16 µs after a
+//! Data_Exchange "so that an immediate master repeat does not desynchronise the monitor" (ZMD
+//! SAP5 datasheet); the monitor's response delay is below 40 ms (Euchner/Bihl+Wiedemann AS-i
+//! Safety Monitor data sheet) and an input must be off for at least 41 ms to be seen reliably
+//! (Euchner Safety Basic Monitor manual); wrongly transferred code sequences cannot be
+//! suppressed (Siemens FAQ). The exact acceptance rule is not public.
+//!
+//! **Decisions**:
 //! - Tables have 8 distinct values in 0001..1110 (no 0000, which means tripped, and no 1111,
 //!   which the coding rules forbid).
 //! - Teaching: the monitor learns a table from 16 consecutive codes whose second 8 repeat the
 //!   first 8; it then releases.
-//! - 0000 drops the release at once (the demand). A wrong code (not the next of the table) or a
-//!   frozen code (the same code twice: with the SAP5 hold rule a master repeat never shows a
-//!   code twice, because the monitor sees only the valid response) is tolerated once; the
-//!   second bad code in a row drops the release. No valid code for `max_silence` (default
-//!   40 ms) drops it too (missing code).
+//! - Only valid telegrams are judged. The monitor counts the code steps the slave has taken
+//!   since the last code it judged, from the valid Data_Exchange requests it heard: a request
+//!   more than [`MonitorConfig::hold`] after the previous one to that address is a step (the
+//!   slave's own rule); a request within it is the master's repeat and gets the same code.
+//! - A valid code is correct if it is one of the next `steps` codes of the table (the slave
+//!   answered the steps whose responses the line corrupted; 8 or more steps: any code of the
+//!   table). The same code again without a step is the repeat of a code already judged and is
+//!   ignored. Anything else is a wrong code (the same code after a step is a frozen code).
+//! - 0000 drops the release at once (the demand). A wrong or frozen code drops it at once
+//!   (`bad_codes_to_trip` = 1: noise never produces one, so one is a fault). No valid code for
+//!   `max_silence` (default 40 ms, the monitors' response delay) drops it too (missing code).
 //! - After a drop the monitor releases again after 8 consecutive correct codes (one rotation);
 //!   restart interlocks (manual restart) belong to the safety logic (SPEC §6, MON).
 
@@ -97,19 +112,36 @@ pub enum NotReleased {
 /// The monitor's settings.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct MonitorConfig {
-    /// Consecutive bad codes (wrong or frozen) that drop the release (default 2).
+    /// Consecutive bad codes (wrong or frozen) that drop the release (default 1: the first).
     pub bad_codes_to_trip: u8,
-    /// Longest time without a valid code before the release drops (default 40 ms).
+    /// The tolerance time: the longest time without a valid code before the release drops
+    /// (default 40 ms, the response delay of the AS-i safety monitors).
     pub max_silence: SimDuration,
+    /// How long after a Data_Exchange the slave keeps its code, so that a request within it is
+    /// the master's repeat, not a new step (default [`crate::devices::CODE_HOLD`], SAP5).
+    pub hold: SimDuration,
 }
 
 impl Default for MonitorConfig {
     fn default() -> Self {
         MonitorConfig {
-            bad_codes_to_trip: 2,
+            bad_codes_to_trip: 1,
             max_silence: SimDuration::from_millis(40),
+            hold: crate::devices::CODE_HOLD,
         }
     }
+}
+
+/// The monitor dropped the release of a slave.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct MonitorDrop {
+    /// When.
+    pub at: SimTime,
+    /// The slave.
+    pub address: Address,
+    /// Why: [`NotReleased::Tripped`] (0000), [`NotReleased::WrongCode`],
+    /// [`NotReleased::Frozen`] or [`NotReleased::Missing`] (tolerance time exceeded).
+    pub why: NotReleased,
 }
 
 #[derive(Clone, Debug)]
@@ -120,11 +152,16 @@ struct Channel {
     pos: Option<usize>,
     last_code: Option<u8>,
     last_at: Option<SimTime>,
+    /// The last valid Data_Exchange request heard for this slave.
+    last_request: Option<SimTime>,
+    /// Code steps the slave has taken since the last judged code, as the requests tell.
+    steps: u32,
     bad: u8,
     good_run: u8,
     released: bool,
     reason: NotReleased,
     bad_codes: u64,
+    drops: Vec<MonitorDrop>,
 }
 
 impl Channel {
@@ -136,31 +173,63 @@ impl Channel {
             pos: None,
             last_code: None,
             last_at: None,
+            last_request: None,
+            steps: 0,
             bad: 0,
             good_run: 0,
             released: false,
             reason: NotReleased::Teaching,
             bad_codes: 0,
+            drops: Vec::new(),
         }
     }
 
-    fn drop_release(&mut self, why: NotReleased) {
+    fn drop_release(&mut self, now: SimTime, why: NotReleased) {
+        if self.released {
+            self.drops.push(MonitorDrop {
+                at: now,
+                address: self.address,
+                why,
+            });
+        }
         self.reason = why;
         self.released = false;
         self.good_run = 0;
     }
 
+    /// A valid Data_Exchange request to this slave at `now`.
+    fn request(&mut self, now: SimTime, cfg: &MonitorConfig) {
+        let step = self
+            .last_request
+            .is_none_or(|t| now.saturating_duration_since(t) > cfg.hold);
+        self.last_request = Some(now);
+        if step {
+            self.steps = self.steps.saturating_add(1);
+        }
+    }
+
     fn code(&mut self, now: SimTime, code: u8, cfg: &MonitorConfig) {
+        let steps = core::mem::take(&mut self.steps);
+        if steps == 0 && self.last_code == Some(code) {
+            // The master's repeat of a transaction whose first answer this receiver took:
+            // the code already judged, not a new one.
+            self.last_at = Some(now);
+            return;
+        }
         let previous = self.last_code.replace(code);
         self.last_at = Some(now);
         let Some(table) = self.table else {
+            if steps > 1 {
+                // A code was missed: the sequence heard is not consecutive.
+                self.learn.clear();
+            }
             self.teach(code);
             return;
         };
         if code == 0 {
             self.pos = None;
             self.bad = 0;
-            self.drop_release(NotReleased::Tripped);
+            self.drop_release(now, NotReleased::Tripped);
             return;
         }
         let bad = match self.pos {
@@ -176,19 +245,23 @@ impl Channel {
             },
             Some(p) => {
                 let expected = table.0[(p + 1) % 8];
-                if code == expected {
-                    self.pos = Some((p + 1) % 8);
-                    None
-                } else if previous == Some(code) {
-                    Some(NotReleased::Frozen { code })
-                } else {
-                    if let Some(q) = table.position(code) {
-                        self.pos = Some(q);
+                let ahead = table.position(code).map(|q| (q + 8 - p) % 8);
+                match ahead {
+                    Some(d) if d >= 1 && (d as u32 <= steps.max(1) || steps >= 8) => {
+                        self.pos = Some((p + d) % 8);
+                        None
                     }
-                    Some(NotReleased::WrongCode {
-                        expected,
-                        got: code,
-                    })
+                    Some(0) if steps >= 8 => None,
+                    _ if previous == Some(code) => Some(NotReleased::Frozen { code }),
+                    _ => {
+                        if let Some(q) = table.position(code) {
+                            self.pos = Some(q);
+                        }
+                        Some(NotReleased::WrongCode {
+                            expected,
+                            got: code,
+                        })
+                    }
                 }
             }
         };
@@ -207,8 +280,8 @@ impl Channel {
                 self.bad_codes += 1;
                 self.bad = self.bad.saturating_add(1);
                 self.good_run = 0;
-                if self.bad >= cfg.bad_codes_to_trip || !self.released {
-                    self.drop_release(why);
+                if self.bad >= cfg.bad_codes_to_trip.max(1) || !self.released {
+                    self.drop_release(now, why);
                 }
             }
         }
@@ -240,7 +313,7 @@ impl Channel {
         if let Some(t) = self.last_at {
             if self.released && now.saturating_duration_since(t) > cfg.max_silence {
                 self.pos = None;
-                self.drop_release(NotReleased::Missing);
+                self.drop_release(now, NotReleased::Missing);
             }
         }
     }
@@ -301,6 +374,12 @@ impl SafetyMonitor {
                     Some(Call::DataExchange { address, .. }) => Some(address),
                     _ => None,
                 };
+                if let Some(a) = self.asked {
+                    let cfg = self.cfg;
+                    if let Some(c) = self.channel_mut(a) {
+                        c.request(now, &cfg);
+                    }
+                }
             }
             TelegramKind::Response => {
                 let (Some(a), Some(resp)) = (self.asked.take(), r.response()) else {
@@ -353,6 +432,22 @@ impl SafetyMonitor {
             .map_or(0, |c| c.bad_codes)
     }
 
+    /// The releases dropped since the last call, in order (for reports).
+    pub fn take_drops(&mut self) -> Vec<MonitorDrop> {
+        let mut all: Vec<MonitorDrop> = self
+            .channels
+            .iter_mut()
+            .flat_map(|c| c.drops.drain(..))
+            .collect();
+        all.sort_by_key(|d| d.at);
+        all
+    }
+
+    /// The settings.
+    pub fn config(&self) -> &MonitorConfig {
+        &self.cfg
+    }
+
     /// The monitored addresses.
     pub fn addresses(&self) -> impl Iterator<Item = Address> + '_ {
         self.channels.iter().map(|c| c.address)
@@ -363,12 +458,40 @@ impl SafetyMonitor {
 mod tests {
     use super::*;
 
-    fn feed(c: &mut Channel, codes: &[u8], t0: &mut u64) {
+    /// One cycle of the lab bus.
+    const CYCLE: u64 = 2_002_000;
+    /// A master repeat comes this long after the first try.
+    const REPEAT: u64 = 162_000;
+
+    fn at(ns: u64) -> SimTime {
+        SimTime::from_nanos(ns)
+    }
+
+    /// A channel that has learned `t` (two rotations, one exchange per cycle) at `now`.
+    fn taught(t: &[u8; 8], now: &mut u64) -> Channel {
+        let mut c = Channel::new(Address::new(11).expect("a"));
+        feed(&mut c, t, now);
+        feed(&mut c, t, now);
+        assert!(c.released, "learned after two rotations");
+        c
+    }
+
+    /// One exchange per cycle, each answered with the code.
+    fn feed(c: &mut Channel, codes: &[u8], now: &mut u64) {
         let cfg = MonitorConfig::default();
         for &code in codes {
-            *t0 += 2_000_000;
-            c.code(SimTime::from_nanos(*t0), code, &cfg);
+            *now += CYCLE;
+            c.request(at(*now), &cfg);
+            c.code(at(*now + 100_000), code, &cfg);
         }
+    }
+
+    /// One exchange whose answers (first try and repeat) were both rejected.
+    fn lost(c: &mut Channel, now: &mut u64) {
+        let cfg = MonitorConfig::default();
+        *now += CYCLE;
+        c.request(at(*now), &cfg);
+        c.request(at(*now + REPEAT), &cfg);
     }
 
     #[test]
@@ -384,33 +507,102 @@ mod tests {
     }
 
     #[test]
-    fn teach_then_release_then_trip_on_0000_and_recover_after_a_rotation() {
+    fn a_correct_rotation_stays_released() {
         let t = CodeTable::from_serial(5).codes();
-        let mut c = Channel::new(Address::new(11).expect("a"));
         let mut now = 0;
-        feed(&mut c, &t, &mut now);
-        assert!(!c.released);
-        feed(&mut c, &t, &mut now);
-        assert!(c.released, "learned after two rotations");
+        let mut c = taught(&t, &mut now);
+        for _ in 0..50 {
+            feed(&mut c, &t, &mut now);
+            assert!(c.released);
+        }
+        assert_eq!(c.bad_codes, 0);
+        assert!(c.drops.is_empty());
+    }
+
+    #[test]
+    fn a_rejected_telegram_and_its_repeat_are_not_a_wrong_code() {
+        let t = CodeTable::from_serial(5).codes();
+        let mut now = 0;
+        let mut c = taught(&t, &mut now);
+        let cfg = MonitorConfig::default();
+        feed(&mut c, &t[..3], &mut now);
+        // The response to the first try fails the checks; the repeat gets the same code.
+        now += CYCLE;
+        c.request(at(now), &cfg);
+        c.request(at(now + REPEAT), &cfg);
+        c.code(at(now + REPEAT + 100_000), t[3], &cfg);
+        assert!(c.released);
+        // This receiver took the first answer, the master did not: the repeat's code is the
+        // same code, not a frozen one.
+        now += CYCLE;
+        c.request(at(now), &cfg);
+        c.code(at(now + 100_000), t[4], &cfg);
+        c.request(at(now + REPEAT), &cfg);
+        c.code(at(now + REPEAT + 100_000), t[4], &cfg);
+        assert!(c.released);
+        // Both tries of an exchange lost: the slave stepped unheard, the next code skips one.
+        lost(&mut c, &mut now);
+        feed(&mut c, &[t[6], t[7]], &mut now);
+        // Three exchanges lost in a row.
+        for _ in 0..3 {
+            lost(&mut c, &mut now);
+        }
+        feed(&mut c, &[t[3], t[4]], &mut now);
+        assert!(c.released);
+        assert_eq!(c.bad_codes, 0);
+    }
+
+    #[test]
+    fn code_0000_drops_the_release_at_once_and_a_rotation_releases_again() {
+        let t = CodeTable::from_serial(5).codes();
+        let mut now = 0;
+        let mut c = taught(&t, &mut now);
         feed(&mut c, &[0], &mut now);
         assert_eq!((c.released, c.reason), (false, NotReleased::Tripped));
+        feed(&mut c, &[0, 0, 0], &mut now);
         feed(&mut c, &t[..7], &mut now);
         assert!(!c.released);
         feed(&mut c, &t[7..], &mut now);
         assert!(c.released, "8 correct codes release again");
+        assert_eq!(c.drops.len(), 1);
+        assert_eq!(c.drops[0].why, NotReleased::Tripped);
     }
 
     #[test]
-    fn one_bad_code_is_tolerated_the_second_drops_the_release() {
+    fn a_wrong_code_drops_the_release_at_once() {
         let t = CodeTable::from_serial(5).codes();
-        let mut c = Channel::new(Address::new(11).expect("a"));
         let mut now = 0;
-        feed(&mut c, &t, &mut now);
-        feed(&mut c, &t, &mut now);
+        let mut c = taught(&t, &mut now);
         feed(&mut c, &t[..3], &mut now);
-        feed(&mut c, &[t[2]], &mut now); // frozen once
+        // One step, but the code two ahead.
+        feed(&mut c, &[t[4]], &mut now);
+        assert_eq!(
+            (c.released, c.reason),
+            (
+                false,
+                NotReleased::WrongCode {
+                    expected: t[3],
+                    got: t[4]
+                }
+            )
+        );
+        // A code outside the table after recovery.
+        feed(&mut c, &t[5..], &mut now);
+        feed(&mut c, &t[..5], &mut now);
         assert!(c.released);
-        feed(&mut c, &[t[2]], &mut now); // frozen twice
+        let outside = (1..15).find(|v| !t.contains(v)).expect("a value outside");
+        feed(&mut c, &[outside], &mut now);
+        assert!(!c.released);
+        assert!(matches!(c.reason, NotReleased::WrongCode { .. }));
+    }
+
+    #[test]
+    fn a_frozen_code_drops_the_release() {
+        let t = CodeTable::from_serial(5).codes();
+        let mut now = 0;
+        let mut c = taught(&t, &mut now);
+        feed(&mut c, &t[..3], &mut now);
+        feed(&mut c, &[t[2]], &mut now);
         assert_eq!(
             (c.released, c.reason),
             (false, NotReleased::Frozen { code: t[2] })
@@ -418,16 +610,47 @@ mod tests {
     }
 
     #[test]
-    fn silence_drops_the_release() {
+    fn silence_beyond_the_tolerance_time_drops_the_release() {
         let t = CodeTable::from_serial(9).codes();
+        let mut now = 0;
+        let mut c = taught(&t, &mut now);
+        let cfg = MonitorConfig::default();
+        let last = now + 100_000;
+        c.check_silence(at(last + 40_000_000), &cfg);
+        assert!(c.released, "exactly the tolerance time");
+        c.check_silence(at(last + 40_000_001), &cfg);
+        assert_eq!((c.released, c.reason), (false, NotReleased::Missing));
+        // Codes return: one rotation releases again.
+        now = last + 50_000_000;
+        feed(&mut c, &t[3..], &mut now);
+        feed(&mut c, &t[..2], &mut now);
+        assert!(!c.released);
+        feed(&mut c, &t[2..3], &mut now);
+        assert!(c.released);
+        // A longer tolerance time is a setting.
+        let long = MonitorConfig {
+            max_silence: SimDuration::from_millis(100),
+            ..cfg
+        };
+        c.check_silence(at(now + 60_000_000), &long);
+        assert!(c.released);
+    }
+
+    #[test]
+    fn teaching_needs_two_consecutive_rotations_heard_without_a_gap() {
+        let t = CodeTable::from_serial(3).codes();
         let mut c = Channel::new(Address::new(12).expect("a"));
         let mut now = 0;
+        feed(&mut c, &t[..5], &mut now);
+        lost(&mut c, &mut now);
+        feed(&mut c, &t[6..], &mut now);
         feed(&mut c, &t, &mut now);
+        assert!(!c.released, "a gap restarts teaching");
         feed(&mut c, &t, &mut now);
-        let cfg = MonitorConfig::default();
-        c.check_silence(SimTime::from_nanos(now + 39_000_000), &cfg);
         assert!(c.released);
-        c.check_silence(SimTime::from_nanos(now + 41_000_000), &cfg);
-        assert_eq!((c.released, c.reason), (false, NotReleased::Missing));
+        // Learned from t[6] on: the same cycle, started where the hearing started.
+        let mut rotated = t;
+        rotated.rotate_left(6);
+        assert_eq!(c.table.map(|x| x.codes()), Some(rotated));
     }
 }

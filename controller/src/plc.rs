@@ -3,7 +3,21 @@
 //! the standard signals exchanged with the safety logic.
 //!
 //! The program reads and writes only the image words of seed table 4.1: the flag nibble of
-//! word 0, one nibble per slave, and the analog output word of the speed set-point.
+//! word 0, one nibble per slave, the analog output word of the speed set-point, and the command
+//! mailbox (words 32..49) to read the LAS when the master flags a configuration error.
+//!
+//! **Which slaves the lift needs** (decision): F0 (ConfigError) says that *some* projected
+//! slave is missing, not which. While F0 is set the PLC reads the LAS with the mailbox command
+//! Read_List (as a PLC asks a Bihl+Wiedemann master through its command interface; the master
+//! answers from its lists, no bus call) once per scan, and the bus counts as usable while the
+//! slaves the cabin cannot move without are in LAS: the cabin panel (6: vanes, door, STOP,
+//! buttons), the converter I/O (7), the load sensor (8) and the speed set-point output (10).
+//! A floor station or the cabin display dropping out costs only its calls and its display.
+//! The answer arrives one scan after the question, so for the first scan of a configuration
+//! error the PLC keeps its last verdict (at most one scan, 10 ms, later than the flag); a
+//! mailbox that has not answered for [`LAS_STALE_SCANS`] scans counts as "essential slave
+//! missing". The overtravel sensors (11, 12) are not the PLC's business: the safety monitor
+//! and the safety logic take K1 away when they are not heard.
 
 use crate::program::{
     CabinWord, ControllerConfig, ControllerConfigError, Inputs, Outputs, Program,
@@ -12,7 +26,8 @@ use asi_master::handshake::{
     CabinDisplayMaster, CabinPanelMaster, DisplayWord, FloorStationMaster,
 };
 use asi_master::image::{F0_CONFIG_ERROR, F1_APF};
-use asi_master::{ProcessImage, SlaveAddr};
+use asi_master::mailbox::{self, Command, JobResult};
+use asi_master::{Image, ProcessImage, SlaveAddr, SlaveList};
 use asi_phy::{Nibble, SimTime};
 
 /// The lab lift's slave addresses (SPEC §3 table).
@@ -31,6 +46,70 @@ pub mod addr {
     pub const SPEED: u8 = 10;
     /// The lab bus has floor stations for this many floors.
     pub const FLOOR_STATIONS: u8 = 4;
+    /// The slaves the cabin cannot move without (see the module's decision).
+    pub const ESSENTIAL: [u8; 4] = [CABIN_PANEL, CONVERTER, LOAD, SPEED];
+}
+
+/// Scans without an answer from the mailbox after which the LAS counts as unknown, and the
+/// essential slaves as missing.
+pub const LAS_STALE_SCANS: u32 = 3;
+
+/// Reads the LAS through the command mailbox while the master flags a configuration error.
+#[derive(Clone, Debug, Default)]
+struct LasReader {
+    /// A Read_List job is posted and not answered yet.
+    pending: bool,
+    /// Scans since the job was posted.
+    waited: u32,
+    /// The LAS of the last answer in this configuration error.
+    las: Option<SlaveList>,
+    /// The last verdict: every essential slave in LAS.
+    essential_ok: bool,
+}
+
+impl LasReader {
+    fn new() -> LasReader {
+        LasReader {
+            essential_ok: true,
+            ..LasReader::default()
+        }
+    }
+
+    /// Whether the essential slaves are in LAS, given F0; posts or collects a Read_List job.
+    fn essential_present(&mut self, config_error: bool, input: &Image, output: &mut Image) -> bool {
+        if self.pending {
+            if let Some((cmd, result, bytes)) = mailbox::completed(input, output) {
+                if cmd == Command::ReadList as u8 {
+                    self.pending = false;
+                    self.las = (result == JobResult::Ok).then(|| {
+                        let mut b = [0u8; 8];
+                        b.copy_from_slice(&bytes[..8]);
+                        SlaveList::from_bits(u64::from_le_bytes(b))
+                    });
+                }
+            } else {
+                self.waited += 1;
+            }
+        }
+        if !config_error {
+            self.las = None;
+            self.essential_ok = true;
+            return true;
+        }
+        if !self.pending {
+            mailbox::post(output, Command::ReadList, &[1]);
+            self.pending = true;
+            self.waited = 0;
+        }
+        self.essential_ok = match self.las {
+            _ if self.waited >= LAS_STALE_SCANS => false,
+            Some(las) => addr::ESSENTIAL
+                .iter()
+                .all(|&n| SlaveAddr::a(n).is_some_and(|a| las.contains(a))),
+            None => self.essential_ok,
+        };
+        self.essential_ok
+    }
 }
 
 /// Scans without the echo of the PLC's own K after which the PLC starts a new cabin button
@@ -66,6 +145,7 @@ pub struct Plc {
     /// The bus was healthy (no configuration error, no AS-i power fail) at the last scan.
     bus_healthy: bool,
     shown: Option<DisplayWord>,
+    las: LasReader,
 }
 
 impl Plc {
@@ -86,6 +166,7 @@ impl Plc {
             panel: CabinPanelMaster::new().with_stall_limit(PANEL_STALL_LIMIT),
             bus_healthy: false,
             shown: None,
+            las: LasReader::new(),
         })
     }
 
@@ -111,6 +192,9 @@ impl Plc {
         let input = &image.input;
         let output = &mut image.output;
         let flags = input.word(0);
+        let bus_ok = self
+            .las
+            .essential_present(flags & F0_CONFIG_ERROR != 0, input, output);
 
         // Komunikuj: the master side of the floor, cabin display and cabin button handshakes.
         let mut hall_up = 0u32;
@@ -167,7 +251,7 @@ impl Plc {
                 estop_ok: safety.estop_out,
                 converter_ready: converter.bit(0),
                 converter_fault: converter.bit(1),
-                bus_ok: flags & F0_CONFIG_ERROR == 0,
+                bus_ok,
                 power_ok: flags & F1_APF == 0,
             },
         );
@@ -195,5 +279,48 @@ impl Plc {
                 self.cabin_display.set_word(word);
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use asi_master::image::MAILBOX_WORD;
+
+    /// The master's answer to the posted job: `las` (A slots) with result Ok.
+    fn answer(input: &mut Image, output: &Image, las: &[u8]) {
+        let bits = las.iter().fold(0u64, |m, &n| m | 1 << n);
+        for (k, b) in bits.to_le_bytes().iter().enumerate() {
+            input.set_mailbox_byte(k + 1, *b);
+        }
+        input.set_word(MAILBOX_WORD, output.word(MAILBOX_WORD) & 0xFF80);
+    }
+
+    #[test]
+    fn the_las_decides_only_while_f0_is_set_and_only_for_the_essential_slaves() {
+        let mut r = LasReader::new();
+        let mut input = Image::default();
+        let mut output = Image::default();
+        assert!(r.essential_present(false, &input, &mut output));
+        assert_eq!(output.word(MAILBOX_WORD), 0, "no job without F0");
+        // F0 rises: a Read_List(LAS) job is posted; the last verdict holds for this scan.
+        assert!(r.essential_present(true, &input, &mut output));
+        assert_eq!(output.word(MAILBOX_WORD) >> 8, Command::ReadList as u16);
+        assert_eq!(output.mailbox_byte(1), 1, "list 1 = LAS");
+        // A floor station and the cabin display are out: the cabin may move.
+        answer(&mut input, &output, &[1, 3, 4, 6, 7, 8, 10, 11, 12]);
+        assert!(r.essential_present(true, &input, &mut output));
+        // The converter I/O is out: hold.
+        answer(&mut input, &output, &[1, 2, 3, 4, 5, 6, 8, 10, 11, 12]);
+        assert!(!r.essential_present(true, &input, &mut output));
+        // Back: the cabin may move again.
+        answer(&mut input, &output, &[1, 2, 3, 4, 5, 6, 7, 8, 10, 11, 12]);
+        assert!(r.essential_present(true, &input, &mut output));
+        // The mailbox stops answering: the last verdict for two scans, then "missing".
+        assert!(r.essential_present(true, &input, &mut output));
+        assert!(r.essential_present(true, &input, &mut output));
+        assert!(!r.essential_present(true, &input, &mut output));
+        // F0 clears: every projected slave is there.
+        assert!(r.essential_present(false, &input, &mut output));
     }
 }

@@ -20,7 +20,7 @@ mod safety;
 pub use analog::{AnalogInput, AnalogOutput};
 pub use io::{Converter, IoModule, LoadSensor};
 pub use lift::{CabinDisplay, CabinPanel, FloorStation, HandshakeEngine, HandshakeModule};
-pub use safety::SafetySensor;
+pub use safety::{SafetySensor, CODE_HOLD};
 
 use crate::config::SlaveCodes;
 
