@@ -150,7 +150,8 @@ pub struct Inputs {
     pub converter_ready: bool,
     /// The converter reports a fault.
     pub converter_fault: bool,
-    /// No configuration error (flag F0 of word 0): every projected slave is on the bus.
+    /// The slaves the cabin cannot move without are on the bus (in LAS; see
+    /// [`crate::plc`]).
     pub bus_ok: bool,
     /// No AS-i power fail (flag F1 of word 0).
     pub power_ok: bool,
@@ -341,6 +342,9 @@ pub enum InitStart {
     Floor1Track,
     /// Both sensors: level at some floor; a slow probe tells floor 1 from the others.
     Level,
+    /// No vane, but the cabin was last seen creeping down inside floor 1's vane (before a hold
+    /// or a bus fault): it is just below floor 1 and creeps up to its level.
+    BelowFloor1,
 }
 
 /// Initialisation steps (seed table 6.3, extended for a start at floor 1).
@@ -433,6 +437,9 @@ pub struct Program {
     lost: bool,
     /// At the last vane counted: whether the left sensor rose first.
     vane_shape: Option<bool>,
+    /// A cabin that shows no vane now is just below floor 1's vane: initialisation last moved
+    /// it down inside that vane, or up towards it from below.
+    in_floor1_vane: bool,
 }
 
 /// How long the cabin may go on moving after the program took the drive off: the converter
@@ -494,6 +501,7 @@ impl Program {
             drive_off_at: SimTime::ZERO,
             lost: false,
             vane_shape: None,
+            in_floor1_vane: false,
         })
     }
 
@@ -544,17 +552,25 @@ impl Program {
                 let moved = settled && (edges.vane_rise || edges.vane_fall);
                 let blind = blind || !fresh || !inp.power_ok || moved;
                 self.phase = Phase::BusFault { resume, blind };
-                if bus_ok {
-                    self.event(now, EventKind::BusRestored);
-                    match resume {
-                        Some(step) if !blind => self.resume(step),
-                        _ => {
-                            if self.target != self.current {
-                                self.dispatch.requeue(self.target);
-                            }
-                            self.start_init(now);
-                        }
+                let journey = matches!(
+                    resume,
+                    Some(Step::Travel | Step::Braking | Step::Halted { .. })
+                );
+                match resume {
+                    Some(step) if bus_ok && !blind => {
+                        self.event(now, EventKind::BusRestored);
+                        self.resume(step);
                     }
+                    // Initialisation chooses its way from the vane sensors: only a cabin word
+                    // that completed since the bus came back shows where the cabin is now.
+                    _ if bus_ok && inp.cabin.is_some() => {
+                        self.event(now, EventKind::BusRestored);
+                        if journey || self.target != self.current {
+                            self.dispatch.requeue(self.target);
+                        }
+                        self.start_init(now);
+                    }
+                    _ => {}
                 }
             }
         }
@@ -622,11 +638,14 @@ impl Program {
         let start = match (self.cabin.vane_left, self.cabin.vane_right) {
             (true, true) => InitStart::Level,
             (true, false) => InitStart::Floor1Track,
+            // Last seen inside floor 1's vane moving down, or below it moving up: below it.
+            (false, false) if self.in_floor1_vane => InitStart::BelowFloor1,
             _ => InitStart::Seed,
         };
         let step = match start {
             InitStart::Level => InitStep::Probe,
             InitStart::Floor1Track => InitStep::Floor1Down,
+            InitStart::BelowFloor1 => InitStep::Floor1Up,
             InitStart::Seed => InitStep::Run,
         };
         self.initialised_at = None;
@@ -699,15 +718,28 @@ impl Program {
         }
         let c = self.cabin;
         let next = match step {
-            InitStep::Run if e.left_rise => Some(InitStep::Brake {
-                until: now + self.cfg.init_timer,
-            }),
+            InitStep::Run if e.left_rise => {
+                // The left sensor first, the right one off: floor 1's turned vane.
+                self.in_floor1_vane = !c.vane_right;
+                Some(InitStep::Brake {
+                    until: now + self.cfg.init_timer,
+                })
+            }
             InitStep::Brake { .. } if e.right_rise => return self.initialised(now),
+            // Out of floor 1's vane at the bottom without seeing its level (the cabin word came
+            // too late): creep back up to it rather than run on into the overtravel sensor.
+            InitStep::Brake { .. } if e.left_fall && self.in_floor1_vane => {
+                Some(InitStep::Floor1Up)
+            }
             InitStep::Brake { until } if now >= until => Some(InitStep::Run),
             InitStep::Floor1Down if e.right_rise => return self.initialised(now),
             InitStep::Floor1Down if e.left_fall => Some(InitStep::Floor1Up),
             InitStep::Probe if e.right_fall && c.vane_left => Some(InitStep::Floor1Up),
             InitStep::Probe if e.left_fall => Some(InitStep::Run),
+            // Up into a vane whose right sensor comes first: not floor 1.
+            InitStep::Floor1Up if e.vane_rise && e.floor1_vane == Some(false) => {
+                return self.start_init(now)
+            }
             InitStep::Floor1Up if c.vane_left && c.vane_right => return self.initialised(now),
             // Out of the long track without ever standing level: the sensors disagree with the
             // floor-1 vane's shape; start again from what they show now.
@@ -715,12 +747,21 @@ impl Program {
             _ => None,
         };
         let step = next.unwrap_or(step);
+        match step {
+            InitStep::Floor1Down => self.in_floor1_vane = true,
+            InitStep::Brake { .. } => {}
+            // Below the vane until its left sensor shows; inside it, moving up, the cabin can
+            // only leave it upwards.
+            InitStep::Floor1Up => self.in_floor1_vane = !c.vane_left,
+            InitStep::Run | InitStep::Probe => self.in_floor1_vane = false,
+        }
         self.phase = Phase::Init(step);
         self.drive_init(step);
     }
 
     fn initialised(&mut self, now: SimTime) {
         self.hold();
+        self.in_floor1_vane = false;
         self.current = 1;
         self.target = 1;
         self.dir = None;
@@ -1218,6 +1259,7 @@ impl fmt::Display for EventKind {
                     InitStart::Seed => "running down to find floor 1",
                     InitStart::Floor1Track => "inside floor 1's vane, creeping to level",
                     InitStart::Level => "level at a floor, probing which one",
+                    InitStart::BelowFloor1 => "just below floor 1's vane, creeping up",
                 }
             ),
             EventKind::Initialised => f.write_str("initialised at floor 1"),
