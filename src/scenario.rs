@@ -8,7 +8,8 @@ use controller::Algorithm;
 use lift_model::{Button, LoadLevel, SensorFault, VaneSensor};
 use serde::Deserialize;
 use std::fmt;
-use std::ops::Range;
+use std::fmt::Write as _;
+use std::ops::{Range, RangeInclusive};
 use toml::Spanned;
 
 /// A scenario, checked.
@@ -342,6 +343,18 @@ fn button(
     }
 }
 
+/// The legal cabin heights at power-on (`lift.start_mm`) for a lift of `floors` floors, mm
+/// above the floor-1 level: the travel between the overtravel sensors, which trip 60 mm beyond
+/// the end floors (SPEC §4). The one place that says so: the scenario reader checks
+/// `start_mm` against it and the campaign generator draws start positions from it.
+pub fn start_range_mm(floors: u8) -> RangeInclusive<f64> {
+    let top = (f64::from(floors.max(1)) - 1.0) * FLOOR_PITCH_MM;
+    -59.0..=top + 59.0
+}
+
+/// The distance between two floors of the lab lift, mm (SPEC §4).
+pub const FLOOR_PITCH_MM: f64 = 400.0;
+
 impl Scenario {
     /// Reads a scenario from TOML `text`; `file` names it in errors.
     pub fn from_toml(file: &str, text: &str) -> Result<Scenario, ScenarioError> {
@@ -394,13 +407,16 @@ impl Scenario {
             }
             if let Some(s) = &l.start_mm {
                 let v = *s.get_ref();
-                let top = (sc.floors as f64 - 1.0) * 400.0;
-                // The overtravel sensors trip 60 mm beyond the end floors (SPEC §4).
-                if !v.is_finite() || v < -59.0 || v > top + 59.0 {
+                let range = start_range_mm(sc.floors);
+                if !v.is_finite() || !range.contains(&v) {
                     return Err(loc.error(
                         Some(s.span()),
                         "lift.start_mm",
-                        format!("{v} mm lies outside the travel between the overtravel sensors (-59..{} mm)", top + 59.0),
+                        format!(
+                            "{v} mm lies outside the travel between the overtravel sensors ({}..{} mm)",
+                            range.start(),
+                            range.end()
+                        ),
                     ));
                 }
                 sc.start_mm = v;
@@ -543,6 +559,70 @@ impl Scenario {
         Ok(sc)
     }
 
+    /// The scenario as a scenario file that [`Scenario::from_toml`] reads back to an equal
+    /// scenario, but for the events' `line`s: every setting is written (defaults too),
+    /// durations exactly in the largest unit that divides them (`"1500ms"`), numbers in their
+    /// shortest exact form, and the events in time order (stable, as the reader sorts them;
+    /// so a scenario whose events are in time order comes back unchanged).
+    pub fn to_toml(&self) -> String {
+        let mut s = String::new();
+        let _ = writeln!(s, "name = {}", toml_string(&self.name));
+        let _ = writeln!(s, "seed = {}", self.seed);
+        let _ = writeln!(s, "duration = \"{}\"", exact_duration(self.duration));
+        let _ = writeln!(
+            s,
+            "algorithm = \"{}\"",
+            match self.algorithm {
+                Algorithm::Fifo => "fifo",
+                Algorithm::Collective => "collective",
+            }
+        );
+        let _ = writeln!(s, "\n[lift]\nfloors = {}", self.floors);
+        let _ = writeln!(s, "start_mm = {}", toml_float(self.start_mm));
+        let _ = writeln!(s, "load = \"{}\"", load_name(self.load));
+        let _ = writeln!(
+            s,
+            "door = \"{}\"",
+            if self.door_closed { "closed" } else { "open" }
+        );
+        let _ = writeln!(
+            s,
+            "\n[bus]\npulse_error_rate = {}",
+            toml_float(self.pulse_error_rate)
+        );
+        let _ = writeln!(s, "extra_slaves = {}", self.extra_slaves);
+        let _ = writeln!(
+            s,
+            "\n[controller]\nscan = \"{}\"",
+            exact_duration(self.plc_scan)
+        );
+        let _ = writeln!(s, "\n[safety]\npower_on_reset = {}", self.power_on_reset);
+        let mut events: Vec<&ScenarioEvent> = self.events.iter().collect();
+        events.sort_by_key(|e| e.at);
+        for e in events {
+            let at = exact_duration(e.at.saturating_duration_since(SimTime::ZERO));
+            let _ = writeln!(s, "\n[[event]]\nat = \"{at}\"");
+            let _ = match &e.action {
+                Action::Press { button, hold } => {
+                    let _ = writeln!(s, "press = \"{}\"", button_text(*button));
+                    if *hold != DEFAULT_HOLD {
+                        let _ = writeln!(s, "hold = \"{}\"", exact_duration(*hold));
+                    }
+                    Ok(())
+                }
+                Action::Load(l) => writeln!(s, "load = \"{}\"", load_name(*l)),
+                Action::Door { closed } => {
+                    writeln!(s, "door = \"{}\"", if *closed { "closed" } else { "open" })
+                }
+                Action::Crank { mm } => writeln!(s, "crank_mm = {}", toml_float(*mm)),
+                Action::Reset => writeln!(s, "reset = true"),
+                Action::Ack => writeln!(s, "ack = true"),
+                Action::Fault(f) => writeln!(s, "fault = {}", fault_text(f)),
+            };
+        }
+        s
+    }
+
     /// A scenario with nothing in it: the defaults every file starts from.
     pub fn defaults() -> Scenario {
         Scenario {
@@ -571,6 +651,91 @@ impl Scenario {
             // The demo is checked by a test; this branch only keeps a broken build from
             // panicking.
             Err(_) => Scenario::defaults(),
+        }
+    }
+}
+
+/// A TOML basic string: quoted, with `"`, `\\` and control characters escaped.
+fn toml_string(text: &str) -> String {
+    let mut s = String::with_capacity(text.len() + 2);
+    s.push('"');
+    for c in text.chars() {
+        match c {
+            '"' => s.push_str("\\\""),
+            '\\' => s.push_str("\\\\"),
+            '\n' => s.push_str("\\n"),
+            '\t' => s.push_str("\\t"),
+            '\r' => s.push_str("\\r"),
+            c if c.is_control() => {
+                let _ = write!(s, "\\u{:04X}", c as u32);
+            }
+            c => s.push(c),
+        }
+    }
+    s.push('"');
+    s
+}
+
+/// A finite number as TOML reads it back exactly: Rust's shortest round-trip form, which
+/// always has a decimal point or an exponent (`650.0`, `0.001`, `1e-5`).
+fn toml_float(v: f64) -> String {
+    format!("{v:?}")
+}
+
+/// A duration in the largest unit that divides it, so that it reads back exactly.
+fn exact_duration(d: SimDuration) -> String {
+    let ns = d.as_nanos();
+    for (scale, unit) in [(1_000_000_000, "s"), (1_000_000, "ms"), (1_000, "us")] {
+        if ns % scale == 0 {
+            return format!("{}{unit}", ns / scale);
+        }
+    }
+    format!("{ns}ns")
+}
+
+fn load_name(l: LoadLevel) -> &'static str {
+    match l {
+        LoadLevel::Empty => "empty",
+        LoadLevel::Loaded => "loaded",
+        LoadLevel::Full => "full",
+        LoadLevel::Overloaded => "overloaded",
+    }
+}
+
+/// A button as a scenario file names it: `cabin:3`, `hall-up:2`, `stop`.
+pub fn button_text(b: Button) -> String {
+    match b {
+        Button::Cabin(f) => format!("cabin:{f}"),
+        Button::HallUp(f) => format!("hall-up:{f}"),
+        Button::HallDown(f) => format!("hall-down:{f}"),
+        Button::Bell => "bell".into(),
+        Button::Stop => "stop".into(),
+    }
+}
+
+fn fault_text(f: &Fault) -> String {
+    let side = |s: &VaneSensor| match s {
+        VaneSensor::Left => "left",
+        VaneSensor::Right => "right",
+    };
+    match f {
+        Fault::SlaveOffline { slave } => format!("{{ kind = \"slave-offline\", slave = {slave} }}"),
+        Fault::SlaveOnline { slave } => format!("{{ kind = \"slave-online\", slave = {slave} }}"),
+        Fault::PowerFail { duration } => format!(
+            "{{ kind = \"power-fail\", duration = \"{}\" }}",
+            exact_duration(*duration)
+        ),
+        Fault::SafeLinkDrop { duration } => format!(
+            "{{ kind = \"safe-link-drop\", duration = \"{}\" }}",
+            exact_duration(*duration)
+        ),
+        Fault::Vane { sensor, fault } => {
+            let kind = match fault {
+                SensorFault::StuckOn => "vane-stuck-on",
+                SensorFault::StuckOff => "vane-stuck-off",
+                SensorFault::None => "vane-repaired",
+            };
+            format!("{{ kind = \"{kind}\", sensor = \"{}\" }}", side(sensor))
         }
     }
 }
@@ -781,6 +946,157 @@ fault = { kind = "safe-link-drop", duration = "300ms" }
     fn a_wrong_type_names_its_key() {
         let e = err("[lift]\nstart_mm = \"high\"\n");
         assert!(e.starts_with("t.toml:2:12: start_mm:"), "{e}");
+    }
+
+    mod round_trip {
+        use super::*;
+        use proptest::prelude::*;
+
+        fn duration_ns(max: u64) -> impl Strategy<Value = SimDuration> {
+            // Whole seconds, milliseconds and microseconds as well as odd nanoseconds.
+            prop_oneof![
+                (1..=max / 1_000_000_000).prop_map(SimDuration::from_secs),
+                (1..=max / 1_000_000).prop_map(SimDuration::from_millis),
+                (1..=max / 1_000).prop_map(SimDuration::from_micros),
+                (1..=max).prop_map(SimDuration::from_nanos),
+            ]
+        }
+
+        fn button(floors: u8) -> impl Strategy<Value = Button> {
+            prop_oneof![
+                (1..=floors).prop_map(Button::Cabin),
+                (1..floors).prop_map(Button::HallUp),
+                (2..=floors).prop_map(Button::HallDown),
+                Just(Button::Stop),
+                Just(Button::Bell),
+            ]
+        }
+
+        fn load() -> impl Strategy<Value = LoadLevel> {
+            prop_oneof![
+                Just(LoadLevel::Empty),
+                Just(LoadLevel::Loaded),
+                Just(LoadLevel::Full),
+                Just(LoadLevel::Overloaded),
+            ]
+        }
+
+        fn action(floors: u8) -> impl Strategy<Value = Action> {
+            let sensor = prop_oneof![Just(VaneSensor::Left), Just(VaneSensor::Right)];
+            let sensor_fault = prop_oneof![
+                Just(SensorFault::None),
+                Just(SensorFault::StuckOn),
+                Just(SensorFault::StuckOff)
+            ];
+            prop_oneof![
+                (button(floors), duration_ns(10_000_000_000))
+                    .prop_map(|(button, hold)| Action::Press { button, hold }),
+                load().prop_map(Action::Load),
+                any::<bool>().prop_map(|closed| Action::Door { closed }),
+                (-10_000.0..=10_000.0f64)
+                    .prop_filter("non-zero", |mm| *mm != 0.0)
+                    .prop_map(|mm| Action::Crank { mm }),
+                Just(Action::Reset),
+                Just(Action::Ack),
+                (1..=31u8).prop_map(|slave| Action::Fault(Fault::SlaveOffline { slave })),
+                (1..=31u8).prop_map(|slave| Action::Fault(Fault::SlaveOnline { slave })),
+                duration_ns(60_000_000_000)
+                    .prop_map(|duration| Action::Fault(Fault::PowerFail { duration })),
+                duration_ns(60_000_000_000)
+                    .prop_map(|duration| Action::Fault(Fault::SafeLinkDrop { duration })),
+                (sensor, sensor_fault)
+                    .prop_map(|(sensor, fault)| Action::Fault(Fault::Vane { sensor, fault })),
+            ]
+        }
+
+        prop_compose! {
+            fn event(floors: u8)(at in 0..=3_600_000_000_000u64, action in action(floors))
+                -> ScenarioEvent {
+                ScenarioEvent { at: SimTime::from_nanos(at), action, line: 0 }
+            }
+        }
+
+        prop_compose! {
+            fn lift()(floors in 2..=24u8)(
+                floors in Just(floors),
+                start in start_range_mm(floors),
+                events in proptest::collection::vec(event(floors), 0..12),
+            ) -> (u8, f64, Vec<ScenarioEvent>) {
+                (floors, start, events)
+            }
+        }
+
+        prop_compose! {
+            fn scenario()(
+                name in any::<String>(),
+                seed in any::<u64>(),
+                duration in duration_ns(36_000_000_000_000),
+                collective in any::<bool>(),
+                (floors, start_mm, events) in lift(),
+                load in load(),
+                door_closed in any::<bool>(),
+                pulse_error_rate in prop_oneof![Just(0.0), Just(1.0), 0.0..=1.0f64],
+                extra_slaves in 0..=20u8,
+                scan in 1_000_000..=1_000_000_000u64,
+                power_on_reset in any::<bool>(),
+            ) -> Scenario {
+                Scenario {
+                    name,
+                    seed,
+                    duration,
+                    algorithm: if collective { Algorithm::Collective } else { Algorithm::Fifo },
+                    floors,
+                    start_mm,
+                    load,
+                    door_closed,
+                    pulse_error_rate,
+                    extra_slaves,
+                    plc_scan: SimDuration::from_nanos(scan),
+                    power_on_reset,
+                    events,
+                }
+            }
+        }
+
+        proptest! {
+            #[test]
+            fn to_toml_reads_back_to_an_equal_scenario(sc in scenario()) {
+                let text = sc.to_toml();
+                let mut back = match Scenario::from_toml("written.toml", &text) {
+                    Ok(b) => b,
+                    Err(e) => return Err(TestCaseError::fail(format!("{e}\n{text}"))),
+                };
+                back.events.iter_mut().for_each(|e| e.line = 0);
+                let mut expected = sc;
+                expected.events.sort_by_key(|e| e.at);
+                prop_assert_eq!(back, expected, "{}", text);
+            }
+        }
+
+        #[test]
+        fn the_written_scenario_files_are_readable() {
+            let sc = Scenario::from_toml("demo.toml", include_str!("../scenarios/demo.toml"))
+                .expect("demo");
+            let text = sc.to_toml();
+            assert!(
+                text.contains("[[event]]\nat = \"15s\"\npress = \"cabin:3\"\n"),
+                "{text}"
+            );
+            assert!(text.starts_with("name = \"demo\"\nseed = 1\n"), "{text}");
+            let back = Scenario::from_toml("w.toml", &text).expect("back");
+            assert_eq!(back.events.len(), sc.events.len());
+        }
+    }
+
+    #[test]
+    fn the_start_range_is_the_travel_between_the_overtravel_sensors() {
+        assert_eq!(start_range_mm(4), -59.0..=1259.0);
+        assert_eq!(start_range_mm(2), -59.0..=459.0);
+        let at = |mm: f64| format!("[lift]\nfloors = 2\nstart_mm = {mm:?}\n");
+        assert!(Scenario::from_toml("t.toml", &at(459.0)).is_ok());
+        assert!(Scenario::from_toml("t.toml", &at(-59.0)).is_ok());
+        assert!(err(&at(459.5)).contains("(-59..459 mm)"));
+        assert!(err(&at(-59.5)).contains("lift.start_mm"));
     }
 
     #[test]
