@@ -1,5 +1,8 @@
 //! The `asi-lift` command.
 
+use asi_lift::campaign::profile::Profile;
+use asi_lift::campaign::run::{run_campaign, Finished, Plan, Shard};
+use asi_lift::campaign::summary::summarize;
 use asi_lift::capture::{
     decode_capture, summary, to_json_lines, to_text, CaptureFormat, DecodeOptions,
 };
@@ -179,6 +182,66 @@ enum Command {
         #[arg(long)]
         force: bool,
     },
+    /// Run many random valid scenarios on the whole rig (README.md, "Campaigns"): one JSON
+    /// line per run, every failure shrunk to a scenario file that reproduces it; or merge
+    /// result files with `campaign summarize`.
+    #[command(args_conflicts_with_subcommands = true)]
+    Campaign {
+        #[command(subcommand)]
+        action: Option<CampaignAction>,
+        #[command(flatten)]
+        args: CampaignArgs,
+    },
+}
+
+#[derive(Subcommand)]
+enum CampaignAction {
+    /// Merge the JSON lines of one campaign (its shards, in any order) into one table: runs,
+    /// outcomes, violations by kind, out-of-service runs, waits, repeats per transaction.
+    Summarize {
+        /// The result files (`-` for standard input).
+        #[arg(required = true, value_name = "FILE")]
+        files: Vec<PathBuf>,
+        /// Write the summary as JSON.
+        #[arg(long)]
+        json: bool,
+    },
+}
+
+#[derive(clap::Args)]
+struct CampaignArgs {
+    /// Runs of the whole campaign (all shards together).
+    #[arg(long, value_name = "N", default_value_t = 100)]
+    runs: u64,
+    /// The campaign seed: the same seed gives the same runs and the same lines.
+    #[arg(long, value_name = "S", default_value_t = 1)]
+    seed: u64,
+    /// Worker threads [default: all cores].
+    #[arg(long, value_name = "J")]
+    jobs: Option<usize>,
+    /// Run only the K-th of N disjoint parts (1-based): the runs whose index i has
+    /// i mod N = K - 1.
+    #[arg(long, value_name = "K/N", value_parser = parse_shard)]
+    shard: Option<Shard>,
+    /// Write the JSON lines to this file instead of standard output.
+    #[arg(long, value_name = "FILE.jsonl")]
+    out: Option<PathBuf>,
+    /// The generator's profile: a built-in (default, quiet, noisy, smoke) or a profile file.
+    #[arg(long, value_name = "NAME|FILE", default_value = "default")]
+    profile: String,
+    /// Where the shrunk reproducers of failing runs go (created when needed).
+    #[arg(long, value_name = "DIR", default_value = "campaign-failures")]
+    failures: PathBuf,
+    /// Runs a failure may spend on shrinking (0: write the failing scenario as generated).
+    #[arg(long, value_name = "RUNS", default_value_t = 64)]
+    shrink_budget: u32,
+    /// Overwrite the --out file if it exists.
+    #[arg(long)]
+    force: bool,
+}
+
+fn parse_shard(s: &str) -> Result<Shard, String> {
+    s.parse()
 }
 
 fn parse_bus(s: &str) -> Result<BusChoice, String> {
@@ -405,6 +468,10 @@ fn run(cli: Cli) -> Result<u8, String> {
             }
             Ok(0)
         }
+        Command::Campaign { action, args } => match action {
+            None => campaign(args),
+            Some(CampaignAction::Summarize { files, json }) => campaign_summary(&files, json),
+        },
         Command::Timing {
             bus,
             extra_slaves,
@@ -439,6 +506,171 @@ fn run(cli: Cli) -> Result<u8, String> {
             Ok(0)
         }
     }
+}
+
+/// `asi-lift campaign`: runs the plan, writes the lines and the reproducers.
+fn campaign(args: CampaignArgs) -> Result<u8, String> {
+    if args.runs == 0 {
+        return Err("--runs: 0: a campaign has at least one run".into());
+    }
+    let jobs = match args.jobs {
+        Some(0) => return Err("--jobs: 0: give at least one worker thread".into()),
+        Some(j) => j,
+        None => std::thread::available_parallelism().map_or(1, |n| n.get()),
+    };
+    let profile = Profile::resolve(&args.profile).map_err(|e| e.to_string())?;
+    let plan = Plan {
+        seed: args.seed,
+        runs: args.runs,
+        shard: args.shard.unwrap_or(Shard::ALL),
+        profile,
+        shrink_budget: args.shrink_budget,
+    };
+    let count = plan.indices().count() as u64;
+    if count == 0 {
+        return Err(format!(
+            "--shard {}: the campaign's {} runs leave this shard empty",
+            plan.shard, plan.runs
+        ));
+    }
+    if args.failures.exists() && !args.failures.is_dir() {
+        return Err(format!(
+            "--failures {}: exists and is not a directory",
+            args.failures.display()
+        ));
+    }
+    let out_path = args.out.clone().unwrap_or_else(|| PathBuf::from("-"));
+    let mut out = open_output(&out_path, args.force)?;
+    let out_name = if out_path == Path::new("-") {
+        "standard output".to_string()
+    } else {
+        out_path.display().to_string()
+    };
+    // A panic in a run is an outcome of the campaign, reported in its line: keep the
+    // workers' panic messages off the terminal.
+    let default_hook = std::panic::take_hook();
+    std::panic::set_hook(Box::new(move |info| {
+        let worker = std::thread::current()
+            .name()
+            .is_some_and(|n| n.starts_with("campaign-worker-"));
+        if !worker {
+            default_hook(info);
+        }
+    }));
+    let bar = if std::io::stderr().is_terminal() {
+        let bar = indicatif::ProgressBar::new(count);
+        if let Ok(style) = indicatif::ProgressStyle::with_template(
+            "{elapsed_precise} [{bar:30}] {pos}/{len} runs, {msg}, eta {eta}",
+        ) {
+            bar.set_style(style.progress_chars("=> "));
+        }
+        bar
+    } else {
+        indicatif::ProgressBar::hidden()
+    };
+    let mut outcomes = std::collections::BTreeMap::<String, u64>::new();
+    let mut failures_seen = 0u64;
+    let mut written: Vec<PathBuf> = Vec::new();
+    let failures_dir = args.failures.clone();
+    let mut sink = |mut f: Finished| -> Result<(), String> {
+        if let Some(r) = &f.reproducer {
+            let path = write_reproducer(&failures_dir, &r.file_name, &r.text)?;
+            f.line.reproducer = path.file_name().map(|n| n.to_string_lossy().into_owned());
+            written.push(path);
+        }
+        *outcomes
+            .entry(f.line.outcome.name().to_owned())
+            .or_default() += 1;
+        let json = serde_json::to_string(&f.line).map_err(|e| format!("{out_name}: {e}"))?;
+        writeln!(out, "{json}")
+            .and_then(|()| out.flush())
+            .map_err(|e| format!("{out_name}: {e}"))
+    };
+    let mut progress = |f: &Finished| {
+        if f.reproducer.is_some() {
+            failures_seen += 1;
+        }
+        bar.set_message(format!("{failures_seen} failing"));
+        bar.inc(1);
+    };
+    let result = run_campaign(&plan, jobs, &mut sink, &mut progress);
+    bar.finish_and_clear();
+    let _ = std::panic::take_hook();
+    result.map_err(|e| e.0)?;
+    let failing = count - outcomes.get("ok").copied().unwrap_or(0);
+    let by: Vec<String> = outcomes.iter().map(|(k, v)| format!("{v} {k}")).collect();
+    eprintln!(
+        "campaign seed {}, profile {}, shard {}: {count} runs: {}",
+        plan.seed,
+        plan.profile.name,
+        plan.shard,
+        by.join(", ")
+    );
+    if failing > 0 {
+        eprintln!(
+            "{} reproducers written to {}",
+            written.len(),
+            args.failures.display()
+        );
+        return Ok(EXIT_VIOLATIONS);
+    }
+    Ok(0)
+}
+
+/// Writes a reproducer into `dir` as `name`, never over another file: an existing file
+/// with the same text is kept as it is, one with other text gets the next free name
+/// (`run-000042-…-2.toml`).
+fn write_reproducer(dir: &Path, name: &str, text: &str) -> Result<PathBuf, String> {
+    std::fs::create_dir_all(dir).map_err(|e| format!("--failures {}: {e}", dir.display()))?;
+    let stem = name.trim_end_matches(".toml");
+    for n in 1..1000 {
+        let path = if n == 1 {
+            dir.join(name)
+        } else {
+            dir.join(format!("{stem}-{n}.toml"))
+        };
+        match std::fs::OpenOptions::new()
+            .write(true)
+            .create_new(true)
+            .open(&path)
+        {
+            Ok(mut f) => {
+                f.write_all(text.as_bytes())
+                    .map_err(|e| format!("{}: {e}", path.display()))?;
+                return Ok(path);
+            }
+            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {
+                if std::fs::read_to_string(&path).is_ok_and(|t| t == text) {
+                    return Ok(path);
+                }
+            }
+            Err(e) => return Err(format!("{}: {e}", path.display())),
+        }
+    }
+    Err(format!(
+        "--failures {}: no free name for {name}",
+        dir.display()
+    ))
+}
+
+/// `asi-lift campaign summarize`.
+fn campaign_summary(files: &[PathBuf], json: bool) -> Result<u8, String> {
+    let mut texts = Vec::new();
+    for f in files {
+        let name = if f == Path::new("-") {
+            "standard input".to_string()
+        } else {
+            f.display().to_string()
+        };
+        texts.push((name, read_input(f)?));
+    }
+    let s = summarize(&texts)?;
+    print_out(&if json {
+        s.to_json() + "\n"
+    } else {
+        s.to_text()
+    })?;
+    Ok(0)
 }
 
 /// Parses `START..END` in simulated time.
