@@ -211,13 +211,23 @@ enum CampaignAction {
 #[derive(clap::Args)]
 struct CampaignArgs {
     /// Runs of the whole campaign (all shards together).
-    #[arg(long, value_name = "N", default_value_t = 100)]
+    #[arg(
+        long,
+        value_name = "N",
+        default_value_t = 100,
+        allow_negative_numbers = true
+    )]
     runs: u64,
     /// The campaign seed: the same seed gives the same runs and the same lines.
-    #[arg(long, value_name = "S", default_value_t = 1)]
+    #[arg(
+        long,
+        value_name = "S",
+        default_value_t = 1,
+        allow_negative_numbers = true
+    )]
     seed: u64,
     /// Worker threads [default: all cores].
-    #[arg(long, value_name = "J")]
+    #[arg(long, value_name = "J", allow_negative_numbers = true)]
     jobs: Option<usize>,
     /// Run only the K-th of N disjoint parts (1-based): the runs whose index i has
     /// i mod N = K - 1.
@@ -233,7 +243,12 @@ struct CampaignArgs {
     #[arg(long, value_name = "DIR", default_value = "campaign-failures")]
     failures: PathBuf,
     /// Runs a failure may spend on shrinking (0: write the failing scenario as generated).
-    #[arg(long, value_name = "RUNS", default_value_t = 64)]
+    #[arg(
+        long,
+        value_name = "RUNS",
+        default_value_t = 64,
+        allow_negative_numbers = true
+    )]
     shrink_budget: u32,
     /// Overwrite the --out file if it exists.
     #[arg(long)]
@@ -581,8 +596,7 @@ fn campaign(args: CampaignArgs) -> Result<u8, String> {
         *outcomes
             .entry(f.line.outcome.name().to_owned())
             .or_default() += 1;
-        let json = serde_json::to_string(&f.line).map_err(|e| format!("{out_name}: {e}"))?;
-        writeln!(out, "{json}")
+        writeln!(out, "{}", f.line.to_json_line())
             .and_then(|()| out.flush())
             .map_err(|e| format!("{out_name}: {e}"))
     };
@@ -832,6 +846,157 @@ mod tests {
         fails_naming(&["--samples", "-3"], "--samples");
         fails_naming(&["--extra-slaves", "-3"], "--extra-slaves");
         fails_naming(&["--duration", "-3s"], "--duration");
+    }
+
+    fn campaign_cli(args: &[&str]) -> Result<u8, String> {
+        let cli = Cli::try_parse_from(["asi-lift", "campaign"].iter().chain(args))
+            .map_err(|e| e.to_string())?;
+        run(cli)
+    }
+
+    fn campaign_fails_naming(args: &[&str], what: &str) {
+        match campaign_cli(args) {
+            Ok(_) => panic!("{args:?} was accepted"),
+            Err(e) => assert!(e.contains(what), "{args:?}: {e}"),
+        }
+    }
+
+    fn temp(name: &str) -> PathBuf {
+        let dir = std::env::temp_dir().join(format!("asi-lift-cli-{}-{name}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).expect("temp dir");
+        dir
+    }
+
+    #[test]
+    fn bad_campaign_arguments_are_named() {
+        campaign_fails_naming(&["--shard", "0/3"], "--shard");
+        campaign_fails_naming(&["--shard", "0/3"], "numbered from 1");
+        campaign_fails_naming(&["--shard", "4/3"], "1..=3");
+        campaign_fails_naming(&["--shard", "3"], "K/N");
+        campaign_fails_naming(&["--runs", "abc"], "--runs");
+        campaign_fails_naming(&["--runs", "0"], "--runs");
+        campaign_fails_naming(&["--runs", "-5"], "--runs");
+        campaign_fails_naming(&["--jobs", "0"], "--jobs");
+        campaign_fails_naming(&["--jobs", "-2"], "--jobs");
+        campaign_fails_naming(&["--shrink-budget", "-1"], "--shrink-budget");
+        campaign_fails_naming(&["--seed", "x"], "--seed");
+        campaign_fails_naming(&["--runs", "2", "--shard", "3/3"], "shard empty");
+        campaign_fails_naming(&["--profile", "loud"], "--profile loud: no such built-in");
+        let dir = temp("bad-profile");
+        let bad = dir.join("bad.toml");
+        std::fs::write(&bad, "[event]\nmeteor = 3\n").expect("write");
+        let bad = bad.to_string_lossy().to_string();
+        campaign_fails_naming(&["--profile", &bad], "unknown event kind");
+        campaign_fails_naming(&["--profile", &dir.to_string_lossy()], "--profile");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn a_campaign_refuses_to_overwrite_and_its_shards_summarize_to_the_whole() {
+        let dir = temp("shards");
+        let profile = dir.join("short.toml");
+        std::fs::write(
+            &profile,
+            "base = \"smoke\"\nduration = [\"40s\", \"45s\"]\nprobe_lead = \"10s\"\nevents = [1, 4]\n",
+        )
+        .expect("profile");
+        let p = profile.to_string_lossy().to_string();
+        let path = |n: &str| dir.join(n).to_string_lossy().to_string();
+        let failures = path("failures");
+        let common = ["--runs", "6", "--seed", "3", "--profile", &p, "--jobs", "2"];
+        let go = |extra: &[&str]| {
+            let mut a: Vec<&str> = common.to_vec();
+            a.extend_from_slice(extra);
+            a.extend_from_slice(&["--failures", &failures, "--shrink-budget", "2"]);
+            campaign_cli(&a)
+        };
+        let whole = path("whole.jsonl");
+        let code = go(&["--out", &whole]).expect("campaign");
+        assert!(code == 0 || code == EXIT_VIOLATIONS);
+        // Not again without --force, and the file stays as it was.
+        let before = std::fs::read_to_string(&whole).expect("lines");
+        let again = go(&["--out", &whole]).expect_err("refused");
+        assert!(again.contains("--force"), "{again}");
+        assert_eq!(std::fs::read_to_string(&whole).ok(), Some(before.clone()));
+        assert_eq!(go(&["--out", &whole, "--force"]), Ok(code));
+        assert_eq!(std::fs::read_to_string(&whole).ok(), Some(before.clone()));
+        let (a, b) = (path("a.jsonl"), path("b.jsonl"));
+        go(&["--out", &a, "--shard", "1/2"]).expect("shard 1");
+        go(&["--out", &b, "--shard", "2/2"]).expect("shard 2");
+        let read = |f: &str| std::fs::read_to_string(f).expect("read");
+        let mut union: Vec<String> = [read(&a), read(&b)]
+            .iter()
+            .flat_map(|t| t.lines().map(String::from).collect::<Vec<_>>())
+            .collect();
+        let index = |l: &String| -> u64 {
+            let v: serde_json::Value = serde_json::from_str(l).expect("json");
+            v["index"].as_u64().expect("index")
+        };
+        union.sort_by_key(index);
+        let whole_lines: Vec<String> = before.lines().map(String::from).collect();
+        assert_eq!(union, whole_lines);
+        // Every failing run has its reproducer, which `asi-lift run` reads.
+        for l in &whole_lines {
+            let v: serde_json::Value = serde_json::from_str(l).expect("json");
+            match v["reproducer"].as_str() {
+                Some(name) => {
+                    assert_ne!(v["outcome"], "ok");
+                    let file = dir.join("failures").join(name);
+                    let text = std::fs::read_to_string(&file).expect("reproducer");
+                    assert!(text.contains("# reproduce: asi-lift run"), "{text}");
+                    Scenario::from_toml(name, &text).expect("a valid scenario");
+                }
+                None => assert_eq!(v["outcome"], "ok"),
+            }
+        }
+        // The summary of the shards is the summary of the whole.
+        let files = |f: &[&str]| f.iter().map(PathBuf::from).collect::<Vec<_>>();
+        let merged = summarize(&[("a".into(), read(&a)), ("b".into(), read(&b))]).expect("merge");
+        let single = summarize(&[("w".into(), read(&whole))]).expect("whole");
+        assert_eq!(merged, single);
+        assert_eq!(merged.runs, 6);
+        assert_eq!(merged.missing, 0);
+        assert_eq!(campaign_summary(&files(&[&a, &b]), false), Ok(0));
+        // Overlapping shards and malformed lines are named by file and line.
+        let e = campaign_summary(&files(&[&a, &whole]), true).expect_err("duplicate");
+        assert!(
+            e.contains(&format!("{whole}:1: run 0 is also at {a}:1")),
+            "{e}"
+        );
+        let junk = path("junk.jsonl");
+        std::fs::write(
+            &junk,
+            format!(
+                "{}\n{{\"index\": 1}}\n",
+                read(&b).lines().next().unwrap_or("")
+            ),
+        )
+        .expect("junk");
+        let e = campaign_summary(&files(&[&junk]), false).expect_err("malformed");
+        assert!(
+            e.starts_with(&format!("{junk}:2: not a campaign line")),
+            "{e}"
+        );
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn a_reproducer_never_replaces_another_file() {
+        let dir = temp("repro");
+        let first = write_reproducer(&dir, "run-000001-ab.toml", "one").expect("write");
+        assert_eq!(
+            write_reproducer(&dir, "run-000001-ab.toml", "one"),
+            Ok(first.clone())
+        );
+        let second = write_reproducer(&dir, "run-000001-ab.toml", "two").expect("write");
+        assert_eq!(second, dir.join("run-000001-ab-2.toml"));
+        assert_eq!(std::fs::read_to_string(&first).ok().as_deref(), Some("one"));
+        assert_eq!(
+            std::fs::read_to_string(&second).ok().as_deref(),
+            Some("two")
+        );
+        let _ = std::fs::remove_dir_all(&dir);
     }
 
     #[test]

@@ -98,6 +98,7 @@ struct Touched {
     vanes: BTreeSet<u8>,
     load: bool,
     door: bool,
+    /// The sizes of the first cranks so far, mm.
     crank_sum_mm: f64,
 }
 
@@ -195,21 +196,19 @@ impl Builder<'_> {
                 let Some(c) = self.later(t, 10_000, 15_000) else {
                     return;
                 };
-                let sum = self.touched.crank_sum_mm;
-                // Keep |sum| ≤ 40 mm: the crank lies within [-40 - sum, 40 - sum].
-                let (lo, hi) = (-MAX_CRANK_SUM_MM - sum, MAX_CRANK_SUM_MM - sum);
-                let tenths = self
-                    .rng
-                    .random_range((lo * 10.0).ceil() as i64..=(hi * 10.0).floor() as i64);
-                let mm = tenths as f64 / 10.0;
-                if mm.abs() < 0.1 {
+                // The cranks of a run add up to at most 40 mm either way whatever their
+                // order in time: every first crank spends its size from a budget of 40 mm,
+                // and a crank back only undoes its own first crank, later.
+                let left = ((MAX_CRANK_SUM_MM - self.touched.crank_sum_mm) * 10.0).floor() as i64;
+                let tenths = self.rng.random_range(-left.min(200)..=left.min(200));
+                if tenths == 0 {
                     return;
                 }
-                self.touched.crank_sum_mm += mm;
+                let mm = tenths as f64 / 10.0;
+                self.touched.crank_sum_mm += mm.abs();
                 self.push(c, Action::Crank { mm });
                 if self.rng.random_bool(0.5) {
                     if let Some(back) = self.later(c, 3_000, 8_000) {
-                        self.touched.crank_sum_mm -= mm;
                         self.push(back, Action::Crank { mm: -mm });
                     }
                 }

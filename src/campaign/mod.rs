@@ -226,6 +226,13 @@ pub struct RunLine {
     pub reproducer: Option<String>,
 }
 
+impl RunLine {
+    /// The line as written to the output: one JSON object, no line break.
+    pub fn to_json_line(&self) -> String {
+        serde_json::to_string(self).unwrap_or_else(|e| format!("{{\"error\": \"{e}\"}}"))
+    }
+}
+
 /// A violation in a run line.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]

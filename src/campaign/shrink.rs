@@ -43,7 +43,11 @@ pub struct Shrunk {
     pub attempts: u32,
 }
 
-struct Shrinker {
+/// Runs a case and judges it.
+pub type Oracle<'a> = &'a dyn Fn(&Case) -> (Execution, Verdict);
+
+struct Shrinker<'a> {
+    oracle: Oracle<'a>,
     target: (Outcome, Option<String>),
     budget: u32,
     attempts: u32,
@@ -52,7 +56,7 @@ struct Shrinker {
     verdict: Verdict,
 }
 
-impl Shrinker {
+impl Shrinker<'_> {
     /// Runs `cand` if the budget allows; keeps it if it fails the same way.
     fn attempt(&mut self, cand: Case) -> bool {
         if self.attempts >= self.budget || cand == self.best {
@@ -62,8 +66,7 @@ impl Shrinker {
             return false;
         }
         self.attempts += 1;
-        let exec = execute(&cand.scenario);
-        let verdict = judge(&exec, cand.probe.as_ref());
+        let (exec, verdict) = (self.oracle)(&cand);
         let (o, k) = verdict.signature();
         if (o, k) != (self.target.0, self.target.1.as_deref()) {
             return false;
@@ -251,8 +254,25 @@ fn has_probe_event(case: &Case, p: &Probe) -> bool {
 /// Shrinks `case`, which ran as `execution` and was judged `verdict` (a failure), spending
 /// at most `budget` runs. With a budget of 0 the case comes back as it is.
 pub fn shrink(case: Case, execution: Execution, verdict: Verdict, budget: u32) -> Shrunk {
+    let oracle = |c: &Case| {
+        let exec = execute(&c.scenario);
+        let verdict = judge(&exec, c.probe.as_ref());
+        (exec, verdict)
+    };
+    shrink_with(&oracle, case, execution, verdict, budget)
+}
+
+/// [`shrink`] with another way to run and judge a case (for tests of the shrinker).
+pub fn shrink_with(
+    oracle: Oracle<'_>,
+    case: Case,
+    execution: Execution,
+    verdict: Verdict,
+    budget: u32,
+) -> Shrunk {
     let target = (verdict.outcome, verdict.first_violation.clone());
     let mut s = Shrinker {
+        oracle,
         target,
         budget,
         attempts: 0,
@@ -277,66 +297,191 @@ pub fn shrink(case: Case, execution: Execution, verdict: Verdict, budget: u32) -
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::report::Violation;
     use crate::scenario::ScenarioEvent;
     use lift_model::{Button, LoadLevel};
+    use std::cell::Cell;
 
-    fn press(s: u64, button: Button) -> ScenarioEvent {
+    fn ev(ms: u64, action: Action) -> ScenarioEvent {
         ScenarioEvent {
-            at: SimTime::from_millis(s * 1000),
-            action: Action::Press {
-                button,
-                hold: crate::scenario::DEFAULT_HOLD,
-            },
+            at: SimTime::from_millis(ms),
+            action,
             line: 0,
         }
     }
 
-    #[test]
-    fn an_out_of_service_run_keeps_its_tail_and_loses_the_rest() {
-        // Overloaded to the end: the probe cannot be served (a lift that is right to refuse,
-        // which is all this test needs). The calls before are noise for the shrinker.
-        let mut events = vec![
-            press(2, Button::Cabin(2)),
-            press(3, Button::HallUp(1)),
-            press(4, Button::Cabin(1)),
-        ];
-        events.push(ScenarioEvent {
-            at: SimTime::from_millis(5000),
-            action: Action::Load(LoadLevel::Overloaded),
-            line: 0,
-        });
-        events.push(press(8, Button::Cabin(2)));
-        let tail = vec![false, false, false, false, true];
-        let probe = Probe {
-            at: SimTime::from_millis(8000),
-            floor: 2,
-            judged: true,
-        };
-        let case = Case {
+    fn press(ms: u64, floor: u8) -> Action {
+        let _ = ms;
+        Action::Press {
+            button: Button::Cabin(floor),
+            hold: crate::scenario::DEFAULT_HOLD,
+        }
+    }
+
+    /// A generated-looking case: noise, twelve events, then the recovery and the probe.
+    fn case() -> Case {
+        let mut events: Vec<ScenarioEvent> = (0..12u64)
+            .map(|i| ev(2_000 + i * 3_000, press(0, 1 + (i % 3) as u8)))
+            .collect();
+        events[4] = ev(14_000, Action::Fault(Fault::SlaveOffline { slave: 6 }));
+        events[7] = ev(23_000, Action::Load(LoadLevel::Overloaded));
+        events[9] = ev(29_000, Action::Fault(Fault::SlaveOffline { slave: 2 }));
+        let mut tail = vec![false; events.len()];
+        for e in [
+            ev(60_000, Action::Fault(Fault::SlaveOnline { slave: 2 })),
+            ev(60_000, Action::Fault(Fault::SlaveOnline { slave: 6 })),
+            ev(60_000, Action::Load(LoadLevel::Empty)),
+            ev(64_000, Action::Ack),
+            ev(65_000, Action::Reset),
+            ev(70_000, press(0, 3)),
+        ] {
+            events.push(e);
+            tail.push(true);
+        }
+        Case {
             scenario: Scenario {
-                name: "overloaded".into(),
-                floors: 2,
-                start_mm: 0.0,
-                duration: SimDuration::from_secs(25),
+                name: "shrink me".into(),
+                duration: SimDuration::from_secs(130),
                 pulse_error_rate: 1e-3,
+                extra_slaves: 5,
                 events,
                 ..Scenario::defaults()
             },
             tail,
-            probe: Some(probe),
+            probe: Some(Probe {
+                at: SimTime::from_millis(70_000),
+                floor: 3,
+                judged: true,
+            }),
+        }
+    }
+
+    /// A report to hand back: a real one of a short run, its violations replaced.
+    fn report(violations: Vec<Violation>) -> Execution {
+        let sc = Scenario {
+            duration: SimDuration::from_millis(50),
+            ..Scenario::defaults()
         };
-        let exec = execute(&case.scenario);
-        let verdict = judge(&exec, case.probe.as_ref());
-        assert_eq!(verdict.outcome, Outcome::OutOfService, "{exec:?}");
-        let s = shrink(case.clone(), exec.clone(), verdict.clone(), 0);
-        assert_eq!((s.case, s.attempts), (case.clone(), 0));
-        let s = shrink(case, exec, verdict, 40);
-        assert_eq!(s.verdict.outcome, Outcome::OutOfService);
-        assert_eq!(s.case.scenario.pulse_error_rate, 0.0);
+        match execute(&sc) {
+            Execution::Report(mut r) => {
+                r.violations = violations;
+                Execution::Report(r)
+            }
+            other => panic!("a short run: {other:?}"),
+        }
+    }
+
+    fn verdict(outcome: Outcome, kind: Option<&str>) -> Verdict {
+        Verdict {
+            outcome,
+            in_service: None,
+            first_violation: kind.map(String::from),
+        }
+    }
+
+    #[test]
+    fn a_violation_shrinks_to_its_cause_and_its_moment() {
+        // The stand-in lift breaks an invariant 2 s after an overload if slave 6 went offline
+        // before, and only on a noisy line; it knows nothing else.
+        let runs = Cell::new(0);
+        let oracle = |c: &Case| {
+            runs.set(runs.get() + 1);
+            let sc = &c.scenario;
+            let offline = sc
+                .events
+                .iter()
+                .position(|e| e.action == Action::Fault(Fault::SlaveOffline { slave: 6 }));
+            let overload = sc
+                .events
+                .iter()
+                .position(|e| e.action == Action::Load(LoadLevel::Overloaded));
+            match (offline, overload) {
+                (Some(a), Some(b)) if a < b && sc.pulse_error_rate > 0.0 => {
+                    let at = sc.events[b].at.as_secs_f64() + 2.0;
+                    let v = Violation {
+                        at_s: at,
+                        kind: "overloaded-moving".into(),
+                        detail: String::new(),
+                    };
+                    (
+                        report(vec![v]),
+                        verdict(Outcome::Violation, Some("overloaded-moving")),
+                    )
+                }
+                _ => (report(vec![]), verdict(Outcome::Ok, None)),
+            }
+        };
+        let c = case();
+        let (exec, v) = oracle(&c);
+        let s = shrink_with(&oracle, c.clone(), exec.clone(), v.clone(), 100);
         let kept: Vec<&Action> = s.case.scenario.events.iter().map(|e| &e.action).collect();
-        assert_eq!(kept.len(), 2, "{kept:?}");
-        assert_eq!(kept[0], &Action::Load(LoadLevel::Overloaded));
-        assert_eq!(s.case.probe, Some(probe));
-        assert!(s.attempts <= 40);
+        assert_eq!(
+            kept,
+            [
+                &Action::Fault(Fault::SlaveOffline { slave: 6 }),
+                &Action::Load(LoadLevel::Overloaded)
+            ]
+        );
+        // Cut 1 s after the whole second of the violation (25 s); noise kept, slaves gone.
+        assert_eq!(s.case.scenario.duration, SimDuration::from_secs(26));
+        assert_eq!(s.case.scenario.pulse_error_rate, 1e-3);
+        assert_eq!(s.case.scenario.extra_slaves, 0);
+        assert_eq!(s.case.probe, None);
+        assert_eq!(s.verdict, v);
+        assert_eq!(s.attempts, runs.get() - 1);
+        // Deterministic, bounded by the budget, and a budget of 0 leaves the case alone.
+        let again = shrink_with(&oracle, c.clone(), exec.clone(), v.clone(), 100);
+        assert_eq!(again.case, s.case);
+        let few = shrink_with(&oracle, c.clone(), exec.clone(), v.clone(), 5);
+        assert_eq!(few.attempts, 5);
+        let none = shrink_with(&oracle, c.clone(), exec, v, 0);
+        assert_eq!((none.case, none.attempts), (c, 0));
+    }
+
+    #[test]
+    fn an_out_of_service_run_keeps_what_makes_it_a_finding() {
+        // The stand-in lift is out of service whenever slave 2 went offline at all.
+        let oracle = |c: &Case| {
+            let hit = c
+                .scenario
+                .events
+                .iter()
+                .any(|e| e.action == Action::Fault(Fault::SlaveOffline { slave: 2 }));
+            let outcome = if hit {
+                Outcome::OutOfService
+            } else {
+                Outcome::Ok
+            };
+            (report(vec![]), verdict(outcome, None))
+        };
+        let c = case();
+        let (exec, v) = oracle(&c);
+        assert_eq!(v.outcome, Outcome::OutOfService);
+        let s = shrink_with(&oracle, c, exec, v, 200);
+        let kept: Vec<(u64, &Action)> = s
+            .case
+            .scenario
+            .events
+            .iter()
+            .map(|e| (e.at.as_nanos() / 1_000_000, &e.action))
+            .collect();
+        // Slave 2's fault and its repair, the acknowledge, the reset and the probe; the
+        // recovery moved to 6 s after the fault, and the run as much shorter.
+        assert_eq!(
+            kept,
+            [
+                (29_000, &Action::Fault(Fault::SlaveOffline { slave: 2 })),
+                (35_000, &Action::Fault(Fault::SlaveOnline { slave: 2 })),
+                (39_000, &Action::Ack),
+                (40_000, &Action::Reset),
+                (45_000, &press(0, 3)),
+            ]
+        );
+        assert_eq!(s.case.scenario.duration, SimDuration::from_secs(105));
+        assert_eq!(
+            s.case.probe.map(|p| (p.at, p.floor)),
+            Some((SimTime::from_millis(45_000), 3))
+        );
+        assert!(repaired(&s.case));
     }
 }
