@@ -543,10 +543,11 @@ fn campaign(args: CampaignArgs) -> Result<u8, String> {
     };
     let count = plan.indices().count() as u64;
     if count == 0 {
-        return Err(format!(
-            "--shard {}: the campaign's {} runs leave this shard empty",
+        // More shards than runs (an array larger than the campaign): nothing to do here.
+        eprintln!(
+            "asi-lift: --shard {}: the campaign's {} runs leave this shard empty",
             plan.shard, plan.runs
-        ));
+        );
     }
     if args.failures.exists() && !args.failures.is_dir() {
         return Err(format!(
@@ -881,7 +882,15 @@ mod tests {
         campaign_fails_naming(&["--jobs", "-2"], "--jobs");
         campaign_fails_naming(&["--shrink-budget", "-1"], "--shrink-budget");
         campaign_fails_naming(&["--seed", "x"], "--seed");
-        campaign_fails_naming(&["--runs", "2", "--shard", "3/3"], "shard empty");
+        // An empty shard (more shards than runs) is no error: it has nothing to do.
+        let dir = temp("empty-shard");
+        let out = dir.join("empty.jsonl").to_string_lossy().to_string();
+        assert_eq!(
+            campaign_cli(&["--runs", "2", "--shard", "3/3", "--out", &out]),
+            Ok(0)
+        );
+        assert_eq!(std::fs::read_to_string(&out).ok().as_deref(), Some(""));
+        let _ = std::fs::remove_dir_all(&dir);
         campaign_fails_naming(&["--profile", "loud"], "--profile loud: no such built-in");
         let dir = temp("bad-profile");
         let bad = dir.join("bad.toml");
