@@ -23,7 +23,8 @@ pub struct Summary {
     pub outcomes: BTreeMap<String, u64>,
     /// Violations by kind: how many, and in how many runs.
     pub violations: BTreeMap<String, KindCount>,
-    /// Runs out of service at the end.
+    /// Runs not in service at the end (`in_service: false`), those with violations included;
+    /// the outcome `out-of-service` counts the others.
     pub out_of_service: u64,
     /// Runs in service at the end.
     pub in_service: u64,
@@ -268,7 +269,7 @@ impl Summary {
             &mut t,
             "in service at the end",
             format!(
-                "{} yes, {} no (out of service), {} not judged",
+                "{} yes, {} no (runs with violations included), {} not judged",
                 self.in_service, self.out_of_service, self.not_judged
             ),
         );
