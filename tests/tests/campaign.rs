@@ -143,7 +143,7 @@ fn the_kubernetes_job_shards_by_completion_index() {
 }
 
 /// The CI campaign: a few hundred runs of the default profile without a violation, a
-/// panic or a lift out of service. 300 runs take about N s in the test profile on two cores
+/// panic or a lift out of service. 300 runs take about 124 s in the test profile on two cores
 /// (README.md, "Campaigns").
 #[test]
 #[ignore = "enabled once the issue-12 fixes land"]
