@@ -1,5 +1,8 @@
 //! The `asi-lift` command.
 
+use asi_lift::campaign::profile::Profile;
+use asi_lift::campaign::run::{run_campaign, Finished, Plan, Shard};
+use asi_lift::campaign::summary::summarize;
 use asi_lift::capture::{
     decode_capture, summary, to_json_lines, to_text, CaptureFormat, DecodeOptions,
 };
@@ -179,6 +182,81 @@ enum Command {
         #[arg(long)]
         force: bool,
     },
+    /// Run many random valid scenarios on the whole rig (README.md, "Campaigns"): one JSON
+    /// line per run, every failure shrunk to a scenario file that reproduces it; or merge
+    /// result files with `campaign summarize`.
+    #[command(args_conflicts_with_subcommands = true)]
+    Campaign {
+        #[command(subcommand)]
+        action: Option<CampaignAction>,
+        #[command(flatten)]
+        args: CampaignArgs,
+    },
+}
+
+#[derive(Subcommand)]
+enum CampaignAction {
+    /// Merge the JSON lines of one campaign (its shards, in any order) into one table: runs,
+    /// outcomes, violations by kind, out-of-service runs, waits, repeats per transaction.
+    Summarize {
+        /// The result files (`-` for standard input).
+        #[arg(required = true, value_name = "FILE")]
+        files: Vec<PathBuf>,
+        /// Write the summary as JSON.
+        #[arg(long)]
+        json: bool,
+    },
+}
+
+#[derive(clap::Args)]
+struct CampaignArgs {
+    /// Runs of the whole campaign (all shards together).
+    #[arg(
+        long,
+        value_name = "N",
+        default_value_t = 100,
+        allow_negative_numbers = true
+    )]
+    runs: u64,
+    /// The campaign seed: the same seed gives the same runs and the same lines.
+    #[arg(
+        long,
+        value_name = "S",
+        default_value_t = 1,
+        allow_negative_numbers = true
+    )]
+    seed: u64,
+    /// Worker threads [default: all cores].
+    #[arg(long, value_name = "J", allow_negative_numbers = true)]
+    jobs: Option<usize>,
+    /// Run only the K-th of N disjoint parts (1-based): the runs whose index i has
+    /// i mod N = K - 1.
+    #[arg(long, value_name = "K/N", value_parser = parse_shard)]
+    shard: Option<Shard>,
+    /// Write the JSON lines to this file instead of standard output.
+    #[arg(long, value_name = "FILE.jsonl")]
+    out: Option<PathBuf>,
+    /// The generator's profile: a built-in (default, quiet, noisy, smoke) or a profile file.
+    #[arg(long, value_name = "NAME|FILE", default_value = "default")]
+    profile: String,
+    /// Where the shrunk reproducers of failing runs go (created when needed).
+    #[arg(long, value_name = "DIR", default_value = "campaign-failures")]
+    failures: PathBuf,
+    /// Runs a failure may spend on shrinking (0: write the failing scenario as generated).
+    #[arg(
+        long,
+        value_name = "RUNS",
+        default_value_t = 64,
+        allow_negative_numbers = true
+    )]
+    shrink_budget: u32,
+    /// Overwrite the --out file if it exists.
+    #[arg(long)]
+    force: bool,
+}
+
+fn parse_shard(s: &str) -> Result<Shard, String> {
+    s.parse()
 }
 
 fn parse_bus(s: &str) -> Result<BusChoice, String> {
@@ -405,6 +483,10 @@ fn run(cli: Cli) -> Result<u8, String> {
             }
             Ok(0)
         }
+        Command::Campaign { action, args } => match action {
+            None => campaign(args),
+            Some(CampaignAction::Summarize { files, json }) => campaign_summary(&files, json),
+        },
         Command::Timing {
             bus,
             extra_slaves,
@@ -439,6 +521,171 @@ fn run(cli: Cli) -> Result<u8, String> {
             Ok(0)
         }
     }
+}
+
+/// `asi-lift campaign`: runs the plan, writes the lines and the reproducers.
+fn campaign(args: CampaignArgs) -> Result<u8, String> {
+    if args.runs == 0 {
+        return Err("--runs: 0: a campaign has at least one run".into());
+    }
+    let jobs = match args.jobs {
+        Some(0) => return Err("--jobs: 0: give at least one worker thread".into()),
+        Some(j) => j,
+        None => std::thread::available_parallelism().map_or(1, |n| n.get()),
+    };
+    let profile = Profile::resolve(&args.profile).map_err(|e| e.to_string())?;
+    let plan = Plan {
+        seed: args.seed,
+        runs: args.runs,
+        shard: args.shard.unwrap_or(Shard::ALL),
+        profile,
+        shrink_budget: args.shrink_budget,
+    };
+    let count = plan.indices().count() as u64;
+    if count == 0 {
+        // More shards than runs (an array larger than the campaign): nothing to do here.
+        eprintln!(
+            "asi-lift: --shard {}: the campaign's {} runs leave this shard empty",
+            plan.shard, plan.runs
+        );
+    }
+    if args.failures.exists() && !args.failures.is_dir() {
+        return Err(format!(
+            "--failures {}: exists and is not a directory",
+            args.failures.display()
+        ));
+    }
+    let out_path = args.out.clone().unwrap_or_else(|| PathBuf::from("-"));
+    let mut out = open_output(&out_path, args.force)?;
+    let out_name = if out_path == Path::new("-") {
+        "standard output".to_string()
+    } else {
+        out_path.display().to_string()
+    };
+    // A panic in a run is an outcome of the campaign, reported in its line: keep the
+    // workers' panic messages off the terminal.
+    let default_hook = std::panic::take_hook();
+    std::panic::set_hook(Box::new(move |info| {
+        let worker = std::thread::current()
+            .name()
+            .is_some_and(|n| n.starts_with("campaign-worker-"));
+        if !worker {
+            default_hook(info);
+        }
+    }));
+    let bar = if std::io::stderr().is_terminal() {
+        let bar = indicatif::ProgressBar::new(count);
+        if let Ok(style) = indicatif::ProgressStyle::with_template(
+            "{elapsed_precise} [{bar:30}] {pos}/{len} runs, {msg}, eta {eta}",
+        ) {
+            bar.set_style(style.progress_chars("=> "));
+        }
+        bar
+    } else {
+        indicatif::ProgressBar::hidden()
+    };
+    let mut outcomes = std::collections::BTreeMap::<String, u64>::new();
+    let mut failures_seen = 0u64;
+    let mut written: Vec<PathBuf> = Vec::new();
+    let failures_dir = args.failures.clone();
+    let mut sink = |mut f: Finished| -> Result<(), String> {
+        if let Some(r) = &f.reproducer {
+            let path = write_reproducer(&failures_dir, &r.file_name, &r.text)?;
+            f.line.reproducer = path.file_name().map(|n| n.to_string_lossy().into_owned());
+            written.push(path);
+        }
+        *outcomes
+            .entry(f.line.outcome.name().to_owned())
+            .or_default() += 1;
+        writeln!(out, "{}", f.line.to_json_line())
+            .and_then(|()| out.flush())
+            .map_err(|e| format!("{out_name}: {e}"))
+    };
+    let mut progress = |f: &Finished| {
+        if f.reproducer.is_some() {
+            failures_seen += 1;
+        }
+        bar.set_message(format!("{failures_seen} failing"));
+        bar.inc(1);
+    };
+    let result = run_campaign(&plan, jobs, &mut sink, &mut progress);
+    bar.finish_and_clear();
+    let _ = std::panic::take_hook();
+    result.map_err(|e| e.0)?;
+    let failing = count - outcomes.get("ok").copied().unwrap_or(0);
+    let by: Vec<String> = outcomes.iter().map(|(k, v)| format!("{v} {k}")).collect();
+    eprintln!(
+        "campaign seed {}, profile {}, shard {}: {count} runs: {}",
+        plan.seed,
+        plan.profile.name,
+        plan.shard,
+        by.join(", ")
+    );
+    if failing > 0 {
+        eprintln!(
+            "{} reproducers written to {}",
+            written.len(),
+            args.failures.display()
+        );
+        return Ok(EXIT_VIOLATIONS);
+    }
+    Ok(0)
+}
+
+/// Writes a reproducer into `dir` as `name`, never over another file: an existing file
+/// with the same text is kept as it is, one with other text gets the next free name
+/// (`run-000042-…-2.toml`).
+fn write_reproducer(dir: &Path, name: &str, text: &str) -> Result<PathBuf, String> {
+    std::fs::create_dir_all(dir).map_err(|e| format!("--failures {}: {e}", dir.display()))?;
+    let stem = name.trim_end_matches(".toml");
+    for n in 1..1000 {
+        let path = if n == 1 {
+            dir.join(name)
+        } else {
+            dir.join(format!("{stem}-{n}.toml"))
+        };
+        match std::fs::OpenOptions::new()
+            .write(true)
+            .create_new(true)
+            .open(&path)
+        {
+            Ok(mut f) => {
+                f.write_all(text.as_bytes())
+                    .map_err(|e| format!("{}: {e}", path.display()))?;
+                return Ok(path);
+            }
+            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {
+                if std::fs::read_to_string(&path).is_ok_and(|t| t == text) {
+                    return Ok(path);
+                }
+            }
+            Err(e) => return Err(format!("{}: {e}", path.display())),
+        }
+    }
+    Err(format!(
+        "--failures {}: no free name for {name}",
+        dir.display()
+    ))
+}
+
+/// `asi-lift campaign summarize`.
+fn campaign_summary(files: &[PathBuf], json: bool) -> Result<u8, String> {
+    let mut texts = Vec::new();
+    for f in files {
+        let name = if f == Path::new("-") {
+            "standard input".to_string()
+        } else {
+            f.display().to_string()
+        };
+        texts.push((name, read_input(f)?));
+    }
+    let s = summarize(&texts)?;
+    print_out(&if json {
+        s.to_json() + "\n"
+    } else {
+        s.to_text()
+    })?;
+    Ok(0)
 }
 
 /// Parses `START..END` in simulated time.
@@ -600,6 +847,165 @@ mod tests {
         fails_naming(&["--samples", "-3"], "--samples");
         fails_naming(&["--extra-slaves", "-3"], "--extra-slaves");
         fails_naming(&["--duration", "-3s"], "--duration");
+    }
+
+    fn campaign_cli(args: &[&str]) -> Result<u8, String> {
+        let cli = Cli::try_parse_from(["asi-lift", "campaign"].iter().chain(args))
+            .map_err(|e| e.to_string())?;
+        run(cli)
+    }
+
+    fn campaign_fails_naming(args: &[&str], what: &str) {
+        match campaign_cli(args) {
+            Ok(_) => panic!("{args:?} was accepted"),
+            Err(e) => assert!(e.contains(what), "{args:?}: {e}"),
+        }
+    }
+
+    fn temp(name: &str) -> PathBuf {
+        let dir = std::env::temp_dir().join(format!("asi-lift-cli-{}-{name}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).expect("temp dir");
+        dir
+    }
+
+    #[test]
+    fn bad_campaign_arguments_are_named() {
+        campaign_fails_naming(&["--shard", "0/3"], "--shard");
+        campaign_fails_naming(&["--shard", "0/3"], "numbered from 1");
+        campaign_fails_naming(&["--shard", "4/3"], "1..=3");
+        campaign_fails_naming(&["--shard", "3"], "K/N");
+        campaign_fails_naming(&["--runs", "abc"], "--runs");
+        campaign_fails_naming(&["--runs", "0"], "--runs");
+        campaign_fails_naming(&["--runs", "-5"], "--runs");
+        campaign_fails_naming(&["--jobs", "0"], "--jobs");
+        campaign_fails_naming(&["--jobs", "-2"], "--jobs");
+        campaign_fails_naming(&["--shrink-budget", "-1"], "--shrink-budget");
+        campaign_fails_naming(&["--seed", "x"], "--seed");
+        // An empty shard (more shards than runs) is no error: it has nothing to do.
+        let dir = temp("empty-shard");
+        let out = dir.join("empty.jsonl").to_string_lossy().to_string();
+        assert_eq!(
+            campaign_cli(&["--runs", "2", "--shard", "3/3", "--out", &out]),
+            Ok(0)
+        );
+        assert_eq!(std::fs::read_to_string(&out).ok().as_deref(), Some(""));
+        let _ = std::fs::remove_dir_all(&dir);
+        campaign_fails_naming(&["--profile", "loud"], "--profile loud: no such built-in");
+        let dir = temp("bad-profile");
+        let bad = dir.join("bad.toml");
+        std::fs::write(&bad, "[event]\nmeteor = 3\n").expect("write");
+        let bad = bad.to_string_lossy().to_string();
+        campaign_fails_naming(&["--profile", &bad], "unknown event kind");
+        campaign_fails_naming(&["--profile", &dir.to_string_lossy()], "--profile");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn a_campaign_refuses_to_overwrite_and_its_shards_summarize_to_the_whole() {
+        let dir = temp("shards");
+        let profile = dir.join("short.toml");
+        std::fs::write(
+            &profile,
+            "base = \"smoke\"\nduration = [\"40s\", \"45s\"]\nprobe_lead = \"10s\"\nevents = [1, 4]\n",
+        )
+        .expect("profile");
+        let p = profile.to_string_lossy().to_string();
+        let path = |n: &str| dir.join(n).to_string_lossy().to_string();
+        let failures = path("failures");
+        let common = ["--runs", "6", "--seed", "3", "--profile", &p, "--jobs", "2"];
+        let go = |extra: &[&str]| {
+            let mut a: Vec<&str> = common.to_vec();
+            a.extend_from_slice(extra);
+            a.extend_from_slice(&["--failures", &failures, "--shrink-budget", "2"]);
+            campaign_cli(&a)
+        };
+        let whole = path("whole.jsonl");
+        let code = go(&["--out", &whole]).expect("campaign");
+        assert!(code == 0 || code == EXIT_VIOLATIONS);
+        // Not again without --force, and the file stays as it was.
+        let before = std::fs::read_to_string(&whole).expect("lines");
+        let again = go(&["--out", &whole]).expect_err("refused");
+        assert!(again.contains("--force"), "{again}");
+        assert_eq!(std::fs::read_to_string(&whole).ok(), Some(before.clone()));
+        assert_eq!(go(&["--out", &whole, "--force"]), Ok(code));
+        assert_eq!(std::fs::read_to_string(&whole).ok(), Some(before.clone()));
+        let (a, b) = (path("a.jsonl"), path("b.jsonl"));
+        go(&["--out", &a, "--shard", "1/2"]).expect("shard 1");
+        go(&["--out", &b, "--shard", "2/2"]).expect("shard 2");
+        let read = |f: &str| std::fs::read_to_string(f).expect("read");
+        let mut union: Vec<String> = [read(&a), read(&b)]
+            .iter()
+            .flat_map(|t| t.lines().map(String::from).collect::<Vec<_>>())
+            .collect();
+        let index = |l: &String| -> u64 {
+            let v: serde_json::Value = serde_json::from_str(l).expect("json");
+            v["index"].as_u64().expect("index")
+        };
+        union.sort_by_key(index);
+        let whole_lines: Vec<String> = before.lines().map(String::from).collect();
+        assert_eq!(union, whole_lines);
+        // Every failing run has its reproducer, which `asi-lift run` reads.
+        for l in &whole_lines {
+            let v: serde_json::Value = serde_json::from_str(l).expect("json");
+            match v["reproducer"].as_str() {
+                Some(name) => {
+                    assert_ne!(v["outcome"], "ok");
+                    let file = dir.join("failures").join(name);
+                    let text = std::fs::read_to_string(&file).expect("reproducer");
+                    assert!(text.contains("# reproduce: asi-lift run"), "{text}");
+                    Scenario::from_toml(name, &text).expect("a valid scenario");
+                }
+                None => assert_eq!(v["outcome"], "ok"),
+            }
+        }
+        // The summary of the shards is the summary of the whole.
+        let files = |f: &[&str]| f.iter().map(PathBuf::from).collect::<Vec<_>>();
+        let merged = summarize(&[("a".into(), read(&a)), ("b".into(), read(&b))]).expect("merge");
+        let single = summarize(&[("w".into(), read(&whole))]).expect("whole");
+        assert_eq!(merged, single);
+        assert_eq!(merged.runs, 6);
+        assert_eq!(merged.missing, 0);
+        assert_eq!(campaign_summary(&files(&[&a, &b]), false), Ok(0));
+        // Overlapping shards and malformed lines are named by file and line.
+        let e = campaign_summary(&files(&[&a, &whole]), true).expect_err("duplicate");
+        assert!(
+            e.contains(&format!("{whole}:1: run 0 is also at {a}:1")),
+            "{e}"
+        );
+        let junk = path("junk.jsonl");
+        std::fs::write(
+            &junk,
+            format!(
+                "{}\n{{\"index\": 1}}\n",
+                read(&b).lines().next().unwrap_or("")
+            ),
+        )
+        .expect("junk");
+        let e = campaign_summary(&files(&[&junk]), false).expect_err("malformed");
+        assert!(
+            e.starts_with(&format!("{junk}:2: not a campaign line")),
+            "{e}"
+        );
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn a_reproducer_never_replaces_another_file() {
+        let dir = temp("repro");
+        let first = write_reproducer(&dir, "run-000001-ab.toml", "one").expect("write");
+        assert_eq!(
+            write_reproducer(&dir, "run-000001-ab.toml", "one"),
+            Ok(first.clone())
+        );
+        let second = write_reproducer(&dir, "run-000001-ab.toml", "two").expect("write");
+        assert_eq!(second, dir.join("run-000001-ab-2.toml"));
+        assert_eq!(std::fs::read_to_string(&first).ok().as_deref(), Some("one"));
+        assert_eq!(
+            std::fs::read_to_string(&second).ok().as_deref(),
+            Some("two")
+        );
+        let _ = std::fs::remove_dir_all(&dir);
     }
 
     #[test]

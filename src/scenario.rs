@@ -365,6 +365,28 @@ pub fn start_range_mm(floors: u8) -> RangeInclusive<f64> {
     shaft.end_position_mm(End::Bottom)..=shaft.end_position_mm(End::Top)
 }
 
+/// Where the operator must crank a cabin that starts at `start_mm` before initialisation can
+/// find floor 1 by itself (README, "Start heights"), or `None` if it needs no help. It does
+/// from the bottom of floor 1's vane up to the top overtravel sensor. Below that (beyond the
+/// bottom sensor, or between it and the vane, where the run down ends on the sensor) the
+/// cabin goes into floor 1's vane, 20 mm below level; beyond the top sensor, into the top
+/// floor's vane, 20 mm above level.
+pub fn start_recovery_mm(floors: u8, start_mm: f64) -> Option<f64> {
+    let shaft = LiftConfig {
+        floors,
+        ..LiftConfig::default()
+    };
+    let (vane_bottom, _) = shaft.vane_track_mm(VaneSensor::Left, 1)?;
+    let level = |f: u8| shaft.floor_level_mm(f);
+    if start_mm < vane_bottom {
+        level(1).map(|l| l - 20.0)
+    } else if start_mm >= shaft.trip_position_mm(End::Top) {
+        level(floors).map(|l| l + 20.0)
+    } else {
+        None
+    }
+}
+
 impl Scenario {
     /// Reads a scenario from TOML `text`; `file` names it in errors.
     pub fn from_toml(file: &str, text: &str) -> Result<Scenario, ScenarioError> {
