@@ -98,6 +98,8 @@ struct Watch {
     overtravel_k1_since: Option<SimTime>,
     /// STOP pressed at, and whether K1 has opened since.
     stop_since: Option<(SimTime, bool)>,
+    /// The cabin moves by the hand crank (from the turn's start to the next rest).
+    by_hand: bool,
     reported: [bool; 4],
 }
 
@@ -973,8 +975,11 @@ impl Rig {
 
     fn check_invariants(&mut self, t: SimTime) {
         // Motion by the hand crank (K1 open, the operator at the motor) is the operator's, not
-        // the drive's: the door and overload invariants judge the drive.
-        let moving = self.lift.velocity_mm_s() != 0.0 && !self.lift.hand_cranking();
+        // the drive's, until the cabin is at rest again (a turn that K1 ends still brakes): the
+        // door and overload invariants judge the drive.
+        let velocity = self.lift.velocity_mm_s();
+        self.watch.by_hand = velocity != 0.0 && (self.watch.by_hand || self.lift.hand_cranking());
+        let moving = velocity != 0.0 && !self.watch.by_hand;
         let door_open = !self.lift.door_closed();
         let overloaded = self.lift.load() == LoadLevel::Overloaded;
         let tripped = !self.lift.overtravel_bottom_free() || !self.lift.overtravel_top_free();

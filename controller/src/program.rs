@@ -37,6 +37,14 @@ pub struct ControllerConfig {
     /// **Decision**: 2 s. The seed's automat departs in the scan after it arrives, so an
     /// intermediate stop would never come to rest; a lift stands for its passengers.
     pub dwell: SimDuration,
+    /// Travel without reaching a vane for longer than this means a vane sensor lies: the
+    /// cabin stops and the position is found again. Default 9 s: the vanes are 400 mm apart,
+    /// 6.7 s at the travel speed (59.4 mm/s), 5.8 s at the initialisation speed.
+    pub travel_watchdog: SimDuration,
+    /// A creep inside a vane (braking to level, initialisation's probes) that does not reach
+    /// its edge within this means a vane sensor lies. Default 6 s: the long track is 80 mm,
+    /// 3.9 s at the creep speed (20.6 mm/s).
+    pub creep_watchdog: SimDuration,
 }
 
 impl Default for ControllerConfig {
@@ -53,6 +61,8 @@ impl Default for ControllerConfig {
             restart_every: SimDuration::from_millis(500),
             stale_after: SimDuration::from_secs(1),
             dwell: SimDuration::from_secs(2),
+            travel_watchdog: SimDuration::from_secs(9),
+            creep_watchdog: SimDuration::from_secs(6),
         }
     }
 }
@@ -202,7 +212,14 @@ pub enum HaltReason {
     NoPower,
     /// STOP is demanded (initialisation only; in service STOP has its own states).
     Stop,
+    /// The vane sensors showed no edge where one was due (initialisation only): held until a
+    /// sensor changes, or for [`NO_VANE_RETRY`] at most.
+    NoVane,
 }
+
+/// How long initialisation waits after its watchdog before it tries again without a vane
+/// sensor edge.
+pub const NO_VANE_RETRY: SimDuration = SimDuration::from_secs(30);
 
 impl fmt::Display for HaltReason {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
@@ -212,6 +229,7 @@ impl fmt::Display for HaltReason {
             HaltReason::ConverterFault => "converter fault",
             HaltReason::NoPower => "no drive power (K1 open)",
             HaltReason::Stop => "STOP circuit open",
+            HaltReason::NoVane => "no vane edge where one was due (a vane sensor fault?)",
         })
     }
 }
@@ -309,8 +327,11 @@ pub enum LostReason {
     WrongVane,
     /// A vane beyond the last floor in the direction of travel.
     BeyondEndFloor,
-    /// The cabin left its stop floor's vane without ever standing level in it.
+    /// The cabin left its stop floor's vane without ever standing level in it, or did not
+    /// reach its level in time.
     MissedLevel,
+    /// No vane within the travel watchdog.
+    NoVane,
 }
 
 impl fmt::Display for LostReason {
@@ -320,6 +341,7 @@ impl fmt::Display for LostReason {
             LostReason::WrongVane => "the vane seen is not the floor counted",
             LostReason::BeyondEndFloor => "a vane beyond the end floor",
             LostReason::MissedLevel => "the stop floor's level was passed",
+            LostReason::NoVane => "no vane where one was due",
         })
     }
 }
@@ -440,6 +462,14 @@ pub struct Program {
     /// A cabin that shows no vane now is just below floor 1's vane: initialisation last moved
     /// it down inside that vane, or up towards it from below.
     in_floor1_vane: bool,
+    /// When the cabin last made progress the program can see: a departure, a vane reached, a
+    /// step of initialisation (for the watchdogs).
+    progress_at: SimTime,
+    /// The floor whose vane the cabin is leaving since its departure: the first sensor to
+    /// fall tells whether it is floor 1's turned vane.
+    leaving: Option<u8>,
+    /// Initialisation held for want of vane edges since: any edge ends it.
+    no_vane_since: Option<SimTime>,
 }
 
 /// How long the cabin may go on moving after the program took the drive off: the converter
@@ -462,6 +492,10 @@ struct Edges {
     /// 003 §6.4), `Some(false)` if the right one did (floors 2..), `None` if both came in one
     /// word.
     floor1_vane: Option<bool>,
+    /// One sensor fell while the other stayed on: `Some(true)` for the left one.
+    left_fell_first: Option<bool>,
+    /// Any sensor changed.
+    any: bool,
 }
 
 impl Program {
@@ -502,6 +536,9 @@ impl Program {
             lost: false,
             vane_shape: None,
             in_floor1_vane: false,
+            progress_at: SimTime::ZERO,
+            leaving: None,
+            no_vane_since: None,
         })
     }
 
@@ -550,7 +587,26 @@ impl Program {
                 self.hold();
                 let settled = now.saturating_duration_since(self.drive_off_at) > COAST;
                 let moved = settled && (edges.vane_rise || edges.vane_fall);
-                let blind = blind || !fresh || !inp.power_ok || moved;
+                let mut blind = blind || !fresh || !inp.power_ok || moved;
+                let mut resume = resume;
+                // The cabin coasting to rest may reach the next vane: count it, as in a halt.
+                if !settled && !blind {
+                    match (resume, self.dir) {
+                        (Some(Step::Travel), Some(dir)) if edges.vane_rise => {
+                            match self.count_vane(dir, edges) {
+                                Ok(floor) => {
+                                    self.current = floor;
+                                    if floor == self.target {
+                                        resume = Some(Step::Braking);
+                                    }
+                                }
+                                Err(_) => blind = true,
+                            }
+                        }
+                        (Some(Step::Braking), _) if edges.vane_fall => blind = true,
+                        _ => {}
+                    }
+                }
                 self.phase = Phase::BusFault { resume, blind };
                 let journey = matches!(
                     resume,
@@ -559,7 +615,7 @@ impl Program {
                 match resume {
                     Some(step) if bus_ok && !blind => {
                         self.event(now, EventKind::BusRestored);
-                        self.resume(step);
+                        self.resume(now, step);
                     }
                     // Initialisation chooses its way from the vane sensors: only a cabin word
                     // that completed since the bus came back shows where the cabin is now.
@@ -595,6 +651,12 @@ impl Program {
             if e.vane_rise && w.vane_left != w.vane_right {
                 e.floor1_vane = Some(w.vane_left);
             }
+            if e.left_fall && w.vane_right {
+                e.left_fell_first = Some(true);
+            } else if e.right_fall && w.vane_left {
+                e.left_fell_first = Some(false);
+            }
+            e.any = e.left_rise || e.right_rise || e.left_fall || e.right_fall;
             let pressed = if first {
                 w.buttons
             } else {
@@ -650,6 +712,8 @@ impl Program {
         };
         self.initialised_at = None;
         self.init_held = None;
+        self.no_vane_since = None;
+        self.progress_at = now;
         self.lost = false;
         (self.shown_floor, self.shown_dir) = (1, Some(Dir::Down));
         self.event(now, EventKind::InitStarted { start });
@@ -680,6 +744,11 @@ impl Program {
         // overtravel sensor) ends when every reason is gone and the drive has power again;
         // then initialisation starts afresh from what the sensors show, because the edges the
         // steps wait for may have passed during the hold.
+        if let Some(since) = self.no_vane_since {
+            if e.any || now.saturating_duration_since(since) > NO_VANE_RETRY {
+                self.no_vane_since = None;
+            }
+        }
         let reason = if stop_demand {
             Some(HaltReason::Stop)
         } else if !self.cabin.door_closed {
@@ -690,6 +759,8 @@ impl Program {
             Some(HaltReason::ConverterFault)
         } else if !inp.converter_ready && (self.ready_before || self.init_held.is_some()) {
             Some(HaltReason::NoPower)
+        } else if self.no_vane_since.is_some() {
+            Some(HaltReason::NoVane)
         } else {
             None
         };
@@ -717,6 +788,23 @@ impl Program {
             (None, None) => {}
         }
         let c = self.cabin;
+        // The watchdog: the run must reach a vane, a creep the edge it waits for, in the time
+        // the geometry allows; only while the drive has power.
+        let limit = match step {
+            InitStep::Run => self.cfg.travel_watchdog,
+            _ => self.cfg.creep_watchdog,
+        };
+        if e.vane_rise || !inp.converter_ready {
+            self.progress_at = now;
+        }
+        if now.saturating_duration_since(self.progress_at) > limit {
+            self.hold();
+            self.no_vane_since = Some(now);
+            self.init_held = Some(HaltReason::NoVane);
+            self.drive_off_at = now;
+            self.event(now, EventKind::InitHeld(HaltReason::NoVane));
+            return;
+        }
         let next = match step {
             InitStep::Run if e.left_rise => {
                 // The left sensor first, the right one off: floor 1's turned vane.
@@ -746,6 +834,9 @@ impl Program {
             InitStep::Floor1Up if e.left_fall => return self.start_init(now),
             _ => None,
         };
+        if next.is_some_and(|n| n != step) {
+            self.progress_at = now;
+        }
         let step = next.unwrap_or(step);
         match step {
             InitStep::Floor1Down => self.in_floor1_vane = true,
@@ -780,8 +871,9 @@ impl Program {
     }
 
     /// Back to `step` after a bus fault in which the program kept sight of the cabin.
-    fn resume(&mut self, step: Step) {
+    fn resume(&mut self, now: SimTime, step: Step) {
         self.phase = Phase::Service(step);
+        self.progress_at = now;
         let speed = match step {
             Step::Travel => self.cfg.travel_ua,
             Step::Braking => self.cfg.creep_ua,
@@ -884,11 +976,20 @@ impl Program {
                 } else if braking {
                     if both {
                         self.arrive(now);
-                    } else if e.vane_fall {
+                    } else if e.vane_fall
+                        || now.saturating_duration_since(self.progress_at) > self.cfg.creep_watchdog
+                    {
                         self.lose_now(now, LostReason::MissedLevel);
                     }
+                } else if self.left_wrong_vane(e) {
+                    // Leaving the departure floor's vane, the short track ends first: the right
+                    // one at floor 1 (its vane is turned), the left one elsewhere.
+                    self.lose_now(now, LostReason::WrongVane);
                 } else if e.vane_rise {
                     self.pass_floor(now, e);
+                } else if now.saturating_duration_since(self.progress_at) > self.cfg.travel_watchdog
+                {
+                    self.lose_now(now, LostReason::NoVane);
                 }
             }
             Step::Halted { reason, braking } => {
@@ -910,6 +1011,8 @@ impl Program {
                     HaltReason::DoorOpen => door_closed,
                     HaltReason::Overload => !overloaded,
                     HaltReason::Stop => inp.estop_ok,
+                    // Not a reason to halt in service (initialisation only).
+                    HaltReason::NoVane => true,
                     HaltReason::ConverterFault | HaltReason::NoPower => {
                         !inp.converter_fault && inp.converter_ready
                     }
@@ -922,6 +1025,7 @@ impl Program {
                     }
                 } else if cleared && door_closed && !overloaded && inp.estop_ok {
                     self.event(now, EventKind::Continued);
+                    self.progress_at = now;
                     self.out.run = true;
                     self.out.up = self.dir == Some(Dir::Up);
                     self.out.setpoint_ua = if braking {
@@ -963,6 +1067,8 @@ impl Program {
     fn depart(&mut self, now: SimTime) {
         let dir = Dir::between(self.current, self.target);
         self.dir = dir;
+        self.progress_at = now;
+        self.leaving = (self.cabin.vane_left || self.cabin.vane_right).then_some(self.current);
         self.stop_pending = false;
         self.out.run = true;
         self.out.up = dir == Some(Dir::Up);
@@ -987,6 +1093,7 @@ impl Program {
             Err(why) => return self.lose_now(now, why),
         };
         self.current = floor;
+        self.progress_at = now;
         if !self.stop_pending
             && self.dispatch.algorithm() == Algorithm::Collective
             && self.dispatch.should_stop(floor, dir)
@@ -1013,6 +1120,19 @@ impl Program {
         self.vane_shape = e.floor1_vane;
         next.filter(|f| (1..=self.cfg.floors).contains(f))
             .ok_or(LostReason::BeyondEndFloor)
+    }
+
+    /// Whether the departure floor's vane, as the cabin leaves it, has the wrong shape for the
+    /// floor counted; forgets the departure floor once its vane is left.
+    fn left_wrong_vane(&mut self, e: Edges) -> bool {
+        let Some(floor) = self.leaving else {
+            return false;
+        };
+        if e.vane_fall {
+            self.leaving = None;
+        }
+        e.left_fell_first
+            .is_some_and(|left_first| left_first != (floor != 1))
     }
 
     /// While the cabin comes to rest after a halt: a vane reached on the way is counted (the
