@@ -14,7 +14,7 @@ use crate::report::{
     Arrival, Availability, BusReport, CycleTimes, ErrorCounts, FinalState, LogLine, MonitorTrip,
     Passenger, Report, SafetyReport, Served, SlaveDropouts, Trip, Violation,
 };
-use crate::scenario::{Action, Fault, Scenario, ScenarioEvent};
+use crate::scenario::{Action, Fault, Scenario, ScenarioEvent, RESCUE_INSIDE_MM};
 use crate::trace::{write_record, TraceFormat};
 use crate::waves::{RigSample, WaveOutputs, Waves};
 use asi_master::lab::LabLift;
@@ -621,6 +621,7 @@ impl Rig {
                     .push((t + OPERATOR_PULSE, Timer::OperatorReset(false)));
                 Ok(())
             }
+            Action::Rescue => self.rescue(t),
             Action::Ack => {
                 self.err_ack = true;
                 self.timers.push((t + OPERATOR_PULSE, Timer::ErrAck(false)));
@@ -635,6 +636,30 @@ impl Rig {
             self.log("scenario", format!("refused by the plant: {e}"));
         }
         self.plant_dirty = true;
+    }
+
+    /// The operator's overtravel rescue: crank a cabin that stands on or beyond a tripped
+    /// overtravel sensor back inside it (only with K1 open; nothing to do otherwise).
+    fn rescue(&mut self, t: SimTime) -> Result<(), lift_model::PlantError> {
+        let x = self.lift.position_mm();
+        let cfg = self.lift.config();
+        let to = if !self.lift.overtravel_bottom_free() {
+            cfg.trip_position_mm(lift_model::End::Bottom) + RESCUE_INSIDE_MM
+        } else if !self.lift.overtravel_top_free() {
+            cfg.trip_position_mm(lift_model::End::Top) - RESCUE_INSIDE_MM
+        } else {
+            self.log(
+                "scenario",
+                "no overtravel sensor tripped: nothing to rescue".into(),
+            );
+            return Ok(());
+        };
+        if self.lift.k1_closed() {
+            self.log("scenario", "K1 is closed: no rescue by hand".into());
+            return Ok(());
+        }
+        self.log("scenario", format!("hand crank {:+.1} mm", to - x));
+        self.lift.crank(t, to - x)
     }
 
     fn fault(&mut self, t: SimTime, f: Fault) {
@@ -1293,6 +1318,7 @@ fn describe(a: &Action) -> String {
         Action::Door { closed } => format!("door {}", if *closed { "closed" } else { "opened" }),
         Action::Crank { mm } => format!("hand crank {mm:+.1} mm"),
         Action::Reset => "operator presses the safety reset".into(),
+        Action::Rescue => "operator's overtravel rescue".into(),
         Action::Ack => "operator acknowledges the safety group error".into(),
         Action::Fault(f) => match f {
             Fault::SlaveOffline { slave } => format!("fault: slave {slave} taken off the bus"),

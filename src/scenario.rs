@@ -80,6 +80,10 @@ pub enum Action {
     },
     /// The operator's safety reset button (overtravel recovery).
     Reset,
+    /// The operator's overtravel rescue (README, "Start heights"): if an overtravel sensor is
+    /// tripped and K1 is open, the operator cranks the cabin back inside it, to
+    /// [`RESCUE_INSIDE_MM`] within the sensor; otherwise nothing.
+    Rescue,
     /// The operator's acknowledge of a safety group error (ERR_ACK).
     Ack,
     /// A fault is injected.
@@ -214,6 +218,7 @@ struct RawEvent {
     door: Option<Spanned<String>>,
     crank_mm: Option<Spanned<f64>>,
     reset: Option<Spanned<bool>>,
+    rescue: Option<Spanned<bool>>,
     ack: Option<Spanned<bool>>,
     fault: Option<Spanned<RawFault>>,
 }
@@ -365,26 +370,25 @@ pub fn start_range_mm(floors: u8) -> RangeInclusive<f64> {
     shaft.end_position_mm(End::Bottom)..=shaft.end_position_mm(End::Top)
 }
 
-/// Where the operator must crank a cabin that starts at `start_mm` before initialisation can
-/// find floor 1 by itself (README, "Start heights"), or `None` if it needs no help. It does
-/// from the bottom of floor 1's vane up to the top overtravel sensor. Below that (beyond the
-/// bottom sensor, or between it and the vane, where the run down ends on the sensor) the
-/// cabin goes into floor 1's vane, 20 mm below level; beyond the top sensor, into the top
-/// floor's vane, 20 mm above level.
-pub fn start_recovery_mm(floors: u8, start_mm: f64) -> Option<f64> {
+/// How far inside an overtravel sensor's trip point the operator's rescue leaves the cabin,
+/// mm: at the bottom that is inside floor 1's vane (its long track reaches 40 mm below level,
+/// the sensor trips at 60 mm), at the top inside the top floor's.
+pub const RESCUE_INSIDE_MM: f64 = 25.0;
+
+/// Whether a cabin that starts at `start_mm` needs the operator's rescue before
+/// initialisation can find floor 1 (README, "Start heights"). It does not from the bottom of
+/// floor 1's vane up to the top overtravel sensor; below that (beyond the bottom sensor, or
+/// between it and the vane, where the run down ends on the sensor) and beyond the top sensor
+/// it does.
+pub fn start_needs_rescue(floors: u8, start_mm: f64) -> bool {
     let shaft = LiftConfig {
         floors,
         ..LiftConfig::default()
     };
-    let (vane_bottom, _) = shaft.vane_track_mm(VaneSensor::Left, 1)?;
-    let level = |f: u8| shaft.floor_level_mm(f);
-    if start_mm < vane_bottom {
-        level(1).map(|l| l - 20.0)
-    } else if start_mm >= shaft.trip_position_mm(End::Top) {
-        level(floors).map(|l| l + 20.0)
-    } else {
-        None
-    }
+    let vane_bottom = shaft
+        .vane_track_mm(VaneSensor::Left, 1)
+        .map_or(shaft.trip_position_mm(End::Bottom), |(lo, _)| lo);
+    start_mm < vane_bottom || start_mm >= shaft.trip_position_mm(End::Top)
 }
 
 impl Scenario {
@@ -550,6 +554,7 @@ impl Scenario {
             }
             for (flag, name, action) in [
                 (&e.reset, "reset", Action::Reset),
+                (&e.rescue, "rescue", Action::Rescue),
                 (&e.ack, "ack", Action::Ack),
             ] {
                 if let Some(v) = flag {
@@ -568,13 +573,11 @@ impl Scenario {
             }
             let action = match actions.len() {
                 1 => actions.remove(0),
-                0 => {
-                    return Err(loc.error(
-                        Some(span),
-                        format!("event[{}]", i + 1),
-                        "no action: give one of press, load, door, crank_mm, reset, ack, fault",
-                    ))
-                }
+                0 => return Err(loc.error(
+                    Some(span),
+                    format!("event[{}]", i + 1),
+                    "no action: give one of press, load, door, crank_mm, reset, rescue, ack, fault",
+                )),
                 _ => {
                     return Err(loc.error(
                         Some(span),
@@ -648,6 +651,7 @@ impl Scenario {
                 }
                 Action::Crank { mm } => writeln!(s, "crank_mm = {}", toml_float(*mm)),
                 Action::Reset => writeln!(s, "reset = true"),
+                Action::Rescue => writeln!(s, "rescue = true"),
                 Action::Ack => writeln!(s, "ack = true"),
                 Action::Fault(f) => writeln!(s, "fault = {}", fault_text(f)),
             };
@@ -1029,6 +1033,7 @@ fault = { kind = "safe-link-drop", duration = "300ms" }
                     .prop_filter("non-zero", |mm| *mm != 0.0)
                     .prop_map(|mm| Action::Crank { mm }),
                 Just(Action::Reset),
+                Just(Action::Rescue),
                 Just(Action::Ack),
                 (1..=31u8).prop_map(|slave| Action::Fault(Fault::SlaveOffline { slave })),
                 (1..=31u8).prop_map(|slave| Action::Fault(Fault::SlaveOnline { slave })),

@@ -23,7 +23,7 @@
 //! every choice; the scenario's line-noise seed is the run's seed.
 
 use super::profile::{EventKind, Profile};
-use crate::scenario::{start_range_mm, start_recovery_mm, Action, Fault, Scenario, ScenarioEvent};
+use crate::scenario::{start_needs_rescue, start_range_mm, Action, Fault, Scenario, ScenarioEvent};
 use asi_phy::{SimDuration, SimTime};
 use lift_model::{Button, LiftConfig, LoadLevel, SensorFault, VaneSensor};
 use rand::{Rng, SeedableRng};
@@ -321,26 +321,27 @@ pub fn generate(campaign_seed: u64, index: u64, profile: &Profile) -> Generated 
         .pick(&mut rng)
         .unwrap_or(SimDuration::from_millis(10));
     // A start initialisation cannot handle by itself gets the operator's procedure first
-    // (README, "Start heights"): the power-on reset, a crank into the vane, the safety reset
-    // and the acknowledge; the activity begins after it.
-    let start_recovery = start_recovery_mm(floors, start_mm);
-    let power_on_reset =
-        start_recovery.is_some() || !rng.random_bool(profile.no_power_on_reset_chance);
+    // (README, "Start heights"): the power-on reset, the rescue (a crank back inside the
+    // sensor, up to 10.5 s at 10 mm/s), the safety reset and the acknowledge; the activity
+    // begins after it.
+    let needs_rescue = start_needs_rescue(floors, start_mm);
+    let power_on_reset = needs_rescue || !rng.random_bool(profile.no_power_on_reset_chance);
     let leave_vane_broken = rng.random_bool(profile.leave_vane_broken_chance);
 
     let end = dur_ms(duration);
     let probe_at = end - dur_ms(profile.probe_lead);
     let recovery = probe_at - dur_ms(RECOVERY);
     let act_end = recovery - dur_ms(QUIET_GAP);
-    let preamble: Vec<(u64, Action)> = match start_recovery {
-        Some(to) => vec![
-            (3_000, Action::Crank { mm: to - start_mm }),
-            (6_000, Action::Reset),
-            (7_000, Action::Ack),
-        ],
-        None => Vec::new(),
+    let preamble: Vec<(u64, Action)> = if needs_rescue {
+        vec![
+            (2_000, Action::Rescue),
+            (15_000, Action::Reset),
+            (16_000, Action::Ack),
+        ]
+    } else {
+        Vec::new()
     };
-    let act_start = if preamble.is_empty() { 1_000 } else { 8_000 };
+    let act_start = if preamble.is_empty() { 1_000 } else { 17_000 };
     let mut b = Builder {
         rng,
         profile,
@@ -368,7 +369,6 @@ pub fn generate(campaign_seed: u64, index: u64, profile: &Profile) -> Generated 
         sensor_index(sensor)
     });
     b.events.sort_by_key(|(t, _)| *t);
-    let activity = b.events.len();
 
     // The recovery: repair whatever the activity touched.
     let mut tail: Vec<(u64, Action)> = Vec::new();
@@ -401,6 +401,10 @@ pub fn generate(campaign_seed: u64, index: u64, profile: &Profile) -> Generated 
     if b.touched.door {
         tail.push((recovery, Action::Door { closed: true }));
     }
+    // The operator rescues a cabin left on an overtravel sensor (a vane sensor fault can take
+    // it there); nothing happens otherwise. A runaway stops a few mm beyond the sensor: the
+    // crank back takes about 3 s, before the acknowledge and the reset.
+    tail.push((recovery, Action::Rescue));
     tail.push((recovery + dur_ms(ACK_AFTER), Action::Ack));
     tail.push((recovery + dur_ms(RESET_AFTER), Action::Reset));
     let probe_floor = b.rng.random_range(1..=floors);
@@ -412,23 +416,24 @@ pub fn generate(campaign_seed: u64, index: u64, profile: &Profile) -> Generated 
         },
     ));
 
-    // The start procedure comes before every activity event and is kept like the recovery.
-    let n_pre = preamble.len();
-    let events: Vec<ScenarioEvent> = preamble
+    // The start procedure is kept like the recovery; in a run too short for an activity after
+    // it, the activity overlaps it (in time order; the procedure first at equal times).
+    let mut flagged: Vec<(u64, Action, bool)> = preamble
         .into_iter()
-        .chain(b.events)
-        .chain(tail)
-        .map(|(t, action)| ScenarioEvent {
+        .map(|(t, a)| (t, a, true))
+        .chain(b.events.into_iter().map(|(t, a)| (t, a, false)))
+        .collect();
+    flagged.sort_by_key(|(t, _, _)| *t);
+    flagged.extend(tail.into_iter().map(|(t, a)| (t, a, true)));
+    let is_tail: Vec<bool> = flagged.iter().map(|(_, _, k)| *k).collect();
+    let events: Vec<ScenarioEvent> = flagged
+        .into_iter()
+        .map(|(t, action, _)| ScenarioEvent {
             at: ms(t),
             action,
             line: 0,
         })
         .collect();
-    let mut is_tail = vec![false; events.len()];
-    is_tail[..n_pre].iter_mut().for_each(|t| *t = true);
-    is_tail[n_pre + activity..]
-        .iter_mut()
-        .for_each(|t| *t = true);
     Generated {
         scenario: Scenario {
             name: format!("campaign {campaign_seed} ({}) run {index}", profile.name),
@@ -509,7 +514,7 @@ mod tests {
             let preamble = g.tail.iter().take_while(|t| **t).count().min(first_tail);
             assert_eq!(
                 preamble > 0,
-                start_recovery_mm(sc.floors, sc.start_mm).is_some(),
+                start_needs_rescue(sc.floors, sc.start_mm),
                 "{ctx}"
             );
             let probe = g.probe.expect("a probe");
@@ -609,6 +614,7 @@ mod tests {
                     Action::Door { closed } => format!("door to {closed}"),
                     Action::Crank { mm } => format!("crank {}", *mm > 0.0),
                     Action::Reset => "reset".into(),
+                    Action::Rescue => "rescue".into(),
                     Action::Ack => "ack".into(),
                     Action::Fault(Fault::SlaveOffline { slave }) => format!("offline {slave}"),
                     Action::Fault(Fault::SlaveOnline { slave }) => format!("online {slave}"),
@@ -653,6 +659,7 @@ mod tests {
             "crank true",
             "crank false",
             "reset",
+            "rescue",
             "ack",
             "power-fail",
             "safe-link-drop",

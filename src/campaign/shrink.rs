@@ -160,6 +160,7 @@ impl Shrinker<'_> {
                             c.scenario.events[*i].action,
                             Action::Ack
                                 | Action::Reset
+                                | Action::Rescue
                                 | Action::Press { .. }
                                 | Action::Crank { .. }
                         ))
