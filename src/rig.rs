@@ -14,7 +14,7 @@ use crate::report::{
     Arrival, Availability, BusReport, CycleTimes, ErrorCounts, FinalState, LogLine, MonitorTrip,
     Passenger, Report, SafetyReport, Served, SlaveDropouts, Trip, Violation,
 };
-use crate::scenario::{Action, Fault, Scenario, ScenarioEvent, RESCUE_INSIDE_MM};
+use crate::scenario::{Action, Fault, Scenario, ScenarioEvent};
 use crate::trace::{write_record, TraceFormat};
 use crate::waves::{RigSample, WaveOutputs, Waves};
 use asi_master::lab::LabLift;
@@ -639,15 +639,19 @@ impl Rig {
     }
 
     /// The operator's overtravel rescue: crank a cabin that stands on or beyond a tripped
-    /// overtravel sensor back inside it (only with K1 open; nothing to do otherwise).
+    /// overtravel sensor back to the end floor's level (only with K1 open; nothing to do
+    /// otherwise).
     fn rescue(&mut self, t: SimTime) -> Result<(), lift_model::PlantError> {
         let x = self.lift.position_mm();
         let cfg = self.lift.config();
         let to = if !self.lift.overtravel_bottom_free() {
-            cfg.trip_position_mm(lift_model::End::Bottom) + RESCUE_INSIDE_MM
+            cfg.floor_level_mm(1)
         } else if !self.lift.overtravel_top_free() {
-            cfg.trip_position_mm(lift_model::End::Top) - RESCUE_INSIDE_MM
+            cfg.floor_level_mm(self.sc.floors)
         } else {
+            None
+        };
+        let Some(to) = to else {
             self.log(
                 "scenario",
                 "no overtravel sensor tripped: nothing to rescue".into(),

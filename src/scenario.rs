@@ -81,8 +81,8 @@ pub enum Action {
     /// The operator's safety reset button (overtravel recovery).
     Reset,
     /// The operator's overtravel rescue (README, "Start heights"): if an overtravel sensor is
-    /// tripped and K1 is open, the operator cranks the cabin back inside it, to
-    /// [`RESCUE_INSIDE_MM`] within the sensor; otherwise nothing.
+    /// tripped and K1 is open, the operator cranks the cabin back to the level of the end
+    /// floor beyond which it stands; otherwise nothing.
     Rescue,
     /// The operator's acknowledge of a safety group error (ERR_ACK).
     Ack,
@@ -369,11 +369,6 @@ pub fn start_range_mm(floors: u8) -> RangeInclusive<f64> {
     };
     shaft.end_position_mm(End::Bottom)..=shaft.end_position_mm(End::Top)
 }
-
-/// How far inside an overtravel sensor's trip point the operator's rescue leaves the cabin,
-/// mm: at the bottom that is inside floor 1's vane (its long track reaches 40 mm below level,
-/// the sensor trips at 60 mm), at the top inside the top floor's.
-pub const RESCUE_INSIDE_MM: f64 = 25.0;
 
 /// Whether a cabin that starts at `start_mm` needs the operator's rescue before
 /// initialisation can find floor 1 (README, "Start heights"). It does not from the bottom of

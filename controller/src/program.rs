@@ -799,6 +799,8 @@ impl Program {
         }
         if now.saturating_duration_since(self.progress_at) > limit {
             self.hold();
+            // A sensor lies: what it showed of floor 1's vane is no guide either.
+            self.in_floor1_vane = false;
             self.no_vane_since = Some(now);
             self.init_held = Some(HaltReason::NoVane);
             self.drive_off_at = now;

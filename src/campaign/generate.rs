@@ -42,9 +42,10 @@ const QUIET_GAP: SimDuration = SimDuration::from_secs(6);
 /// From the recovery's repairs to the probe.
 const RECOVERY: SimDuration = SimDuration::from_secs(10);
 /// From the repairs to the acknowledge, and to the reset: the safety monitor sees a slave
-/// that came back within a few cycles; 4 s leave room for a power fail's restart.
-const ACK_AFTER: SimDuration = SimDuration::from_secs(4);
-const RESET_AFTER: SimDuration = SimDuration::from_secs(5);
+/// that came back within a few cycles, a power fail's restart takes a few seconds, and the
+/// rescue's crank back to the end floor's level about 7 s.
+const ACK_AFTER: SimDuration = SimDuration::from_secs(8);
+const RESET_AFTER: SimDuration = SimDuration::from_secs(9);
 
 /// The probe: the cabin call whose service says the lift is in service at the end.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -321,9 +322,9 @@ pub fn generate(campaign_seed: u64, index: u64, profile: &Profile) -> Generated 
         .pick(&mut rng)
         .unwrap_or(SimDuration::from_millis(10));
     // A start initialisation cannot handle by itself gets the operator's procedure first
-    // (README, "Start heights"): the power-on reset, the rescue (a crank back inside the
-    // sensor, up to 10.5 s at 10 mm/s), the safety reset and the acknowledge; the activity
-    // begins after it.
+    // (README, "Start heights"): the power-on reset, the rescue (a crank back to the end
+    // floor's level, up to 14 s at 10 mm/s), the safety reset and the acknowledge; the
+    // activity begins after it.
     let needs_rescue = start_needs_rescue(floors, start_mm);
     let power_on_reset = needs_rescue || !rng.random_bool(profile.no_power_on_reset_chance);
     let leave_vane_broken = rng.random_bool(profile.leave_vane_broken_chance);
@@ -335,13 +336,13 @@ pub fn generate(campaign_seed: u64, index: u64, profile: &Profile) -> Generated 
     let preamble: Vec<(u64, Action)> = if needs_rescue {
         vec![
             (2_000, Action::Rescue),
-            (15_000, Action::Reset),
-            (16_000, Action::Ack),
+            (18_000, Action::Reset),
+            (19_000, Action::Ack),
         ]
     } else {
         Vec::new()
     };
-    let act_start = if preamble.is_empty() { 1_000 } else { 17_000 };
+    let act_start = if preamble.is_empty() { 1_000 } else { 20_000 };
     let mut b = Builder {
         rng,
         profile,
@@ -403,7 +404,8 @@ pub fn generate(campaign_seed: u64, index: u64, profile: &Profile) -> Generated 
     }
     // The operator rescues a cabin left on an overtravel sensor (a vane sensor fault can take
     // it there); nothing happens otherwise. A runaway stops a few mm beyond the sensor: the
-    // crank back takes about 3 s, before the acknowledge and the reset.
+    // crank back to the end floor's level takes about 7 s, before the acknowledge and the
+    // reset.
     tail.push((recovery, Action::Rescue));
     tail.push((recovery + dur_ms(ACK_AFTER), Action::Ack));
     tail.push((recovery + dur_ms(RESET_AFTER), Action::Reset));
