@@ -45,6 +45,11 @@ pub struct ControllerConfig {
     /// its edge within this means a vane sensor lies. Default 6 s: the long track is 80 mm,
     /// 3.9 s at the creep speed (20.6 mm/s).
     pub creep_watchdog: SimDuration,
+    /// A vane sensor on for longer than this while the cabin runs at the travel or the
+    /// initialisation speed is stuck on. Default 3 s: the long track (80 mm) passes in 1.35 s
+    /// at the travel speed and 1.16 s at the initialisation speed; 3 s leave room for the
+    /// ramp and two cabin words.
+    pub stuck_on_after: SimDuration,
 }
 
 impl Default for ControllerConfig {
@@ -63,6 +68,7 @@ impl Default for ControllerConfig {
             dwell: SimDuration::from_secs(2),
             travel_watchdog: SimDuration::from_secs(9),
             creep_watchdog: SimDuration::from_secs(6),
+            stuck_on_after: SimDuration::from_secs(3),
         }
     }
 }
@@ -332,6 +338,8 @@ pub enum LostReason {
     MissedLevel,
     /// No vane within the travel watchdog.
     NoVane,
+    /// A vane sensor stayed on for longer than a vane takes to pass.
+    StuckSensor,
 }
 
 impl fmt::Display for LostReason {
@@ -342,6 +350,7 @@ impl fmt::Display for LostReason {
             LostReason::BeyondEndFloor => "a vane beyond the end floor",
             LostReason::MissedLevel => "the stop floor's level was passed",
             LostReason::NoVane => "no vane where one was due",
+            LostReason::StuckSensor => "a vane sensor stays on",
         })
     }
 }
@@ -450,8 +459,6 @@ pub struct Program {
     served: Vec<ServedCall>,
     /// Initialisation is held for this reason; it starts again when the reason is gone.
     init_held: Option<HaltReason>,
-    /// The converter reported ready in the last scan.
-    ready_before: bool,
     /// When the program last took the drive off (a halt, an arrival, a bus fault): vane edges
     /// within [`COAST`] of it are the cabin coming to rest, later ones are a hand's work.
     drive_off_at: SimTime,
@@ -470,6 +477,10 @@ pub struct Program {
     leaving: Option<u8>,
     /// Initialisation held for want of vane edges since: any edge ends it.
     no_vane_since: Option<SimTime>,
+    /// Since when each vane sensor (left, right) is on, as the cabin words show it.
+    on_since: [Option<SimTime>; 2],
+    /// When the present run at the travel or initialisation speed began.
+    running_since: SimTime,
 }
 
 /// How long the cabin may go on moving after the program took the drive off: the converter
@@ -531,7 +542,6 @@ impl Program {
             events: Vec::new(),
             served: Vec::new(),
             init_held: None,
-            ready_before: false,
             drive_off_at: SimTime::ZERO,
             lost: false,
             vane_shape: None,
@@ -539,6 +549,8 @@ impl Program {
             progress_at: SimTime::ZERO,
             leaving: None,
             no_vane_since: None,
+            on_since: [None; 2],
+            running_since: SimTime::ZERO,
         })
     }
 
@@ -632,7 +644,6 @@ impl Program {
         }
         self.pulse_restart(now, want_restart);
         self.update_display();
-        self.ready_before = inp.converter_ready;
         self.out
     }
 
@@ -648,6 +659,9 @@ impl Program {
             e.left_fall = !w.vane_left && old.vane_left;
             e.right_fall = !w.vane_right && old.vane_right;
             e.vane_fall = !(w.vane_left || w.vane_right) && (old.vane_left || old.vane_right);
+            for (since, on) in self.on_since.iter_mut().zip([w.vane_left, w.vane_right]) {
+                *since = if on { since.or(Some(now)) } else { None };
+            }
             if e.vane_rise && w.vane_left != w.vane_right {
                 e.floor1_vane = Some(w.vane_left);
             }
@@ -714,6 +728,7 @@ impl Program {
         self.init_held = None;
         self.no_vane_since = None;
         self.progress_at = now;
+        self.running_since = now;
         self.lost = false;
         (self.shown_floor, self.shown_dir) = (1, Some(Dir::Down));
         self.event(now, EventKind::InitStarted { start });
@@ -757,7 +772,7 @@ impl Program {
             Some(HaltReason::Overload)
         } else if inp.converter_fault {
             Some(HaltReason::ConverterFault)
-        } else if !inp.converter_ready && (self.ready_before || self.init_held.is_some()) {
+        } else if !inp.converter_ready {
             Some(HaltReason::NoPower)
         } else if self.no_vane_since.is_some() {
             Some(HaltReason::NoVane)
@@ -797,7 +812,8 @@ impl Program {
         if e.vane_rise || !inp.converter_ready {
             self.progress_at = now;
         }
-        if now.saturating_duration_since(self.progress_at) > limit {
+        let stuck = step == InitStep::Run && self.stuck_on(now);
+        if stuck || now.saturating_duration_since(self.progress_at) > limit {
             self.hold();
             // A sensor lies: what it showed of floor 1's vane is no guide either.
             self.in_floor1_vane = false;
@@ -838,6 +854,7 @@ impl Program {
         };
         if next.is_some_and(|n| n != step) {
             self.progress_at = now;
+            self.running_since = now;
         }
         let step = next.unwrap_or(step);
         match step {
@@ -876,6 +893,7 @@ impl Program {
     fn resume(&mut self, now: SimTime, step: Step) {
         self.phase = Phase::Service(step);
         self.progress_at = now;
+        self.running_since = now;
         let speed = match step {
             Step::Travel => self.cfg.travel_ua,
             Step::Braking => self.cfg.creep_ua,
@@ -983,6 +1001,8 @@ impl Program {
                     {
                         self.lose_now(now, LostReason::MissedLevel);
                     }
+                } else if self.stuck_on(now) {
+                    self.lose_now(now, LostReason::StuckSensor);
                 } else if self.left_wrong_vane(e) {
                     // Leaving the departure floor's vane, the short track ends first: the right
                     // one at floor 1 (its vane is turned), the left one elsewhere.
@@ -1028,6 +1048,7 @@ impl Program {
                 } else if cleared && door_closed && !overloaded && inp.estop_ok {
                     self.event(now, EventKind::Continued);
                     self.progress_at = now;
+                    self.running_since = now;
                     self.out.run = true;
                     self.out.up = self.dir == Some(Dir::Up);
                     self.out.setpoint_ua = if braking {
@@ -1070,6 +1091,7 @@ impl Program {
         let dir = Dir::between(self.current, self.target);
         self.dir = dir;
         self.progress_at = now;
+        self.running_since = now;
         self.leaving = (self.cabin.vane_left || self.cabin.vane_right).then_some(self.current);
         self.stop_pending = false;
         self.out.run = true;
@@ -1122,6 +1144,13 @@ impl Program {
         self.vane_shape = e.floor1_vane;
         next.filter(|f| (1..=self.cfg.floors).contains(f))
             .ok_or(LostReason::BeyondEndFloor)
+    }
+
+    /// A vane sensor on for longer than a vane takes to pass while the cabin runs at speed.
+    fn stuck_on(&self, now: SimTime) -> bool {
+        self.on_since.iter().flatten().any(|&on| {
+            now.saturating_duration_since(on.max(self.running_since)) > self.cfg.stuck_on_after
+        })
     }
 
     /// Whether the departure floor's vane, as the cabin leaves it, has the wrong shape for the

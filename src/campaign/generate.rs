@@ -45,6 +45,9 @@ const RECOVERY: SimDuration = SimDuration::from_secs(10);
 /// that came back within a few cycles, a power fail's restart takes a few seconds, and the
 /// rescue's crank back to the end floor's level about 7 s.
 const ACK_AFTER: SimDuration = SimDuration::from_secs(8);
+/// From the repairs to the rescue: a cabin held (door, load) from a run down that ends on the
+/// bottom sensor gets there within a second or two of the repairs.
+const RESCUE_AFTER: SimDuration = SimDuration::from_secs(2);
 const RESET_AFTER: SimDuration = SimDuration::from_secs(9);
 
 /// The probe: the cabin call whose service says the lift is in service at the end.
@@ -406,7 +409,7 @@ pub fn generate(campaign_seed: u64, index: u64, profile: &Profile) -> Generated 
     // it there); nothing happens otherwise. A runaway stops a few mm beyond the sensor: the
     // crank back to the end floor's level takes about 7 s, before the acknowledge and the
     // reset.
-    tail.push((recovery, Action::Rescue));
+    tail.push((recovery + dur_ms(RESCUE_AFTER), Action::Rescue));
     tail.push((recovery + dur_ms(ACK_AFTER), Action::Ack));
     tail.push((recovery + dur_ms(RESET_AFTER), Action::Reset));
     let probe_floor = b.rng.random_range(1..=floors);
