@@ -481,6 +481,8 @@ pub struct Program {
     on_since: [Option<SimTime>; 2],
     /// When the present run at the travel or initialisation speed began.
     running_since: SimTime,
+    /// The left vane sensor rose during this initialisation: it is not stuck on.
+    left_proven: bool,
 }
 
 /// How long the cabin may go on moving after the program took the drive off: the converter
@@ -551,6 +553,7 @@ impl Program {
             no_vane_since: None,
             on_since: [None; 2],
             running_since: SimTime::ZERO,
+            left_proven: false,
         })
     }
 
@@ -729,6 +732,7 @@ impl Program {
         self.no_vane_since = None;
         self.progress_at = now;
         self.running_since = now;
+        self.left_proven = false;
         self.lost = false;
         (self.shown_floor, self.shown_dir) = (1, Some(Dir::Down));
         self.event(now, EventKind::InitStarted { start });
@@ -803,6 +807,7 @@ impl Program {
             (None, None) => {}
         }
         let c = self.cabin;
+        self.left_proven |= e.left_rise;
         // The watchdog: the run must reach a vane, a creep the edge it waits for, in the time
         // the geometry allows; only while the drive has power.
         let limit = match step {
@@ -838,9 +843,15 @@ impl Program {
                 Some(InitStep::Floor1Up)
             }
             InitStep::Brake { until } if now >= until => Some(InitStep::Run),
-            InitStep::Floor1Down if e.right_rise => return self.initialised(now),
+            // Level at floor 1, once its left sensor has shown a rise in this initialisation (a
+            // sensor stuck on would make every vane look like floor 1's long track).
+            InitStep::Floor1Down if e.right_rise && self.left_proven => {
+                return self.initialised(now)
+            }
             InitStep::Floor1Down if e.left_fall => Some(InitStep::Floor1Up),
-            InitStep::Probe if e.right_fall && c.vane_left => Some(InitStep::Floor1Up),
+            // Floor 1's short track ended first: below floor 1's level. Down out of the long
+            // track too, then up into it, so that the left sensor shows it works.
+            InitStep::Probe if e.right_fall && c.vane_left => Some(InitStep::Floor1Down),
             InitStep::Probe if e.left_fall => Some(InitStep::Run),
             // Up into a vane whose right sensor comes first: not floor 1.
             InitStep::Floor1Up if e.vane_rise && e.floor1_vane == Some(false) => {

@@ -286,7 +286,7 @@ fn a_broken_vane_sensor_never_takes_the_cabin_to_an_overtravel_sensor() {
         "floor count not trusted (the stop floor's level was passed)",
     )
     .expect("level missed");
-    assert!((25.0..27.0).contains(&missed), "{missed}");
+    assert!((25.0..30.0).contains(&missed), "{missed}");
     // It hunts around the vane that looks like floor 1's: never near an overtravel sensor, K1
     // never dropped.
     assert!(r.safety.trips.is_empty(), "{:?}", r.safety.trips);
