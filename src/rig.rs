@@ -14,7 +14,7 @@ use crate::report::{
     Arrival, Availability, BusReport, CycleTimes, ErrorCounts, FinalState, LogLine, MonitorTrip,
     Passenger, Report, SafetyReport, Served, SlaveDropouts, Trip, Violation,
 };
-use crate::scenario::{Action, Fault, Scenario, ScenarioEvent};
+use crate::scenario::{needs_rescue, Action, Fault, Scenario, ScenarioEvent};
 use crate::trace::{write_record, TraceFormat};
 use crate::waves::{RigSample, WaveOutputs, Waves};
 use asi_master::lab::LabLift;
@@ -638,24 +638,18 @@ impl Rig {
         self.plant_dirty = true;
     }
 
-    /// The operator's overtravel rescue: crank a cabin that stands on or beyond a tripped
-    /// overtravel sensor back to the end floor's level (only with K1 open; nothing to do
-    /// otherwise).
+    /// The operator's overtravel rescue: crank a cabin that stands where initialisation cannot
+    /// find floor 1 by itself (on or beyond an overtravel sensor, below floor 1's vane) to the
+    /// nearer end floor's level; only with K1 open, nothing to do otherwise.
     fn rescue(&mut self, t: SimTime) -> Result<(), lift_model::PlantError> {
         let x = self.lift.position_mm();
+        if !needs_rescue(self.sc.floors, x) {
+            self.log("scenario", "the cabin needs no rescue".into());
+            return Ok(());
+        }
         let cfg = self.lift.config();
-        let to = if !self.lift.overtravel_bottom_free() {
-            cfg.floor_level_mm(1)
-        } else if !self.lift.overtravel_top_free() {
-            cfg.floor_level_mm(self.sc.floors)
-        } else {
-            None
-        };
-        let Some(to) = to else {
-            self.log(
-                "scenario",
-                "no overtravel sensor tripped: nothing to rescue".into(),
-            );
+        let end_floor = if x < 0.0 { 1 } else { self.sc.floors };
+        let Some(to) = cfg.floor_level_mm(end_floor) else {
             return Ok(());
         };
         if self.lift.k1_closed() {

@@ -80,9 +80,10 @@ pub enum Action {
     },
     /// The operator's safety reset button (overtravel recovery).
     Reset,
-    /// The operator's overtravel rescue (README, "Start heights"): if an overtravel sensor is
-    /// tripped and K1 is open, the operator cranks the cabin back to the level of the end
-    /// floor beyond which it stands; otherwise nothing.
+    /// The operator's overtravel rescue (README, "Start heights"): if the cabin stands where
+    /// initialisation cannot find floor 1 by itself ([`needs_rescue`]: on or beyond an
+    /// overtravel sensor, or below floor 1's vane) and K1 is open, the operator cranks it to
+    /// the level of the nearer end floor; otherwise nothing.
     Rescue,
     /// The operator's acknowledge of a safety group error (ERR_ACK).
     Ack,
@@ -370,12 +371,11 @@ pub fn start_range_mm(floors: u8) -> RangeInclusive<f64> {
     shaft.end_position_mm(End::Bottom)..=shaft.end_position_mm(End::Top)
 }
 
-/// Whether a cabin that starts at `start_mm` needs the operator's rescue before
-/// initialisation can find floor 1 (README, "Start heights"). It does not from the bottom of
-/// floor 1's vane up to the top overtravel sensor; below that (beyond the bottom sensor, or
-/// between it and the vane, where the run down ends on the sensor) and beyond the top sensor
-/// it does.
-pub fn start_needs_rescue(floors: u8, start_mm: f64) -> bool {
+/// Whether a cabin standing at `position_mm` needs the operator's rescue before initialisation
+/// can find floor 1 by itself (README, "Start heights"). It does not from the bottom of floor
+/// 1's vane up to the top overtravel sensor; below that (beyond the bottom sensor, or between
+/// it and the vane, where the run down ends on the sensor) and beyond the top sensor it does.
+pub fn needs_rescue(floors: u8, position_mm: f64) -> bool {
     let shaft = LiftConfig {
         floors,
         ..LiftConfig::default()
@@ -383,7 +383,7 @@ pub fn start_needs_rescue(floors: u8, start_mm: f64) -> bool {
     let vane_bottom = shaft
         .vane_track_mm(VaneSensor::Left, 1)
         .map_or(shaft.trip_position_mm(End::Bottom), |(lo, _)| lo);
-    start_mm < vane_bottom || start_mm >= shaft.trip_position_mm(End::Top)
+    position_mm < vane_bottom || position_mm >= shaft.trip_position_mm(End::Top)
 }
 
 impl Scenario {

@@ -23,7 +23,7 @@
 //! every choice; the scenario's line-noise seed is the run's seed.
 
 use super::profile::{EventKind, Profile};
-use crate::scenario::{start_needs_rescue, start_range_mm, Action, Fault, Scenario, ScenarioEvent};
+use crate::scenario::{needs_rescue, start_range_mm, Action, Fault, Scenario, ScenarioEvent};
 use asi_phy::{SimDuration, SimTime};
 use lift_model::{Button, LiftConfig, LoadLevel, SensorFault, VaneSensor};
 use rand::{Rng, SeedableRng};
@@ -328,15 +328,15 @@ pub fn generate(campaign_seed: u64, index: u64, profile: &Profile) -> Generated 
     // (README, "Start heights"): the power-on reset, the rescue (a crank back to the end
     // floor's level, up to 14 s at 10 mm/s), the safety reset and the acknowledge; the
     // activity begins after it.
-    let needs_rescue = start_needs_rescue(floors, start_mm);
-    let power_on_reset = needs_rescue || !rng.random_bool(profile.no_power_on_reset_chance);
+    let rescue_first = needs_rescue(floors, start_mm);
+    let power_on_reset = rescue_first || !rng.random_bool(profile.no_power_on_reset_chance);
     let leave_vane_broken = rng.random_bool(profile.leave_vane_broken_chance);
 
     let end = dur_ms(duration);
     let probe_at = end - dur_ms(profile.probe_lead);
     let recovery = probe_at - dur_ms(RECOVERY);
     let act_end = recovery - dur_ms(QUIET_GAP);
-    let preamble: Vec<(u64, Action)> = if needs_rescue {
+    let preamble: Vec<(u64, Action)> = if rescue_first {
         vec![
             (2_000, Action::Rescue),
             (18_000, Action::Reset),
@@ -517,11 +517,7 @@ mod tests {
             let first_tail = recovery_index(&g.tail, &sc.events).expect("a tail");
             assert!(g.tail[first_tail..].iter().all(|t| *t), "{ctx}");
             let preamble = g.tail.iter().take_while(|t| **t).count().min(first_tail);
-            assert_eq!(
-                preamble > 0,
-                start_needs_rescue(sc.floors, sc.start_mm),
-                "{ctx}"
-            );
+            assert_eq!(preamble > 0, needs_rescue(sc.floors, sc.start_mm), "{ctx}");
             let probe = g.probe.expect("a probe");
             let last = sc.events.last().expect("events");
             assert_eq!(last.at, probe.at);
