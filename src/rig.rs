@@ -14,7 +14,7 @@ use crate::report::{
     Arrival, Availability, BusReport, CycleTimes, ErrorCounts, FinalState, LogLine, MonitorTrip,
     Passenger, Report, SafetyReport, Served, SlaveDropouts, Trip, Violation,
 };
-use crate::scenario::{needs_rescue, Action, Fault, Scenario, ScenarioEvent};
+use crate::scenario::{load_name, needs_rescue, Action, Fault, Scenario, ScenarioEvent};
 use crate::trace::{write_record, TraceFormat};
 use crate::waves::{RigSample, WaveOutputs, Waves};
 use asi_master::lab::LabLift;
@@ -1298,15 +1298,6 @@ fn button_floor(b: &Button) -> Option<u8> {
 /// `x` rounded to three decimals (reports and waveforms).
 pub(crate) fn round3(x: f64) -> f64 {
     (x * 1000.0).round() / 1000.0
-}
-
-fn load_name(l: LoadLevel) -> &'static str {
-    match l {
-        LoadLevel::Empty => "empty",
-        LoadLevel::Loaded => "loaded",
-        LoadLevel::Full => "full",
-        LoadLevel::Overloaded => "overloaded",
-    }
 }
 
 fn describe(a: &Action) -> String {

@@ -724,7 +724,8 @@ fn exact_duration(d: SimDuration) -> String {
     format!("{ns}ns")
 }
 
-fn load_name(l: LoadLevel) -> &'static str {
+/// The scenario file's name of a load level (also the rig's log).
+pub(crate) fn load_name(l: LoadLevel) -> &'static str {
     match l {
         LoadLevel::Empty => "empty",
         LoadLevel::Loaded => "loaded",

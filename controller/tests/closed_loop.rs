@@ -2,8 +2,10 @@
 //! plant's signals and writes the converter. Tests the logic of seed tables 6.3–6.5; the full
 //! rig with the AS-i handshakes and the safety logic is tested in the workspace's tests crate.
 
+mod common;
+
 use asi_phy::{SimDuration, SimTime};
-use controller::{Algorithm, CabinWord, ControllerConfig, EventKind, Inputs, Program, Source};
+use controller::{Algorithm, ControllerConfig, EventKind, Program, Source};
 use lift_model::{Button, Lift, LiftConfig, LoadLevel};
 
 struct Loop {
@@ -42,42 +44,7 @@ impl Loop {
     fn scan(&mut self) {
         self.now += SCAN;
         let _ = self.lift.advance_to(self.now).expect("plant").count();
-        let l = &self.lift;
-        let mut buttons = 0u32;
-        for f in 1..=4u8 {
-            if l.is_pressed(Button::Cabin(f)) {
-                buttons |= 1 << (f - 1);
-            }
-        }
-        let mut hall_up = 0;
-        let mut hall_down = 0;
-        for f in 1..=4u8 {
-            if l.is_pressed(Button::HallUp(f)) {
-                hall_up |= 1 << (f - 1);
-            }
-            if l.is_pressed(Button::HallDown(f)) {
-                hall_down |= 1 << (f - 1);
-            }
-        }
-        let inp = Inputs {
-            cabin: Some(CabinWord {
-                buttons,
-                bell: false,
-                stop: l.stop_pressed(),
-                door_closed: l.door_closed(),
-                vane_left: l.vane_left(),
-                vane_right: l.vane_right(),
-            }),
-            hall_up,
-            hall_down,
-            load: l.load().code(),
-            load_lost: false,
-            estop_ok: self.estop_ok && !l.stop_pressed(),
-            converter_ready: l.converter_ready(),
-            converter_fault: l.converter_fault(),
-            bus_ok: true,
-            power_ok: true,
-        };
+        let inp = common::plant_inputs(&self.lift, self.estop_ok, true);
         let out = self.prog.scan(self.now, &inp);
         self.lift
             .set_converter(self.now, out.run, out.up, out.setpoint_ua)

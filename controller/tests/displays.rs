@@ -5,8 +5,10 @@
 //! ("Aktuální patro → Jede", "Dobrždění → Aktuální patro"), not while floors are passed;
 //! initialisation shows floor 1 and "down", its last step ("Brzdí → 1. Patro") included.
 
+mod common;
+
 use asi_phy::{SimDuration, SimTime};
-use controller::{CabinWord, ControllerConfig, DisplayState, EventKind, Inputs, Program};
+use controller::{ControllerConfig, DisplayState, EventKind, Program};
 use lift_model::{Button, Lift, LiftConfig, LoadLevel};
 
 const SCAN: SimDuration = SimDuration::from_millis(10);
@@ -42,29 +44,7 @@ impl Loop {
     fn scan(&mut self) {
         self.now += SCAN;
         let _ = self.lift.advance_to(self.now).expect("plant").count();
-        let l = &self.lift;
-        let buttons = (1..=4u8)
-            .filter(|&f| l.is_pressed(Button::Cabin(f)))
-            .fold(0u32, |b, f| b | 1 << (f - 1));
-        let inp = Inputs {
-            cabin: self.bus_ok.then_some(CabinWord {
-                buttons,
-                bell: false,
-                stop: l.stop_pressed(),
-                door_closed: l.door_closed(),
-                vane_left: l.vane_left(),
-                vane_right: l.vane_right(),
-            }),
-            hall_up: 0,
-            hall_down: 0,
-            load: l.load().code(),
-            load_lost: false,
-            estop_ok: !l.stop_pressed(),
-            converter_ready: l.converter_ready(),
-            converter_fault: l.converter_fault(),
-            bus_ok: self.bus_ok,
-            power_ok: true,
-        };
+        let inp = common::plant_inputs(&self.lift, true, self.bus_ok);
         let out = self.prog.scan(self.now, &inp);
         self.lift
             .set_converter(self.now, out.run, out.up, out.setpoint_ua)
