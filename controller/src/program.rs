@@ -941,9 +941,6 @@ impl Program {
             }
         }
         let want_restart = self.restart_wanted && !inp.estop_ok;
-        let door_closed = self.cabin.door_closed;
-        let overloaded = overloaded(inp);
-        let both = self.cabin.vane_left && self.cabin.vane_right;
         let settled = now.saturating_duration_since(self.drive_off_at) > COAST;
         if matches!(step, Step::AtFloor | Step::Overload | Step::StopFault)
             && settled
@@ -951,6 +948,34 @@ impl Program {
         {
             self.mark_lost(now, LostReason::MovedByHand);
         }
+        self.step_service(now, step, e, inp, stop_demand);
+        // After this scan's count: the count or a sensor is wrong if the sensors show what the
+        // counted floor's vane cannot; stop now if moving, else before the next journey.
+        if let Phase::Service(step) = self.phase {
+            if self.vane_contradicts_floor() {
+                if matches!(step, Step::Travel | Step::Braking) {
+                    self.lose_now(now, LostReason::WrongVane);
+                } else {
+                    self.mark_lost(now, LostReason::WrongVane);
+                }
+            }
+        }
+        want_restart
+    }
+
+    /// The automat's step for this scan (seed tables 6.4/6.5).
+    fn step_service(
+        &mut self,
+        now: SimTime,
+        step: Step,
+        e: Edges,
+        inp: &Inputs,
+        stop_demand: bool,
+    ) {
+        let door_closed = self.cabin.door_closed;
+        let overloaded = overloaded(inp);
+        let both = self.cabin.vane_left && self.cabin.vane_right;
+        let settled = now.saturating_duration_since(self.drive_off_at) > COAST;
         match step {
             Step::AtFloor => {
                 if stop_demand {
@@ -1072,7 +1097,6 @@ impl Program {
             }
             Step::StopFault => {}
         }
-        want_restart
     }
 
     fn enter(&mut self, now: SimTime, step: Step) {
@@ -1155,6 +1179,19 @@ impl Program {
         self.vane_shape = e.floor1_vane;
         next.filter(|f| (1..=self.cfg.floors).contains(f))
             .ok_or(LostReason::BeyondEndFloor)
+    }
+
+    /// Whether the vane sensors show what no working pair can show in the vane of the floor
+    /// counted: at floor 1 the right (short) track lies inside the left (long) one, at the
+    /// other floors the left inside the right (seed 003 §6.4), so the short sensor is never on
+    /// alone.
+    fn vane_contradicts_floor(&self) -> bool {
+        let (left, right) = (self.cabin.vane_left, self.cabin.vane_right);
+        if self.current == 1 {
+            right && !left
+        } else {
+            left && !right
+        }
     }
 
     /// A vane sensor on for longer than a vane takes to pass while the cabin runs at speed.
