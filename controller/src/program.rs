@@ -225,7 +225,7 @@ pub enum HaltReason {
 
 /// How long initialisation waits after its watchdog before it tries again without a vane
 /// sensor edge.
-pub const NO_VANE_RETRY: SimDuration = SimDuration::from_secs(30);
+pub const NO_VANE_RETRY: SimDuration = SimDuration::from_secs(10);
 
 impl fmt::Display for HaltReason {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
@@ -749,12 +749,18 @@ impl Program {
             }
             InitStep::Floor1Up => (self.cfg.creep_ua, true),
         };
-        self.out.run = true;
-        self.out.up = up;
-        self.out.setpoint_ua = ua;
         self.current = 1;
         self.target = 1;
         self.dir = Some(if up { Dir::Up } else { Dir::Down });
+        // Never a command to move with the door open, overloaded or STOP pressed, not even
+        // for the one scan before the hold is seen (a start from a bus fault or a lost count).
+        if !self.cabin.door_closed || self.out.overloaded || self.cabin.stop {
+            self.hold();
+            return;
+        }
+        self.out.run = true;
+        self.out.up = up;
+        self.out.setpoint_ua = ua;
     }
 
     fn init(&mut self, now: SimTime, step: InitStep, e: Edges, inp: &Inputs, stop_demand: bool) {
@@ -905,6 +911,21 @@ impl Program {
         self.phase = Phase::Service(step);
         self.progress_at = now;
         self.running_since = now;
+        let braking = step == Step::Braking;
+        let reason = if !self.cabin.door_closed {
+            Some(HaltReason::DoorOpen)
+        } else if self.out.overloaded {
+            Some(HaltReason::Overload)
+        } else {
+            None
+        };
+        if let (Some(reason), Step::Travel | Step::Braking) = (reason, step) {
+            // The door opened or the cabin was loaded during the bus fault: held, not resumed.
+            self.drive_off_at = now;
+            self.event(now, EventKind::Halted(reason));
+            self.phase = Phase::Service(Step::Halted { reason, braking });
+            return;
+        }
         let speed = match step {
             Step::Travel => self.cfg.travel_ua,
             Step::Braking => self.cfg.creep_ua,

@@ -150,13 +150,14 @@ pub fn judge(exec: &Execution, probe: Option<&Probe>) -> Verdict {
             first_violation: None,
         },
         Execution::Report(r) => {
-            // In service: the probe was served, or the lift is still working through the calls
-            // queued before it (it served one after the probe was pressed); and the program
-            // ends in a normal service state.
+            // In service: the program ends in a normal service state, and the probe was
+            // served or the lift is still working through the calls queued before it (it
+            // served one after the probe was pressed, or the automat is moving the cabin).
             let in_service = probe.filter(|p| p.judged).map(|p| {
-                let working = r.served.iter().any(|s| s.served_at_s >= p.at.as_secs_f64());
-                (probe_served(r, p) || working)
-                    && SERVICE_STATES.contains(&r.final_state.state.as_str())
+                let state = r.final_state.state.as_str();
+                let working = r.served.iter().any(|s| s.served_at_s >= p.at.as_secs_f64())
+                    || (r.final_state.moving && state != "at floor");
+                (probe_served(r, p) || working) && SERVICE_STATES.contains(&state)
             });
             let first_violation = r.violations.first().map(|v| v.kind.clone());
             let outcome = if first_violation.is_some() {

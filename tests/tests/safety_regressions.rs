@@ -384,3 +384,29 @@ fn a_scan_beyond_20_ms_is_refused_with_the_reason() {
         "{text}"
     );
 }
+
+#[test]
+fn a_new_initialisation_after_a_bus_fault_never_moves_with_the_door_open() {
+    // Door open from power-on, the converter I/O module away and back: the initialisation that
+    // follows the bus fault must hold for the door from its first scan.
+    let r = run_toml(
+        "door open through a bus fault",
+        r#"
+duration = "70s"
+[lift]
+start_mm = 800.0
+door = "open"
+[controller]
+scan = "20ms"
+[[event]]
+at = "51993ms"
+fault = { kind = "slave-offline", slave = 7 }
+[[event]]
+at = "63629ms"
+fault = { kind = "slave-online", slave = 7 }
+"#,
+    );
+    assert_no_violations(&r);
+    assert_eq!(r.final_state.position_mm, 800.0);
+    assert!(logged_after(&r, "controller", "initialisation held: door open", 63.0).is_some());
+}
