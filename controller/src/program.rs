@@ -754,7 +754,7 @@ impl Program {
         self.dir = Some(if up { Dir::Up } else { Dir::Down });
         // Never a command to move with the door open, overloaded or STOP pressed, not even
         // for the one scan before the hold is seen (a start from a bus fault or a lost count).
-        if !self.cabin.door_closed || self.out.overloaded || self.cabin.stop {
+        if self.cabin_blocks_motion().is_some() || self.cabin.stop {
             self.hold();
             return;
         }
@@ -776,10 +776,8 @@ impl Program {
         }
         let reason = if stop_demand {
             Some(HaltReason::Stop)
-        } else if !self.cabin.door_closed {
-            Some(HaltReason::DoorOpen)
-        } else if overloaded(inp) {
-            Some(HaltReason::Overload)
+        } else if let Some(r) = self.cabin_blocks_motion() {
+            Some(r)
         } else if inp.converter_fault {
             Some(HaltReason::ConverterFault)
         } else if !inp.converter_ready {
@@ -912,14 +910,7 @@ impl Program {
         self.progress_at = now;
         self.running_since = now;
         let braking = step == Step::Braking;
-        let reason = if !self.cabin.door_closed {
-            Some(HaltReason::DoorOpen)
-        } else if self.out.overloaded {
-            Some(HaltReason::Overload)
-        } else {
-            None
-        };
-        if let (Some(reason), Step::Travel | Step::Braking) = (reason, step) {
+        if let (Some(reason), Step::Travel | Step::Braking) = (self.cabin_blocks_motion(), step) {
             // The door opened or the cabin was loaded during the bus fault: held, not resumed.
             self.drive_off_at = now;
             self.event(now, EventKind::Halted(reason));
@@ -934,6 +925,18 @@ impl Program {
         self.out.run = true;
         self.out.up = self.dir == Some(Dir::Up);
         self.out.setpoint_ua = speed;
+    }
+
+    /// Why the cabin itself forbids motion: the door open, or overloaded (or its load unknown;
+    /// `out.overloaded` is this scan's).
+    fn cabin_blocks_motion(&self) -> Option<HaltReason> {
+        if !self.cabin.door_closed {
+            Some(HaltReason::DoorOpen)
+        } else if self.out.overloaded {
+            Some(HaltReason::Overload)
+        } else {
+            None
+        }
     }
 
     /// Motor off: run cleared, standstill set-point.
@@ -1032,10 +1035,8 @@ impl Program {
                 if stop_demand && !self.stop_pending {
                     self.stop_demanded(now, braking);
                 }
-                let halt = if !door_closed {
-                    Some(HaltReason::DoorOpen)
-                } else if overloaded {
-                    Some(HaltReason::Overload)
+                let halt = if let Some(r) = self.cabin_blocks_motion() {
+                    Some(r)
                 } else if inp.converter_fault {
                     Some(HaltReason::ConverterFault)
                 } else if !inp.converter_ready {
