@@ -907,7 +907,7 @@ mod tests {
         let profile = dir.join("short.toml");
         std::fs::write(
             &profile,
-            "base = \"smoke\"\nduration = [\"40s\", \"45s\"]\nprobe_lead = \"10s\"\nevents = [1, 4]\n",
+            "base = \"smoke\"\nduration = [\"70s\", \"75s\"]\nprobe_lead = \"10s\"\nevents = [1, 4]\n",
         )
         .expect("profile");
         let p = profile.to_string_lossy().to_string();

@@ -9,11 +9,12 @@
 //!    1..30 s later, an opened door is mostly closed 2..20 s later, a crank follows a STOP
 //!    once K1 has opened (10..15 s later) and is sometimes turned back. Every follow-up falls
 //!    within the activity window; what it cannot repair there, the recovery does.
-//! 2. **Recovery**, 10 s before the probe: every slave ever taken offline is put back, every
+//! 2. **Recovery**, 22 s before the probe: every slave ever taken offline is put back, every
 //!    vane sensor ever broken is repaired (but one a profile deliberately leaves broken), the
 //!    load goes back to empty, loaded or full if it ever changed, the door is closed if it was
-//!    ever open; 4 s later the operator acknowledges (ERR_ACK) and 1 s after that presses the
-//!    safety reset. The recovery repairs everything the activity could have broken, whatever
+//!    ever open. Then the operator rescues a cabin left beyond an end floor, acknowledges
+//!    (ERR_ACK) and presses the safety reset, twice ([`ROUNDS`]), the probe 22 s after the
+//!    repairs. The recovery repairs everything the activity could have broken, whatever
 //!    events remain, so a shrunk scenario that keeps the recovery is still repaired.
 //! 3. **Probe**: a cabin call `probe_lead` before the end. The lift is in service at the end
 //!    if the probe is served and the controller ends in a normal service state.
@@ -40,15 +41,26 @@ pub const MAX_CRANK_SUM_MM: f64 = 40.0;
 /// (5 s) that starts in the activity.
 const QUIET_GAP: SimDuration = SimDuration::from_secs(6);
 /// From the recovery's repairs to the probe.
-const RECOVERY: SimDuration = SimDuration::from_secs(10);
-/// From the repairs to the acknowledge, and to the reset: the safety monitor sees a slave
-/// that came back within a few cycles, a power fail's restart takes a few seconds, and the
-/// rescue's crank back to the end floor's level about 7 s.
-const ACK_AFTER: SimDuration = SimDuration::from_secs(8);
-/// From the repairs to the rescue: a cabin held (door, load) from a run down that ends on the
-/// bottom sensor gets there within a second or two of the repairs.
-const RESCUE_AFTER: SimDuration = SimDuration::from_secs(2);
-const RESET_AFTER: SimDuration = SimDuration::from_secs(9);
+const RECOVERY: SimDuration = SimDuration::from_secs(22);
+/// The operator's rounds after the repairs, each (rescue, acknowledge, reset) after the
+/// repairs. A rescue does something only to a cabin beyond an end floor with K1 open; its
+/// crank back to the end floor's level takes up to about 7 s, before the acknowledge and the
+/// reset. The first round finds a cabin that a run before the repairs left on an overtravel
+/// sensor; the second one a cabin that ran there after them (a restart from a vane sensor
+/// reading taken before its repair reached the PLC, campaign 12 run 3764), which the first
+/// rescue, coming while K1 was still closed, could not help.
+const ROUNDS: [(SimDuration, SimDuration, SimDuration); 2] = [
+    (
+        SimDuration::from_secs(2),
+        SimDuration::from_secs(8),
+        SimDuration::from_secs(9),
+    ),
+    (
+        SimDuration::from_secs(12),
+        SimDuration::from_secs(20),
+        SimDuration::from_secs(21),
+    ),
+];
 
 /// The probe: the cabin call whose service says the lift is in service at the end.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -406,12 +418,13 @@ pub fn generate(campaign_seed: u64, index: u64, profile: &Profile) -> Generated 
         tail.push((recovery, Action::Door { closed: true }));
     }
     // The operator rescues a cabin left on an overtravel sensor (a vane sensor fault can take
-    // it there); nothing happens otherwise. A runaway stops a few mm beyond the sensor: the
-    // crank back to the end floor's level takes about 7 s, before the acknowledge and the
-    // reset.
-    tail.push((recovery + dur_ms(RESCUE_AFTER), Action::Rescue));
-    tail.push((recovery + dur_ms(ACK_AFTER), Action::Ack));
-    tail.push((recovery + dur_ms(RESET_AFTER), Action::Reset));
+    // it there), acknowledges and resets, twice ([`ROUNDS`]); a rescue does nothing to a cabin
+    // inside the shaft's floors.
+    for (rescue, ack, reset) in ROUNDS {
+        tail.push((recovery + dur_ms(rescue), Action::Rescue));
+        tail.push((recovery + dur_ms(ack), Action::Ack));
+        tail.push((recovery + dur_ms(reset), Action::Reset));
+    }
     let probe_floor = b.rng.random_range(1..=floors);
     tail.push((
         probe_at,

@@ -206,7 +206,7 @@ impl Profile {
             }
             "smoke" => {
                 p.name = "smoke".into();
-                p.duration = (SimDuration::from_secs(75), SimDuration::from_secs(100));
+                p.duration = (SimDuration::from_secs(110), SimDuration::from_secs(130));
                 p.probe_lead = SimDuration::from_secs(45);
                 p.events = (1, 6);
             }
@@ -452,9 +452,10 @@ impl Profile {
     }
 }
 
-/// What a run needs besides the probe lead: the shortest window of random events (10 s), the
-/// quiet gap before the recovery (6 s) and the recovery before the probe (10 s), with room.
-pub const MIN_ACTIVITY_AND_RECOVERY: SimDuration = SimDuration::from_secs(30);
+/// What a run needs besides the probe lead: the operator's procedure for a start beyond what
+/// initialisation can find (20 s), the shortest window of random events (10 s), the quiet gap
+/// before the recovery (6 s) and the recovery before the probe (22 s), with room.
+pub const MIN_ACTIVITY_AND_RECOVERY: SimDuration = SimDuration::from_secs(60);
 
 fn merge<T: Copy + PartialEq>(
     into: &mut Weights<T>,
@@ -550,14 +551,14 @@ mod tests {
         let p = Profile::from_toml(
             "p.toml",
             "mine",
-            "base = \"quiet\"\nduration = [\"100s\", \"2min\"]\nevents = [0, 5]\n\
+            "base = \"quiet\"\nduration = [\"2min\", \"3min\"]\nevents = [0, 5]\n\
              [floors]\n2 = 0\n[event]\nslave = 4\n[scan]\n\"2ms\" = 3\n",
         )
         .expect("valid");
         assert_eq!(p.name, "mine");
         assert_eq!(
             p.duration,
-            (SimDuration::from_secs(100), SimDuration::from_secs(120))
+            (SimDuration::from_secs(120), SimDuration::from_secs(180))
         );
         assert_eq!(p.floors.weight(2), 0);
         assert_eq!(p.floors.weight(4), 2);

@@ -9,11 +9,11 @@ use asi_lift::campaign::Outcome;
 use asi_phy::SimDuration;
 use std::path::PathBuf;
 
-/// Short runs (40..45 s, probe 10 s before the end, 1..5 events) for fast tests.
+/// Short runs (70..75 s, probe 10 s before the end, 1..5 events) for fast tests.
 fn short_profile() -> Profile {
     let mut p = Profile::built_in("smoke").expect("smoke");
     p.name = "test".into();
-    p.duration = (SimDuration::from_secs(40), SimDuration::from_secs(45));
+    p.duration = (SimDuration::from_secs(70), SimDuration::from_secs(75));
     p.probe_lead = SimDuration::from_secs(10);
     p.events = (1, 5);
     p.check().expect("a valid profile");

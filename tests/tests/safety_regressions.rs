@@ -410,3 +410,60 @@ fault = { kind = "slave-online", slave = 7 }
     assert_eq!(r.final_state.position_mm, 800.0);
     assert!(logged_after(&r, "controller", "initialisation held: door open", 63.0).is_some());
 }
+
+#[test]
+fn a_run_onto_the_bottom_sensor_after_the_repairs_is_rescued_by_a_second_round() {
+    // Campaign 12, run 3764: the cabin held overloaded at floor 1's level while its left vane
+    // sensor was stuck off. The repair and the load falling come at the same moment; the hold
+    // ends and initialisation restarts from the PLC's reading of a few ms before, the left
+    // sensor off, and runs down onto the bottom sensor (safely: K1 opens). The operator's first
+    // rescue comes while K1 is still closed and is refused; the second one, after the trip,
+    // cranks the cabin back, and the reset brings service back.
+    let r = run_toml(
+        "run onto the bottom sensor after the repairs",
+        r#"
+duration = "70s"
+[lift]
+start_mm = 0.0
+load = "overloaded"
+[[event]]
+at = "5s"
+fault = { kind = "vane-stuck-off", sensor = "left" }
+[[event]]
+at = "11s"
+fault = { kind = "vane-repaired", sensor = "left" }
+[[event]]
+at = "11s"
+load = "loaded"
+[[event]]
+at = "13s"
+rescue = true
+[[event]]
+at = "19s"
+ack = true
+[[event]]
+at = "20s"
+reset = true
+[[event]]
+at = "23s"
+rescue = true
+[[event]]
+at = "31s"
+ack = true
+[[event]]
+at = "32s"
+reset = true
+[[event]]
+at = "33s"
+press = "cabin:4"
+"#,
+    );
+    assert_no_violations(&r);
+    let refused = logged_at(&r, "scenario", "K1 is closed: no rescue by hand").expect("refused");
+    let tripped = logged_at(&r, "safety", "K1 opened: overtravel bottom sensor").expect("trip");
+    let cranked = logged_at(&r, "scenario", "hand crank +").expect("second rescue");
+    assert!(refused < tripped && tripped < cranked, "{}", r.to_text());
+    assert!(r.initialised_at_s.is_some_and(|t| t > 32.0));
+    assert_arrivals_agree(&r);
+    assert_eq!(served(&r), [(4, "cabin".into())]);
+}
