@@ -1,9 +1,9 @@
 //! Helpers of the end-to-end tests: run a scenario file of `scenarios/` or a built scenario on
 //! the whole rig and read its report.
 
-use asi_lift::report::Report;
-use asi_lift::rig::Rig;
-use asi_lift::scenario::Scenario;
+use rig::report::Report;
+use rig::rig::Rig;
+use rig::scenario::Scenario;
 use std::path::PathBuf;
 
 /// The scenario `scenarios/<name>.toml` of the repository.

@@ -3,9 +3,9 @@
 //! no torn word is taken while the panel is off the bus, and words resume as soon as it is
 //! back.
 
-use asi_lift::rig::Rig;
 use asi_lift_tests::scenario;
 use asi_phy::{SimDuration, SimTime};
+use rig::rig::Rig;
 
 fn at(s: f64) -> SimTime {
     SimTime::ZERO + SimDuration::from_secs_f64(s).expect("time")

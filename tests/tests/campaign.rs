@@ -3,10 +3,10 @@
 //! without a failure (ignored here: `.ci/run` runs the same campaign on the release build,
 //! where it takes a minute instead of two and keeps `cargo test --workspace` short).
 
-use asi_lift::campaign::profile::Profile;
-use asi_lift::campaign::run::{run_campaign, Finished, Plan, Shard};
-use asi_lift::campaign::Outcome;
 use asi_phy::SimDuration;
+use rig::campaign::profile::Profile;
+use rig::campaign::run::{run_campaign, Finished, Plan, Shard};
+use rig::campaign::Outcome;
 use std::path::PathBuf;
 
 /// Short runs (70..75 s, probe 10 s before the end, 1..5 events) for fast tests.
@@ -25,7 +25,7 @@ fn lines(plan: &Plan, jobs: usize) -> (Vec<String>, Vec<Finished>) {
     let mut out = Vec::new();
     let mut finished = Vec::new();
     let mut sink = |f: Finished| {
-        out.push(f.line.to_json_line());
+        out.push(f.line.to_json_line().expect("serialises"));
         finished.push(f);
         Ok(())
     };

@@ -3,10 +3,10 @@
 //! scenario (most of them the files in `scenarios/`, which users can run themselves) and
 //! asserts its report.
 
-use asi_lift::scenario::{Action, Scenario, ScenarioEvent};
 use asi_lift_tests::*;
 use asi_phy::{SimDuration, SimTime};
 use lift_model::Button;
+use rig::scenario::{Action, Scenario, ScenarioEvent};
 
 fn at(s: f64) -> SimTime {
     SimTime::ZERO + SimDuration::from_secs_f64(s).expect("time")
@@ -59,7 +59,7 @@ fn initialises_from_several_heights_including_floor_1() {
 
 #[test]
 fn the_demo_serves_a_cabin_call_and_a_hall_call_stored_meanwhile() {
-    let r = run(Scenario::demo());
+    let r = run(Scenario::demo().expect("the demo"));
     assert_no_violations(&r);
     assert_eq!(stops(&r), [1, 3, 4, 1]);
     assert_eq!(
@@ -426,13 +426,13 @@ fn cranking_into_the_mechanical_end_is_a_violation() {
 
 #[test]
 fn a_run_is_deterministic_and_the_seed_matters() {
-    let a = run_file("noise").to_json();
-    let b = run_file("noise").to_json();
+    let a = run_file("noise").to_json().expect("serialises");
+    let b = run_file("noise").to_json().expect("serialises");
     assert_eq!(a, b);
     let mut sc = scenario("noise");
     sc.seed = 8;
     let c = run(sc);
-    assert_ne!(c.to_json(), a);
+    assert_ne!(c.to_json().expect("serialises"), a);
     assert_no_violations(&c);
 }
 

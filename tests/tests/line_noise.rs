@@ -2,11 +2,11 @@
 //! lift keeps serving while the bus delivers what it needs, and when it cannot the report says
 //! why.
 
-use asi_lift::report::Report;
-use asi_lift::scenario::{Action, Fault, ScenarioEvent};
 use asi_lift_tests::*;
 use asi_phy::{SimDuration, SimTime};
 use lift_model::Button;
+use rig::report::Report;
+use rig::scenario::{Action, Fault, ScenarioEvent};
 
 fn at(s: f64) -> SimTime {
     SimTime::ZERO + SimDuration::from_secs_f64(s).expect("time")

@@ -2,14 +2,14 @@
 //! whole run), its `line_voltage` real and the CSV (the waveform window) decode to exactly the
 //! telegrams of the JSON-lines trace, at the same nanoseconds.
 
-use asi_lift::capture::{decode_capture, DecodeOptions};
-use asi_lift::rig::Rig;
-use asi_lift::scenario::Scenario;
-use asi_lift::telegrams::TelegramRecord;
-use asi_lift::trace::TraceFormat;
-use asi_lift::waves::WaveOutputs;
 use asi_lift_tests::Shared;
 use asi_phy::{Nibble, Request, Response, SimDuration};
+use asi_trace::capture::{decode_capture, DecodeOptions};
+use asi_trace::telegrams::TelegramRecord;
+use asi_trace::trace::TraceFormat;
+use rig::rig::Rig;
+use rig::scenario::Scenario;
+use rig::waves::WaveOutputs;
 
 /// The telegrams of a JSON-lines trace: each request at its start, each response 102 µs later
 /// (84 µs of request and the 18 µs master pause, SPEC §1).
@@ -35,12 +35,12 @@ fn telegrams_of_trace(jsonl: &[u8]) -> Vec<TelegramRecord> {
 #[test]
 fn decode_returns_the_telegrams_of_the_trace() {
     let (trace, vcd, csv) = (Shared::default(), Shared::default(), Shared::default());
-    let mut rig = Rig::new(Scenario::demo()).expect("rig");
+    let mut rig = Rig::new(Scenario::demo().expect("the demo")).expect("rig");
     rig.trace_to(Box::new(trace.clone()), TraceFormat::Jsonl);
     // The default window: the line is idle before the master starts at 5 ms, so a receiver
     // reading it is synchronised from the first telegram. (A window that opens in the middle
     // of a telegram leaves the receiver out of step until a pause of 18 µs, as on a real line.)
-    let window = asi_lift::waves::DEFAULT_WINDOW;
+    let window = rig::waves::DEFAULT_WINDOW;
     rig.waves_to(WaveOutputs {
         vcd: Some(Box::new(vcd.clone())),
         csv: Some(Box::new(csv.clone())),
@@ -101,7 +101,7 @@ fn decode_returns_the_telegrams_of_the_trace() {
     }
 }
 
-fn rig_errors(r: &asi_lift::report::Report) -> Option<String> {
+fn rig_errors(r: &rig::report::Report) -> Option<String> {
     r.log
         .iter()
         .find(|l| l.text.contains("could not be written"))

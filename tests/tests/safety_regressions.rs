@@ -3,8 +3,8 @@
 //! a safety engineer expects of it: no invariant broken, the fault ends in a safe reported
 //! state, and service resumes once the fault is repaired.
 
-use asi_lift::report::Report;
 use asi_lift_tests::*;
+use rig::report::Report;
 
 /// The times the safety logic closed K1.
 fn k1_closed_at(r: &Report) -> Vec<f64> {
@@ -376,7 +376,7 @@ press = "hall-up:2"
 
 #[test]
 fn a_scan_beyond_20_ms_is_refused_with_the_reason() {
-    let e = asi_lift::scenario::Scenario::from_toml("s.toml", "[controller]\nscan = \"30ms\"\n")
+    let e = rig::scenario::Scenario::from_toml("s.toml", "[controller]\nscan = \"30ms\"\n")
         .expect_err("30 ms");
     let text = e.to_string();
     assert!(

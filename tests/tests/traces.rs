@@ -5,13 +5,13 @@
 //! and, of their data exchanges, only those whose outputs or inputs changed.
 //! (`INSTA_UPDATE=always cargo test -p asi-lift-tests --test traces`, then read the .snap.)
 
-use asi_lift::report::Report;
-use asi_lift::rig::Rig;
-use asi_lift::scenario::{Action, Scenario, ScenarioEvent};
 use asi_lift_tests::*;
 use asi_master::trace::TransactionRecord;
 use asi_phy::{Call, SimDuration, SimTime};
 use lift_model::Button;
+use rig::report::Report;
+use rig::rig::Rig;
+use rig::scenario::{Action, Scenario, ScenarioEvent};
 use std::cell::RefCell;
 use std::rc::Rc;
 

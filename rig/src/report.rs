@@ -271,8 +271,8 @@ impl Report {
     }
 
     /// The report as pretty JSON.
-    pub fn to_json(&self) -> String {
-        serde_json::to_string_pretty(self).unwrap_or_else(|e| format!("{{\"error\": \"{e}\"}}"))
+    pub fn to_json(&self) -> Result<String, serde_json::Error> {
+        serde_json::to_string_pretty(self)
     }
 
     /// The readable log and a summary.
@@ -282,7 +282,14 @@ impl Report {
         for l in &self.log {
             let _ = writeln!(s, "{:>10.3} s  {:<10}  {}", l.at_s, l.who, l.text);
         }
-        let _ = writeln!(s, "\nsummary after {:.3} s", self.simulated_s);
+        s.push('\n');
+        s + &self.summary_text()
+    }
+
+    /// The summary of the run, from its `summary after … s` line on.
+    pub fn summary_text(&self) -> String {
+        let mut s = String::new();
+        let _ = writeln!(s, "summary after {:.3} s", self.simulated_s);
         match self.initialised_at_s {
             Some(t) => {
                 let _ = writeln!(s, "  initialised at     {t:.3} s");

@@ -16,7 +16,7 @@
 //! [`to_json_lines`] render them.
 
 use crate::telegrams::TelegramRecord;
-use crate::vcd::{Change, Timescale, Value, Var, VcdReader};
+use crate::vcd::read::{Change, Timescale, Value, Var, VcdReader};
 use asi_phy::waveform::{
     read_capture, CaptureError, DemodConfig, Demodulator, Waveform, WaveformError,
 };
@@ -577,16 +577,13 @@ pub fn to_text(d: &Decoded) -> String {
 }
 
 /// One JSON object per telegram and line, the fields of [`TelegramRecord`].
-pub fn to_json_lines(d: &Decoded) -> String {
+pub fn to_json_lines(d: &Decoded) -> Result<String, serde_json::Error> {
     let mut s = String::new();
     for t in &d.telegrams {
-        // A record of strings, integers and options always serialises.
-        if let Ok(line) = serde_json::to_string(t) {
-            s.push_str(&line);
-            s.push('\n');
-        }
+        s.push_str(&serde_json::to_string(t)?);
+        s.push('\n');
     }
-    s
+    Ok(s)
 }
 
 #[cfg(test)]
@@ -893,7 +890,7 @@ $comment response 18 us after the last pulse $end
     #[test]
     fn json_lines_carry_the_trace_fields() {
         let d = decode(SPEC_WIRE_VCD, &DecodeOptions::default()).expect("decodes");
-        let json = to_json_lines(&d);
+        let json = to_json_lines(&d).expect("serialises");
         let lines: Vec<serde_json::Value> = json
             .lines()
             .map(|l| serde_json::from_str(l).expect("JSON"))
@@ -1079,8 +1076,8 @@ $comment response 18 us after the last pulse $end
 
     #[test]
     fn a_written_waveform_decodes_back() {
-        let t = crate::phy_tools::parse_call(&["rid1".into(), "7".into()]).expect("call");
-        let csv = crate::phy_tools::waveform_csv(t, &WaveformConfig::default()).expect("render");
+        let t = crate::encode::parse_call(&["rid1".into(), "7".into()]).expect("call");
+        let csv = crate::encode::waveform_csv(t, &WaveformConfig::default()).expect("render");
         let d = decode(&csv, &DecodeOptions::default()).expect("decode");
         assert_eq!(d.telegrams.len(), 1);
         assert_eq!(d.telegrams[0].call, Some("Read_ID1"));

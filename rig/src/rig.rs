@@ -15,12 +15,12 @@ use crate::report::{
     Passenger, Report, SafetyReport, Served, SlaveDropouts, Trip, Violation,
 };
 use crate::scenario::{load_name, needs_rescue, Action, Fault, Scenario, ScenarioEvent};
-use crate::trace::{write_record, TraceFormat};
 use crate::waves::{RigSample, WaveOutputs, Waves};
 use asi_master::lab::LabLift;
 use asi_master::safety::NotReleased;
 use asi_phy::fault::FaultRates;
 use asi_phy::{Check, SimDuration, SimTime};
+use asi_trace::trace::{write_record, TraceFormat};
 use controller::plc::{addr, FromSafety, Plc, ToSafety};
 use controller::{ControllerConfig, EventKind as Ctl, HallDir, Source};
 use lift_model::{Button, DisplayId, EventKind as Plant, Lift, LiftConfig, LoadLevel, SensorFault};

@@ -1650,8 +1650,8 @@ impl TimingReport {
     }
 
     /// The report as JSON.
-    pub fn to_json(&self) -> String {
-        serde_json::to_string_pretty(self).unwrap_or_else(|e| format!("{{\"error\": \"{e}\"}}"))
+    pub fn to_json(&self) -> Result<String, serde_json::Error> {
+        serde_json::to_string_pretty(self)
     }
 
     /// An SVG with histograms of the cycle time and of each latency.
@@ -2011,7 +2011,8 @@ mod tests {
         ] {
             assert!(text.contains(want), "{text}");
         }
-        let json: serde_json::Value = serde_json::from_str(&r.to_json()).expect("json");
+        let json: serde_json::Value =
+            serde_json::from_str(&r.to_json().expect("serialises")).expect("json");
         assert_eq!(json["cycle_us"]["analytic"].as_f64(), r.cycle_us.analytic);
         let svg = r.to_svg();
         assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));

@@ -217,8 +217,8 @@ pub fn summarize(files: &[(String, String)]) -> Result<Summary, String> {
 
 impl Summary {
     /// The summary as pretty JSON.
-    pub fn to_json(&self) -> String {
-        serde_json::to_string_pretty(self).unwrap_or_else(|e| format!("{{\"error\": \"{e}\"}}"))
+    pub fn to_json(&self) -> Result<String, serde_json::Error> {
+        serde_json::to_string_pretty(self)
     }
 
     /// The summary as a table.

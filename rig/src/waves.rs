@@ -9,10 +9,10 @@
 //! long run stays small; the CSV holds the same window as `time_s,voltage_v`.
 
 use crate::rig::round3;
-use crate::vcd_write::{Value, VarId, VarKind, VcdWriter};
 use asi_master::trace::{describe_request, TransactionRecord};
 use asi_phy::waveform::{render, WaveformConfig};
 use asi_phy::{BusTiming, Polarity, Pulse, SimDuration, SimTime};
+use asi_trace::vcd::write::{Value, VarId, VarKind, VcdWriter};
 use std::fmt::Write as _;
 use std::io::{self, Write};
 
@@ -239,7 +239,7 @@ impl Waves {
                 errors,
                 "{}{}",
                 if errors.is_empty() { "" } else { "+" },
-                crate::telegrams::check_key(c)
+                asi_trace::telegrams::check_key(c)
             );
         }
         if errors.is_empty() {

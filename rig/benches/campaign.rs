@@ -4,8 +4,8 @@
 //!
 //! `cargo bench --bench campaign` (arguments after `--`: the number of runs, default 24).
 
-use asi_lift::campaign::profile::Profile;
-use asi_lift::campaign::run::{run_campaign, Plan, Shard};
+use rig::campaign::profile::Profile;
+use rig::campaign::run::{run_campaign, Plan, Shard};
 use std::time::Instant;
 
 fn main() {
@@ -30,9 +30,9 @@ fn main() {
         let mut simulated = 0.0;
         let mut lines = Vec::new();
         let wall = Instant::now();
-        let mut sink = |f: asi_lift::campaign::run::Finished| {
+        let mut sink = |f: rig::campaign::run::Finished| {
             simulated += f.line.simulated_s;
-            lines.push(f.line.to_json_line());
+            lines.push(f.line.to_json_line().expect("serialises"));
             Ok(())
         };
         if let Err(e) = run_campaign(&plan, jobs, &mut sink, &mut |_| {}) {

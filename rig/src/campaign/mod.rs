@@ -234,8 +234,8 @@ pub struct RunLine {
 
 impl RunLine {
     /// The line as written to the output: one JSON object, no line break.
-    pub fn to_json_line(&self) -> String {
-        serde_json::to_string(self).unwrap_or_else(|e| format!("{{\"error\": \"{e}\"}}"))
+    pub fn to_json_line(&self) -> Result<String, serde_json::Error> {
+        serde_json::to_string(self)
     }
 }
 

@@ -6,12 +6,12 @@
 //! `cargo bench --bench rig` (arguments after `--`: simulated seconds, default 3600; `lab` or
 //! `full` to run only one of the two).
 
-use asi_lift::rig::Rig;
-use asi_lift::scenario::{Action, Scenario, ScenarioEvent};
 use asi_phy::{SimDuration, SimTime};
 use lift_model::Button;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
+use rig::rig::Rig;
+use rig::scenario::{Action, Scenario, ScenarioEvent};
 use std::time::Instant;
 
 /// Passengers at random: a press every 15..45 s, a cabin call or a hall call at a random floor.

@@ -1,0 +1,143 @@
+//! `asi-lift timing`: the bus and reaction times, computed and simulated side by side.
+
+use super::open_output;
+use asi_phy::SimDuration;
+use rig::timing::{analyse, BusChoice, TimingOptions, MAX_DURATION, MAX_SAMPLES};
+use std::io::Write;
+use std::path::PathBuf;
+
+/// The arguments of `asi-lift timing`.
+#[derive(clap::Args)]
+pub struct TimingArgs {
+    /// The bus: `lab` (the lab lift, whole rig), a number 1..31 of standard slaves, or
+    /// `62ab` (62 A/B slaves).
+    #[arg(long, default_value = "lab", value_parser = parse_bus)]
+    pub bus: BusChoice,
+    /// Plain I/O modules added to the lab bus at its free addresses (0..20).
+    #[arg(long, value_name = "N", allow_negative_numbers = true)]
+    pub extra_slaves: Option<u8>,
+    /// Probability that a pulse on the line is corrupted (0 <= P < 1).
+    #[arg(
+        long,
+        value_name = "P",
+        default_value_t = 0.0,
+        allow_negative_numbers = true
+    )]
+    pub error_rate: f64,
+    /// Seed of the line noise and of the press moments.
+    #[arg(long, default_value_t = 1, allow_negative_numbers = true)]
+    pub seed: u64,
+    /// Simulated measurement window of the bus statistics (e.g. 60s, 2min).
+    #[arg(
+        long,
+        value_name = "DURATION",
+        default_value = "60s",
+        allow_hyphen_values = true
+    )]
+    pub duration: String,
+    /// Latency samples of each chain (lab bus).
+    #[arg(
+        long,
+        value_name = "K",
+        default_value_t = 100,
+        allow_negative_numbers = true
+    )]
+    pub samples: u32,
+    /// Write the report as JSON instead of the table.
+    #[arg(long)]
+    pub json: bool,
+    /// Also write an SVG with histograms of the cycle time and of the latencies.
+    #[arg(long, value_name = "FILE")]
+    pub svg: Option<PathBuf>,
+    /// Overwrite the SVG file if it exists.
+    #[arg(long)]
+    pub force: bool,
+}
+
+fn parse_bus(s: &str) -> Result<BusChoice, String> {
+    s.parse()
+}
+
+/// Runs the analysis and prints its report.
+pub fn run(args: TimingArgs) -> Result<u8, String> {
+    let TimingArgs {
+        bus,
+        extra_slaves,
+        error_rate,
+        seed,
+        duration,
+        samples,
+        json,
+        svg,
+        force,
+    } = args;
+    let opts = timing_options(bus, extra_slaves, error_rate, seed, &duration, samples)?;
+    // Refuse an existing SVG before spending the simulation on it.
+    let mut svg_out = match &svg {
+        Some(path) => Some((path, open_output(path, force)?)),
+        None => None,
+    };
+    let rep = analyse(&opts).map_err(|e| e.to_string())?;
+    if json {
+        println!(
+            "{}",
+            rep.to_json()
+                .map_err(|e| format!("the report as JSON: {e}"))?
+        );
+    } else {
+        print!("{}", rep.to_text());
+    }
+    if let Some((path, out)) = &mut svg_out {
+        out.write_all(rep.to_svg().as_bytes())
+            .and_then(|()| out.flush())
+            .map_err(|e| format!("{}: {e}", path.display()))?;
+        if !json {
+            println!("SVG written to {}", path.display());
+        }
+    }
+    Ok(0)
+}
+
+/// The timing options from the command line, each bad value named by its argument.
+fn timing_options(
+    bus: BusChoice,
+    extra_slaves: Option<u8>,
+    error_rate: f64,
+    seed: u64,
+    duration: &str,
+    samples: u32,
+) -> Result<TimingOptions, String> {
+    let bus = match (bus, extra_slaves) {
+        (BusChoice::Lab { .. }, Some(extra)) if extra > 20 => {
+            return Err(format!(
+                "--extra-slaves: {extra}: the lab bus has 20 free addresses (0..20)"
+            ))
+        }
+        (BusChoice::Lab { .. }, Some(extra)) => BusChoice::Lab { extra },
+        (_, Some(_)) => {
+            return Err("--extra-slaves applies to --bus lab only".into());
+        }
+        (b, None) => b,
+    };
+    if !(error_rate.is_finite() && (0.0..1.0).contains(&error_rate)) {
+        return Err(format!(
+            "--error-rate: {error_rate}: a pulse error probability is 0 <= P < 1"
+        ));
+    }
+    let duration: SimDuration = duration.parse().map_err(|e| format!("--duration: {e}"))?;
+    if duration.is_zero() || duration > MAX_DURATION {
+        return Err(format!(
+            "--duration: {duration}: must be more than 0 and at most 1 h"
+        ));
+    }
+    if samples > MAX_SAMPLES {
+        return Err(format!("--samples: {samples}: at most {MAX_SAMPLES}"));
+    }
+    Ok(TimingOptions {
+        bus,
+        pulse_error_rate: error_rate,
+        seed,
+        duration,
+        samples,
+    })
+}
