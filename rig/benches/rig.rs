@@ -3,7 +3,7 @@
 //! target is ≤ 1 s of wall time per simulated hour (≥ 3600× real time), release build, traces
 //! off.
 //!
-//! `cargo bench --bench rig` (arguments after `--`: simulated seconds, default 3600; `lab` or
+//! `cargo bench -p rig --bench rig` (arguments after `--`: simulated seconds, default 3600; `lab` or
 //! `full` to run only one of the two).
 
 use asi_phy::{SimDuration, SimTime};
