@@ -13,6 +13,9 @@ pub const MAX_FLOORS: u8 = 24;
 /// The longest length this model accepts, in mm (100 m): keeps every time and position
 /// computation far from overflow.
 pub const MAX_LENGTH_MM: f64 = 100_000.0;
+/// How far from a floor's level the cabin may stand and still be level at that floor, mm
+/// (either way): the window in which the rig counts an arrival and the tests judge a stop.
+pub const LEVEL_WINDOW_MM: f64 = 10.0;
 
 /// The lift as built (SPEC §4 geometry; seed 003 §6.3, §6.4). All lengths in mm, positions of
 /// the cabin measured upward from the level of floor 1.
@@ -245,6 +248,17 @@ impl LiftConfig {
         (1..=self.floors)
             .contains(&floor)
             .then(|| self.level(floor))
+    }
+
+    /// The floor the cabin stands level at when it is at `position_mm`: within
+    /// [`LEVEL_WINDOW_MM`] of a floor's level; `None` between floors.
+    pub fn level_floor(&self, position_mm: f64) -> Option<u8> {
+        let nearest = (position_mm / self.floor_pitch_mm).round() + 1.0;
+        if !(1.0..=f64::from(self.floors)).contains(&nearest) {
+            return None;
+        }
+        let floor = nearest as u8;
+        ((position_mm - self.level(floor)).abs() <= LEVEL_WINDOW_MM).then_some(floor)
     }
 
     /// The track `(from, to)` in mm, both ends inclusive, on which `sensor` is on at `floor`;

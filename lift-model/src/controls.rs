@@ -34,6 +34,28 @@ impl fmt::Display for Button {
     }
 }
 
+impl Button {
+    /// The button as scenario files and reports name it: `cabin:3`, `hall-up:2`,
+    /// `hall-down:4`, `bell`, `stop`.
+    pub fn key(self) -> String {
+        match self {
+            Button::Cabin(f) => format!("cabin:{f}"),
+            Button::HallUp(f) => format!("hall-up:{f}"),
+            Button::HallDown(f) => format!("hall-down:{f}"),
+            Button::Bell => "bell".into(),
+            Button::Stop => "stop".into(),
+        }
+    }
+
+    /// The floor a call button belongs to (`None` for the bell and STOP).
+    pub fn floor(self) -> Option<u8> {
+        match self {
+            Button::Cabin(f) | Button::HallUp(f) | Button::HallDown(f) => Some(f),
+            Button::Bell | Button::Stop => None,
+        }
+    }
+}
+
 /// The load sensor's reading (IG5886, SPEC §3 slave 8; seed 003 `Zatizeni_Kabiny`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
 pub enum LoadLevel {
@@ -49,6 +71,30 @@ pub enum LoadLevel {
 }
 
 impl LoadLevel {
+    /// Every level, lightest first.
+    pub const ALL: [LoadLevel; 4] = [
+        LoadLevel::Empty,
+        LoadLevel::Loaded,
+        LoadLevel::Full,
+        LoadLevel::Overloaded,
+    ];
+
+    /// The level's name in scenario files and reports: `empty`, `loaded`, `full`,
+    /// `overloaded`.
+    pub const fn name(self) -> &'static str {
+        match self {
+            LoadLevel::Empty => "empty",
+            LoadLevel::Loaded => "loaded",
+            LoadLevel::Full => "full",
+            LoadLevel::Overloaded => "overloaded",
+        }
+    }
+
+    /// The level of a name ([`LoadLevel::name`]).
+    pub fn from_name(name: &str) -> Option<LoadLevel> {
+        LoadLevel::ALL.into_iter().find(|l| l.name() == name)
+    }
+
     /// The 2-bit code on the sensor's D1..D0 (SPEC §3): 0 empty .. 3 overloaded.
     pub fn code(self) -> u8 {
         match self {

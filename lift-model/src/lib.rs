@@ -66,7 +66,7 @@ mod lift;
 mod motion;
 mod shaft;
 
-pub use config::{ConfigError, LiftConfig};
+pub use config::{ConfigError, LiftConfig, LEVEL_WINDOW_MM};
 pub use controls::{Button, ContactFault, LoadLevel, SensorFault, StopChannel};
 pub use display::{DisplayId, DisplayState, DisplayWord, DisplayWordError};
 pub use drive::{converter_frequency_hz, DriveConfig};

@@ -57,10 +57,10 @@ pub struct Arrival {
 pub struct Served {
     /// The floor.
     pub floor: u8,
-    /// `cabin` or `hall`.
-    pub source: String,
-    /// For a hall call, `up` or `down`.
-    pub direction: Option<String>,
+    /// A cabin or a hall call.
+    pub source: CallSource,
+    /// For a hall call, the direction.
+    pub direction: Option<HallDirection>,
     /// When the passenger pressed the button (or, if no press matches, when the controller
     /// stored the call), seconds.
     pub requested_at_s: f64,
@@ -228,11 +228,90 @@ pub struct Trip {
 pub struct Violation {
     /// When it was found, seconds.
     pub at_s: f64,
-    /// Which invariant: `door-open-moving`, `overloaded-moving`, `k1-in-overtravel`,
-    /// `mechanical-end`, `stop-ignored`.
-    pub kind: String,
+    /// Which invariant.
+    pub kind: ViolationKind,
     /// What was seen.
     pub detail: String,
+}
+
+/// The invariants the rig watches (README "Violations"); in files by their names. Declared
+/// in the order of their names, which is their order in summaries.
+#[derive(
+    Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, serde::Deserialize,
+)]
+pub enum ViolationKind {
+    /// The cabin moves with the door open beyond the reaction budget.
+    #[serde(rename = "door-open-moving")]
+    DoorOpenMoving,
+    /// K1 stays closed with an overtravel sensor tripped.
+    #[serde(rename = "k1-in-overtravel")]
+    K1InOvertravel,
+    /// The cabin hits a mechanical end of the shaft.
+    #[serde(rename = "mechanical-end")]
+    MechanicalEnd,
+    /// The cabin moves overloaded beyond the reaction budget.
+    #[serde(rename = "overloaded-moving")]
+    OverloadedMoving,
+    /// K1 still closed after STOP's delay and a margin.
+    #[serde(rename = "stop-ignored")]
+    StopIgnored,
+}
+
+impl ViolationKind {
+    /// Every kind.
+    pub const ALL: [ViolationKind; 5] = [
+        ViolationKind::DoorOpenMoving,
+        ViolationKind::K1InOvertravel,
+        ViolationKind::MechanicalEnd,
+        ViolationKind::OverloadedMoving,
+        ViolationKind::StopIgnored,
+    ];
+
+    /// The kind's name in reports and files.
+    pub const fn name(self) -> &'static str {
+        match self {
+            ViolationKind::DoorOpenMoving => "door-open-moving",
+            ViolationKind::OverloadedMoving => "overloaded-moving",
+            ViolationKind::K1InOvertravel => "k1-in-overtravel",
+            ViolationKind::MechanicalEnd => "mechanical-end",
+            ViolationKind::StopIgnored => "stop-ignored",
+        }
+    }
+}
+
+impl std::fmt::Display for ViolationKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.pad(self.name())
+    }
+}
+
+/// Where a served call came from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum CallSource {
+    /// A cabin button.
+    Cabin,
+    /// A hall (floor station) button.
+    Hall,
+}
+
+impl std::fmt::Display for CallSource {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.pad(match self {
+            CallSource::Cabin => "cabin",
+            CallSource::Hall => "hall",
+        })
+    }
+}
+
+/// The direction a hall call asks for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum HallDirection {
+    /// Up.
+    Up,
+    /// Down.
+    Down,
 }
 
 /// One line of the run's log.
@@ -247,6 +326,48 @@ pub struct LogLine {
 }
 
 impl Report {
+    /// The report of a run at power-on, before anything happened: the scenario's name and
+    /// seed, the cabin at `start_mm`.
+    pub fn at_power_on(scenario: &str, seed: u64, start_mm: f64) -> Report {
+        Report {
+            scenario: scenario.to_owned(),
+            seed,
+            simulated_s: 0.0,
+            initialised_at_s: None,
+            arrivals: Vec::new(),
+            served: Vec::new(),
+            passengers: Vec::new(),
+            final_state: FinalState {
+                floor: 1,
+                position_mm: start_mm,
+                state: String::new(),
+                moving: false,
+                contactor_closed: false,
+                k1_open_cause: None,
+                fifo_cabin: Vec::new(),
+                fifo_hall: Vec::new(),
+            },
+            bus: BusReport {
+                transactions: 0,
+                repeats: 0,
+                errors: ErrorCounts::default(),
+                cycle_us: CycleTimes {
+                    min: 0.0,
+                    mean: 0.0,
+                    max: 0.0,
+                },
+                dropouts: Vec::new(),
+            },
+            safety: SafetyReport {
+                trips: Vec::new(),
+                monitor: Vec::new(),
+            },
+            violations: Vec::new(),
+            availability: Availability::default(),
+            log: Vec::new(),
+        }
+    }
+
     /// Mean waiting times per passenger press.
     pub fn waits(&self) -> Waits {
         let mean = |f: &dyn Fn(&Passenger) -> bool| {
@@ -390,4 +511,10 @@ impl Report {
         }
         s
     }
+}
+
+/// `x` rounded to three decimals: the precision of the report's and the waveforms' figures
+/// (µm, ms, µs).
+pub fn round3(x: f64) -> f64 {
+    (x * 1000.0).round() / 1000.0
 }

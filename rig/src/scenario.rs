@@ -291,17 +291,16 @@ fn load_level(
     field: &str,
     s: &Spanned<String>,
 ) -> Result<LoadLevel, ScenarioError> {
-    match s.get_ref().as_str() {
-        "empty" => Ok(LoadLevel::Empty),
-        "loaded" => Ok(LoadLevel::Loaded),
-        "full" => Ok(LoadLevel::Full),
-        "overloaded" => Ok(LoadLevel::Overloaded),
-        other => Err(loc.error(
+    LoadLevel::from_name(s.get_ref()).ok_or_else(|| {
+        loc.error(
             Some(s.span()),
             field,
-            format!("unknown load `{other}`: use empty, loaded, full or overloaded"),
-        )),
-    }
+            format!(
+                "unknown load `{}`: use empty, loaded, full or overloaded",
+                s.get_ref()
+            ),
+        )
+    })
 }
 
 fn door(loc: &Locator<'_>, field: &str, s: &Spanned<String>) -> Result<bool, ScenarioError> {
@@ -609,7 +608,7 @@ impl Scenario {
         );
         let _ = writeln!(s, "\n[lift]\nfloors = {}", self.floors);
         let _ = writeln!(s, "start_mm = {}", toml_float(self.start_mm));
-        let _ = writeln!(s, "load = \"{}\"", load_name(self.load));
+        let _ = writeln!(s, "load = \"{}\"", self.load.name());
         let _ = writeln!(
             s,
             "door = \"{}\"",
@@ -634,13 +633,13 @@ impl Scenario {
             let _ = writeln!(s, "\n[[event]]\nat = \"{at}\"");
             let _ = match &e.action {
                 Action::Press { button, hold } => {
-                    let _ = writeln!(s, "press = \"{}\"", button_text(*button));
+                    let _ = writeln!(s, "press = \"{}\"", button.key());
                     if *hold != DEFAULT_HOLD {
                         let _ = writeln!(s, "hold = \"{}\"", exact_duration(*hold));
                     }
                     Ok(())
                 }
-                Action::Load(l) => writeln!(s, "load = \"{}\"", load_name(*l)),
+                Action::Load(l) => writeln!(s, "load = \"{}\"", l.name()),
                 Action::Door { closed } => {
                     writeln!(s, "door = \"{}\"", if *closed { "closed" } else { "open" })
                 }
@@ -719,26 +718,6 @@ fn exact_duration(d: SimDuration) -> String {
 }
 
 /// The scenario file's name of a load level (also the rig's log).
-pub(crate) fn load_name(l: LoadLevel) -> &'static str {
-    match l {
-        LoadLevel::Empty => "empty",
-        LoadLevel::Loaded => "loaded",
-        LoadLevel::Full => "full",
-        LoadLevel::Overloaded => "overloaded",
-    }
-}
-
-/// A button as a scenario file names it: `cabin:3`, `hall-up:2`, `stop`.
-pub fn button_text(b: Button) -> String {
-    match b {
-        Button::Cabin(f) => format!("cabin:{f}"),
-        Button::HallUp(f) => format!("hall-up:{f}"),
-        Button::HallDown(f) => format!("hall-down:{f}"),
-        Button::Bell => "bell".into(),
-        Button::Stop => "stop".into(),
-    }
-}
-
 fn fault_text(f: &Fault) -> String {
     let side = |s: &VaneSensor| match s {
         VaneSensor::Left => "left",

@@ -8,7 +8,7 @@
 //! on the line, faults included) is written only for a window, default the first 10 ms, so a
 //! long run stays small; the CSV holds the same window as `time_s,voltage_v`.
 
-use crate::rig::round3;
+use crate::report::round3;
 use asi_master::trace::{describe_request, TransactionRecord};
 use asi_phy::waveform::{render, WaveformConfig};
 use asi_phy::{BusTiming, Polarity, Pulse, SimDuration, SimTime};

@@ -52,7 +52,7 @@ pub fn stops_between(r: &Report, from_s: f64, to_s: f64) -> Vec<u8> {
 pub fn served(r: &Report) -> Vec<(u8, String)> {
     r.served
         .iter()
-        .map(|s| (s.floor, s.source.clone()))
+        .map(|s| (s.floor, s.source.to_string()))
         .collect()
 }
 

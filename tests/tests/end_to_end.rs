@@ -414,7 +414,7 @@ fn cranking_into_the_mechanical_end_is_a_violation() {
         },
     ];
     let r = run(sc);
-    let kinds: Vec<&str> = r.violations.iter().map(|v| v.kind.as_str()).collect();
+    let kinds: Vec<&str> = r.violations.iter().map(|v| v.kind.name()).collect();
     assert_eq!(kinds, ["mechanical-end"], "{}", r.to_text());
     // -3.4 mm to the end at -140 mm at 10 mm/s: about 13.7 s after 20 s.
     assert!(

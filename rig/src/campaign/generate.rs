@@ -618,10 +618,7 @@ mod tests {
                 see(match &e.action {
                     Action::Press { button, hold } => format!(
                         "press {} {}",
-                        crate::scenario::button_text(*button)
-                            .split(':')
-                            .next()
-                            .unwrap_or(""),
+                        button.key().split(':').next().unwrap_or(""),
                         *hold == crate::scenario::DEFAULT_HOLD
                     ),
                     Action::Load(l) => format!("load to {l:?}"),

@@ -19,7 +19,7 @@ pub mod run;
 pub mod shrink;
 pub mod summary;
 
-use crate::report::Report;
+use crate::report::{round3, Report, ViolationKind};
 use crate::rig::Rig;
 use crate::scenario::Scenario;
 use generate::Probe;
@@ -115,14 +115,14 @@ pub struct Verdict {
     /// In service at the end: `None` without a judged probe (or without a report).
     pub in_service: Option<bool>,
     /// The first violation's kind, if any.
-    pub first_violation: Option<String>,
+    pub first_violation: Option<ViolationKind>,
 }
 
 impl Verdict {
     /// What "fails the same way" compares while shrinking: the outcome and the first
     /// violation's kind.
-    pub fn signature(&self) -> (Outcome, Option<&str>) {
-        (self.outcome, self.first_violation.as_deref())
+    pub fn signature(&self) -> (Outcome, Option<ViolationKind>) {
+        (self.outcome, self.first_violation)
     }
 }
 
@@ -159,7 +159,7 @@ pub fn judge(exec: &Execution, probe: Option<&Probe>) -> Verdict {
                     || (r.final_state.moving && state != "at floor");
                 (probe_served(r, p) || working) && SERVICE_STATES.contains(&state)
             });
-            let first_violation = r.violations.first().map(|v| v.kind.clone());
+            let first_violation = r.violations.first().map(|v| v.kind);
             let outcome = if first_violation.is_some() {
                 Outcome::Violation
             } else if in_service == Some(false) {
@@ -244,7 +244,7 @@ impl RunLine {
 #[serde(deny_unknown_fields)]
 pub struct LineViolation {
     /// Its kind (README.md, "Violations").
-    pub kind: String,
+    pub kind: ViolationKind,
     /// When, seconds.
     pub at_s: f64,
 }
@@ -278,10 +278,6 @@ pub fn p95(sorted: &[f64]) -> Option<f64> {
     }
     let rank = (0.95 * sorted.len() as f64).ceil() as usize;
     sorted.get(rank.clamp(1, sorted.len()) - 1).copied()
-}
-
-fn round3(x: f64) -> f64 {
-    (x * 1000.0).round() / 1000.0
 }
 
 /// Who a line belongs to: the campaign and the run.
@@ -338,7 +334,7 @@ pub fn line(ctx: LineContext<'_>, exec: &Execution, verdict: &Verdict) -> RunLin
                 .violations
                 .iter()
                 .map(|v| LineViolation {
-                    kind: v.kind.clone(),
+                    kind: v.kind,
                     at_s: round3(v.at_s),
                 })
                 .collect();

@@ -16,6 +16,7 @@
 
 use super::generate::{recovery_index, Probe, RECOVERY_NOT_BEFORE};
 use super::{execute, judge, Execution, Outcome, Verdict};
+use crate::report::ViolationKind;
 use crate::scenario::{Action, Fault, Scenario};
 use asi_phy::{SimDuration, SimTime};
 
@@ -48,7 +49,7 @@ pub type Oracle<'a> = &'a dyn Fn(&Case) -> (Execution, Verdict);
 
 struct Shrinker<'a> {
     oracle: Oracle<'a>,
-    target: (Outcome, Option<String>),
+    target: (Outcome, Option<ViolationKind>),
     budget: u32,
     attempts: u32,
     best: Case,
@@ -68,7 +69,7 @@ impl Shrinker<'_> {
         self.attempts += 1;
         let (exec, verdict) = (self.oracle)(&cand);
         let (o, k) = verdict.signature();
-        if (o, k) != (self.target.0, self.target.1.as_deref()) {
+        if (o, k) != self.target {
             return false;
         }
         self.best = cand;
@@ -282,7 +283,7 @@ pub fn shrink_with(
     verdict: Verdict,
     budget: u32,
 ) -> Shrunk {
-    let target = (verdict.outcome, verdict.first_violation.clone());
+    let target = (verdict.outcome, verdict.first_violation);
     let mut s = Shrinker {
         oracle,
         target,
@@ -383,11 +384,11 @@ mod tests {
         }
     }
 
-    fn verdict(outcome: Outcome, kind: Option<&str>) -> Verdict {
+    fn verdict(outcome: Outcome, kind: Option<ViolationKind>) -> Verdict {
         Verdict {
             outcome,
             in_service: None,
-            first_violation: kind.map(String::from),
+            first_violation: kind,
         }
     }
 
@@ -412,12 +413,12 @@ mod tests {
                     let at = sc.events[b].at.as_secs_f64() + 2.0;
                     let v = Violation {
                         at_s: at,
-                        kind: "overloaded-moving".into(),
+                        kind: ViolationKind::OverloadedMoving,
                         detail: String::new(),
                     };
                     (
                         report(vec![v]),
-                        verdict(Outcome::Violation, Some("overloaded-moving")),
+                        verdict(Outcome::Violation, Some(ViolationKind::OverloadedMoving)),
                     )
                 }
                 _ => (report(vec![]), verdict(Outcome::Ok, None)),

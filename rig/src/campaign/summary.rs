@@ -2,6 +2,7 @@
 //! shards), merged into one table.
 
 use super::{p95, Outcome, RunLine};
+use crate::report::ViolationKind;
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
@@ -22,7 +23,7 @@ pub struct Summary {
     /// Runs per outcome (every outcome listed).
     pub outcomes: BTreeMap<String, u64>,
     /// Violations by kind: how many, and in how many runs.
-    pub violations: BTreeMap<String, KindCount>,
+    pub violations: BTreeMap<ViolationKind, KindCount>,
     /// Runs not in service at the end (`in_service: false`), those with violations included;
     /// the outcome `out-of-service` counts the others.
     pub out_of_service: u64,
@@ -80,7 +81,7 @@ pub struct Failure {
     /// Its outcome.
     pub outcome: Outcome,
     /// Its first violation's kind, if any.
-    pub first_violation: Option<String>,
+    pub first_violation: Option<ViolationKind>,
     /// Its reproducer's file name, if written.
     pub reproducer: Option<String>,
 }
@@ -170,12 +171,12 @@ pub fn summarize(files: &[(String, String)]) -> Result<Summary, String> {
     let mut waits: Vec<f64> = Vec::new();
     for l in &lines {
         *s.outcomes.entry(l.outcome.name().to_owned()).or_default() += 1;
-        let mut kinds: Vec<&str> = Vec::new();
+        let mut kinds: Vec<ViolationKind> = Vec::new();
         for v in &l.violations {
-            let k = s.violations.entry(v.kind.clone()).or_default();
+            let k = s.violations.entry(v.kind).or_default();
             k.violations += 1;
-            if !kinds.contains(&v.kind.as_str()) {
-                kinds.push(&v.kind);
+            if !kinds.contains(&v.kind) {
+                kinds.push(v.kind);
                 k.runs += 1;
             }
         }
@@ -195,7 +196,7 @@ pub fn summarize(files: &[(String, String)]) -> Result<Summary, String> {
             s.failures.push(Failure {
                 index: l.index,
                 outcome: l.outcome,
-                first_violation: l.violations.first().map(|v| v.kind.clone()),
+                first_violation: l.violations.first().map(|v| v.kind),
                 reproducer: l.reproducer.clone(),
             });
         }
@@ -312,7 +313,7 @@ impl Summary {
                     "  {:>6}  {:<15} {:<20} {}",
                     f.index,
                     f.outcome.name(),
-                    f.first_violation.as_deref().unwrap_or(""),
+                    f.first_violation.map_or("", ViolationKind::name),
                     f.reproducer.as_deref().unwrap_or("")
                 );
             }

@@ -1,0 +1,830 @@
+//! The rig: the AS-i bus with the lab lift's slaves, the lift plant, the PLC and the safety
+//! logic on one simulated clock (SPEC §0), driven by a scenario.
+//!
+//! A discrete-event loop: the next moment is the earliest of the next bus event, the plant's
+//! next edge, the next PLC scan, the next safety scan, the next scenario event and the end of
+//! the run. At each moment the plant is brought up to it first (its edges are exact), its
+//! signals are handed to the slaves' peripheral inputs, the bus runs, and what the slaves drive
+//! (converter run and direction, the speed set-point, the display words) goes to the plant at
+//! that same moment. So a slave samples the plant exactly when its transaction completes, and
+//! the plant sees a new output exactly when the slave takes it. Nothing reads the wall clock;
+//! the only random source is the bus's line noise, seeded from the scenario.
+
+mod invariants;
+mod las;
+mod operator;
+mod outputs;
+mod passengers;
+mod wiring;
+mod words;
+
+pub use outputs::TransactionObserver;
+
+use crate::report::{
+    round3, Arrival, FinalState, LogLine, MonitorTrip, Report, SlaveDropouts, Trip, Violation,
+    ViolationKind,
+};
+use crate::scenario::{Action, Fault, Scenario, ScenarioEvent};
+use crate::waves::{RigSample, WaveOutputs, Waves};
+use asi_master::bus::NOMINAL_VOLTS;
+use asi_master::lab::{LabLift, SAFETY_BOTTOM, SAFETY_TOP};
+use asi_phy::fault::FaultRates;
+use asi_phy::{SimDuration, SimTime};
+use asi_trace::trace::TraceFormat;
+use controller::plc::{FromSafety, Plc, ToSafety};
+use controller::{ControllerConfig, EventKind as Ctl};
+use invariants::{InvariantWatch, Observed};
+use las::LasWatch;
+use lift_model::drive::STANDSTILL_UA;
+use lift_model::{EventKind as Plant, Lift, LiftConfig, LoadLevel};
+use operator::{describe, Rescue, OPERATOR_PULSE};
+use outputs::Outputs;
+use passengers::Passengers;
+use safety::{LiftSafety, LiftSafetyConfig, LiftSafetyInputs, SafeLink, SAFETY_SCAN_PERIOD};
+use wiring::Applied;
+
+/// Why a rig cannot be built for a scenario.
+#[derive(Debug, thiserror::Error)]
+pub enum RigError {
+    /// The lift plant rejects its configuration.
+    #[error("lift: {0}")]
+    Lift(#[from] lift_model::ConfigError),
+    /// The bus cannot be built.
+    #[error("bus: {0}")]
+    Bus(#[from] asi_master::ConfigError),
+    /// The controller rejects its configuration.
+    #[error("{0}")]
+    Controller(#[from] controller::ControllerConfigError),
+    /// The safety project cannot be built.
+    #[error("safety: {0}")]
+    Safety(#[from] safety::lift::LiftSafetyError),
+    /// The plant refuses the scenario's initial state.
+    #[error("lift: {0}")]
+    Plant(#[from] lift_model::PlantError),
+}
+
+/// When the operator presses the safety reset after power-on.
+const POWER_ON_RESET_AT: SimTime = SimTime::from_millis(500);
+
+/// Something the rig does at a fixed time besides the scenario's events.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Timer {
+    OperatorReset(bool),
+    ErrAck(bool),
+    PowerBack,
+}
+
+/// The whole rig.
+pub struct Rig {
+    sc: Scenario,
+    lab: LabLift,
+    lift: Lift,
+    plc: Plc,
+    safety: LiftSafety,
+    estop_delay: SimDuration,
+    now: SimTime,
+    end: SimTime,
+    next_plc: SimTime,
+    next_safety: SimTime,
+    next_event: usize,
+    timers: Vec<(SimTime, Timer)>,
+    applied: Applied,
+    plant_dirty: bool,
+    from_safety: FromSafety,
+    to_safety: ToSafety,
+    k1: bool,
+    operator_reset: bool,
+    err_ack: bool,
+    /// Every press of a call button, for the passengers' waits and the served calls' requests.
+    passengers: Passengers,
+    watch: InvariantWatch,
+    report: Report,
+    /// The trace, the waveforms and the observer.
+    outputs: Outputs,
+    /// The safety logic's last outputs, for the VCD.
+    safety_out: Option<safety::lift::LiftSafetyDiag>,
+    /// Drop-outs from LAS.
+    las_watch: LasWatch,
+    /// Since when the controller holds the cabin for a bus fault.
+    bus_fault_since: Option<SimTime>,
+}
+
+impl Rig {
+    /// A rig at power-on for `sc`.
+    pub fn new(sc: Scenario) -> Result<Rig, RigError> {
+        let lift = Lift::new(LiftConfig {
+            floors: sc.floors,
+            initial_position_mm: sc.start_mm,
+            ..LiftConfig::default()
+        })?;
+        let mut lab = LabLift::with_extra(asi_master::MasterConfig::default(), sc.extra_slaves)?;
+        lab.bus.watch_outputs(wiring::drives_plant());
+        lab.bus.enable_trace(0);
+        if sc.pulse_error_rate > 0.0 {
+            lab.bus
+                .set_line_faults(sc.seed, FaultRates::uniform(sc.pulse_error_rate));
+        }
+        let plc = Plc::new(ControllerConfig {
+            floors: sc.floors,
+            algorithm: sc.algorithm,
+            scan: sc.plc_scan,
+            ..ControllerConfig::default()
+        })?;
+        let safety_cfg = LiftSafetyConfig::default();
+        let estop_delay = safety_cfg.estop_delay;
+        let safety = LiftSafety::new(safety_cfg)?;
+        let mut timers = Vec::new();
+        if sc.power_on_reset {
+            timers.push((POWER_ON_RESET_AT, Timer::OperatorReset(true)));
+        }
+        let report = Report::at_power_on(&sc.name, sc.seed, sc.start_mm);
+        let mut rig = Rig {
+            end: SimTime::ZERO + sc.duration,
+            lab,
+            lift,
+            plc,
+            safety,
+            estop_delay,
+            now: SimTime::ZERO,
+            next_plc: SimTime::ZERO,
+            next_safety: SimTime::ZERO,
+            next_event: 0,
+            timers,
+            applied: Applied::default(),
+            plant_dirty: true,
+            from_safety: FromSafety::default(),
+            to_safety: ToSafety::default(),
+            k1: false,
+            operator_reset: false,
+            err_ack: false,
+            passengers: Passengers::default(),
+            watch: InvariantWatch::default(),
+            report,
+            outputs: Outputs::default(),
+            safety_out: None,
+            las_watch: LasWatch::default(),
+            bus_fault_since: None,
+            sc,
+        };
+        rig.lift.set_load(SimTime::ZERO, rig.sc.load)?;
+        rig.lift.set_door(SimTime::ZERO, rig.sc.door_closed)?;
+        rig.log(
+            "rig",
+            format!(
+                "power on: cabin at {:.1} mm, load {}, door {}, {} control, line error rate {}",
+                rig.sc.start_mm,
+                rig.sc.load.name(),
+                if rig.sc.door_closed { "closed" } else { "open" },
+                match rig.sc.algorithm {
+                    controller::Algorithm::Fifo => "FIFO",
+                    controller::Algorithm::Collective => "collective",
+                },
+                rig.sc.pulse_error_rate
+            ),
+        );
+        Ok(rig)
+    }
+
+    /// Streams every bus transaction, one line each in `format`, to `out` (drained from the
+    /// master's trace ring at every PLC scan and at the end).
+    pub fn trace_to(&mut self, out: Box<dyn std::io::Write>, format: TraceFormat) {
+        self.enable_trace_ring();
+        self.outputs.trace = Some((out, format));
+    }
+
+    /// Writes the VCD and the line-voltage CSV of the run (see [`crate::waves`]).
+    pub fn waves_to(&mut self, out: WaveOutputs) {
+        self.enable_trace_ring();
+        self.lab.bus.record_line(true);
+        self.outputs.waves = Some(Waves::new(out, self.lab.bus.timing()));
+    }
+
+    /// Hands every bus transaction to `f` (at every PLC scan and at the end, in order).
+    pub fn on_transaction(&mut self, f: TransactionObserver) {
+        self.enable_trace_ring();
+        self.outputs.observer = Some(f);
+    }
+
+    fn enable_trace_ring(&mut self) {
+        // A PLC scan spans about 65 transactions of the lab bus; the ring holds far more.
+        self.lab.bus.enable_trace(1 << 16);
+    }
+
+    /// The first error writing the trace or the waveforms, if any.
+    pub fn trace_error(&self) -> Option<&str> {
+        self.outputs.error()
+    }
+
+    /// Hands the transactions and line pulses since the last call to the trace and the
+    /// waveform outputs.
+    fn flush_trace(&mut self) {
+        if !self.outputs.wanted() {
+            return;
+        }
+        let records = self.lab.bus.drain_trace();
+        let pulses = if self.outputs.waves.is_some() {
+            self.lab.bus.take_line_pulses()
+        } else {
+            Vec::new()
+        };
+        self.outputs.transactions(&records, &pulses, self.now);
+    }
+
+    /// The rig's state for the waveforms at `t`, if they are wanted.
+    fn sample_waves(&mut self, t: SimTime) {
+        if self.outputs.waves.is_some() {
+            let sample = self.sample();
+            self.outputs.sample(t, &sample);
+        }
+    }
+
+    /// The rig's state for the VCD.
+    fn sample(&self) -> RigSample {
+        let l = &self.lift;
+        let p = self.plc.program();
+        let diag = self.safety_out.as_ref();
+        RigSample {
+            position_mm: l.position_mm(),
+            velocity_mm_s: l.velocity_mm_s(),
+            vane_left: l.vane_left(),
+            vane_right: l.vane_right(),
+            overtravel_bottom_free: l.overtravel_bottom_free(),
+            overtravel_top_free: l.overtravel_top_free(),
+            k1: l.k1_closed(),
+            door_closed: l.door_closed(),
+            converter_run: self.applied.run,
+            converter_up: self.applied.up,
+            setpoint_ua: self.applied.setpoint_ua,
+            controller_state: p.state_name(),
+            floor: p.current_floor(),
+            target_floor: p.target(),
+            fifo_cabin: p.fifo_cabin().len() as u8,
+            fifo_hall: p.fifo_hall().len() as u8,
+            estop_out: self.from_safety.estop_out,
+            group_state: diag.map_or("STOP", |d| d.group.state.name()),
+            fb_err: diag.is_some_and(|d| d.group.errors.fb_err),
+            com_err: diag.is_some_and(|d| d.group.errors.com_err),
+            out_err: diag.is_some_and(|d| d.group.errors.out_err),
+            supply_v: self.lab.bus.supply_voltage(),
+        }
+    }
+
+    /// Runs until `until` (at most the scenario's duration) and returns the report.
+    pub fn run(self, until: Option<SimDuration>) -> Report {
+        self.run_observed(until, &mut |_, _| {})
+    }
+
+    /// As [`Rig::run`], telling `progress` the simulated time and the end after every PLC
+    /// scan (for a progress indicator; the simulation does not depend on it).
+    pub fn run_observed(
+        mut self,
+        until: Option<SimDuration>,
+        progress: &mut dyn FnMut(SimTime, SimTime),
+    ) -> Report {
+        if let Some(u) = until {
+            self.end = self.end.min(SimTime::ZERO + u);
+        }
+        let mut scans = self.next_plc;
+        while let Some(t) = self.advance(self.end) {
+            if self.next_plc != scans {
+                scans = self.next_plc;
+                progress(t, self.end);
+            }
+            if t == self.end {
+                break;
+            }
+        }
+        self.finish()
+    }
+
+    fn next_moment(&self) -> SimTime {
+        let mut t = self.end;
+        if let Some(e) = self.lift.next_event() {
+            t = t.min(e);
+        }
+        t = t.min(self.next_plc).min(self.next_safety);
+        if let Some(e) = self.sc.events.get(self.next_event) {
+            t = t.min(e.at);
+        }
+        if let Some((at, _)) = self.timers.iter().min_by_key(|(at, _)| *at) {
+            t = t.min(*at);
+        }
+        t.max(self.now)
+    }
+
+    /// Handles the rig's next moment, or a slave's new output before it, if it comes no later
+    /// than `limit`; returns its time. The bus runs on its own up to the rig's next moment and
+    /// stops where a slave takes a new output for the plant, which gets it at that moment.
+    fn advance(&mut self, limit: SimTime) -> Option<SimTime> {
+        let t = self.next_moment();
+        if t > limit {
+            return None;
+        }
+        if let Some(at) = self.lab.bus.advance_before(t) {
+            self.output_taken(at);
+            return Some(at);
+        }
+        self.step(t);
+        Some(t)
+    }
+
+    /// A slave took a new output at `t` (before the rig's next moment): the plant gets it.
+    fn output_taken(&mut self, t: SimTime) {
+        self.now = t;
+        self.advance_plant(t);
+        self.slaves_to_plant(t);
+        if self.plant_dirty {
+            self.plant_to_slaves();
+        }
+        self.check_invariants(t);
+        self.sample_waves(t);
+    }
+
+    fn step(&mut self, t: SimTime) {
+        self.now = t;
+        self.advance_plant(t);
+        while let Some(ev) = self
+            .sc
+            .events
+            .get(self.next_event)
+            .filter(|e| e.at <= t)
+            .cloned()
+        {
+            self.next_event += 1;
+            self.apply(t, &ev);
+        }
+        self.fire_timers(t);
+        if self.plant_dirty {
+            self.plant_to_slaves();
+        }
+        self.lab.bus.advance_to(t);
+        self.slaves_to_plant(t);
+        if t >= self.next_safety {
+            self.safety_scan(t);
+            self.next_safety = t + SAFETY_SCAN_PERIOD;
+        }
+        if t >= self.next_plc {
+            self.plc_scan(t);
+            self.next_plc = t + self.sc.plc_scan;
+            self.flush_trace();
+        }
+        self.check_invariants(t);
+        self.sample_waves(t);
+    }
+
+    fn advance_plant(&mut self, t: SimTime) {
+        let events: Result<Vec<_>, _> = self.lift.advance_to(t).map(|ev| ev.collect());
+        let events = match events {
+            Ok(ev) => ev,
+            Err(e) => {
+                self.log("plant", format!("error: {e}"));
+                return;
+            }
+        };
+        if events.is_empty() {
+            return;
+        }
+        self.plant_dirty = true;
+        for e in events {
+            match e.kind {
+                Plant::Stopped { position_mm } => self.stopped(e.at, position_mm),
+                Plant::Crash { end, impact_mm_s } => {
+                    let text =
+                        format!("crash into the mechanical end ({end:?}) at {impact_mm_s:.1} mm/s");
+                    self.log_at(e.at, "plant", text.clone());
+                    self.violation(e.at, ViolationKind::MechanicalEnd, text);
+                }
+                Plant::Overtravel { end, tripped } => {
+                    let text = if tripped {
+                        format!(
+                            "overtravel sensor ({end:?}) tripped at {:.1} mm",
+                            self.lift.position_mm()
+                        )
+                    } else {
+                        format!("overtravel sensor ({end:?}) free again")
+                    };
+                    self.log_at(e.at, "plant", text);
+                }
+                Plant::ConverterFault { fault } => {
+                    self.log_at(e.at, "plant", format!("converter fault: {fault:?}"));
+                }
+                _ => {}
+            }
+        }
+    }
+
+    /// The cabin came to rest: an arrival if it stands level at a floor with the drive
+    /// commanded to stand still.
+    fn stopped(&mut self, at: SimTime, position_mm: f64) {
+        if self.applied.run && self.applied.setpoint_ua > STANDSTILL_UA {
+            return;
+        }
+        let cfg = self.lift.config();
+        let Some(floor) = cfg.level_floor(position_mm) else {
+            return;
+        };
+        let level = cfg.floor_level_mm(floor).unwrap_or_default();
+        self.report.arrivals.push(Arrival {
+            floor,
+            at_s: at.as_secs_f64(),
+            position_mm: round3(position_mm),
+        });
+        self.log_at(
+            at,
+            "plant",
+            format!(
+                "cabin at rest level at floor {floor} ({:+.1} mm)",
+                position_mm - level
+            ),
+        );
+    }
+
+    fn apply(&mut self, t: SimTime, ev: &ScenarioEvent) {
+        let what = describe(&ev.action);
+        self.log("scenario", what);
+        let result = match &ev.action {
+            Action::Press { button, hold } => {
+                self.passengers.press(t, *button);
+                self.lift.press(t, *button, *hold)
+            }
+            Action::Load(l) => self.lift.set_load(t, *l),
+            Action::Door { closed } => self.lift.set_door(t, *closed),
+            Action::Crank { mm } => self.lift.crank(t, *mm),
+            Action::Reset => {
+                self.operator_reset = true;
+                self.timers
+                    .push((t + OPERATOR_PULSE, Timer::OperatorReset(false)));
+                Ok(())
+            }
+            Action::Rescue => self.rescue(t),
+            Action::Ack => {
+                self.err_ack = true;
+                self.timers.push((t + OPERATOR_PULSE, Timer::ErrAck(false)));
+                Ok(())
+            }
+            Action::Fault(f) => {
+                self.fault(t, *f);
+                Ok(())
+            }
+        };
+        if let Err(e) = result {
+            self.log("scenario", format!("refused by the plant: {e}"));
+        }
+        self.plant_dirty = true;
+    }
+
+    /// The operator's overtravel rescue ([`operator::rescue`]).
+    fn rescue(&mut self, t: SimTime) -> Result<(), lift_model::PlantError> {
+        match operator::rescue(&self.lift, self.sc.floors) {
+            Rescue::NotNeeded => {
+                self.log("scenario", "the cabin needs no rescue".into());
+                Ok(())
+            }
+            Rescue::K1Closed => {
+                self.log("scenario", "K1 is closed: no rescue by hand".into());
+                Ok(())
+            }
+            Rescue::Crank(mm) => {
+                self.log("scenario", format!("hand crank {mm:+.1} mm"));
+                self.lift.crank(t, mm)
+            }
+        }
+    }
+
+    fn fault(&mut self, t: SimTime, f: Fault) {
+        match f {
+            Fault::SlaveOffline { slave } | Fault::SlaveOnline { slave } => {
+                let Some(id) = self.lab.slave_id(slave) else {
+                    self.log(
+                        "scenario",
+                        format!("no slave at address {slave} on the lab bus"),
+                    );
+                    return;
+                };
+                if matches!(f, Fault::SlaveOffline { .. }) {
+                    self.lab.bus.detach(id);
+                } else {
+                    self.lab.bus.attach(id);
+                    self.plant_dirty = true;
+                }
+            }
+            Fault::PowerFail { duration } => {
+                self.lab.bus.set_supply_voltage(0.0);
+                self.timers.push((t + duration, Timer::PowerBack));
+            }
+            Fault::SafeLinkDrop { duration } => {
+                self.safety.drop_link(SafeLink::CabinStop, t, duration)
+            }
+            Fault::Vane { sensor, fault } => {
+                if let Err(e) = self.lift.set_vane_fault(t, sensor, fault) {
+                    self.log("plant", format!("error: {e}"));
+                }
+                self.plant_dirty = true;
+            }
+        }
+    }
+
+    fn fire_timers(&mut self, t: SimTime) {
+        let mut due: Vec<Timer> = Vec::new();
+        self.timers.retain(|(at, timer)| {
+            if *at <= t {
+                due.push(*timer);
+                false
+            } else {
+                true
+            }
+        });
+        for timer in due {
+            match timer {
+                Timer::OperatorReset(on) => {
+                    self.operator_reset = on;
+                    if on {
+                        self.log(
+                            "rig",
+                            "operator presses the safety reset after power-on".into(),
+                        );
+                        self.timers
+                            .push((t + OPERATOR_PULSE, Timer::OperatorReset(false)));
+                    }
+                }
+                Timer::ErrAck(on) => self.err_ack = on,
+                Timer::PowerBack => {
+                    self.lab.bus.set_supply_voltage(NOMINAL_VOLTS);
+                    self.log("rig", "AS-i power back".into());
+                    self.plant_dirty = true;
+                }
+            }
+        }
+    }
+
+    /// The plant's signals on the slaves' peripheral inputs.
+    fn plant_to_slaves(&mut self) {
+        self.plant_dirty = false;
+        wiring::plant_to_slaves(&self.lift, &mut self.lab, self.sc.floors);
+    }
+
+    /// What the slaves drive, to the plant, at the moment they drive it.
+    fn slaves_to_plant(&mut self, t: SimTime) {
+        let new = wiring::slave_outputs(&self.lab);
+        let result = wiring::apply_to_plant(&mut self.lift, t, &self.applied, &new, self.sc.floors);
+        if let Err(e) = result {
+            self.log("plant", format!("error: {e}"));
+        }
+        // What the plant shows the slaves can change with what it is given.
+        self.plant_dirty |= new != self.applied;
+        self.applied = new;
+    }
+
+    /// The master's LAS and the safety monitor's drops since the last look, to the report
+    /// and the log (every safety scan, 1 ms).
+    fn watch_bus(&mut self, t: SimTime) {
+        let m = self.lab.bus.master();
+        let las = (m.phase() == asi_master::Phase::NormalOperation).then(|| m.las().bits() as u32);
+        let (left, back) = self.las_watch.update(t, las);
+        for i in 1..32u8 {
+            if left & (1 << i) != 0 {
+                self.log_at(t, "bus", format!("slave {i} dropped out of LAS"));
+            }
+            if back & (1 << i) != 0 {
+                self.log_at(t, "bus", format!("slave {i} back in LAS"));
+            }
+        }
+        let id = self.lab.monitor;
+        let drops = self
+            .lab
+            .bus
+            .monitor_mut(id)
+            .map(|m| m.take_drops())
+            .unwrap_or_default();
+        for d in drops {
+            let (cause, text) = words::monitor_drop(d.why);
+            let address = d.address.get();
+            self.log_at(
+                d.at,
+                "monitor",
+                format!("safety sensor {address} not released: {text}"),
+            );
+            self.report.safety.monitor.push(MonitorTrip {
+                at_s: d.at.as_secs_f64(),
+                address,
+                cause: cause.into(),
+            });
+        }
+    }
+
+    fn safety_scan(&mut self, t: SimTime) {
+        self.watch_bus(t);
+        let [ch1, ch2] = self.lift.stop_channels();
+        let inputs = LiftSafetyInputs {
+            stop_ch1: ch1,
+            stop_ch2: ch2,
+            overtravel_bottom_released: self.lab.released(SAFETY_BOTTOM),
+            overtravel_top_released: self.lab.released(SAFETY_TOP),
+            overloaded: self.to_safety.overloaded,
+            k1_aux: self.lift.k1_aux_closed(),
+            operator_reset: self.operator_reset,
+            err_ack: self.err_ack,
+            controller_restart: self.to_safety.restart,
+        };
+        let out = self.safety.scan(t, &inputs);
+        for e in &out.events {
+            if e.is_trip() {
+                self.report.safety.trips.push(Trip {
+                    at_s: e.at_s(),
+                    cause: e.cause.clone(),
+                });
+            }
+            self.report.log.push(LogLine {
+                at_s: e.at_s(),
+                who: "safety",
+                text: e.cause.clone(),
+            });
+        }
+        self.from_safety = FromSafety {
+            estop_out: out.estop_out,
+        };
+        self.safety_out = Some(out.diag);
+        if out.k1 != self.k1 {
+            self.k1 = out.k1;
+            if let Err(e) = self.lift.set_contactor(t, out.k1) {
+                self.log("plant", format!("error: {e}"));
+            }
+            self.plant_dirty = true;
+        }
+    }
+
+    fn plc_scan(&mut self, t: SimTime) {
+        self.to_safety = self.plc.scan(t, self.lab.bus.image_mut(), self.from_safety);
+        let held = self.plc.program().state_name() == "bus fault";
+        match (self.bus_fault_since, held) {
+            (None, true) => {
+                self.bus_fault_since = Some(t);
+                self.report.availability.bus_fault_holds += 1;
+            }
+            (Some(s), false) => {
+                self.report.availability.bus_fault_s += (t - s).as_secs_f64();
+                self.bus_fault_since = None;
+            }
+            _ => {}
+        }
+        let events: Vec<_> = self.plc.program_mut().drain_events().collect();
+        for e in events {
+            match e.kind {
+                Ctl::Initialised if self.report.initialised_at_s.is_none() => {
+                    self.report.initialised_at_s = Some(e.at.as_secs_f64());
+                }
+                Ctl::StopDemanded {
+                    dropped: Some(f), ..
+                } => self.passengers.target_dropped(f, e.at),
+                Ctl::Served(s) => {
+                    let served = self.passengers.served(&s, e.at);
+                    self.report.served.push(served);
+                }
+                _ => {}
+            }
+            self.log_at(e.at, "controller", e.kind.to_string());
+        }
+    }
+
+    fn check_invariants(&mut self, t: SimTime) {
+        let l = &self.lift;
+        let seen = Observed {
+            velocity_mm_s: l.velocity_mm_s(),
+            hand_cranking: l.hand_cranking(),
+            door_open: !l.door_closed(),
+            overloaded: l.load() == LoadLevel::Overloaded,
+            overtravel_tripped: !l.overtravel_bottom_free() || !l.overtravel_top_free(),
+            k1_closed: l.k1_closed(),
+            stop: l.stop_channels() != [true, true],
+        };
+        for (kind, detail) in self.watch.check(t, seen, self.estop_delay) {
+            self.violation(t, kind, detail);
+        }
+    }
+
+    fn violation(&mut self, t: SimTime, kind: ViolationKind, detail: String) {
+        self.log_at(t, "rig", format!("VIOLATION {kind}: {detail}"));
+        self.report.violations.push(Violation {
+            at_s: t.as_secs_f64(),
+            kind,
+            detail,
+        });
+    }
+
+    fn log(&mut self, who: &'static str, text: String) {
+        self.log_at(self.now, who, text);
+    }
+
+    fn log_at(&mut self, at: SimTime, who: &'static str, text: String) {
+        self.report.log.push(LogLine {
+            at_s: at.as_secs_f64(),
+            who,
+            text,
+        });
+    }
+
+    fn finish(mut self) -> Report {
+        self.flush_trace();
+        self.outputs.finish(self.now);
+        if let Some(e) = self.trace_error().map(str::to_owned) {
+            let text = format!("the bus trace could not be written: {e}");
+            self.log("rig", text);
+        }
+        let now = self.now;
+        self.watch_bus(now);
+        self.las_watch.close(now);
+        if let Some(s) = self.bus_fault_since.take() {
+            self.report.availability.bus_fault_s += (now - s).as_secs_f64();
+        }
+        self.report.availability.bus_fault_s = round3(self.report.availability.bus_fault_s);
+        let dropouts: Vec<SlaveDropouts> = self
+            .las_watch
+            .dropouts()
+            .map(|(address, count, out)| SlaveDropouts {
+                address,
+                count,
+                out_of_las_s: round3(out.as_secs_f64()),
+            })
+            .collect();
+        let p = self.plc.program();
+        let stats = self.lab.bus.stats();
+        self.report.simulated_s = self.now.as_secs_f64();
+        self.report.final_state = FinalState {
+            floor: p.current_floor(),
+            position_mm: round3(self.lift.position_mm()),
+            state: p.state_name().into(),
+            moving: self.lift.velocity_mm_s() != 0.0,
+            contactor_closed: self.lift.k1_closed(),
+            k1_open_cause: self
+                .safety_out
+                .as_ref()
+                .and_then(|d| d.k1_open_cause)
+                .filter(|_| !self.lift.k1_closed())
+                .map(|c| words::k1_open_cause(c, self.lab.monitor())),
+            fifo_cabin: p.fifo_cabin(),
+            fifo_hall: p.fifo_hall(),
+        };
+        self.report.bus = words::bus_report(stats, dropouts);
+        self.report.passengers = self.passengers.report();
+        // Lines from different sources come in scan order; keep them in time order.
+        self.report.log.sort_by(|a, b| a.at_s.total_cmp(&b.at_s));
+        self.report
+    }
+
+    // ----- probes: stepping and state for timing studies (`asi-lift timing`) ----------------
+
+    /// Runs the next moment of the rig if it comes no later than `until` and before the
+    /// scenario's end; returns its time. A caller can look at the rig between moments and
+    /// [`Rig::schedule`] actions in reaction to what it sees.
+    pub fn step_until(&mut self, until: SimTime) -> Option<SimTime> {
+        if self.next_moment() >= self.end {
+            return None;
+        }
+        self.advance(until)
+    }
+
+    /// Schedules `action` at `at` as if the scenario had it (a time before the next moment
+    /// takes effect at the next moment).
+    pub fn schedule(&mut self, at: SimTime, action: Action) {
+        let later = &self.sc.events[self.next_event..];
+        let pos = self.next_event + later.partition_point(|e| e.at <= at);
+        self.sc.events.insert(
+            pos,
+            ScenarioEvent {
+                at,
+                action,
+                line: 0,
+            },
+        );
+    }
+
+    /// The simulated time reached.
+    pub fn now(&self) -> SimTime {
+        self.now
+    }
+
+    /// The lab bus and its devices.
+    pub fn lab(&self) -> &LabLift {
+        &self.lab
+    }
+
+    /// The lab bus, mutable (to trace it).
+    pub fn lab_mut(&mut self) -> &mut LabLift {
+        &mut self.lab
+    }
+
+    /// The PLC.
+    pub fn plc(&self) -> &Plc {
+        &self.plc
+    }
+
+    /// The lift plant.
+    pub fn lift(&self) -> &Lift {
+        &self.lift
+    }
+
+    /// The safety logic's EStopOut as the controller last got it (`true` = no STOP demand).
+    pub fn estop_out(&self) -> bool {
+        self.from_safety.estop_out
+    }
+}

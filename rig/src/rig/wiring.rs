@@ -1,0 +1,123 @@
+//! The wiring of the lab: the plant's signals on the slaves' peripheral inputs, and what the
+//! slaves drive (converter run and direction, the speed set-point, the display words) to the
+//! plant, at the moment they drive it.
+
+use asi_master::lab::{LabLift, SAFETY_BOTTOM, SAFETY_TOP};
+use asi_phy::SimTime;
+use controller::plc::addr;
+use lift_model::{Button, DisplayId, Lift, PlantError};
+
+/// The slaves whose outputs drive the plant: the floor displays, the cabin display, the
+/// converter I/O and the speed set-point; as a mask of addresses.
+pub(super) fn drives_plant() -> u32 {
+    [
+        1,
+        2,
+        3,
+        4,
+        addr::CABIN_DISPLAY,
+        addr::CONVERTER,
+        addr::SPEED,
+    ]
+    .iter()
+    .fold(0, |m, a| m | 1 << a)
+}
+
+/// What the rig last handed the plant from the slaves.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub(super) struct Applied {
+    pub run: bool,
+    pub up: bool,
+    pub setpoint_ua: u16,
+    /// Floor displays 1..4, then the cabin display.
+    pub displays: [Option<u16>; 5],
+}
+
+/// The plant's signals on the slaves' peripheral inputs.
+pub(super) fn plant_to_slaves(l: &Lift, lab: &mut LabLift, floors: u8) {
+    for f in 1..=floors.min(addr::FLOOR_STATIONS) {
+        let up = l.is_pressed(Button::HallUp(f));
+        let down = l.is_pressed(Button::HallDown(f));
+        if let Some(st) = lab.floor_mut(f) {
+            st.set_buttons(up, down);
+        }
+    }
+    if let Some(p) = lab.cabin_panel_mut() {
+        for f in 1..=floors {
+            p.set_floor_button(f, l.is_pressed(Button::Cabin(f)));
+        }
+        p.set_bell(l.is_pressed(Button::Bell));
+        p.set_stop(l.stop_pressed());
+        p.set_door_closed(l.door_closed());
+        p.set_vane_left(l.vane_left());
+        p.set_vane_right(l.vane_right());
+    }
+    if let Some(c) = lab.converter_mut() {
+        c.set_ready(l.converter_ready());
+        c.set_fault(l.converter_fault());
+    }
+    if let Some(s) = lab.load_sensor_mut() {
+        s.set_level(l.load().code());
+    }
+    if let Some(s) = lab.safety_sensor_mut(SAFETY_BOTTOM) {
+        s.set_free(l.overtravel_bottom_free());
+    }
+    if let Some(s) = lab.safety_sensor_mut(SAFETY_TOP) {
+        s.set_free(l.overtravel_top_free());
+    }
+}
+
+/// What the slaves drive now.
+pub(super) fn slave_outputs(lab: &LabLift) -> Applied {
+    let (run, up) = lab
+        .converter()
+        .map_or((false, false), |c| (c.run(), c.direction_up()));
+    let setpoint_ua = lab.analog_output().map_or(0, |a| a.current_ua(1));
+    let mut displays = [None; 5];
+    for f in 1..=addr::FLOOR_STATIONS {
+        displays[f as usize - 1] = lab.floor(f).and_then(|s| s.display()).map(|w| w.bits());
+    }
+    displays[4] = lab
+        .cabin_display()
+        .and_then(|d| d.display())
+        .map(|w| w.bits());
+    Applied {
+        run,
+        up,
+        setpoint_ua,
+        displays,
+    }
+}
+
+/// Hands the plant at `t` what changed between `before` and `new`.
+pub(super) fn apply_to_plant(
+    lift: &mut Lift,
+    t: SimTime,
+    before: &Applied,
+    new: &Applied,
+    floors: u8,
+) -> Result<(), PlantError> {
+    let mut result = Ok(());
+    if (new.run, new.up) != (before.run, before.up) {
+        result = result.and(lift.set_run_direction(t, new.run, new.up));
+    }
+    if new.setpoint_ua != before.setpoint_ua {
+        result = result.and(lift.set_setpoint(t, new.setpoint_ua));
+    }
+    for (i, d) in new.displays.iter().enumerate() {
+        if *d != before.displays[i] {
+            if let Some(raw) = d {
+                let id = if i < 4 {
+                    DisplayId::Floor(i as u8 + 1)
+                } else {
+                    DisplayId::Cabin
+                };
+                if i < 4 && i as u8 >= floors {
+                    continue;
+                }
+                result = result.and(lift.set_display(t, id, *raw));
+            }
+        }
+    }
+    result
+}

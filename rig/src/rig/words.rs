@@ -1,0 +1,83 @@
+//! The report's words and figures for the bus and the safety monitor: why the monitor did not
+//! release a sensor, why K1 is open, the bus's counts and cycle times.
+
+use crate::report::{round3, BusReport, CycleTimes, ErrorCounts, SlaveDropouts};
+use asi_master::lab::{SAFETY_BOTTOM, SAFETY_TOP};
+use asi_master::safety::{NotReleased, SafetyMonitor};
+use asi_master::BusStats;
+use asi_phy::Check;
+use safety::lift::K1Cause;
+
+/// A drop of the Safety-at-Work monitor: its cause's key in the report and its words.
+pub(super) fn monitor_drop(why: NotReleased) -> (&'static str, String) {
+    match why {
+        NotReleased::Tripped => ("0000", "the sensor sends 0000".to_string()),
+        NotReleased::WrongCode { expected, got } => (
+            "wrong-code",
+            format!("wrong code {got:04b} (expected {expected:04b})"),
+        ),
+        NotReleased::Frozen { code } => ("frozen-code", format!("frozen code {code:04b}")),
+        _ => (
+            "silence",
+            "no valid code within the tolerance time".to_string(),
+        ),
+    }
+}
+
+/// Why K1 is open, in words; an overtravel sensor the monitor does not release is told
+/// apart: tripped (0000) or not heard.
+pub(super) fn k1_open_cause(c: K1Cause, monitor: Option<&SafetyMonitor>) -> String {
+    let K1Cause::Overtravel { bottom, top } = c else {
+        return c.to_string();
+    };
+    let why = |address: u8| {
+        let state = asi_phy::Address::new(address).and_then(|a| monitor.and_then(|m| m.state(a)));
+        match state {
+            Some(Err(NotReleased::Tripped)) => "tripped",
+            Some(Err(NotReleased::Missing)) => "not heard for the monitor's tolerance time",
+            Some(Err(NotReleased::WrongCode { .. } | NotReleased::Frozen { .. })) => {
+                "sending a wrong code sequence"
+            }
+            _ => "not yet released again by the monitor",
+        }
+    };
+    let mut parts = Vec::new();
+    if bottom {
+        parts.push(format!(
+            "overtravel bottom sensor ({SAFETY_BOTTOM}) {}",
+            why(SAFETY_BOTTOM)
+        ));
+    }
+    if top {
+        parts.push(format!(
+            "overtravel top sensor ({SAFETY_TOP}) {}",
+            why(SAFETY_TOP)
+        ));
+    }
+    parts.join("; ")
+}
+
+/// The bus's part of the report.
+pub(super) fn bus_report(stats: BusStats, dropouts: Vec<SlaveDropouts>) -> BusReport {
+    let (min, mean, max) = stats.cycle_time_us();
+    BusReport {
+        transactions: stats.transactions,
+        repeats: stats.repeats,
+        errors: ErrorCounts {
+            start_bit: stats.errors(Check::StartBit),
+            alternation: stats.errors(Check::Alternation),
+            pause: stats.errors(Check::Pause),
+            information: stats.errors(Check::Information),
+            parity: stats.errors(Check::Parity),
+            end_bit: stats.errors(Check::EndBit),
+            length: stats.errors(Check::Length),
+            no_response: stats.no_response,
+        },
+        cycle_us: CycleTimes {
+            min: round3(min),
+            mean: round3(mean),
+            max: round3(max),
+        },
+        dropouts,
+    }
+}
