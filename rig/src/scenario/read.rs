@@ -1,0 +1,545 @@
+//! Reading a scenario file: the TOML's shape (serde, with spans), then each section checked
+//! in its own step, every error named by file, line and field.
+
+use super::{
+    start_range_mm, Action, Fault, Scenario, ScenarioError, ScenarioEvent, DEFAULT_HOLD,
+    PLC_SCAN_RANGE,
+};
+use asi_phy::{SimDuration, SimTime};
+use controller::Algorithm;
+use lift_model::config::{MAX_FLOORS, MIN_FLOORS};
+use lift_model::{Button, LoadLevel, SensorFault, VaneSensor};
+use serde::Deserialize;
+use std::ops::Range;
+use toml::Spanned;
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawScenario {
+    name: Option<String>,
+    seed: Option<u64>,
+    duration: Option<Spanned<String>>,
+    algorithm: Option<Spanned<String>>,
+    lift: Option<RawLift>,
+    bus: Option<RawBus>,
+    controller: Option<RawController>,
+    safety: Option<RawSafety>,
+    #[serde(default)]
+    event: Vec<Spanned<RawEvent>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawLift {
+    floors: Option<Spanned<i64>>,
+    start_mm: Option<Spanned<f64>>,
+    load: Option<Spanned<String>>,
+    door: Option<Spanned<String>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawBus {
+    pulse_error_rate: Option<Spanned<f64>>,
+    extra_slaves: Option<Spanned<i64>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawController {
+    scan: Option<Spanned<String>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawSafety {
+    power_on_reset: Option<bool>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawEvent {
+    at: Spanned<String>,
+    press: Option<Spanned<String>>,
+    hold: Option<Spanned<String>>,
+    load: Option<Spanned<String>>,
+    door: Option<Spanned<String>>,
+    crank_mm: Option<Spanned<f64>>,
+    reset: Option<Spanned<bool>>,
+    rescue: Option<Spanned<bool>>,
+    ack: Option<Spanned<bool>>,
+    fault: Option<Spanned<RawFault>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawFault {
+    kind: Spanned<String>,
+    slave: Option<Spanned<i64>>,
+    duration: Option<Spanned<String>>,
+    sensor: Option<Spanned<String>>,
+}
+
+/// Turns byte offsets into lines and columns, and names errors.
+struct Locator<'a> {
+    file: &'a str,
+    text: &'a str,
+}
+
+impl Locator<'_> {
+    fn position(&self, offset: usize) -> (usize, usize) {
+        let upto = &self.text[..offset.min(self.text.len())];
+        let line = upto.matches('\n').count() + 1;
+        let column = upto.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
+        (line, column)
+    }
+
+    fn error(
+        &self,
+        span: Option<Range<usize>>,
+        field: impl Into<String>,
+        message: impl Into<String>,
+    ) -> ScenarioError {
+        let (line, column) = span.map_or((0, 0), |s| self.position(s.start));
+        ScenarioError {
+            file: self.file.to_owned(),
+            line,
+            column,
+            field: field.into(),
+            message: message.into(),
+        }
+    }
+
+    /// The key written on the line of `offset`, for errors the TOML reader reports without it.
+    fn key_at(&self, offset: usize) -> String {
+        let start = self.text[..offset.min(self.text.len())]
+            .rfind('\n')
+            .map_or(0, |i| i + 1);
+        let line = self.text[start..].lines().next().unwrap_or("");
+        match line.split_once('=') {
+            Some((k, _)) if !line.trim_start().starts_with('[') => k.trim().to_owned(),
+            _ => String::new(),
+        }
+    }
+}
+
+fn duration(
+    loc: &Locator<'_>,
+    field: &str,
+    s: &Spanned<String>,
+) -> Result<SimDuration, ScenarioError> {
+    s.get_ref()
+        .parse::<SimDuration>()
+        .map_err(|e| loc.error(Some(s.span()), field, e.to_string()))
+}
+
+fn load_level(
+    loc: &Locator<'_>,
+    field: &str,
+    s: &Spanned<String>,
+) -> Result<LoadLevel, ScenarioError> {
+    LoadLevel::from_name(s.get_ref()).ok_or_else(|| {
+        loc.error(
+            Some(s.span()),
+            field,
+            format!(
+                "unknown load `{}`: use empty, loaded, full or overloaded",
+                s.get_ref()
+            ),
+        )
+    })
+}
+
+fn door(loc: &Locator<'_>, field: &str, s: &Spanned<String>) -> Result<bool, ScenarioError> {
+    match s.get_ref().as_str() {
+        "closed" => Ok(true),
+        "open" => Ok(false),
+        other => Err(loc.error(
+            Some(s.span()),
+            field,
+            format!("unknown door state `{other}`: use open or closed"),
+        )),
+    }
+}
+
+/// Reads `press = "cabin:3"` and its kin.
+fn button(
+    loc: &Locator<'_>,
+    field: &str,
+    s: &Spanned<String>,
+    floors: u8,
+) -> Result<Button, ScenarioError> {
+    let text = s.get_ref().as_str();
+    let bad = |m: String| loc.error(Some(s.span()), field, m);
+    let floor = |n: &str| -> Result<u8, ScenarioError> {
+        match n.parse::<u8>() {
+            Ok(f) if (1..=floors).contains(&f) => Ok(f),
+            _ => Err(bad(format!(
+                "floor `{n}` does not exist: the lift has floors 1..{floors}"
+            ))),
+        }
+    };
+    match text.split_once(':') {
+        None if text == "stop" => Ok(Button::Stop),
+        None if text == "bell" => Ok(Button::Bell),
+        Some(("cabin", n)) => Ok(Button::Cabin(floor(n)?)),
+        Some(("hall-up", n)) => {
+            let f = floor(n)?;
+            if f == floors {
+                return Err(bad(format!("the top floor ({floors}) has no up button")));
+            }
+            Ok(Button::HallUp(f))
+        }
+        Some(("hall-down", n)) => {
+            let f = floor(n)?;
+            if f == 1 {
+                return Err(bad("floor 1 has no down button".into()));
+            }
+            Ok(Button::HallDown(f))
+        }
+        _ => Err(bad(format!(
+            "unknown button `{text}`: use cabin:N, hall-up:N, hall-down:N, stop or bell"
+        ))),
+    }
+}
+
+fn fault(loc: &Locator<'_>, field: &str, f: &Spanned<RawFault>) -> Result<Fault, ScenarioError> {
+    let raw = f.get_ref();
+    let kind = raw.kind.get_ref().as_str();
+    let slave = || -> Result<u8, ScenarioError> {
+        let s = raw.slave.as_ref().ok_or_else(|| {
+            loc.error(
+                Some(f.span()),
+                format!("{field}.slave"),
+                format!("`{kind}` needs `slave = N`"),
+            )
+        })?;
+        match *s.get_ref() {
+            v @ 1..=31 => Ok(v as u8),
+            v => Err(loc.error(
+                Some(s.span()),
+                format!("{field}.slave"),
+                format!("{v}: a slave address is 1..31"),
+            )),
+        }
+    };
+    let dur = || -> Result<SimDuration, ScenarioError> {
+        let d = raw.duration.as_ref().ok_or_else(|| {
+            loc.error(
+                Some(f.span()),
+                format!("{field}.duration"),
+                format!("`{kind}` needs `duration = \"…\"`"),
+            )
+        })?;
+        duration(loc, &format!("{field}.duration"), d)
+    };
+    let unused = |present: bool, name: &str| -> Result<(), ScenarioError> {
+        if present {
+            Err(loc.error(
+                Some(f.span()),
+                format!("{field}.{name}"),
+                format!("`{kind}` takes no `{name}`"),
+            ))
+        } else {
+            Ok(())
+        }
+    };
+    match kind {
+        "slave-offline" | "slave-online" => {
+            unused(raw.duration.is_some(), "duration")?;
+            unused(raw.sensor.is_some(), "sensor")?;
+            let s = slave()?;
+            Ok(if kind == "slave-offline" {
+                Fault::SlaveOffline { slave: s }
+            } else {
+                Fault::SlaveOnline { slave: s }
+            })
+        }
+        "power-fail" | "safe-link-drop" => {
+            unused(raw.slave.is_some(), "slave")?;
+            unused(raw.sensor.is_some(), "sensor")?;
+            let d = dur()?;
+            Ok(if kind == "power-fail" {
+                Fault::PowerFail { duration: d }
+            } else {
+                Fault::SafeLinkDrop { duration: d }
+            })
+        }
+        "vane-stuck-on" | "vane-stuck-off" | "vane-repaired" => {
+            unused(raw.slave.is_some(), "slave")?;
+            unused(raw.duration.is_some(), "duration")?;
+            let s = raw.sensor.as_ref().ok_or_else(|| {
+                loc.error(Some(f.span()), format!("{field}.sensor"), format!("`{kind}` needs `sensor = \"left\"` or `\"right\"`"))
+            })?;
+            let sensor = match s.get_ref().as_str() {
+                "left" => VaneSensor::Left,
+                "right" => VaneSensor::Right,
+                other => {
+                    return Err(loc.error(
+                        Some(s.span()),
+                        format!("{field}.sensor"),
+                        format!("unknown sensor `{other}`: use left (Snimac_1) or right (Snimac_2)"),
+                    ))
+                }
+            };
+            let fault = match kind {
+                "vane-stuck-on" => SensorFault::StuckOn,
+                "vane-stuck-off" => SensorFault::StuckOff,
+                _ => SensorFault::None,
+            };
+            Ok(Fault::Vane { sensor, fault })
+        }
+        other => Err(loc.error(
+            Some(raw.kind.span()),
+            format!("{field}.kind"),
+            format!(
+                "unknown fault `{other}`: use slave-offline, slave-online, power-fail, safe-link-drop, \
+                 vane-stuck-on, vane-stuck-off or vane-repaired"
+            ),
+        )),
+    }
+}
+
+impl Scenario {
+    /// Reads a scenario from TOML `text`; `file` names it in errors.
+    pub fn from_toml(file: &str, text: &str) -> Result<Scenario, ScenarioError> {
+        let loc = Locator { file, text };
+        let raw = parse(&loc)?;
+        let mut sc = Scenario::defaults();
+        read_top(&loc, &raw, &mut sc)?;
+        if let Some(l) = &raw.lift {
+            read_lift(&loc, l, &mut sc)?;
+        }
+        if let Some(b) = &raw.bus {
+            read_bus(&loc, b, &mut sc)?;
+        }
+        if let Some(c) = &raw.controller {
+            read_controller(&loc, c, &mut sc)?;
+        }
+        if let Some(r) = raw.safety.as_ref().and_then(|s| s.power_on_reset) {
+            sc.power_on_reset = r;
+        }
+        for (i, ev) in raw.event.iter().enumerate() {
+            let event = read_event(&loc, i + 1, ev, sc.floors)?;
+            sc.events.push(event);
+        }
+        // Stable: events at the same time keep the file's order.
+        sc.events.sort_by_key(|e| e.at);
+        Ok(sc)
+    }
+}
+
+/// The file's TOML, in its shape, or the TOML reader's error at its place.
+fn parse(loc: &Locator<'_>) -> Result<RawScenario, ScenarioError> {
+    toml::from_str(loc.text).map_err(|e| {
+        let span = e.span();
+        let field = span
+            .clone()
+            .map(|s| loc.key_at(s.start))
+            .unwrap_or_default();
+        loc.error(span, field, e.message().trim().to_owned())
+    })
+}
+
+/// The top-level settings: name, seed, duration, algorithm.
+fn read_top(loc: &Locator<'_>, raw: &RawScenario, sc: &mut Scenario) -> Result<(), ScenarioError> {
+    if let Some(n) = raw.name.clone() {
+        sc.name = n;
+    }
+    if let Some(s) = raw.seed {
+        sc.seed = s;
+    }
+    if let Some(d) = &raw.duration {
+        sc.duration = duration(loc, "duration", d)?;
+        if sc.duration.is_zero() {
+            return Err(loc.error(Some(d.span()), "duration", "must be longer than zero"));
+        }
+    }
+    if let Some(a) = &raw.algorithm {
+        sc.algorithm = match a.get_ref().as_str() {
+            "fifo" => Algorithm::Fifo,
+            "collective" => Algorithm::Collective,
+            other => {
+                return Err(loc.error(
+                    Some(a.span()),
+                    "algorithm",
+                    format!("unknown algorithm `{other}`: use fifo or collective"),
+                ))
+            }
+        };
+    }
+    Ok(())
+}
+
+/// `[lift]`: floors, start height, load, door.
+fn read_lift(loc: &Locator<'_>, l: &RawLift, sc: &mut Scenario) -> Result<(), ScenarioError> {
+    if let Some(f) = &l.floors {
+        let v = *f.get_ref();
+        if !(i64::from(MIN_FLOORS)..=i64::from(MAX_FLOORS)).contains(&v) {
+            return Err(loc.error(
+                Some(f.span()),
+                "lift.floors",
+                format!("{v}: the lift has {MIN_FLOORS}..{MAX_FLOORS} floors"),
+            ));
+        }
+        sc.floors = v as u8;
+    }
+    if let Some(s) = &l.start_mm {
+        let v = *s.get_ref();
+        let range = start_range_mm(sc.floors);
+        if !v.is_finite() || !range.contains(&v) {
+            return Err(loc.error(
+                Some(s.span()),
+                "lift.start_mm",
+                format!(
+                    "{v} mm lies outside the shaft between the mechanical ends ({}..{} mm)",
+                    range.start(),
+                    range.end()
+                ),
+            ));
+        }
+        sc.start_mm = v;
+    }
+    if let Some(s) = &l.load {
+        sc.load = load_level(loc, "lift.load", s)?;
+    }
+    if let Some(s) = &l.door {
+        sc.door_closed = door(loc, "lift.door", s)?;
+    }
+    Ok(())
+}
+
+/// `[bus]`: line noise and extra slaves.
+fn read_bus(loc: &Locator<'_>, b: &RawBus, sc: &mut Scenario) -> Result<(), ScenarioError> {
+    if let Some(r) = &b.pulse_error_rate {
+        let v = *r.get_ref();
+        if !(0.0..=1.0).contains(&v) {
+            return Err(loc.error(
+                Some(r.span()),
+                "bus.pulse_error_rate",
+                format!("{v}: a probability is 0..1"),
+            ));
+        }
+        sc.pulse_error_rate = v;
+    }
+    if let Some(n) = &b.extra_slaves {
+        let v = *n.get_ref();
+        sc.extra_slaves = u8::try_from(v)
+            .ok()
+            .filter(|v| *v as usize <= asi_master::lab::EXTRA_ADDRESSES.len())
+            .ok_or_else(|| {
+                loc.error(
+                    Some(n.span()),
+                    "bus.extra_slaves",
+                    format!("{v}: the lab bus has room for 0..=20 more slaves"),
+                )
+            })?;
+    }
+    Ok(())
+}
+
+/// `[controller]`: the PLC scan.
+fn read_controller(
+    loc: &Locator<'_>,
+    c: &RawController,
+    sc: &mut Scenario,
+) -> Result<(), ScenarioError> {
+    if let Some(s) = &c.scan {
+        sc.plc_scan = duration(loc, "controller.scan", s)?;
+        if !PLC_SCAN_RANGE.contains(&sc.plc_scan) {
+            return Err(loc.error(
+                Some(s.span()),
+                "controller.scan",
+                "must lie within 1..20 ms: the cabin word takes 14 scans, and beyond \
+                 20 ms a 300 ms press or the vane edge initialisation needs can pass \
+                 unseen (README, Scenario files)",
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The `n`-th `[[event]]` (1-based): its time and its one action.
+fn read_event(
+    loc: &Locator<'_>,
+    n: usize,
+    ev: &Spanned<RawEvent>,
+    floors: u8,
+) -> Result<ScenarioEvent, ScenarioError> {
+    let field = |name: &str| format!("event[{n}].{name}");
+    let span = ev.span();
+    let e = ev.get_ref();
+    let at = SimTime::ZERO + duration(loc, &field("at"), &e.at)?;
+    let mut actions = Vec::new();
+    if let Some(p) = &e.press {
+        let b = button(loc, &field("press"), p, floors)?;
+        let hold = match &e.hold {
+            Some(h) => duration(loc, &field("hold"), h)?,
+            None => DEFAULT_HOLD,
+        };
+        if hold.is_zero() {
+            let h = e.hold.as_ref().map(|h| h.span());
+            return Err(loc.error(h, field("hold"), "a press lasts longer than zero"));
+        }
+        actions.push(Action::Press { button: b, hold });
+    } else if let Some(h) = &e.hold {
+        return Err(loc.error(Some(h.span()), field("hold"), "`hold` belongs to a `press`"));
+    }
+    if let Some(l) = &e.load {
+        actions.push(Action::Load(load_level(loc, &field("load"), l)?));
+    }
+    if let Some(d) = &e.door {
+        actions.push(Action::Door {
+            closed: door(loc, &field("door"), d)?,
+        });
+    }
+    if let Some(c) = &e.crank_mm {
+        let mm = *c.get_ref();
+        if !mm.is_finite() || mm == 0.0 || mm.abs() > 10_000.0 {
+            return Err(loc.error(
+                Some(c.span()),
+                field("crank_mm"),
+                format!("{mm}: crank by a non-zero distance up to 10 m"),
+            ));
+        }
+        actions.push(Action::Crank { mm });
+    }
+    for (flag, name, action) in [
+        (&e.reset, "reset", Action::Reset),
+        (&e.rescue, "rescue", Action::Rescue),
+        (&e.ack, "ack", Action::Ack),
+    ] {
+        if let Some(v) = flag {
+            if !*v.get_ref() {
+                return Err(loc.error(
+                    Some(v.span()),
+                    field(name),
+                    format!("`{name} = false` does nothing; write `{name} = true`"),
+                ));
+            }
+            actions.push(action);
+        }
+    }
+    if let Some(f) = &e.fault {
+        actions.push(Action::Fault(fault(loc, &field("fault"), f)?));
+    }
+    let action = match actions.len() {
+        1 => actions.remove(0),
+        0 => {
+            return Err(loc.error(
+                Some(span),
+                format!("event[{n}]"),
+                "no action: give one of press, load, door, crank_mm, reset, rescue, ack, fault",
+            ))
+        }
+        _ => {
+            return Err(loc.error(
+                Some(span),
+                format!("event[{n}]"),
+                "more than one action: give each its own [[event]]",
+            ))
+        }
+    };
+    let (line, _) = loc.position(span.start);
+    Ok(ScenarioEvent { at, action, line })
+}

@@ -1,0 +1,277 @@
+//! Tests of reading and writing scenario files.
+
+use super::*;
+
+fn err(text: &str) -> String {
+    Scenario::from_toml("t.toml", text)
+        .expect_err("must fail")
+        .to_string()
+}
+
+#[test]
+fn reads_the_example_of_the_issue() {
+    let s = Scenario::from_toml(
+        "cabin.toml",
+        r#"
+name = "cabin call"
+seed = 1
+duration = "90s"
+algorithm = "fifo"
+[lift]
+floors = 4
+start_mm = 650.0
+load = "empty"
+door = "closed"
+[bus]
+pulse_error_rate = 0.0
+[[event]]
+at = "20s"
+press = "cabin:3"
+[[event]]
+at = "1.5min"
+press = "stop"
+hold = "2s"
+[[event]]
+at = "25s"
+fault = { kind = "safe-link-drop", duration = "300ms" }
+"#,
+    )
+    .expect("valid");
+    assert_eq!(s.name, "cabin call");
+    assert_eq!(s.duration, SimDuration::from_secs(90));
+    assert_eq!(
+        s.events.iter().map(|e| (e.at, e.line)).collect::<Vec<_>>(),
+        [
+            (SimTime::from_millis(20_000), 13),
+            (SimTime::from_millis(25_000), 20),
+            (SimTime::from_millis(90_000), 16)
+        ]
+    );
+    assert_eq!(
+        s.events[0].action,
+        Action::Press {
+            button: Button::Cabin(3),
+            hold: DEFAULT_HOLD
+        }
+    );
+}
+
+#[test]
+fn errors_name_the_file_the_line_and_the_field() {
+    assert_eq!(
+        err("name = \"x\"\n[lift]\nfloors = 4\nstart_mm = 9000.0\n"),
+        "t.toml:4:12: lift.start_mm: 9000 mm lies outside the shaft between the mechanical ends (-140..1340 mm)"
+    );
+    assert_eq!(
+        err("[[event]]\nat = \"5s\"\npress = \"cabin:7\"\n"),
+        "t.toml:3:9: event[1].press: floor `7` does not exist: the lift has floors 1..4"
+    );
+    assert_eq!(
+        err("[[event]]\nat = \"5 parsecs\"\nreset = true\n"),
+        "t.toml:2:6: event[1].at: unknown unit `parsecs` in `5 parsecs`: use ns, us, ms, s, min or h"
+    );
+    assert!(err("[[event]]\nat = \"5s\"\n").starts_with("t.toml:1:1: event[1]: no action"));
+    assert!(
+        err("[[event]]\nat = \"5s\"\nreset = true\nack = true\n").contains("more than one action")
+    );
+    assert!(err("[[event]]\nat = \"5s\"\npress = \"hall-down:1\"\n")
+        .contains("floor 1 has no down button"));
+    assert!(
+        err("[[event]]\nat = \"5s\"\nfault = { kind = \"slave-offline\" }\n")
+            .contains("needs `slave = N`")
+    );
+    assert_eq!(
+        err("[bus]\nextra_slaves = 21\n"),
+        "t.toml:2:16: bus.extra_slaves: 21: the lab bus has room for 0..=20 more slaves"
+    );
+    assert!(
+        err("algorithm = \"scan\"\n").contains("t.toml:1:13: algorithm: unknown algorithm `scan`")
+    );
+}
+
+#[test]
+fn unknown_keys_are_errors() {
+    let e = err("name = \"x\"\n[lift]\nfloor = 4\n");
+    assert!(
+        e.starts_with("t.toml:3:1: floor: unknown field `floor`"),
+        "{e}"
+    );
+    let e = err("speed = 3\n");
+    assert!(
+        e.starts_with("t.toml:1:1: speed: unknown field `speed`"),
+        "{e}"
+    );
+    let e = err("[[event]]\nat = \"1s\"\npress = \"stop\"\nduration = \"2s\"\n");
+    assert!(e.contains("unknown field `duration`"), "{e}");
+}
+
+#[test]
+fn a_wrong_type_names_its_key() {
+    let e = err("[lift]\nstart_mm = \"high\"\n");
+    assert!(e.starts_with("t.toml:2:12: start_mm:"), "{e}");
+}
+
+mod round_trip {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn duration_ns(max: u64) -> impl Strategy<Value = SimDuration> {
+        // Whole seconds, milliseconds and microseconds as well as odd nanoseconds.
+        prop_oneof![
+            (1..=max / 1_000_000_000).prop_map(SimDuration::from_secs),
+            (1..=max / 1_000_000).prop_map(SimDuration::from_millis),
+            (1..=max / 1_000).prop_map(SimDuration::from_micros),
+            (1..=max).prop_map(SimDuration::from_nanos),
+        ]
+    }
+
+    fn button(floors: u8) -> impl Strategy<Value = Button> {
+        prop_oneof![
+            (1..=floors).prop_map(Button::Cabin),
+            (1..floors).prop_map(Button::HallUp),
+            (2..=floors).prop_map(Button::HallDown),
+            Just(Button::Stop),
+            Just(Button::Bell),
+        ]
+    }
+
+    fn load() -> impl Strategy<Value = LoadLevel> {
+        prop_oneof![
+            Just(LoadLevel::Empty),
+            Just(LoadLevel::Loaded),
+            Just(LoadLevel::Full),
+            Just(LoadLevel::Overloaded),
+        ]
+    }
+
+    fn action(floors: u8) -> impl Strategy<Value = Action> {
+        let sensor = prop_oneof![Just(VaneSensor::Left), Just(VaneSensor::Right)];
+        let sensor_fault = prop_oneof![
+            Just(SensorFault::None),
+            Just(SensorFault::StuckOn),
+            Just(SensorFault::StuckOff)
+        ];
+        prop_oneof![
+            (button(floors), duration_ns(10_000_000_000))
+                .prop_map(|(button, hold)| Action::Press { button, hold }),
+            load().prop_map(Action::Load),
+            any::<bool>().prop_map(|closed| Action::Door { closed }),
+            (-10_000.0..=10_000.0f64)
+                .prop_filter("non-zero", |mm| *mm != 0.0)
+                .prop_map(|mm| Action::Crank { mm }),
+            Just(Action::Reset),
+            Just(Action::Rescue),
+            Just(Action::Ack),
+            (1..=31u8).prop_map(|slave| Action::Fault(Fault::SlaveOffline { slave })),
+            (1..=31u8).prop_map(|slave| Action::Fault(Fault::SlaveOnline { slave })),
+            duration_ns(60_000_000_000)
+                .prop_map(|duration| Action::Fault(Fault::PowerFail { duration })),
+            duration_ns(60_000_000_000)
+                .prop_map(|duration| Action::Fault(Fault::SafeLinkDrop { duration })),
+            (sensor, sensor_fault)
+                .prop_map(|(sensor, fault)| Action::Fault(Fault::Vane { sensor, fault })),
+        ]
+    }
+
+    prop_compose! {
+        fn event(floors: u8)(at in 0..=3_600_000_000_000u64, action in action(floors))
+            -> ScenarioEvent {
+            ScenarioEvent { at: SimTime::from_nanos(at), action, line: 0 }
+        }
+    }
+
+    prop_compose! {
+        fn lift()(floors in 2..=24u8)(
+            floors in Just(floors),
+            start in start_range_mm(floors),
+            events in proptest::collection::vec(event(floors), 0..12),
+        ) -> (u8, f64, Vec<ScenarioEvent>) {
+            (floors, start, events)
+        }
+    }
+
+    prop_compose! {
+        fn scenario()(
+            name in any::<String>(),
+            seed in any::<u64>(),
+            duration in duration_ns(36_000_000_000_000),
+            collective in any::<bool>(),
+            (floors, start_mm, events) in lift(),
+            load in load(),
+            door_closed in any::<bool>(),
+            pulse_error_rate in prop_oneof![Just(0.0), Just(1.0), 0.0..=1.0f64],
+            extra_slaves in 0..=20u8,
+            scan in PLC_SCAN_RANGE.start().as_nanos()..=PLC_SCAN_RANGE.end().as_nanos(),
+            power_on_reset in any::<bool>(),
+        ) -> Scenario {
+            Scenario {
+                name,
+                seed,
+                duration,
+                algorithm: if collective { Algorithm::Collective } else { Algorithm::Fifo },
+                floors,
+                start_mm,
+                load,
+                door_closed,
+                pulse_error_rate,
+                extra_slaves,
+                plc_scan: SimDuration::from_nanos(scan),
+                power_on_reset,
+                events,
+            }
+        }
+    }
+
+    proptest! {
+        #[test]
+        fn to_toml_reads_back_to_an_equal_scenario(sc in scenario()) {
+            let text = sc.to_toml();
+            let mut back = match Scenario::from_toml("written.toml", &text) {
+                Ok(b) => b,
+                Err(e) => return Err(TestCaseError::fail(format!("{e}\n{text}"))),
+            };
+            back.events.iter_mut().for_each(|e| e.line = 0);
+            let mut expected = sc;
+            expected.events.sort_by_key(|e| e.at);
+            prop_assert_eq!(back, expected, "{}", text);
+        }
+    }
+
+    #[test]
+    fn the_written_scenario_files_are_readable() {
+        let sc = Scenario::from_toml("demo.toml", include_str!("../../../scenarios/demo.toml"))
+            .expect("demo");
+        let text = sc.to_toml();
+        assert!(
+            text.contains("[[event]]\nat = \"15s\"\npress = \"cabin:3\"\n"),
+            "{text}"
+        );
+        assert!(text.starts_with("name = \"demo\"\nseed = 1\n"), "{text}");
+        let back = Scenario::from_toml("w.toml", &text).expect("back");
+        assert_eq!(back.events.len(), sc.events.len());
+    }
+}
+
+#[test]
+fn the_start_range_is_the_shaft_between_the_mechanical_ends() {
+    // Sensors 60 mm beyond the end floors, the ends 80 mm further (SPEC §4).
+    assert_eq!(start_range_mm(4), -140.0..=1340.0);
+    assert_eq!(start_range_mm(2), -140.0..=540.0);
+    let at = |mm: f64| format!("[lift]\nfloors = 2\nstart_mm = {mm:?}\n");
+    assert!(Scenario::from_toml("t.toml", &at(540.0)).is_ok());
+    assert!(Scenario::from_toml("t.toml", &at(-140.0)).is_ok());
+    assert!(
+        Scenario::from_toml("t.toml", &at(-70.0)).is_ok(),
+        "beyond the sensor"
+    );
+    assert!(err(&at(540.5)).contains("(-140..540 mm)"));
+    assert!(err(&at(-140.5)).contains("lift.start_mm"));
+}
+
+#[test]
+fn the_demo_is_valid() {
+    let text = include_str!("../../../scenarios/demo.toml");
+    let s = Scenario::from_toml("demo.toml", text).expect("demo");
+    assert!(!s.events.is_empty());
+    assert_eq!(Scenario::demo(), Ok(s));
+}
