@@ -2,9 +2,8 @@
 
 use super::{open_input, print_out};
 use asi_phy::{Expect, SimDuration};
-use asi_trace::capture::{
-    decode_capture, summary, to_json_lines, to_text, CaptureFormat, DecodeOptions,
-};
+use asi_trace::capture::render::{summary, to_json_lines, to_text};
+use asi_trace::capture::{decode_capture, CaptureFormat, DecodeOptions};
 use clap::ValueEnum;
 use std::path::PathBuf;
 
