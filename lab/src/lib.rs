@@ -1,0 +1,16 @@
+//! lab: the facts of the lab lift that more than one part of asi-lift relies on, with one
+//! home each (docs/lab-bus.md):
+//!
+//! - [`address`]: which slave sits at which AS-i address (seed 003 §2.2.3): the bus builder
+//!   puts the devices there, the PLC program addresses them, the rig wires them to the plant,
+//!   the campaign takes them offline;
+//! - [`display`]: the display word of the floor and cabin displays (seed 003 tables 4.2 and
+//!   4.4): the PLC program writes it, the handshakes carry it, the plant's displays show it.
+//!
+//! The crate depends on nothing of asi-lift, so that the bus, the plant and the controller can
+//! all use it.
+
+pub mod address;
+pub mod display;
+
+pub use display::{DisplayWord, DisplayWordError};
