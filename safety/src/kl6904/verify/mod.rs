@@ -5,10 +5,10 @@
 //! Every problem found is reported (not only the first), each with the [`Rule`] it breaks and
 //! the [`Item`] it concerns.
 //!
-//! - this file: the [`Verifier`]'s state and what it resolves, and [`verify`] in its steps;
+//! - this file: the verifier's state and what it resolves, and `verify()` in its steps;
 //! - `error`: [`Rule`], [`Item`], [`PathStep`], [`VerifyError`];
 //! - `specs`: each module kind's inputs, outputs and parameters;
-//! - `steps`: the steps of [`verify`];
+//! - `steps`: the steps of `verify()`;
 //! - `module`: one module's checks and compiled form;
 //! - `compiled`: the compiled project the logic runs.
 
