@@ -1,6 +1,7 @@
 //! What a request asks for: the call table, by classifying a request and by building one.
 
-use super::{Address, Nibble, Request, Select};
+use super::fields::{Address, Nibble, Select};
+use super::frames::Request;
 use core::fmt;
 
 /// What a request asks for (SPEC §2 table; reference/asi.md §4).
@@ -165,6 +166,108 @@ impl fmt::Display for Call {
             Call::Unknown { cb, address, info } => {
                 write!(f, "{name} CB={} A={address} I={info:05b}", *cb as u8)
             }
+        }
+    }
+}
+
+impl Request {
+    /// Classifies the request (SPEC §2 table). Every bit pattern has an answer: codes that are
+    /// no call keep their raw fields in [`Call::Unknown`].
+    ///
+    /// Overlapping encodings are resolved as a slave IC does: at address 0 a CB = 0 call is
+    /// Address_Assignment and a CB = 1 call with I4 = 0 is Write_Extended_ID1.
+    pub const fn call(self) -> Call {
+        let address = self.address();
+        let info = self.info();
+        let i4 = info & 0x10 != 0;
+        let i3 = info & 0x08 != 0;
+        let low3 = info & 0b111;
+        let data = Nibble(info & 0xF);
+        if !self.cb() {
+            return if address.0 == 0 {
+                Call::AddressAssignment {
+                    new_address: Address(info),
+                }
+            } else if i4 {
+                Call::WriteParameter {
+                    address,
+                    parameter: data,
+                }
+            } else {
+                Call::DataExchange { address, data }
+            };
+        }
+        let sel = if i3 { Select::B } else { Select::A };
+        let inv = if i3 { Select::A } else { Select::B };
+        if !i4 {
+            return if address.0 == 0 {
+                Call::WriteExtendedId1 { id1: data }
+            } else if low3 == 0 {
+                Call::DeleteAddress {
+                    address,
+                    select: sel,
+                }
+            } else {
+                Call::Unknown {
+                    cb: true,
+                    address,
+                    info,
+                }
+            };
+        }
+        // Address 0B does not exist: the B encodings at address 0 are no call.
+        let read_ok = address.0 != 0 || !i3;
+        let inv_ok = address.0 != 0 || i3;
+        match low3 {
+            0b000 if read_ok => Call::ReadIoConfiguration {
+                address,
+                select: sel,
+            },
+            0b001 if read_ok => Call::ReadIdCode {
+                address,
+                select: sel,
+            },
+            0b010 if read_ok => Call::ReadId1 {
+                address,
+                select: sel,
+            },
+            0b011 if read_ok => Call::ReadId2 {
+                address,
+                select: sel,
+            },
+            0b100 if inv_ok => Call::ResetSlave {
+                address,
+                select: inv,
+            },
+            0b110 if inv_ok => Call::ReadStatus {
+                address,
+                select: inv,
+            },
+            0b101 if address.0 == 31 && !i3 => Call::BroadcastReset,
+            _ => Call::Unknown {
+                cb: true,
+                address,
+                info,
+            },
+        }
+    }
+
+    /// For a Data_Exchange or Write_Parameter to an A/B slave: the select bit in I3 (1 = A) and
+    /// the three data bits D2..D0. `None` for other calls.
+    pub const fn ab_payload(self) -> Option<(Select, Nibble)> {
+        match self.call() {
+            Call::DataExchange { data, .. }
+            | Call::WriteParameter {
+                parameter: data, ..
+            } => {
+                let select = if data.0 & 0x8 != 0 {
+                    Select::A
+                } else {
+                    Select::B
+                };
+                Some((select, Nibble(data.0 & 0b111)))
+            }
+            _ => None,
         }
     }
 }

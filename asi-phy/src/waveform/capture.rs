@@ -1,6 +1,6 @@
 //! Captures read from text files of `time,voltage` lines (an oscilloscope's export).
 
-use super::Waveform;
+use super::render::Waveform;
 use crate::time::SimTime;
 
 /// A capture read from a text file of `time,voltage` lines.

@@ -1,6 +1,6 @@
 //! The comparator that turns sampled line voltage back into pulses.
 
-use super::{Waveform, WaveformError};
+use super::render::{Waveform, WaveformError};
 use crate::pulse::{Polarity, Pulse};
 use crate::time::{SimDuration, SimTime};
 

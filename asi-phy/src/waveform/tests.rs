@@ -1,7 +1,9 @@
 use super::*;
 use crate::pulse::PulseTrain;
+use crate::pulse::{Polarity, Pulse};
 use crate::receiver::{Expect, Receiver};
 use crate::telegram::{Address, Nibble, Request};
+use crate::time::{SimDuration, SimTime};
 use crate::timing::BusTiming;
 
 fn dexg() -> Request {
