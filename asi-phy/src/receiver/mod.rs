@@ -121,8 +121,8 @@ impl fmt::Debug for Received {
 /// The listener half of a receiver: what it expects, and its synchronisation.
 ///
 /// After a telegram that failed any check the listener is asynchronous and accepts the next
-/// one only after [`BusTiming::async_pause`] of silence (A²SI §7.1.2.1); a fresh listener has
-/// heard nothing, so its first telegram needs no pause.
+/// one only after [`BusTiming::async_pause`](crate::timing::BusTiming::async_pause) of silence
+/// (A²SI §7.1.2.1); a fresh listener has heard nothing, so its first telegram needs no pause.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Listener {
     expect: Expect,

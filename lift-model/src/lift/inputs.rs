@@ -179,7 +179,7 @@ impl Lift {
     ///
     /// Only without drive power (K1's main contacts open; turning implies releasing the brake
     /// by hand) and with the cabin at rest. A turn past a mechanical end stops at the end: the
-    /// impact is recorded as a [`Crash`] at crank speed and the rest of the distance is
+    /// impact is recorded as a [`Crash`](crate::Crash) at crank speed and the rest of the distance is
     /// dropped. A cabin already touching an end cannot be cranked further into it. Closing K1
     /// ends the turn where the cabin is.
     pub fn crank(&mut self, now: SimTime, distance_mm: f64) -> Result<(), PlantError> {
