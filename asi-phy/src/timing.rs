@@ -5,7 +5,6 @@
 //! transaction takes 84 + 18 + 42 + 10 = 154 µs, the seed's figure (seed 003 §2.1), and a
 //! request that gets no answer takes the same slot: 84 + 60 + 10 = 154 µs.
 
-use crate::receiver::{Expect, ReceiverConfig};
 use crate::time::SimDuration;
 
 /// The timing of one AS-i segment. Build it with [`BusTiming::default`] or
@@ -127,11 +126,6 @@ impl BusTiming {
     /// One transaction that gets no response: request, response timeout, slave pause.
     pub fn unanswered_transaction(&self) -> SimDuration {
         self.request_span() + self.response_timeout + self.slave_pause
-    }
-
-    /// The receiver settings that follow from this timing.
-    pub fn receiver(&self, expect: Expect) -> ReceiverConfig {
-        ReceiverConfig::new(self, expect)
     }
 
     fn check(self) -> Result<BusTiming, TimingError> {

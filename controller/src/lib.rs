@@ -20,5 +20,5 @@ pub mod program;
 pub use dispatch::{Algorithm, Dir, HallDir, ServedCall, Source};
 pub use program::{
     CabinWord, ControllerConfig, ControllerConfigError, DisplayState, Event, EventKind, HaltReason,
-    InitStart, Inputs, LostReason, Outputs, Program,
+    InitStart, Inputs, LostReason, Outputs, Program, State,
 };

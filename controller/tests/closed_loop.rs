@@ -5,7 +5,7 @@
 mod common;
 
 use asi_phy::{SimDuration, SimTime};
-use controller::{Algorithm, ControllerConfig, EventKind, Program, Source};
+use controller::{Algorithm, ControllerConfig, EventKind, Program, Source, State};
 use lift_model::{Button, Lift, LiftConfig, LoadLevel};
 
 struct Loop {
@@ -141,7 +141,7 @@ fn a_cabin_call_takes_the_cabin_level_to_its_floor() {
     assert!(l.run_until(SimDuration::from_secs(30), |l| l.arrivals().contains(&3)));
     l.run_for(SimDuration::from_secs(1));
     assert!(l.level_at(3), "at {} mm", l.lift.position_mm());
-    assert_eq!(l.prog.state_name(), "at floor");
+    assert_eq!(l.prog.state(), State::AtFloor);
 }
 
 #[test]
@@ -181,7 +181,7 @@ fn stop_while_moving_stops_at_the_next_floor_and_waits_for_a_cabin_request() {
     assert!(l.run_until(SimDuration::from_secs(20), |l| l.arrivals().contains(&3)));
     l.run_for(SimDuration::from_secs(2));
     assert!(l.level_at(3));
-    assert_eq!(l.prog.state_name(), "STOP fault");
+    assert_eq!(l.prog.state(), State::StopFault);
     // Nothing happens without a cabin request ...
     l.press(Button::HallDown(2));
     l.run_for(SimDuration::from_secs(5));
@@ -200,7 +200,7 @@ fn overload_and_an_open_door_block_departure() {
     l.press(Button::Cabin(2));
     l.run_for(SimDuration::from_secs(5));
     assert!(l.level_at(1));
-    assert_eq!(l.prog.state_name(), "overload fault");
+    assert_eq!(l.prog.state(), State::OverloadFault);
     l.lift.set_load(l.now, LoadLevel::Loaded).expect("load");
     l.lift.set_door(l.now, false).expect("door");
     l.run_for(SimDuration::from_secs(5));

@@ -8,7 +8,7 @@
 mod common;
 
 use asi_phy::{SimDuration, SimTime};
-use controller::{ControllerConfig, DisplayState, EventKind, Program};
+use controller::{ControllerConfig, DisplayState, EventKind, Program, State};
 use lift_model::{Button, Lift, LiftConfig, LoadLevel};
 
 const SCAN: SimDuration = SimDuration::from_millis(10);
@@ -262,7 +262,7 @@ fn stop_shows_the_floor_it_stops_at_on_arrival() {
         l.shown(from),
         [Shown(1, '↑', MOVING, OK), Shown(3, '-', STANDING, FAULT)]
     );
-    assert_eq!(l.prog.state_name(), "STOP fault");
+    assert_eq!(l.prog.state(), State::StopFault);
 }
 
 /// A bus fault during travel (the tables are silent): the floor and arrow shown stay, the

@@ -4,7 +4,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::drive::DriveConfig;
-use crate::shaft::{End, VaneSensor};
+use crate::sensor::{End, VaneSensor};
 
 /// The fewest floors a lift has.
 pub const MIN_FLOORS: u8 = 2;

@@ -6,7 +6,7 @@ use core::fmt;
 use asi_phy::SimTime;
 
 use crate::controls::Button;
-use crate::shaft::{End, VaneSensor};
+use crate::sensor::{End, VaneSensor};
 
 /// One edge, at the first nanosecond at which the new state holds.
 #[derive(Clone, Copy, Debug, PartialEq)]

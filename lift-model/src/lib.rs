@@ -64,6 +64,7 @@ pub mod drive;
 pub mod event;
 mod lift;
 mod motion;
+mod sensor;
 mod shaft;
 
 pub use config::{ConfigError, LiftConfig, LEVEL_WINDOW_MM};
@@ -72,4 +73,4 @@ pub use display::{DisplayId, DisplayState, DisplayWord, DisplayWordError};
 pub use drive::{converter_frequency_hz, DriveConfig};
 pub use event::{Crash, EventKind, PlantEvent};
 pub use lift::{Events, Lift, PlantError};
-pub use shaft::{End, VaneSensor};
+pub use sensor::{End, VaneSensor};

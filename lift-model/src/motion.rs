@@ -182,7 +182,8 @@ pub(crate) fn ceil_nanos(seconds: f64) -> SimDuration {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::shaft::{Side, Signal, VaneSensor};
+    use crate::sensor::VaneSensor;
+    use crate::shaft::{Side, Signal};
 
     fn edge(pos: f64, side: Side) -> Boundary {
         Boundary {

@@ -47,7 +47,7 @@ use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
 use super::connection::PartnerKind;
 use super::signal::{Contact, SignalRef};
-use super::verify::{self, PathStep, VerifyError};
+use super::verify::error::{PathStep, VerifyError};
 
 /// A whole project for one KL6904.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -401,12 +401,6 @@ impl Project {
             source,
         });
         self
-    }
-
-    /// Check the project against every rule of the verifier ([`verify::Rule`]); all problems
-    /// are reported.
-    pub fn verify(&self) -> Result<(), Vec<VerifyError>> {
-        verify::verify(self).map(|_| ())
     }
 
     /// Read a project file and verify it. `origin` names the file in messages. Every problem

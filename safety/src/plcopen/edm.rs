@@ -2,7 +2,7 @@
 
 use asi_phy::{SimDuration, SimTime};
 
-use super::DiagCode;
+use super::diag::DiagCode;
 use crate::primitives::{RTrig, Ton};
 
 /// Inputs of [`SfEdm`]. All default to FALSE / zero.

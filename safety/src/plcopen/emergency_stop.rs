@@ -1,6 +1,6 @@
 //! SF_EmergencyStop, PLCopen v2.x (seed 002, tables 22–25; reference/safety.md §2, §5.3).
 
-use super::DiagCode;
+use super::diag::DiagCode;
 use crate::primitives::RTrig;
 
 /// Inputs of [`SfEmergencyStop`] (seed 002 table 22). All default to FALSE, the initial values.

@@ -2,7 +2,7 @@
 
 use asi_phy::{SimDuration, SimTime};
 
-use super::DiagCode;
+use super::diag::DiagCode;
 use crate::primitives::Ton;
 
 /// Inputs of [`SfEquivalent`]. All default to FALSE / zero.

@@ -2,7 +2,7 @@
 
 use asi_phy::{SimDuration, SimTime};
 
-use super::{mask, Core, FbError, FbEvent, FbState, PairMonitor};
+use super::base::{mask, Core, FbError, FbEvent, FbState, PairMonitor};
 use crate::kl6904::signal::Contact;
 
 /// Parameters of a MON module (seed 004 §4.5.3).

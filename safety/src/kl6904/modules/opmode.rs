@@ -2,7 +2,7 @@
 
 use asi_phy::{SimDuration, SimTime};
 
-use super::{Core, FbError, FbEvent, FbState, PairMonitor};
+use super::base::{Core, FbError, FbEvent, FbState, PairMonitor};
 
 /// Parameters of an OPMODE module (seed 004 §4.3.3).
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
