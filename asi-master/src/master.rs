@@ -4,7 +4,7 @@
 //! Sans-IO: the master never sees pulses or a clock. [`Master::poll_transmit`] gives the
 //! request to start now, [`Master::handle_outcome`] takes what came back (a valid response, a
 //! response that failed checks, or nothing), [`Master::poll_at`] says when an idle master wants
-//! to be asked again. [`crate::Bus`] drives it over the pulse-level medium.
+//! to be asked again. `asi_bus::Bus` drives it over the pulse-level line.
 //!
 //! **Phases** (reference/asi.md §5.1): offline → detection (Read_IO_Configuration, Read_ID_Code,
 //! Read_ID1, Read_ID2 at 0A, 1A..31A, then 1B..31B where the A half does not hold a standard
@@ -33,19 +33,19 @@
 //! - Host Offline: one Data_Exchange with the default outputs to every LAS slave, then the
 //!   offline phase (LAS, LDS, LPF cleared, input nibbles 0). APF: offline at once.
 //! - Integrated analog (CTT1, master profile M3/M4): for an S-7.3 slave (ID 3, ID2 bit 2) the
-//!   master drives the output nibble itself ([`crate::analog`]); the PLC's output nibble for
+//!   master drives the output nibble itself ([`crate::integrated_analog`]); the PLC's output nibble for
 //!   that slave is ignored, the input nibble still shows the raw handshake.
 
-use crate::analog::{S73InputMaster, S73OutputMaster, OVERFLOW_VALUE};
-use crate::config::{ConfigError, MasterConfig, Mode, ProjectedConfig, SlaveCodes};
+use crate::config::{ConfigError, MasterConfig, Mode, ProjectedConfig};
 use crate::image::{
     ProcessImage, F0_CONFIG_ERROR, F1_APF, F2_PERIPHERY_FAULT, F3_CONFIGURATION_NOT_ACTIVE,
 };
-use crate::lists::{EcFlags, HostFlags, SlaveAddr, SlaveList};
+use crate::integrated_analog::{S73InputMaster, S73OutputMaster, OVERFLOW_VALUE};
+use crate::lists::{EcFlags, HostFlags, SlaveList};
 use crate::mailbox::{address_from_byte, Command, JobResult, Mailbox, MailboxRequest};
-use crate::slave::ACK_0110;
-use crate::trace::{BusStats, TxKind};
-use asi_phy::{Checks, Nibble, Request, Response, Select, SimTime};
+use crate::record::{BusStats, TxKind};
+use asi_phy::slave_id::ACK_0110;
+use asi_phy::{Checks, Nibble, Request, Response, Select, SimTime, SlaveAddr, SlaveCodes};
 
 /// The master's phase (reference/asi.md §5.1).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]

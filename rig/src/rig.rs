@@ -16,10 +16,10 @@ use crate::report::{
 };
 use crate::scenario::{load_name, needs_rescue, Action, Fault, Scenario, ScenarioEvent};
 use crate::waves::{RigSample, WaveOutputs, Waves};
-use asi_master::lab::LabLift;
-use asi_master::safety::NotReleased;
+use asi_bus::lab::LabLift;
 use asi_phy::fault::FaultRates;
 use asi_phy::{Check, SimDuration, SimTime};
+use asi_slaves::monitor::NotReleased;
 use asi_trace::trace::{write_record, TraceFormat};
 use controller::plc::{addr, FromSafety, Plc, ToSafety};
 use controller::{ControllerConfig, EventKind as Ctl, HallDir, Source};
@@ -60,7 +60,7 @@ const OVERTRAVEL_BUDGET: SimDuration = SimDuration::from_millis(50);
 const STOP_MARGIN: SimDuration = SimDuration::from_millis(200);
 
 /// Receives every bus transaction of a run ([`Rig::on_transaction`]).
-pub type TransactionObserver = Box<dyn FnMut(&asi_master::trace::TransactionRecord)>;
+pub type TransactionObserver = Box<dyn FnMut(&asi_master::record::TransactionRecord)>;
 
 /// Something the rig does at a fixed time besides the scenario's events.
 #[derive(Clone, Copy, Debug, PartialEq)]
