@@ -33,7 +33,7 @@
 use asi_master::config::{ConfigError, MasterConfig, ProjectedConfig};
 use asi_master::master::{Master, Outcome, Phase, Transmit};
 use asi_master::record::{BusStats, TraceRing, TransactionRecord};
-use asi_phy::line::Medium;
+use asi_phy::line::{Line, Medium};
 use asi_phy::{
     BusTiming, Call, Checks, Expect, FaultInjector, FaultRates, Frame, Listener, PulseFault,
     PulseTrain, Request, Response, SimTime,
@@ -151,7 +151,7 @@ impl Bus {
         let mut bus = Bus {
             timing,
             master_rx: Listener::new(&timing.receiver(Expect::Responses)),
-            medium: Medium::new(&timing),
+            medium: Medium::quiet(&timing),
             master,
             slaves: Vec::new(),
             addr_index: [0; 32],
