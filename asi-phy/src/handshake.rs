@@ -3,10 +3,11 @@
 //!
 //! **Nibble use** (SPEC §3 decision), two kinds of handshake:
 //! - **The answerer owns K** (floor stations, table 4.3; cabin display, table 4.5; S-7.3 of
-//!   S-7.3 (`asi_master::integrated_analog`, `asi_slaves::analog_firmware`)): the *requester* puts its 3-bit step code on D2..D0 (D3 = 0); the
-//!   *answerer* puts 3 data bits on D2..D0 and the toggle bit K on D3. The answerer answers when
-//!   it sees the requested code change, toggling K; a step completes when the requester sees K
-//!   change; it then reads the data and puts out the next code ([`Requester`], [`Answerer`]).
+//!   `asi_master::integrated_analog` and `asi_slaves::analog_firmware`): the *requester* puts
+//!   its 3-bit step code on D2..D0 (D3 = 0); the *answerer* puts 3 data bits on D2..D0 and
+//!   the toggle bit K on D3. The answerer answers when it sees the requested code change,
+//!   toggling K; a step completes when the requester sees K change; it then reads the data
+//!   and puts out the next code ([`Requester`], [`Answerer`]).
 //! - **The requester owns K** (cabin buttons, table 4.7: "K 1 1 1", "K 1 0 1", ...): the master
 //!   puts K on D3 beside the step code on D2..D0 and toggles K with every request; the slave
 //!   answers the 3 data bits on D2..D0 and, **Decision (SPEC §3, revised)**, echoes the K it
@@ -32,7 +33,7 @@
 //!
 //! The engines are generic over the step sequence; the floor (table 4.3: 4 steps), cabin
 //! display (table 4.5: 7 steps, S-7.3 layout) and cabin panel (tables 4.6/4.7: 7 steps, two
-//! halves) protocols, and the S-7.3 analog transfer of S-7.3 (`asi_master::integrated_analog`, `asi_slaves::analog_firmware`), are built on them.
+//! halves) protocols, and the S-7.3 analog transfer, are built on them.
 //! The engines and the words they carry ([`crate::handshake_words`]) are shared by both sides:
 //! the master (PLC) side of each lab protocol is a `*Master` type of
 //! `asi_master::plc_handshake` that the `controller` crate drives from the process image; the

@@ -1,4 +1,4 @@
-//! The bus merges slaves whose receivers have come to the same state (src/bus.rs, comparing
+//! The bus merges slaves whose receivers have come to the same state (asi-bus src/bus/mod.rs, comparing
 //! `Listener`s). Merging pays because it happens all the time: after a frame, a `Listener`'s
 //! state depends only on the frame, the kind it took it for and whether it is synchronised.
 //! Checked here on noisy traffic: any two listeners that agree on those two after the same

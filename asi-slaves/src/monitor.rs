@@ -6,7 +6,7 @@
 //! telegrams that pass the seven checks), pairs each Data_Exchange to a monitored address with
 //! its response, learns each slave's table and reports released / not released.
 //!
-//! **What the sources say** (asi-master/README.md, "Safety at Work under line noise"): the
+//! **What the sources say** (asi-slaves/README.md, "Safety at Work under line noise"): the
 //! monitor listens passively and evaluates the safe slave's Data_Exchange answers (Leuze RS4/AS-i
 //! manual; Siemens 3RK3 manual); the slave holds its code for 224 µs + 16 µs after a
 //! Data_Exchange "so that an immediate master repeat does not desynchronise the monitor" (ZMD

@@ -733,7 +733,7 @@ fn histogram(values: &[f64], min_width: f64, bins: usize) -> Histogram {
 
 // ----- buses --------------------------------------------------------------------------------
 
-/// 62 A/B I/O modules, all projected (as in asi-master's cycle-time test).
+/// 62 A/B I/O modules, all projected (as in asi-bus's cycle-time test).
 fn ab_bus() -> Result<Bus, ConfigError> {
     let b_codes = SlaveCodes {
         id1: Nibble::from_low_bits(0xF),
