@@ -28,7 +28,7 @@
 //! synchronised afterwards, so two receivers that agree on those two are identical from then on
 //! and are merged. A slave put (back) on the bus gets a fresh receiver of its own. This keeps
 //! the cost of a frame independent of the number of slaves (tested against one listener per
-//! slave in `tests/receivers.rs`).
+//! slave in asi-phy's `tests/receivers.rs`).
 
 use asi_master::config::{ConfigError, MasterConfig, ProjectedConfig};
 use asi_master::master::{Master, Outcome, Phase, Transmit};

@@ -6,6 +6,9 @@
 //! response that failed checks, or nothing), [`Master::poll_at`] says when an idle master wants
 //! to be asked again. `asi_bus::Bus` drives it over the pulse-level line.
 //!
+//! The implementation is split by concern: `host` the mailbox jobs, `schedule` the next
+//! call of each phase, `requests` the telegrams, `outcomes` what a response changes.
+//!
 //! **Phases** (reference/asi.md §5.1): offline → detection (Read_IO_Configuration, Read_ID_Code,
 //! Read_ID1, Read_ID2 at 0A, 1A..31A, then 1B..31B where the A half does not hold a standard
 //! slave; builds LDS; repeated until a slave is found) → activation (protected mode: the slaves
