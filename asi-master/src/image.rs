@@ -18,7 +18,7 @@
 //! mailbox at 32..49, analog output values at 68..155. Output word 0 bits 15..12 carry the
 //! host flags ([`crate::HostFlags`]); word 8 bits 15..12 (slot "0B") are reserved and stay 0.
 
-use crate::lists::SlaveAddr;
+use asi_phy::SlaveAddr;
 use asi_phy::{Nibble, Select};
 
 /// Number of words in each image (seed 003 §4: 244 words for master revision 1.3 and later).

@@ -4,76 +4,8 @@
 //! §5.2, `aasidrv.h`): bit 0..31 = slave 0/0A..31/31A, bit 32..63 = 0B..31B. LDS, LAS, LPS, LCS
 //! and LPF are all of this type.
 
-use asi_phy::{Address, Select};
+use asi_phy::SlaveAddr;
 use core::fmt;
-
-/// A slave address with its A/B select: 1..31 (A or B), 0 (A only). A standard (non A/B) slave
-/// is addressed as `A`.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, PartialOrd, Ord, Hash)]
-pub struct SlaveAddr {
-    /// Address 0..=31.
-    pub address: Address,
-    /// A or B.
-    pub select: Select,
-}
-
-impl SlaveAddr {
-    /// `n` (0..=31) as an A (or standard) address; `None` above 31.
-    pub const fn a(n: u8) -> Option<SlaveAddr> {
-        match Address::new(n) {
-            Some(address) => Some(SlaveAddr {
-                address,
-                select: Select::A,
-            }),
-            None => None,
-        }
-    }
-
-    /// `n` (1..=31) as a B address; `None` for 0 (0B does not exist) and above 31.
-    pub const fn b(n: u8) -> Option<SlaveAddr> {
-        if n == 0 {
-            return None;
-        }
-        match Address::new(n) {
-            Some(address) => Some(SlaveAddr {
-                address,
-                select: Select::B,
-            }),
-            None => None,
-        }
-    }
-
-    /// The list bit of this address: 0..31 for A, 32..63 for B.
-    pub const fn index(self) -> u8 {
-        match self.select {
-            Select::A => self.address.get(),
-            Select::B => 32 + self.address.get(),
-        }
-    }
-
-    /// The address of list bit `i` (0..=63); `None` for 32 (0B) and above 63.
-    pub const fn from_index(i: u8) -> Option<SlaveAddr> {
-        if i < 32 {
-            SlaveAddr::a(i)
-        } else if i < 64 {
-            SlaveAddr::b(i - 32)
-        } else {
-            None
-        }
-    }
-
-    /// The address number 0..=31.
-    pub const fn number(self) -> u8 {
-        self.address.get()
-    }
-}
-
-impl fmt::Display for SlaveAddr {
-    /// `5` for a standard/A slave is written `5A`; B slaves `5B`.
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{}{}", self.address.get(), self.select)
-    }
-}
 
 /// A set of slave addresses: LDS, LAS, LPS, LCS or LPF (reference/asi.md §5.2).
 #[derive(Clone, Copy, Default, PartialEq, Eq, Hash)]

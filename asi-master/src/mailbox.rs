@@ -24,7 +24,7 @@
 //! | Read_Flags | 0x0A | — | EC flags high byte, low byte (reference/asi.md §5.3 values) |
 
 use crate::image::{Image, MAILBOX_BYTES, MAILBOX_WORD};
-use crate::lists::SlaveAddr;
+use asi_phy::SlaveAddr;
 
 /// Mailbox command codes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]

@@ -19,9 +19,13 @@
 //! ```
 
 pub mod fault;
+pub mod handshake;
+pub mod handshake_words;
+pub mod line;
 pub mod manchester;
 pub mod pulse;
 pub mod receiver;
+pub mod slave_id;
 pub mod telegram;
 pub mod time;
 pub mod timing;
@@ -34,6 +38,7 @@ pub use receiver::{
     Check, Checks, Expect, Frame, LineDecoder, Listener, Received, Receiver, ReceiverConfig,
     TelegramKind,
 };
+pub use slave_id::{SlaveAddr, SlaveCodes};
 pub use telegram::{Address, Call, Nibble, Request, Response, Select, TelegramError};
 pub use time::{SimDuration, SimTime};
 pub use timing::{BusTiming, TimingError};

@@ -2,7 +2,7 @@
 //! (for snapshot tests and the terminal) or as JSON lines (for machines).
 
 use crate::telegrams::{check_keys, RequestFields, ResponseFields};
-use asi_master::trace::{describe_request, TransactionRecord};
+use asi_master::record::{describe_request, TransactionRecord};
 use serde::Serialize;
 use std::io::{self, Write};
 use std::path::Path;
@@ -82,7 +82,7 @@ pub fn write_record(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use asi_master::trace::TxKind;
+    use asi_master::record::TxKind;
     use asi_phy::{Address, Check, Checks, Nibble, Request, Response, SimTime};
 
     fn record() -> TransactionRecord {

@@ -22,13 +22,12 @@
 use crate::program::{
     CabinWord, ControllerConfig, ControllerConfigError, Inputs, Outputs, Program,
 };
-use asi_master::handshake::{
-    CabinDisplayMaster, CabinPanelMaster, DisplayWord, FloorStationMaster,
-};
 use asi_master::image::{F0_CONFIG_ERROR, F1_APF};
 use asi_master::mailbox::{self, Command, JobResult};
-use asi_master::{Image, ProcessImage, SlaveAddr, SlaveList};
-use asi_phy::{Nibble, SimTime};
+use asi_master::plc_handshake::{CabinDisplayMaster, CabinPanelMaster, FloorStationMaster};
+use asi_master::{Image, ProcessImage, SlaveList};
+use asi_phy::handshake_words::DisplayWord;
+use asi_phy::{Nibble, SimTime, SlaveAddr};
 
 /// The lab lift's slave addresses (SPEC §3 table).
 pub mod addr {

@@ -41,16 +41,17 @@
 
 use crate::rig::{Rig, RigError};
 use crate::scenario::{Action, Scenario};
-use asi_master::devices::{IoModule, AB_MODULE, AC2726};
-use asi_master::lab::{io_bus, CONVERTER};
+use asi_bus::lab::{io_bus, CONVERTER};
+use asi_bus::Bus;
 use asi_master::{
-    Bus, ConfigError, MasterConfig, ProjectedConfig, ProjectedSlave, Slave, SlaveAddr, SlaveCodes,
-    TransactionRecord, TxKind,
+    ConfigError, MasterConfig, ProjectedConfig, ProjectedSlave, TransactionRecord, TxKind,
 };
 use asi_phy::{
     BusTiming, Call, FaultRates, Nibble, PulseTrain, Request, Response, Select, SimDuration,
-    SimTime,
+    SimTime, SlaveAddr, SlaveCodes,
 };
+use asi_slaves::devices::{IoModule, AB_MODULE, AC2726};
+use asi_slaves::Slave;
 use lift_model::{Button, LoadLevel};
 use serde::Serialize;
 use std::collections::HashMap;
@@ -732,7 +733,7 @@ fn histogram(values: &[f64], min_width: f64, bins: usize) -> Histogram {
 
 // ----- buses --------------------------------------------------------------------------------
 
-/// 62 A/B I/O modules, all projected (as in asi-master's cycle-time test).
+/// 62 A/B I/O modules, all projected (as in asi-bus's cycle-time test).
 fn ab_bus() -> Result<Bus, ConfigError> {
     let b_codes = SlaveCodes {
         id1: Nibble::from_low_bits(0xF),

@@ -9,7 +9,7 @@
 //! long run stays small; the CSV holds the same window as `time_s,voltage_v`.
 
 use crate::report::round3;
-use asi_master::trace::{describe_request, TransactionRecord};
+use asi_master::record::{describe_request, TransactionRecord};
 use asi_phy::waveform::{render, WaveformConfig};
 use asi_phy::{BusTiming, Polarity, Pulse, SimDuration, SimTime};
 use asi_trace::vcd::write::{Value, VarId, VarKind, VcdWriter};

@@ -2,7 +2,7 @@
 //! encoder and read by the plant's displays with lift-model's decoder: the two must agree on
 //! every word, and the displays must refuse a word with a broken parity.
 
-use asi_master::handshake::DisplayWord as Sent;
+use asi_phy::handshake_words::DisplayWord as Sent;
 use lift_model::DisplayWord as Shown;
 
 #[test]

@@ -6,7 +6,7 @@
 //! (`INSTA_UPDATE=always cargo test -p asi-lift-tests --test traces`, then read the .snap.)
 
 use asi_lift_tests::*;
-use asi_master::trace::TransactionRecord;
+use asi_master::record::TransactionRecord;
 use asi_phy::{Call, SimDuration, SimTime};
 use lift_model::Button;
 use rig::report::Report;

@@ -328,7 +328,7 @@ pub fn generate(campaign_seed: u64, index: u64, profile: &Profile) -> Generated 
     let door_closed = !rng.random_bool(profile.door_open_chance);
     let pulse_error_rate = profile.pulse_error_rate.pick(&mut rng).unwrap_or(0.0);
     let extra_slaves = if rng.random_bool(profile.extra_slaves_chance) {
-        rng.random_range(1..=asi_master::lab::EXTRA_ADDRESSES.len() as u8)
+        rng.random_range(1..=asi_bus::lab::EXTRA_ADDRESSES.len() as u8)
     } else {
         0
     };

@@ -26,8 +26,8 @@ use crate::report::{
 };
 use crate::scenario::{Action, Fault, Scenario, ScenarioEvent};
 use crate::waves::{RigSample, WaveOutputs, Waves};
-use asi_master::bus::NOMINAL_VOLTS;
-use asi_master::lab::{LabLift, SAFETY_BOTTOM, SAFETY_TOP};
+use asi_bus::bus::NOMINAL_VOLTS;
+use asi_bus::lab::{LabLift, SAFETY_BOTTOM, SAFETY_TOP};
 use asi_phy::fault::FaultRates;
 use asi_phy::{SimDuration, SimTime};
 use asi_trace::trace::TraceFormat;

@@ -2,7 +2,7 @@
 //! lines), the waveform outputs (VCD, line-voltage CSV) and an observer.
 
 use crate::waves::{RigSample, Waves};
-use asi_master::trace::TransactionRecord;
+use asi_master::record::TransactionRecord;
 use asi_phy::{Pulse, SimTime};
 use asi_trace::trace::{write_record, TraceFormat};
 use std::io::Write;

@@ -2,7 +2,7 @@
 //! slaves drive (converter run and direction, the speed set-point, the display words) to the
 //! plant, at the moment they drive it.
 
-use asi_master::lab::{LabLift, SAFETY_BOTTOM, SAFETY_TOP};
+use asi_bus::lab::{LabLift, SAFETY_BOTTOM, SAFETY_TOP};
 use asi_phy::SimTime;
 use controller::plc::addr;
 use lift_model::{Button, DisplayId, Lift, PlantError};

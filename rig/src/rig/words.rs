@@ -2,8 +2,8 @@
 //! release a sensor, why K1 is open, the bus's counts and cycle times.
 
 use crate::report::{round3, BusReport, CycleTimes, ErrorCounts, SlaveDropouts};
-use asi_master::lab::{SAFETY_BOTTOM, SAFETY_TOP};
-use asi_master::safety::{NotReleased, SafetyMonitor};
+use asi_bus::lab::{SAFETY_BOTTOM, SAFETY_TOP};
+use asi_slaves::monitor::{NotReleased, SafetyMonitor};
 use asi_master::BusStats;
 use asi_phy::Check;
 use safety::lift::K1Cause;

@@ -1,0 +1,694 @@
+//! The whole AS-i segment as one sans-IO object: master, slaves, medium, monitors (SPEC §0–3).
+//!
+//! Drive it from a discrete-event loop: [`Bus::poll_at`] is the time of the next bus event,
+//! [`Bus::advance_to`] processes every event up to a time. Each transaction is three events:
+//!
+//! 1. the master starts its request (its pulses go on the line);
+//! 2. the request frame completes (last pulse + the 9 µs pause): every slave's receiver judges
+//!    it; the addressed slave samples its inputs and drives its outputs *at this time*, and its
+//!    response goes on the line after the reply delay (18 µs after the request's last pulse);
+//! 3. the line is quiet again (or the response timeout is over): the master's receiver judges
+//!    the response, the master decides (repeat, next call), and the next request starts — at
+//!    request start + 154 µs with the default timing, later if noise kept the line busy.
+//!
+//! **Decision**: after a transaction whose line carried an erroneous frame (a corrupt request
+//! that still reached the slaves, a corrupt or colliding response) the master starts its next
+//! request no earlier than the asynchronous pause (18 µs) after the last pulse, instead of the
+//! 10 µs slave pause: receivers that saw the error need that pause to accept the repeat
+//! (A²SI; reference/asi.md §2.3). A repeat after a corrupt request (no response) still comes
+//! 154 µs after the first try; after a corrupt response it comes 162 µs after.
+//!
+//! Device inputs set between `advance_to` calls are seen by the transactions after the call
+//! that set them, so an application that wants exact sampling steps to `poll_at()`.
+//!
+//! **Receivers.** Every slave has its own receiver state (asi-phy [`Listener`]): after a
+//! corrupt telegram it needs the asynchronous pause before it accepts the next. Slaves whose
+//! receivers are in the same state share one `Listener` value: after a frame a `Listener`'s
+//! state is a function of the frame, the kind it took the frame for and whether it is
+//! synchronised afterwards, so two receivers that agree on those two are identical from then on
+//! and are merged. A slave put (back) on the bus gets a fresh receiver of its own. This keeps
+//! the cost of a frame independent of the number of slaves (tested against one listener per
+//! slave in asi-phy's `tests/receivers.rs`).
+
+use asi_master::config::{ConfigError, MasterConfig, ProjectedConfig};
+use asi_master::master::{Master, Outcome, Phase, Transmit};
+use asi_master::record::{BusStats, TraceRing, TransactionRecord};
+use asi_phy::line::{Line, Medium};
+use asi_phy::{
+    BusTiming, Call, Checks, Expect, FaultInjector, FaultRates, Frame, Listener, PulseFault,
+    PulseTrain, Request, Response, SimTime,
+};
+use asi_slaves::monitor::SafetyMonitor;
+use asi_slaves::slave::{Peripheral, Slave};
+
+mod hooks;
+
+/// No output nibble taken yet (or lost with a reset).
+const NO_OUTPUT: u8 = 0xFF;
+
+/// A slave's place on the bus.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub struct SlaveId(pub usize);
+
+/// A monitor's place on the bus.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub struct MonitorId(pub usize);
+
+/// **Decision**: slave ICs work down to 16 V (reference/asi.md §1.1: ~16..33 V); below that
+/// they lose power and reset.
+pub const SLAVE_MIN_VOLTS: f64 = 16.0;
+/// The nominal AS-i supply (seed 003 §2.2.1: 29.5..31.6 V).
+pub const NOMINAL_VOLTS: f64 = 30.0;
+
+#[derive(Debug)]
+struct SlaveSlot {
+    slave: Slave,
+    attached: bool,
+}
+
+#[derive(Clone, Debug)]
+struct Group {
+    listener: Listener,
+    members: u64,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum State {
+    Idle,
+    AwaitRequestFrame,
+    AwaitResponse,
+}
+
+#[derive(Clone, Copy, Debug)]
+enum Role {
+    Request,
+    Response,
+}
+
+#[derive(Clone, Copy, Debug)]
+struct Current {
+    tx: Transmit,
+    start: SimTime,
+    req_end: SimTime,
+    request_failed: Checks,
+    request_frames: u32,
+    valid_request: Option<Request>,
+    responses: u32,
+    response_failed: Checks,
+    response: Option<Response>,
+    line_end: SimTime,
+    line_error: bool,
+}
+
+/// Callback sink for trace records.
+pub type TraceCallback = Box<dyn FnMut(&TransactionRecord) + Send>;
+
+/// An AS-i segment: master, slaves, line, passive monitors.
+pub struct Bus {
+    timing: BusTiming,
+    master: Master,
+    slaves: Vec<SlaveSlot>,
+    addr_index: [u64; 32],
+    medium: Medium,
+    master_rx: Listener,
+    groups: Vec<Group>,
+    monitors: Vec<SafetyMonitor>,
+    state: State,
+    now: SimTime,
+    next_event: SimTime,
+    volts: f64,
+    slaves_powered: bool,
+    cur: Option<Current>,
+    stats: BusStats,
+    /// Addresses whose new output nibbles end [`Bus::advance_before`] early.
+    watch: u32,
+    /// The last output nibble each address took in a Data_Exchange.
+    last_out: [u8; 32],
+    /// A watched address took a new output nibble in the current event.
+    output_taken: bool,
+    ring: Option<TraceRing>,
+    callback: Option<TraceCallback>,
+}
+
+impl core::fmt::Debug for Bus {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.debug_struct("Bus")
+            .field("now", &self.now)
+            .field("phase", &self.master.phase())
+            .field("slaves", &self.slaves.len())
+            .finish()
+    }
+}
+
+impl Bus {
+    /// A bus with a master of `cfg` and `projected` configuration and these `slaves`, all
+    /// powered up at time 0.
+    pub fn new(
+        cfg: MasterConfig,
+        projected: ProjectedConfig,
+        slaves: Vec<Slave>,
+    ) -> Result<Bus, ConfigError> {
+        let timing = cfg.timing;
+        let master = Master::new(cfg, projected)?;
+        let mut bus = Bus {
+            timing,
+            master_rx: Listener::new(&timing.receiver(Expect::Responses)),
+            medium: Medium::quiet(&timing),
+            master,
+            slaves: Vec::new(),
+            addr_index: [0; 32],
+            groups: Vec::new(),
+            monitors: Vec::new(),
+            state: State::Idle,
+            now: SimTime::ZERO,
+            next_event: SimTime::ZERO,
+            volts: NOMINAL_VOLTS,
+            slaves_powered: true,
+            cur: None,
+            stats: BusStats::default(),
+            watch: 0,
+            last_out: [NO_OUTPUT; 32],
+            output_taken: false,
+            ring: None,
+            callback: None,
+        };
+        for s in slaves {
+            bus.add_slave(s)?;
+        }
+        bus.reschedule_idle();
+        Ok(bus)
+    }
+
+    /// Adds a slave, attached and powered (it gets a fresh receiver).
+    pub fn add_slave(&mut self, mut slave: Slave) -> Result<SlaveId, ConfigError> {
+        if self.slaves.len() >= 64 {
+            return Err(ConfigError::TooManyDevices(self.slaves.len() + 1));
+        }
+        slave.reset();
+        let id = self.slaves.len();
+        self.slaves.push(SlaveSlot {
+            slave,
+            attached: true,
+        });
+        self.join(id);
+        self.reindex();
+        Ok(SlaveId(id))
+    }
+
+    /// Adds a passive monitor that hears every frame.
+    pub fn add_monitor(&mut self, m: SafetyMonitor) -> MonitorId {
+        self.monitors.push(m);
+        MonitorId(self.monitors.len() - 1)
+    }
+
+    fn join(&mut self, id: usize) {
+        self.groups.push(Group {
+            listener: Listener::new(&self.timing.receiver(Expect::Both)),
+            members: 1 << id,
+        });
+    }
+
+    fn leave(&mut self, id: usize) {
+        for g in &mut self.groups {
+            g.members &= !(1 << id);
+        }
+        self.groups.retain(|g| g.members != 0);
+    }
+
+    fn reindex(&mut self) {
+        self.addr_index = [0; 32];
+        for (i, s) in self.slaves.iter().enumerate() {
+            self.addr_index[s.slave.addr().number() as usize] |= 1 << i;
+        }
+    }
+
+    // ----- the event loop -------------------------------------------------------------
+
+    /// The time of the next bus event ([`SimTime::MAX`] if the bus waits for the application,
+    /// e.g. without power).
+    pub fn poll_at(&self) -> SimTime {
+        self.next_event
+    }
+
+    /// The bus time: the last time given to [`Bus::advance_to`].
+    pub fn now(&self) -> SimTime {
+        self.now
+    }
+
+    /// Processes every event up to and including `now`.
+    pub fn advance_to(&mut self, now: SimTime) {
+        while self.next_event <= now {
+            self.event();
+        }
+        if now > self.now {
+            self.now = now;
+            for m in &mut self.monitors {
+                m.poll(now);
+            }
+        }
+    }
+
+    /// Sets the addresses whose slaves drive something outside the bus (a plant): when one of
+    /// them takes a Data_Exchange whose output nibble differs from its last one,
+    /// [`Bus::advance_before`] returns at that moment, so the application can hand the new
+    /// output on exactly then.
+    pub fn watch_outputs(&mut self, addresses: u32) {
+        self.watch = addresses;
+    }
+
+    /// Processes the events before `until`, returning early with the event's time when a
+    /// watched slave ([`Bus::watch_outputs`]) took a new output nibble in it; `None` when
+    /// every event before `until` is done. The bus's time stays at the last event processed,
+    /// so an application that drives the bus this way runs long stretches without stepping
+    /// at every event, and still sees every output change at its moment.
+    pub fn advance_before(&mut self, until: SimTime) -> Option<SimTime> {
+        while self.next_event < until {
+            self.event();
+            if core::mem::take(&mut self.output_taken) {
+                return Some(self.now);
+            }
+        }
+        None
+    }
+
+    /// Processes the next event.
+    fn event(&mut self) {
+        {
+            let t = self.next_event;
+            self.now = t;
+            match self.state {
+                State::Idle => self.start_transaction(t),
+                State::AwaitRequestFrame => self.request_frame(t),
+                State::AwaitResponse => match self.finish_transaction(t) {
+                    Some(resync) if resync > t => {
+                        self.state = State::Idle;
+                        self.next_event = resync;
+                    }
+                    _ => self.start_transaction(t),
+                },
+            }
+        }
+    }
+
+    fn reschedule_idle(&mut self) {
+        if self.state == State::Idle {
+            self.next_event = self.master.poll_at(self.now).unwrap_or(SimTime::MAX);
+        }
+    }
+
+    fn start_transaction(&mut self, t: SimTime) {
+        for m in &mut self.monitors {
+            m.poll(t);
+        }
+        let Some(tx) = self.master.poll_transmit(t) else {
+            self.state = State::Idle;
+            self.next_event = self.master.poll_at(t).unwrap_or(SimTime::MAX);
+            return;
+        };
+        let train = PulseTrain::request(tx.request, t, self.timing.half_bit());
+        self.cur = Some(Current {
+            tx,
+            start: t,
+            req_end: train.end(),
+            request_failed: Checks::NONE,
+            request_frames: 0,
+            valid_request: None,
+            responses: 0,
+            response_failed: Checks::NONE,
+            response: None,
+            line_end: train.end(),
+            line_error: false,
+        });
+        let mut frames: [Option<Frame>; 4] = [None; 4];
+        let mut n = 0;
+        let raw = tx.request.bits() as u32;
+        self.medium.transmit(&train, raw, Request::BITS, &mut |f| {
+            if n < frames.len() {
+                frames[n] = Some(f);
+                n += 1;
+            }
+        });
+        for f in frames.into_iter().flatten() {
+            self.hear(t, &f, Role::Request);
+        }
+        self.state = State::AwaitRequestFrame;
+        self.next_event = self
+            .medium
+            .poll_at()
+            .unwrap_or(train.end() + self.timing.min_pause())
+            .max(t);
+    }
+
+    fn request_frame(&mut self, t: SimTime) {
+        if let Some(f) = self.medium.poll(t) {
+            self.hear(t, &f, Role::Request);
+        }
+        let Some(cur) = self.cur else {
+            self.state = State::Idle;
+            self.reschedule_idle();
+            return;
+        };
+        self.state = State::AwaitResponse;
+        let base = cur.start + self.timing.transaction();
+        let quiet = self
+            .medium
+            .poll_at()
+            .map(|p| p + (self.timing.slave_pause() - self.timing.min_pause()));
+        self.next_event = quiet.map_or(base, |q| q.max(base)).max(t);
+    }
+
+    /// Ends the transaction; returns the earliest start of the next request when the line
+    /// carried an error (the receivers need the asynchronous pause to resynchronise).
+    fn finish_transaction(&mut self, t: SimTime) -> Option<SimTime> {
+        if let Some(f) = self.medium.poll(t) {
+            self.hear(t, &f, Role::Response);
+        }
+        let cur = self.cur.take()?;
+        let outcome = match (cur.responses, cur.response) {
+            (0, _) => Outcome::NoResponse,
+            (1, Some(r)) => Outcome::Response(r),
+            _ => Outcome::Corrupt(if cur.response_failed.is_empty() {
+                Checks::only(asi_phy::Check::Length)
+            } else {
+                cur.response_failed
+            }),
+        };
+        let verdict = self.master.handle_outcome(t, outcome);
+        let rec = TransactionRecord {
+            start: cur.start,
+            kind: cur.tx.kind,
+            request: cur.tx.request,
+            request_failed: cur.request_failed,
+            response: match outcome {
+                Outcome::Response(r) => Some(r),
+                _ => None,
+            },
+            response_failed: match outcome {
+                Outcome::Corrupt(c) => c,
+                _ => Checks::NONE,
+            },
+            no_response: outcome == Outcome::NoResponse,
+            repeat: cur.tx.repeat,
+            ab: cur.tx.ab,
+        };
+        self.stats.record(&rec, verdict.error, verdict.repeat);
+        tracing::trace!(target: "asi_master::trace", "{rec}");
+        if let Some(r) = &mut self.ring {
+            r.push(rec);
+        }
+        if let Some(cb) = &mut self.callback {
+            cb(&rec);
+        }
+        cur.line_error
+            .then(|| cur.line_end + self.timing.async_pause())
+    }
+
+    /// Every receiver on the line hears frame `f` at `now`.
+    fn hear(&mut self, now: SimTime, f: &Frame, role: Role) {
+        let Some(mut cur) = self.cur else {
+            return;
+        };
+        let window_end = cur.req_end + self.timing.response_timeout();
+        cur.line_end = cur.line_end.max(f.end);
+        if matches!(role, Role::Response) && f.start > cur.req_end && f.start <= window_end {
+            let r = self.master_rx.accept(f);
+            cur.responses += 1;
+            cur.line_error |= !r.is_valid();
+            if r.is_valid() && cur.responses == 1 {
+                cur.response = r.response();
+            } else {
+                cur.response = None;
+                cur.response_failed = cur_checks(cur.response_failed, r.failed);
+            }
+        }
+        let mut responders = 0u64;
+        let mut request = None;
+        let ngroups = self.groups.len();
+        for (gi, g) in self.groups.iter_mut().enumerate() {
+            let r = g.listener.accept(f);
+            if gi == 0 && !f.line_failed.is_empty() {
+                cur.line_error = true;
+            }
+            if matches!(role, Role::Request) {
+                if gi == 0 {
+                    cur.request_frames += 1;
+                    cur.request_failed = cur_checks(cur.request_failed, r.failed);
+                }
+                if let Some(q) = r.request() {
+                    let mask = match q.call() {
+                        Call::BroadcastReset => u64::MAX,
+                        _ => self.addr_index[q.address().get() as usize],
+                    };
+                    responders |= g.members & mask;
+                    request = Some(q);
+                }
+            }
+        }
+        if ngroups > 1 {
+            self.merge_groups();
+        }
+        for m in &mut self.monitors {
+            m.on_frame(now, f);
+        }
+        if matches!(role, Role::Request) && cur.request_frames > 1 {
+            // A request split in pieces is no request.
+            request = None;
+            cur.valid_request = None;
+        } else if request.is_some() {
+            cur.valid_request = request;
+        }
+        self.cur = Some(cur);
+        if let (Some(q), true) = (request, responders != 0 && self.slaves_powered) {
+            self.respond(now, f.end, q, responders);
+        }
+    }
+
+    /// Notes whether `req`, taken by a slave, can change what a watched slave drives: a
+    /// Data_Exchange with a new output nibble, or any call that writes (parameter, address,
+    /// reset), after which the next Data_Exchange counts as new too.
+    fn note_output(&mut self, req: Request) {
+        let a = req.address().get() as usize;
+        let watched = self.watch >> a & 1 == 1;
+        match req.call() {
+            Call::DataExchange { data, .. } => {
+                if watched && self.last_out[a] != data.get() {
+                    self.last_out[a] = data.get();
+                    self.output_taken = true;
+                }
+            }
+            Call::ReadIoConfiguration { .. }
+            | Call::ReadIdCode { .. }
+            | Call::ReadId1 { .. }
+            | Call::ReadId2 { .. }
+            | Call::ReadStatus { .. } => {}
+            Call::BroadcastReset => {
+                self.last_out = [NO_OUTPUT; 32];
+                self.output_taken |= self.watch != 0;
+            }
+            _ => {
+                if watched {
+                    self.last_out[a] = NO_OUTPUT;
+                    self.output_taken = true;
+                }
+            }
+        }
+    }
+
+    /// Merges slave groups whose listeners have come to the same state: from then on they
+    /// react alike to every frame.
+    fn merge_groups(&mut self) {
+        let mut i = self.groups.len();
+        while i > 1 {
+            i -= 1;
+            if let Some(j) = (0..i).find(|&j| self.groups[j].listener == self.groups[i].listener) {
+                let m = self.groups[i].members;
+                self.groups[j].members |= m;
+                self.groups.remove(i);
+            }
+        }
+    }
+
+    fn respond(&mut self, now: SimTime, req_end: SimTime, req: Request, mut who: u64) {
+        let start = req_end + self.timing.master_pause();
+        let h = self.timing.half_bit();
+        let mut trains: [Option<(PulseTrain, Response)>; 4] = [None; 4];
+        let mut n = 0usize;
+        let mut extra = Vec::new();
+        let mut readdressed = false;
+        while who != 0 {
+            let i = who.trailing_zeros() as usize;
+            who &= who - 1;
+            let Some(slot) = self.slaves.get_mut(i) else {
+                continue;
+            };
+            if !slot.attached {
+                continue;
+            }
+            let before = slot.slave.addr();
+            let answer = slot.slave.handle(now, req);
+            readdressed |= slot.slave.addr() != before;
+            if let Some(r) = answer {
+                let train = PulseTrain::response(r, start, h);
+                if n < trains.len() {
+                    trains[n] = Some((train, r));
+                } else {
+                    extra.push(train);
+                }
+                n += 1;
+            }
+        }
+        self.note_output(req);
+        if readdressed || matches!(req.call(), Call::BroadcastReset | Call::ResetSlave { .. }) {
+            self.reindex();
+        }
+        let mut frames: Vec<Frame> = Vec::new();
+        let mut collect = |f| frames.push(f);
+        match n {
+            0 => {}
+            1 => {
+                if let Some((t, r)) = trains[0] {
+                    self.medium
+                        .transmit(&t, r.bits() as u32, Response::BITS, &mut collect);
+                }
+            }
+            _ => {
+                let all: Vec<PulseTrain> = trains
+                    .iter()
+                    .flatten()
+                    .map(|(t, _)| *t)
+                    .chain(extra)
+                    .collect();
+                self.medium.transmit_merged(&all, &mut collect);
+            }
+        }
+        for f in frames {
+            self.hear(now, &f, Role::Response);
+        }
+    }
+
+    // ----- application access -----------------------------------------------------------
+
+    /// Starts (`true`) or stops recording the line: every pulse as it is on the line (after
+    /// faults, colliding answers superimposed), for waveform and VCD export.
+    pub fn record_line(&mut self, on: bool) {
+        self.medium.record_pulses(on);
+    }
+
+    /// The pulses put on the line since the last call, in the order they went on it (a
+    /// pulse that a fault shifted may be slightly out of time order).
+    pub fn take_line_pulses(&mut self) -> Vec<asi_phy::Pulse> {
+        self.medium.take_pulses()
+    }
+
+    /// The master.
+    pub fn master(&self) -> &Master {
+        &self.master
+    }
+
+    /// The process image (what the PLC reads and writes).
+    pub fn image(&self) -> &asi_master::image::ProcessImage {
+        self.master.image()
+    }
+
+    /// The process image for the PLC to write its outputs, host flags and mailbox jobs. An
+    /// idle master (offline by host flag) looks at it again at the bus time.
+    pub fn image_mut(&mut self) -> &mut asi_master::image::ProcessImage {
+        if self.state == State::Idle && self.master.power_ok() {
+            self.next_event = self.next_event.min(self.now);
+        }
+        self.master.image_mut()
+    }
+
+    /// The bus timing.
+    pub fn timing(&self) -> &BusTiming {
+        &self.timing
+    }
+
+    /// Cumulative statistics: transactions, repeats, errors by check class, no-response, cycle
+    /// time, drop-outs.
+    pub fn stats(&self) -> BusStats {
+        let c = self.master.cycle_stats();
+        BusStats {
+            dropouts: c.dropouts,
+            cycles: c.cycles,
+            cycle_min: c.cycle_min,
+            cycle_max: c.cycle_max,
+            cycle_total: c.cycle_total,
+            ..self.stats
+        }
+    }
+
+    /// Keeps the last `capacity` trace records for [`Bus::drain_trace`] (0 switches it off).
+    pub fn enable_trace(&mut self, capacity: usize) {
+        self.ring = (capacity > 0).then(|| TraceRing::new(capacity));
+    }
+
+    /// Takes the trace records kept so far, oldest first.
+    pub fn drain_trace(&mut self) -> Vec<TransactionRecord> {
+        self.ring
+            .as_mut()
+            .map_or_else(Vec::new, |r| r.drain().collect())
+    }
+
+    /// The trace ring (for `dropped()` and allocation-free draining).
+    pub fn trace_ring_mut(&mut self) -> Option<&mut TraceRing> {
+        self.ring.as_mut()
+    }
+
+    /// Calls `cb` with every trace record (`None` removes it).
+    pub fn set_trace_callback(&mut self, cb: Option<TraceCallback>) {
+        self.callback = cb;
+    }
+
+    /// Number of slaves added.
+    pub fn slave_count(&self) -> usize {
+        self.slaves.len()
+    }
+
+    /// A slave.
+    pub fn slave(&self, id: SlaveId) -> Option<&Slave> {
+        self.slaves.get(id.0).map(|s| &s.slave)
+    }
+
+    /// A slave, mutable (for fault hooks such as [`Slave::set_nv_error`]).
+    pub fn slave_mut(&mut self, id: SlaveId) -> Option<&mut Slave> {
+        self.slaves.get_mut(id.0).map(|s| &mut s.slave)
+    }
+
+    /// The attached slave currently at address `n` (A or standard), if any (first found).
+    pub fn find(&self, n: u8) -> Option<SlaveId> {
+        self.slaves
+            .iter()
+            .position(|s| s.attached && s.slave.addr().number() == n)
+            .map(SlaveId)
+    }
+
+    /// The device of slave `id` as a `T`.
+    pub fn device<T: Peripheral>(&self, id: SlaveId) -> Option<&T> {
+        self.slave(id)?.device().as_any().downcast_ref()
+    }
+
+    /// The device of slave `id` as a `T`, mutable (to set its peripheral inputs).
+    pub fn device_mut<T: Peripheral>(&mut self, id: SlaveId) -> Option<&mut T> {
+        self.slave_mut(id)?.device_mut().as_any_mut().downcast_mut()
+    }
+
+    /// A monitor.
+    pub fn monitor(&self, id: MonitorId) -> Option<&SafetyMonitor> {
+        self.monitors.get(id.0)
+    }
+
+    /// A monitor, mutable.
+    pub fn monitor_mut(&mut self, id: MonitorId) -> Option<&mut SafetyMonitor> {
+        self.monitors.get_mut(id.0)
+    }
+
+    /// `true` once the master is in normal operation.
+    pub fn is_running(&self) -> bool {
+        self.master.phase() == Phase::NormalOperation
+    }
+}
+
+fn cur_checks(acc: Checks, new: Checks) -> Checks {
+    acc | new
+}

@@ -1,0 +1,43 @@
+//! Power-on start-up of the lab lift's bus: detection, activation, first cycles (SPEC §2;
+//! reference/asi.md §5.1).
+
+mod common;
+use asi_bus::lab::LabLift;
+use asi_master::{Phase, TxKind};
+use common::*;
+
+#[test]
+fn power_on_start_up_of_the_lab_bus() {
+    let mut lab = LabLift::new().expect("lab");
+    lab.bus.enable_trace(10_000);
+    // Offline until the start-up delay is over.
+    assert_eq!(lab.bus.master().phase(), Phase::Offline);
+    assert!(lab.bus.master().flags().offline_ready());
+    lab.bus.advance_to(ms(4));
+    assert!(lab.bus.drain_trace().is_empty(), "no traffic while offline");
+    let mut trace = Vec::new();
+    // Until the end of the second normal cycle.
+    while lab.bus.stats().cycles < 2 {
+        let t = lab.bus.poll_at();
+        lab.bus.advance_to(t);
+        trace.extend(lab.bus.drain_trace());
+    }
+    let m = lab.bus.master();
+    assert_eq!(m.phase(), Phase::NormalOperation);
+    assert_eq!(m.lds().to_string(), "1A 2A 3A 4A 5A 6A 7A 8A 10A 11A 12A");
+    assert_eq!(m.las(), m.lds());
+    assert_eq!(m.las(), m.lps());
+    assert!(m.flags().config_ok());
+    assert!(m.flags().normal_operation_active());
+    // F3 = 1: protected mode (configuration not active); F0..F2 = 0.
+    assert_eq!(lab.bus.image().input.word(0) >> 12, 0b1000);
+    // Every detected address was read IO, ID, ID1, ID2 in that order.
+    let detect: Vec<_> = trace
+        .iter()
+        .filter(|r| r.kind == TxKind::Detection)
+        .collect();
+    assert_eq!(detect.len(), 11 * 4 + (32 - 11) + (31 - 11));
+    let cycle = (11 + 2) * 154;
+    assert_eq!(lab.bus.stats().cycle_min, us(cycle));
+    insta::assert_snapshot!(lines(&trace));
+}

@@ -1,0 +1,267 @@
+//! Scheduling: which call comes next in each phase, and the transitions between phases.
+
+use super::*;
+
+impl Master {
+    // ----- scheduling -----------------------------------------------------------------
+
+    pub(super) fn next_tx(&mut self, now: SimTime) -> Option<Tx> {
+        for _ in 0..4 {
+            match self.phase {
+                Phase::Offline => {
+                    if !self.power_ok || self.host.offline || now < self.wake_at {
+                        return None;
+                    }
+                    self.start_detection();
+                }
+                Phase::Detection => {
+                    if self.host.offline {
+                        self.go_offline();
+                        return None;
+                    }
+                    if let Some(tx) = self.detect_next() {
+                        return Some(tx);
+                    }
+                }
+                Phase::Activation => {
+                    if self.host.offline {
+                        self.go_offline();
+                        return None;
+                    }
+                    if let Some(tx) = self.activation_next() {
+                        return Some(tx);
+                    }
+                }
+                Phase::NormalOperation => {
+                    if self.host.offline {
+                        return self.offline_next();
+                    }
+                    return self.normal_next(now);
+                }
+            }
+        }
+        None
+    }
+
+    pub(super) fn start_detection(&mut self) {
+        self.phase = Phase::Detection;
+        self.det_cursor = 0;
+        self.det_probe = None;
+        self.lds = SlaveList::EMPTY;
+        self.las = SlaveList::EMPTY;
+        self.lpf = SlaveList::EMPTY;
+        self.update_flags();
+    }
+
+    pub(super) fn occupies_whole(&self, n: u8) -> bool {
+        match SlaveAddr::a(n) {
+            Some(a) => self.lds.contains(a) && !self.detected[a.index() as usize].is_ab(),
+            None => false,
+        }
+    }
+
+    pub(super) fn detect_next(&mut self) -> Option<Tx> {
+        for _ in 0..=65 {
+            if let Some(p) = self.det_probe {
+                return Some(Tx::Detect(p.a, p.step));
+            }
+            if self.det_cursor >= 64 {
+                if self.lds.is_empty() {
+                    self.det_cursor = 0;
+                    continue;
+                }
+                self.act_todo = self.lds.iter().filter(|&a| self.eligible(a)).collect();
+                self.act_param_done = false;
+                self.phase = Phase::Activation;
+                return None;
+            }
+            let i = self.det_cursor;
+            self.det_cursor += 1;
+            let Some(a) = SlaveAddr::from_index(i) else {
+                continue;
+            };
+            if a.select == Select::B && self.occupies_whole(a.number()) {
+                continue;
+            }
+            self.det_probe = Some(Probe {
+                a,
+                step: Read::Io,
+                codes: UNKNOWN_CODES,
+            });
+        }
+        None
+    }
+
+    pub(super) fn activation_next(&mut self) -> Option<Tx> {
+        let Some(a) = self.act_todo.iter().next() else {
+            self.phase = Phase::NormalOperation;
+            self.stage = Stage::Data;
+            self.cursor = 1;
+            self.cycle_open = false;
+            self.cycle_start = None;
+            return None;
+        };
+        Some(if self.act_param_done {
+            Tx::ActivateDexg(a)
+        } else {
+            Tx::ActivateParam(a)
+        })
+    }
+
+    pub(super) fn slot(&self, n: u8) -> Option<SlaveAddr> {
+        let a = SlaveAddr::a(n)?;
+        let b = SlaveAddr::b(n);
+        let has_b = b.is_some_and(|b| self.las.contains(b));
+        match (self.las.contains(a), has_b) {
+            (true, true) if self.odd_cycle => b,
+            (true, _) => Some(a),
+            (false, true) => b,
+            (false, false) => None,
+        }
+    }
+
+    pub(super) fn normal_next(&mut self, now: SimTime) -> Option<Tx> {
+        for _ in 0..4 {
+            match self.stage {
+                Stage::Data => {
+                    if !self.cycle_open {
+                        self.cycle_open = true;
+                        if let Some(s) = self.cycle_start {
+                            self.stats.record_cycle(now.saturating_duration_since(s));
+                        }
+                        self.cycle_start = Some(now);
+                    }
+                    while self.cursor <= 31 {
+                        let n = self.cursor;
+                        self.cursor += 1;
+                        if let Some(a) = self.slot(n) {
+                            return Some(Tx::Exchange(a));
+                        }
+                    }
+                    self.stage = Stage::Management;
+                }
+                Stage::Management => {
+                    self.stage = Stage::Inclusion;
+                    if let Some(tx) = self.management_next() {
+                        return Some(tx);
+                    }
+                }
+                Stage::Inclusion => {
+                    self.stage = Stage::Data;
+                    self.cursor = 1;
+                    self.cycle_open = false;
+                    self.odd_cycle = !self.odd_cycle;
+                    if let Some(tx) = self.inclusion_next() {
+                        return Some(tx);
+                    }
+                }
+            }
+        }
+        None
+    }
+
+    pub(super) fn management_next(&mut self) -> Option<Tx> {
+        if let Some((_, step)) = self.job {
+            return Some(Tx::Job(step));
+        }
+        if self.las.is_empty() {
+            return None;
+        }
+        for _ in 0..64 {
+            let i = self.status_cursor;
+            self.status_cursor = (self.status_cursor + 1) % 64;
+            if let Some(a) = SlaveAddr::from_index(i) {
+                if self.las.contains(a) {
+                    return Some(Tx::Status(a));
+                }
+            }
+        }
+        None
+    }
+
+    pub(super) fn is_inclusion_candidate(&self, a: SlaveAddr) -> bool {
+        if self.las.contains(a) {
+            return false;
+        }
+        match (a.number(), a.select) {
+            (0, _) => (1..=31u8).any(|n| {
+                !self.occupies_whole(n) && SlaveAddr::a(n).is_some_and(|x| !self.las.contains(x))
+            }),
+            (n, Select::B) => !self.occupies_whole(n),
+            _ => true,
+        }
+    }
+
+    pub(super) fn inclusion_next(&mut self) -> Option<Tx> {
+        if let (Some(p), Some(step)) = (self.incl, self.incl_step) {
+            return Some(Tx::Include(p.a, step));
+        }
+        if let Some(a) = self.incl_priority.take() {
+            return Some(self.begin_inclusion(a));
+        }
+        for _ in 0..64 {
+            let i = self.incl_cursor;
+            self.incl_cursor = (self.incl_cursor + 1) % 64;
+            if let Some(a) = SlaveAddr::from_index(i) {
+                if self.is_inclusion_candidate(a) {
+                    return Some(self.begin_inclusion(a));
+                }
+            }
+        }
+        None
+    }
+
+    pub(super) fn begin_inclusion(&mut self, a: SlaveAddr) -> Tx {
+        self.incl = Some(Probe {
+            a,
+            step: Read::Io,
+            codes: UNKNOWN_CODES,
+        });
+        self.incl_step = Some(InclStep::Read(Read::Io));
+        Tx::Include(a, InclStep::Read(Read::Io))
+    }
+
+    pub(super) fn offline_next(&mut self) -> Option<Tx> {
+        while self.offline_cursor < 64 {
+            let i = self.offline_cursor;
+            self.offline_cursor += 1;
+            if let Some(a) = SlaveAddr::from_index(i) {
+                if self.las.contains(a) {
+                    return Some(Tx::OfflineDefault(a));
+                }
+            }
+        }
+        self.go_offline();
+        None
+    }
+
+    pub(super) fn go_offline(&mut self) {
+        self.phase = Phase::Offline;
+        self.in_flight = None;
+        self.repeat_pending = false;
+        self.lds = SlaveList::EMPTY;
+        self.las = SlaveList::EMPTY;
+        self.lpf = SlaveList::EMPTY;
+        for w in 0..16 {
+            let keep = if w == 0 { 0xF000 } else { 0 };
+            let v = self.image.input.word(w) & keep;
+            self.image.input.set_word(w, v);
+        }
+        for e in self.analog.iter_mut() {
+            *e = None;
+        }
+        self.det_probe = None;
+        self.incl = None;
+        self.incl_step = None;
+        self.incl_priority = None;
+        self.stage = Stage::Data;
+        self.cursor = 1;
+        self.cycle_open = false;
+        self.cycle_start = None;
+        self.offline_cursor = 0;
+        if let Some((req, _)) = self.job.take() {
+            self.mailbox.abort(&mut self.image.input, &req);
+        }
+        self.update_flags();
+    }
+}

@@ -1,0 +1,117 @@
+//! The fault wrapper: seeded random pulse faults and one-shot exact ones.
+
+use super::{Line, Tap};
+use crate::fault::apply_faults;
+use crate::{FaultInjector, FaultRates, Frame, Pulse, PulseFault, PulseTrain, SimTime};
+
+/// A line whose pulses pass a seeded [`FaultInjector`] and a one-shot list of exact
+/// [`PulseFault`]s on their way (a wrapper, like smoltcp's fault injector). Without faults a
+/// clean telegram goes on to the inner line as it is (and may take the wire's fast path).
+#[derive(Debug)]
+pub struct Faulty<L> {
+    inner: L,
+    injector: Option<FaultInjector>,
+    one_shot: Vec<PulseFault>,
+    pulses: Vec<Pulse>,
+    scratch: Vec<Pulse>,
+    faults_injected: u64,
+}
+
+impl<L> Faulty<L> {
+    /// `inner` without faults.
+    pub fn new(inner: L) -> Faulty<L> {
+        Faulty {
+            inner,
+            injector: None,
+            one_shot: Vec::new(),
+            pulses: Vec::with_capacity(64),
+            scratch: Vec::with_capacity(64),
+            faults_injected: 0,
+        }
+    }
+
+    /// Seeded random line faults from now on (`FaultRates::NONE` or `None` switches them off).
+    pub fn set_faults(&mut self, injector: Option<FaultInjector>) {
+        self.injector = injector.filter(|i| !i.rates().is_clean());
+    }
+
+    /// The rates in force.
+    pub fn fault_rates(&self) -> FaultRates {
+        self.injector
+            .as_ref()
+            .map_or(FaultRates::NONE, |i| i.rates())
+    }
+
+    /// Exact faults for the next telegram put on the line (indices into its pulses).
+    pub fn corrupt_next(&mut self, faults: Vec<PulseFault>) {
+        self.one_shot = faults;
+    }
+
+    /// Pulse faults injected so far (random and exact).
+    pub fn faults_injected(&self) -> u64 {
+        self.faults_injected + self.injector.as_ref().map_or(0, |i| i.injected())
+    }
+
+    /// `true` while no fault is armed: telegrams pass unchanged.
+    fn is_clean(&self) -> bool {
+        self.injector.is_none() && self.one_shot.is_empty()
+    }
+
+    /// Applies the armed faults to `pulses`: the one-shot list first, then the injector.
+    fn corrupt(&mut self, pulses: &mut Vec<Pulse>) {
+        if !self.one_shot.is_empty() {
+            let faults = core::mem::take(&mut self.one_shot);
+            apply_faults(pulses, &faults, &mut self.scratch);
+            self.faults_injected += faults.len() as u64;
+            core::mem::swap(pulses, &mut self.scratch);
+        }
+        if let Some(inj) = &mut self.injector {
+            inj.corrupt(pulses.iter().copied(), &mut self.scratch);
+            core::mem::swap(pulses, &mut self.scratch);
+        }
+    }
+}
+
+impl<L> Faulty<Tap<L>> {
+    /// Starts (`true`) or stops recording every pulse that goes on the line, as it is there:
+    /// after faults, with colliding answers superimposed.
+    pub fn record_pulses(&mut self, on: bool) {
+        self.inner.record_pulses(on);
+    }
+
+    /// Takes the pulses recorded since the last call (in the order they went on the line).
+    pub fn take_pulses(&mut self) -> Vec<Pulse> {
+        self.inner.take_pulses()
+    }
+}
+
+impl<L: Line> Line for Faulty<L> {
+    fn transmit(&mut self, train: &PulseTrain, raw: u32, bits: u32, done: &mut impl FnMut(Frame)) {
+        if self.is_clean() {
+            self.inner.transmit(train, raw, bits, done);
+            return;
+        }
+        let mut pulses = core::mem::take(&mut self.pulses);
+        pulses.clear();
+        pulses.extend(train.iter());
+        self.transmit_pulses(&mut pulses, done);
+        self.pulses = pulses;
+    }
+
+    fn transmit_pulses(&mut self, pulses: &mut Vec<Pulse>, done: &mut impl FnMut(Frame)) {
+        self.corrupt(pulses);
+        self.inner.transmit_pulses(pulses, done);
+    }
+
+    fn poll_at(&self) -> Option<SimTime> {
+        self.inner.poll_at()
+    }
+
+    fn poll(&mut self, now: SimTime) -> Option<Frame> {
+        self.inner.poll(now)
+    }
+
+    fn reset(&mut self) {
+        self.inner.reset();
+    }
+}

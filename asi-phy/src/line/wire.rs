@@ -1,0 +1,95 @@
+//! The wire: pulses in, frames out, with the fast path for clean telegrams.
+
+use super::Line;
+use crate::{
+    BusTiming, Checks, Expect, Frame, LineDecoder, Pulse, PulseTrain, SimDuration, SimTime,
+};
+
+/// The bare line with its decoder: no faults, nothing recorded.
+#[derive(Debug)]
+pub struct Wire {
+    decoder: LineDecoder,
+    pause: SimDuration,
+    pending: Option<(PulseTrain, Frame)>,
+}
+
+impl Wire {
+    /// A quiet wire with the receiver grid of `timing`.
+    pub fn new(timing: &BusTiming) -> Wire {
+        Wire {
+            decoder: LineDecoder::new(&timing.receiver(Expect::Both)),
+            pause: timing.min_pause(),
+            pending: None,
+        }
+    }
+
+    /// Hands a pending clean train to the decoder (something else comes on the line).
+    fn flush_pending(&mut self, done: &mut impl FnMut(Frame)) {
+        if let Some((t, _)) = self.pending.take() {
+            if let Some(f) = self.decoder.push_train(&t) {
+                done(f);
+            }
+        }
+    }
+}
+
+impl Line for Wire {
+    fn transmit(&mut self, train: &PulseTrain, raw: u32, bits: u32, done: &mut impl FnMut(Frame)) {
+        if self.decoder.poll_at().is_none() {
+            let quiet = match &self.pending {
+                None => true,
+                Some((p, _)) => train.start() >= p.end() && train.start() - p.end() >= self.pause,
+            };
+            if quiet {
+                if let Some((_, f)) = self.pending.take() {
+                    done(f);
+                }
+                self.pending = Some((
+                    *train,
+                    Frame {
+                        start: train.start(),
+                        end: train.end(),
+                        pulses: train.len(),
+                        bit_count: bits,
+                        raw,
+                        line_failed: Checks::NONE,
+                    },
+                ));
+                return;
+            }
+        }
+        self.flush_pending(done);
+        if let Some(f) = self.decoder.push_train(train) {
+            done(f);
+        }
+    }
+
+    fn transmit_pulses(&mut self, pulses: &mut Vec<Pulse>, done: &mut impl FnMut(Frame)) {
+        self.flush_pending(done);
+        for p in pulses.iter() {
+            if let Some(f) = self.decoder.push(*p) {
+                done(f);
+            }
+        }
+    }
+
+    fn poll_at(&self) -> Option<SimTime> {
+        match &self.pending {
+            Some((_, f)) => Some(f.end + self.pause),
+            None => self.decoder.poll_at(),
+        }
+    }
+
+    fn poll(&mut self, now: SimTime) -> Option<Frame> {
+        match &self.pending {
+            Some((_, f)) if now >= f.end + self.pause => self.pending.take().map(|(_, f)| f),
+            Some(_) => None,
+            None => self.decoder.poll(now),
+        }
+    }
+
+    fn reset(&mut self) {
+        self.decoder.reset();
+        self.pending = None;
+    }
+}

@@ -1,0 +1,661 @@
+//! AS-i Safety at Work: code tables and the passive safety monitor (reference/asi.md §7; SPEC
+//! §3, §6).
+//!
+//! A free safe slave sends, cycle after cycle, the 8 values of its own code table; tripped it
+//! sends 0000. The [`SafetyMonitor`] listens on the bus with its own receiver (so it judges only
+//! telegrams that pass the seven checks), pairs each Data_Exchange to a monitored address with
+//! its response, learns each slave's table and reports released / not released.
+//!
+//! **What the sources say** (asi-slaves/README.md, "Safety at Work under line noise"): the
+//! monitor listens passively and evaluates the safe slave's Data_Exchange answers (Leuze RS4/AS-i
+//! manual; Siemens 3RK3 manual); the slave holds its code for 224 µs + 16 µs after a
+//! Data_Exchange "so that an immediate master repeat does not desynchronise the monitor" (ZMD
+//! SAP5 datasheet); the monitor's response delay is below 40 ms (Euchner/Bihl+Wiedemann AS-i
+//! Safety Monitor data sheet) and an input must be off for at least 41 ms to be seen reliably
+//! (Euchner Safety Basic Monitor manual); wrongly transferred code sequences cannot be
+//! suppressed (Siemens FAQ). The exact acceptance rule is not public.
+//!
+//! **Decisions**:
+//! - Tables have 8 distinct values in 0001..1110 (no 0000, which means tripped, and no 1111,
+//!   which the coding rules forbid).
+//! - Teaching: the monitor learns a table from 16 consecutive codes whose second 8 repeat the
+//!   first 8; it then releases.
+//! - Only valid telegrams are judged. The monitor counts the code steps the slave has taken
+//!   since the last code it judged, from the valid Data_Exchange requests it heard: a request
+//!   more than [`MonitorConfig::hold`] after the previous one to that address is a step (the
+//!   slave's own rule); a request within it is the master's repeat and gets the same code.
+//! - A valid code is correct if it is one of the next `steps` codes of the table (the slave
+//!   answered the steps whose responses the line corrupted; 8 or more steps: any code of the
+//!   table). The same code again without a step is the repeat of a code already judged and is
+//!   ignored. Anything else is a wrong code (the same code after a step is a frozen code).
+//! - 0000 drops the release at once (the demand). A wrong or frozen code drops it at once
+//!   (`bad_codes_to_trip` = 1: noise never produces one, so one is a fault). No valid code for
+//!   `max_silence` (default 40 ms, the monitors' response delay) drops it too (missing code).
+//! - After a drop the monitor releases again after 8 consecutive correct codes (one rotation);
+//!   restart interlocks (manual restart) belong to the safety logic (SPEC §6, MON).
+
+use asi_phy::{Address, Call, Expect, Frame, Listener, SimDuration, SimTime, TelegramKind};
+use rand::seq::SliceRandom;
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+
+/// A code table that breaks the coding rules.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("code table: {why}")]
+pub struct CodeTableError {
+    /// What is wrong.
+    pub why: String,
+}
+
+/// A safe slave's 8-value code table.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct CodeTable([u8; 8]);
+
+impl CodeTable {
+    /// A table from its values; each must be in 1..=14 and all distinct.
+    pub fn new(codes: [u8; 8]) -> Result<CodeTable, CodeTableError> {
+        for (i, &c) in codes.iter().enumerate() {
+            if c == 0 || c >= 15 {
+                return Err(CodeTableError {
+                    why: format!("value {i} is {c:04b}: must be 0001..1110"),
+                });
+            }
+            if codes[..i].contains(&c) {
+                return Err(CodeTableError {
+                    why: format!("value {i} ({c:04b}) repeats an earlier value"),
+                });
+            }
+        }
+        Ok(CodeTable(codes))
+    }
+
+    /// The table a device with serial number `serial` has: 8 distinct values drawn with a
+    /// ChaCha RNG seeded by the serial (the manufacturer's unique table, reproducibly).
+    pub fn from_serial(serial: u64) -> CodeTable {
+        let mut values: Vec<u8> = (1..=14).collect();
+        values.shuffle(&mut ChaCha8Rng::seed_from_u64(serial));
+        let mut t = [0u8; 8];
+        t.copy_from_slice(&values[..8]);
+        CodeTable(t)
+    }
+
+    /// The values in sending order.
+    pub fn codes(&self) -> [u8; 8] {
+        self.0
+    }
+
+    fn position(&self, code: u8) -> Option<usize> {
+        self.0.iter().position(|&c| c == code)
+    }
+}
+
+/// Why a monitored slave is not released.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum NotReleased {
+    /// Not taught yet (or teaching was disturbed).
+    Teaching,
+    /// The slave sends 0000: tripped.
+    Tripped,
+    /// A code that is not the next of the table.
+    WrongCode {
+        /// The code expected.
+        expected: u8,
+        /// The code received.
+        got: u8,
+    },
+    /// The same code twice in a row.
+    Frozen {
+        /// The code.
+        code: u8,
+    },
+    /// No valid code for too long.
+    Missing,
+    /// Released again only after a full correct rotation.
+    Recovering,
+}
+
+/// The monitor's settings.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct MonitorConfig {
+    /// Consecutive bad codes (wrong or frozen) that drop the release (default 1: the first).
+    pub bad_codes_to_trip: u8,
+    /// The tolerance time: the longest time without a valid code before the release drops
+    /// (default 40 ms, the response delay of the AS-i safety monitors).
+    pub max_silence: SimDuration,
+    /// How long after a Data_Exchange the slave keeps its code, so that a request within it is
+    /// the master's repeat, not a new step (default [`crate::devices::CODE_HOLD`], SAP5).
+    pub hold: SimDuration,
+}
+
+impl Default for MonitorConfig {
+    fn default() -> Self {
+        MonitorConfig {
+            bad_codes_to_trip: 1,
+            max_silence: SimDuration::from_millis(40),
+            hold: crate::devices::CODE_HOLD,
+        }
+    }
+}
+
+/// The monitor dropped the release of a slave.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct MonitorDrop {
+    /// When.
+    pub at: SimTime,
+    /// The slave.
+    pub address: Address,
+    /// Why: [`NotReleased::Tripped`] (0000), [`NotReleased::WrongCode`],
+    /// [`NotReleased::Frozen`] or [`NotReleased::Missing`] (tolerance time exceeded).
+    pub why: NotReleased,
+}
+
+#[derive(Clone, Debug)]
+struct Channel {
+    address: Address,
+    table: Option<CodeTable>,
+    learn: Vec<u8>,
+    pos: Option<usize>,
+    last_code: Option<u8>,
+    last_at: Option<SimTime>,
+    /// The last valid Data_Exchange request heard for this slave.
+    last_request: Option<SimTime>,
+    /// Code steps the slave has taken since the last judged code, as the requests tell.
+    steps: u32,
+    bad: u8,
+    good_run: u8,
+    released: bool,
+    reason: NotReleased,
+    bad_codes: u64,
+    drops: Vec<MonitorDrop>,
+}
+
+impl Channel {
+    fn new(address: Address) -> Channel {
+        Channel {
+            address,
+            table: None,
+            learn: Vec::with_capacity(16),
+            pos: None,
+            last_code: None,
+            last_at: None,
+            last_request: None,
+            steps: 0,
+            bad: 0,
+            good_run: 0,
+            released: false,
+            reason: NotReleased::Teaching,
+            bad_codes: 0,
+            drops: Vec::new(),
+        }
+    }
+
+    fn drop_release(&mut self, now: SimTime, why: NotReleased) {
+        if self.released {
+            self.drops.push(MonitorDrop {
+                at: now,
+                address: self.address,
+                why,
+            });
+        }
+        self.reason = why;
+        self.released = false;
+        self.good_run = 0;
+    }
+
+    /// A valid Data_Exchange request to this slave at `now`.
+    fn request(&mut self, now: SimTime, cfg: &MonitorConfig) {
+        let step = self
+            .last_request
+            .is_none_or(|t| now.saturating_duration_since(t) > cfg.hold);
+        self.last_request = Some(now);
+        if step {
+            self.steps = self.steps.saturating_add(1);
+        }
+    }
+
+    fn code(&mut self, now: SimTime, code: u8, cfg: &MonitorConfig) {
+        let steps = core::mem::take(&mut self.steps);
+        if steps == 0 && self.last_code == Some(code) {
+            // The master's repeat of a transaction whose first answer this receiver took:
+            // the code already judged, not a new one.
+            self.last_at = Some(now);
+            return;
+        }
+        let previous = self.last_code.replace(code);
+        self.last_at = Some(now);
+        let Some(table) = self.table else {
+            if steps > 1 {
+                // A code was missed: the sequence heard is not consecutive.
+                self.learn.clear();
+            }
+            self.teach(code);
+            return;
+        };
+        if code == 0 {
+            self.pos = None;
+            self.bad = 0;
+            self.drop_release(now, NotReleased::Tripped);
+            return;
+        }
+        let bad = match self.pos {
+            None => match table.position(code) {
+                Some(p) => {
+                    self.pos = Some(p);
+                    None
+                }
+                None => Some(NotReleased::WrongCode {
+                    expected: table.0[0],
+                    got: code,
+                }),
+            },
+            Some(p) => {
+                let expected = table.0[(p + 1) % 8];
+                let ahead = table.position(code).map(|q| (q + 8 - p) % 8);
+                match ahead {
+                    Some(d) if d >= 1 && (d as u32 <= steps.max(1) || steps >= 8) => {
+                        self.pos = Some((p + d) % 8);
+                        None
+                    }
+                    Some(0) if steps >= 8 => None,
+                    _ if previous == Some(code) => Some(NotReleased::Frozen { code }),
+                    _ => {
+                        if let Some(q) = table.position(code) {
+                            self.pos = Some(q);
+                        }
+                        Some(NotReleased::WrongCode {
+                            expected,
+                            got: code,
+                        })
+                    }
+                }
+            }
+        };
+        match bad {
+            None => {
+                self.bad = 0;
+                self.good_run = self.good_run.saturating_add(1);
+                if !self.released && self.good_run >= 8 {
+                    self.released = true;
+                }
+                if !self.released && self.reason != NotReleased::Recovering {
+                    self.reason = NotReleased::Recovering;
+                }
+            }
+            Some(why) => {
+                self.bad_codes += 1;
+                self.bad = self.bad.saturating_add(1);
+                self.good_run = 0;
+                if self.bad >= cfg.bad_codes_to_trip.max(1) || !self.released {
+                    self.drop_release(now, why);
+                }
+            }
+        }
+    }
+
+    fn teach(&mut self, code: u8) {
+        if code == 0 || code == 15 {
+            self.learn.clear();
+            return;
+        }
+        self.learn.push(code);
+        if self.learn.len() > 16 {
+            self.learn.remove(0);
+        }
+        if self.learn.len() == 16 && self.learn[..8] == self.learn[8..] {
+            let mut t = [0u8; 8];
+            t.copy_from_slice(&self.learn[..8]);
+            if let Ok(table) = CodeTable::new(t) {
+                self.table = Some(table);
+                self.pos = Some(7);
+                self.released = true;
+                self.good_run = 8;
+                self.learn.clear();
+            }
+        }
+    }
+
+    fn check_silence(&mut self, now: SimTime, cfg: &MonitorConfig) {
+        if let Some(t) = self.last_at {
+            if self.released && now.saturating_duration_since(t) > cfg.max_silence {
+                self.pos = None;
+                self.drop_release(now, NotReleased::Missing);
+            }
+        }
+    }
+}
+
+/// A passive Safety-at-Work monitor on the bus (reference/asi.md §7).
+#[derive(Clone, Debug)]
+pub struct SafetyMonitor {
+    cfg: MonitorConfig,
+    listener: Listener,
+    asked: Option<Address>,
+    channels: Vec<Channel>,
+}
+
+impl SafetyMonitor {
+    /// A monitor of the safe slaves at `addresses`, with `cfg`, listening with the receiver
+    /// settings of `timing`. It starts teaching.
+    pub fn new(
+        timing: &asi_phy::BusTiming,
+        cfg: MonitorConfig,
+        addresses: &[Address],
+    ) -> SafetyMonitor {
+        SafetyMonitor {
+            cfg,
+            listener: Listener::new(&timing.receiver(Expect::Both)),
+            asked: None,
+            channels: addresses.iter().map(|&a| Channel::new(a)).collect(),
+        }
+    }
+
+    /// Gives the monitor `table` for `address` instead of teaching it.
+    pub fn set_table(&mut self, address: Address, table: CodeTable) {
+        if let Some(c) = self.channel_mut(address) {
+            c.table = Some(table);
+            c.pos = None;
+            c.released = false;
+            c.reason = NotReleased::Recovering;
+        }
+    }
+
+    /// Forgets every learned table and starts teaching again.
+    pub fn reteach(&mut self) {
+        for c in &mut self.channels {
+            *c = Channel::new(c.address);
+        }
+    }
+
+    fn channel_mut(&mut self, a: Address) -> Option<&mut Channel> {
+        self.channels.iter_mut().find(|c| c.address == a)
+    }
+
+    /// A frame heard on the line at `now`.
+    pub fn on_frame(&mut self, now: SimTime, frame: &Frame) {
+        let r = self.listener.accept(frame);
+        match r.kind {
+            TelegramKind::Request => {
+                self.asked = match r.request().map(|q| q.call()) {
+                    Some(Call::DataExchange { address, .. }) => Some(address),
+                    _ => None,
+                };
+                if let Some(a) = self.asked {
+                    let cfg = self.cfg;
+                    if let Some(c) = self.channel_mut(a) {
+                        c.request(now, &cfg);
+                    }
+                }
+            }
+            TelegramKind::Response => {
+                let (Some(a), Some(resp)) = (self.asked.take(), r.response()) else {
+                    return;
+                };
+                let cfg = self.cfg;
+                if let Some(c) = self.channel_mut(a) {
+                    c.code(now, resp.data().get(), &cfg);
+                }
+            }
+        }
+    }
+
+    /// Advances the monitor's clock (missing-code timeouts).
+    pub fn poll(&mut self, now: SimTime) {
+        let cfg = self.cfg;
+        for c in &mut self.channels {
+            c.check_silence(now, &cfg);
+        }
+    }
+
+    /// `true` if the slave at `address` is monitored and released.
+    pub fn released(&self, address: Address) -> bool {
+        self.channels
+            .iter()
+            .any(|c| c.address == address && c.released)
+    }
+
+    /// `Ok(())` if released, else why not; `None` if `address` is not monitored.
+    pub fn state(&self, address: Address) -> Option<Result<(), NotReleased>> {
+        self.channels
+            .iter()
+            .find(|c| c.address == address)
+            .map(|c| if c.released { Ok(()) } else { Err(c.reason) })
+    }
+
+    /// The learned table of `address`.
+    pub fn table(&self, address: Address) -> Option<CodeTable> {
+        self.channels
+            .iter()
+            .find(|c| c.address == address)
+            .and_then(|c| c.table)
+    }
+
+    /// Bad codes seen at `address` (tolerated or not).
+    pub fn bad_codes(&self, address: Address) -> u64 {
+        self.channels
+            .iter()
+            .find(|c| c.address == address)
+            .map_or(0, |c| c.bad_codes)
+    }
+
+    /// The releases dropped since the last call, in order (for reports).
+    pub fn take_drops(&mut self) -> Vec<MonitorDrop> {
+        let mut all: Vec<MonitorDrop> = self
+            .channels
+            .iter_mut()
+            .flat_map(|c| c.drops.drain(..))
+            .collect();
+        all.sort_by_key(|d| d.at);
+        all
+    }
+
+    /// The settings.
+    pub fn config(&self) -> &MonitorConfig {
+        &self.cfg
+    }
+
+    /// The monitored addresses.
+    pub fn addresses(&self) -> impl Iterator<Item = Address> + '_ {
+        self.channels.iter().map(|c| c.address)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// One cycle of the lab bus.
+    const CYCLE: u64 = 2_002_000;
+    /// A master repeat comes this long after the first try.
+    const REPEAT: u64 = 162_000;
+
+    fn at(ns: u64) -> SimTime {
+        SimTime::from_nanos(ns)
+    }
+
+    /// A channel that has learned `t` (two rotations, one exchange per cycle) at `now`.
+    fn taught(t: &[u8; 8], now: &mut u64) -> Channel {
+        let mut c = Channel::new(Address::new(11).expect("a"));
+        feed(&mut c, t, now);
+        feed(&mut c, t, now);
+        assert!(c.released, "learned after two rotations");
+        c
+    }
+
+    /// One exchange per cycle, each answered with the code.
+    fn feed(c: &mut Channel, codes: &[u8], now: &mut u64) {
+        let cfg = MonitorConfig::default();
+        for &code in codes {
+            *now += CYCLE;
+            c.request(at(*now), &cfg);
+            c.code(at(*now + 100_000), code, &cfg);
+        }
+    }
+
+    /// One exchange whose answers (first try and repeat) were both rejected.
+    fn lost(c: &mut Channel, now: &mut u64) {
+        let cfg = MonitorConfig::default();
+        *now += CYCLE;
+        c.request(at(*now), &cfg);
+        c.request(at(*now + REPEAT), &cfg);
+    }
+
+    #[test]
+    fn tables_are_checked_and_unique_per_serial() {
+        assert!(CodeTable::new([1, 2, 3, 4, 5, 6, 7, 15]).is_err());
+        assert!(CodeTable::new([1, 2, 3, 4, 5, 6, 7, 0]).is_err());
+        assert!(CodeTable::new([1, 2, 3, 4, 5, 6, 7, 1]).is_err());
+        let a = CodeTable::from_serial(11);
+        let b = CodeTable::from_serial(12);
+        assert_ne!(a, b);
+        assert!(CodeTable::new(a.codes()).is_ok());
+        assert_eq!(a, CodeTable::from_serial(11));
+    }
+
+    #[test]
+    fn a_correct_rotation_stays_released() {
+        let t = CodeTable::from_serial(5).codes();
+        let mut now = 0;
+        let mut c = taught(&t, &mut now);
+        for _ in 0..50 {
+            feed(&mut c, &t, &mut now);
+            assert!(c.released);
+        }
+        assert_eq!(c.bad_codes, 0);
+        assert!(c.drops.is_empty());
+    }
+
+    #[test]
+    fn a_rejected_telegram_and_its_repeat_are_not_a_wrong_code() {
+        let t = CodeTable::from_serial(5).codes();
+        let mut now = 0;
+        let mut c = taught(&t, &mut now);
+        let cfg = MonitorConfig::default();
+        feed(&mut c, &t[..3], &mut now);
+        // The response to the first try fails the checks; the repeat gets the same code.
+        now += CYCLE;
+        c.request(at(now), &cfg);
+        c.request(at(now + REPEAT), &cfg);
+        c.code(at(now + REPEAT + 100_000), t[3], &cfg);
+        assert!(c.released);
+        // This receiver took the first answer, the master did not: the repeat's code is the
+        // same code, not a frozen one.
+        now += CYCLE;
+        c.request(at(now), &cfg);
+        c.code(at(now + 100_000), t[4], &cfg);
+        c.request(at(now + REPEAT), &cfg);
+        c.code(at(now + REPEAT + 100_000), t[4], &cfg);
+        assert!(c.released);
+        // Both tries of an exchange lost: the slave stepped unheard, the next code skips one.
+        lost(&mut c, &mut now);
+        feed(&mut c, &[t[6], t[7]], &mut now);
+        // Three exchanges lost in a row.
+        for _ in 0..3 {
+            lost(&mut c, &mut now);
+        }
+        feed(&mut c, &[t[3], t[4]], &mut now);
+        assert!(c.released);
+        assert_eq!(c.bad_codes, 0);
+    }
+
+    #[test]
+    fn code_0000_drops_the_release_at_once_and_a_rotation_releases_again() {
+        let t = CodeTable::from_serial(5).codes();
+        let mut now = 0;
+        let mut c = taught(&t, &mut now);
+        feed(&mut c, &[0], &mut now);
+        assert_eq!((c.released, c.reason), (false, NotReleased::Tripped));
+        feed(&mut c, &[0, 0, 0], &mut now);
+        feed(&mut c, &t[..7], &mut now);
+        assert!(!c.released);
+        feed(&mut c, &t[7..], &mut now);
+        assert!(c.released, "8 correct codes release again");
+        assert_eq!(c.drops.len(), 1);
+        assert_eq!(c.drops[0].why, NotReleased::Tripped);
+    }
+
+    #[test]
+    fn a_wrong_code_drops_the_release_at_once() {
+        let t = CodeTable::from_serial(5).codes();
+        let mut now = 0;
+        let mut c = taught(&t, &mut now);
+        feed(&mut c, &t[..3], &mut now);
+        // One step, but the code two ahead.
+        feed(&mut c, &[t[4]], &mut now);
+        assert_eq!(
+            (c.released, c.reason),
+            (
+                false,
+                NotReleased::WrongCode {
+                    expected: t[3],
+                    got: t[4]
+                }
+            )
+        );
+        // A code outside the table after recovery.
+        feed(&mut c, &t[5..], &mut now);
+        feed(&mut c, &t[..5], &mut now);
+        assert!(c.released);
+        let outside = (1..15).find(|v| !t.contains(v)).expect("a value outside");
+        feed(&mut c, &[outside], &mut now);
+        assert!(!c.released);
+        assert!(matches!(c.reason, NotReleased::WrongCode { .. }));
+    }
+
+    #[test]
+    fn a_frozen_code_drops_the_release() {
+        let t = CodeTable::from_serial(5).codes();
+        let mut now = 0;
+        let mut c = taught(&t, &mut now);
+        feed(&mut c, &t[..3], &mut now);
+        feed(&mut c, &[t[2]], &mut now);
+        assert_eq!(
+            (c.released, c.reason),
+            (false, NotReleased::Frozen { code: t[2] })
+        );
+    }
+
+    #[test]
+    fn silence_beyond_the_tolerance_time_drops_the_release() {
+        let t = CodeTable::from_serial(9).codes();
+        let mut now = 0;
+        let mut c = taught(&t, &mut now);
+        let cfg = MonitorConfig::default();
+        let last = now + 100_000;
+        c.check_silence(at(last + 40_000_000), &cfg);
+        assert!(c.released, "exactly the tolerance time");
+        c.check_silence(at(last + 40_000_001), &cfg);
+        assert_eq!((c.released, c.reason), (false, NotReleased::Missing));
+        // Codes return: one rotation releases again.
+        now = last + 50_000_000;
+        feed(&mut c, &t[3..], &mut now);
+        feed(&mut c, &t[..2], &mut now);
+        assert!(!c.released);
+        feed(&mut c, &t[2..3], &mut now);
+        assert!(c.released);
+        // A longer tolerance time is a setting.
+        let long = MonitorConfig {
+            max_silence: SimDuration::from_millis(100),
+            ..cfg
+        };
+        c.check_silence(at(now + 60_000_000), &long);
+        assert!(c.released);
+    }
+
+    #[test]
+    fn teaching_needs_two_consecutive_rotations_heard_without_a_gap() {
+        let t = CodeTable::from_serial(3).codes();
+        let mut c = Channel::new(Address::new(12).expect("a"));
+        let mut now = 0;
+        feed(&mut c, &t[..5], &mut now);
+        lost(&mut c, &mut now);
+        feed(&mut c, &t[6..], &mut now);
+        feed(&mut c, &t, &mut now);
+        assert!(!c.released, "a gap restarts teaching");
+        feed(&mut c, &t, &mut now);
+        assert!(c.released);
+        // Learned from t[6] on: the same cycle, started where the hearing started.
+        let mut rotated = t;
+        rotated.rotate_left(6);
+        assert_eq!(c.table.map(|x| x.codes()), Some(rotated));
+    }
+}

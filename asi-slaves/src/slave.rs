@@ -1,0 +1,266 @@
+//! An AS-i slave: the slave IC's behaviour on the bus, and the device behind its 4-bit
+//! peripheral ports (SPEC §2 call table, §3; reference/asi.md §4, §6).
+//!
+//! The [`Slave`] answers the calls of SPEC §2 as the ZMD slave ICs do (reference/asi.md §4):
+//! it answers only a valid request addressed to it (the bus hands it only requests its
+//! receiver accepted), Data_Exchange only after a Write_Parameter since its last reset (that is
+//! what activation does), Write_Extended_ID1 and Address_Assignment only at address 0. What
+//! happens at the peripheral ports is the [`Peripheral`] device's business.
+
+use asi_phy::slave_id::ACK_0110;
+use asi_phy::{
+    Address, Call, Nibble, Request, Response, Select, SimDuration, SimTime, SlaveAddr, SlaveCodes,
+};
+use core::any::Any;
+use core::fmt;
+
+/// The device behind a slave's peripheral ports.
+///
+/// `exchange` is called on every Data_Exchange the slave answers, at the time the slave has
+/// received the request; it gets the output bits and returns the input bits for the response.
+/// A plain I/O module samples its input pins and then drives its outputs; an intelligent slave
+/// (S-7.3 analog) may react to the outputs within the same telegram.
+pub trait Peripheral: Any + fmt::Debug + Send {
+    /// Data_Exchange: output bits D3..D0 in (D2..D0 for an A/B slave), input bits out.
+    fn exchange(&mut self, now: SimTime, outputs: Nibble) -> Nibble;
+    /// Write_Parameter: the parameter bits; returns the parameter echo (default: the bits).
+    fn write_parameter(&mut self, _now: SimTime, parameter: Nibble) -> Nibble {
+        parameter
+    }
+    /// The slave IC was reset (power-up, Reset_Slave, broadcast reset).
+    fn reset(&mut self) {}
+    /// The device reports a peripheral fault (status bit S1, reference/asi.md §6.2).
+    fn periphery_fault(&self) -> bool {
+        false
+    }
+    /// For typed access from the application.
+    fn as_any(&self) -> &dyn Any;
+    /// For typed access from the application.
+    fn as_any_mut(&mut self) -> &mut dyn Any;
+}
+
+/// Status bit S0: address or ID code volatile (EEPROM write in progress).
+pub const S0_VOLATILE: u8 = 0b0001;
+/// Status bit S1: periphery fault.
+pub const S1_PERIPHERY_FAULT: u8 = 0b0010;
+/// Status bit S3: non-volatile memory read error.
+pub const S3_NV_ERROR: u8 = 0b1000;
+
+/// One AS-i slave: the IC state and its device.
+pub struct Slave {
+    name: String,
+    address: Address,
+    nv_address: Address,
+    codes: SlaveCodes,
+    nv_id1: Nibble,
+    parameter: Nibble,
+    data_exchange_enabled: bool,
+    nv_error: bool,
+    eeprom_busy_until: SimTime,
+    eeprom_write_time: SimDuration,
+    device: Box<dyn Peripheral>,
+}
+
+impl fmt::Debug for Slave {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("Slave")
+            .field("name", &self.name)
+            .field("address", &self.addr())
+            .field("codes", &self.codes)
+            .field("device", &self.device)
+            .finish()
+    }
+}
+
+impl Slave {
+    /// A slave named `name` with non-volatile address `address` (0..=31; an A/B slave's select
+    /// is ID1 bit 3: 0 = A, 1 = B), `codes` and `device`, just powered up.
+    pub fn new(
+        name: impl Into<String>,
+        address: Address,
+        codes: SlaveCodes,
+        device: Box<dyn Peripheral>,
+    ) -> Slave {
+        Slave {
+            name: name.into(),
+            address,
+            nv_address: address,
+            codes,
+            nv_id1: codes.id1,
+            parameter: Nibble::ALL,
+            data_exchange_enabled: false,
+            nv_error: false,
+            eeprom_busy_until: SimTime::ZERO,
+            eeprom_write_time: SimDuration::from_millis(15),
+            device,
+        }
+    }
+
+    /// The slave's name (for traces and errors).
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
+    /// Current address with A/B select.
+    pub fn addr(&self) -> SlaveAddr {
+        SlaveAddr {
+            address: self.address,
+            select: self.select(),
+        }
+    }
+
+    /// The address stored in the slave's EEPROM.
+    pub fn nv_address(&self) -> Address {
+        self.nv_address
+    }
+
+    /// The A/B select: B for an A/B slave with ID1 bit 3 set, else A.
+    pub fn select(&self) -> Select {
+        if self.codes.is_ab() && self.codes.id1.bit(3) {
+            Select::B
+        } else {
+            Select::A
+        }
+    }
+
+    /// IO, ID, ID1, ID2.
+    pub fn codes(&self) -> SlaveCodes {
+        self.codes
+    }
+
+    /// The parameter bits last written.
+    pub fn parameter(&self) -> Nibble {
+        self.parameter
+    }
+
+    /// `true` once a Write_Parameter has enabled data exchange since the last reset.
+    pub fn data_exchange_enabled(&self) -> bool {
+        self.data_exchange_enabled
+    }
+
+    /// The device.
+    pub fn device(&self) -> &dyn Peripheral {
+        self.device.as_ref()
+    }
+
+    /// The device, mutable.
+    pub fn device_mut(&mut self) -> &mut dyn Peripheral {
+        self.device.as_mut()
+    }
+
+    /// Sets status bit S3 (non-volatile memory error), a fault hook.
+    pub fn set_nv_error(&mut self, on: bool) {
+        self.nv_error = on;
+    }
+
+    /// Sets how long an EEPROM write keeps S0 set.
+    pub fn set_eeprom_write_time(&mut self, d: SimDuration) {
+        self.eeprom_write_time = d;
+    }
+
+    /// Status S3..S0 at `now` (reference/asi.md §6.2, spec 2.1 slave).
+    pub fn status(&self, now: SimTime) -> Nibble {
+        let mut s = 0;
+        if now < self.eeprom_busy_until || self.address != self.nv_address {
+            s |= S0_VOLATILE;
+        }
+        if self.device.periphery_fault() {
+            s |= S1_PERIPHERY_FAULT;
+        }
+        if self.nv_error {
+            s |= S3_NV_ERROR;
+        }
+        Nibble::from_low_bits(s)
+    }
+
+    /// Power-up or reset: address and ID1 from EEPROM, parameter 1111, data exchange disabled,
+    /// the device reset.
+    pub fn reset(&mut self) {
+        self.address = self.nv_address;
+        self.codes.id1 = self.nv_id1;
+        self.parameter = Nibble::ALL;
+        self.data_exchange_enabled = false;
+        self.device.reset();
+    }
+
+    fn is_me(&self, address: Address, select: Select) -> bool {
+        address == self.address && select == self.select()
+    }
+
+    /// The slave's answer to a valid request received at `now`, or `None` (not addressed, or a
+    /// call it ignores). Broadcast reset resets the slave and gets no answer.
+    pub fn handle(&mut self, now: SimTime, req: Request) -> Option<Response> {
+        let ab = self.codes.is_ab();
+        let data = match req.call() {
+            Call::DataExchange { address, data } => {
+                let (sel, outputs) = if ab {
+                    req.ab_payload()?
+                } else {
+                    (Select::A, data)
+                };
+                if !self.is_me(address, sel) || !self.data_exchange_enabled {
+                    return None;
+                }
+                self.device.exchange(now, outputs)
+            }
+            Call::WriteParameter { address, parameter } => {
+                let (sel, p) = if ab {
+                    req.ab_payload()?
+                } else {
+                    (Select::A, parameter)
+                };
+                if !self.is_me(address, sel) {
+                    return None;
+                }
+                self.parameter = p;
+                self.data_exchange_enabled = true;
+                self.device.write_parameter(now, p)
+            }
+            Call::AddressAssignment { new_address } => {
+                if self.address.get() != 0 || new_address.get() == 0 {
+                    return None;
+                }
+                self.address = new_address;
+                self.nv_address = new_address;
+                self.eeprom_busy_until = now + self.eeprom_write_time;
+                ACK_0110
+            }
+            Call::WriteExtendedId1 { id1 } => {
+                if self.address.get() != 0 {
+                    return None;
+                }
+                self.codes.id1 = id1;
+                self.nv_id1 = id1;
+                self.eeprom_busy_until = now + self.eeprom_write_time;
+                Nibble::ZERO
+            }
+            Call::DeleteAddress { address, select } => {
+                if !self.is_me(address, select) {
+                    return None;
+                }
+                self.address = Address::ZERO;
+                Nibble::ZERO
+            }
+            Call::ResetSlave { address, select } => {
+                if !self.is_me(address, select) {
+                    return None;
+                }
+                self.reset();
+                ACK_0110
+            }
+            Call::ReadIoConfiguration { address, select } if self.is_me(address, select) => {
+                self.codes.io
+            }
+            Call::ReadIdCode { address, select } if self.is_me(address, select) => self.codes.id,
+            Call::ReadId1 { address, select } if self.is_me(address, select) => self.codes.id1,
+            Call::ReadId2 { address, select } if self.is_me(address, select) => self.codes.id2,
+            Call::ReadStatus { address, select } if self.is_me(address, select) => self.status(now),
+            Call::BroadcastReset => {
+                self.reset();
+                return None;
+            }
+            _ => return None,
+        };
+        Some(Response::new(data))
+    }
+}
