@@ -37,8 +37,22 @@ def strip_tests(text):
     return text[: m.start()] if m else text
 
 
+def inline_depth(text):
+    """For each offset, how many inline `mod name { … }` blocks enclose it."""
+    depth = [0] * (len(text) + 1)
+    for m in re.finditer(r"\bmod \w+\s*\{", text):
+        level, i = 1, m.end()
+        while i < len(text) and level:
+            level += {"{": 1, "}": -1}.get(text[i], 0)
+            i += 1
+        for j in range(m.end(), i):
+            depth[j] += 1
+    return depth
+
+
 def deps(mod, text, mods):
     text = strip_tests(re.sub(r"//[^\n]*", "", text))
+    depth = inline_depth(text)
     parts = mod.split("::") if mod else []
     found = set()
     is_dir = True  # resolved below per reference kind
@@ -56,14 +70,19 @@ def deps(mod, text, mods):
         if target is not None:
             found.add(target)
     for m in re.finditer(r"\b((?:super::)+)((?:\w+::)*\w+)", text):
-        ups = m.group(1).count("super::")
+        # In an inline module, `super` is first the enclosing modules of the same file.
+        ups = m.group(1).count("super::") - depth[m.start()]
+        if ups <= 0:
+            continue
         base = parts[: len(parts) - ups] if ups <= len(parts) else []
         target = resolve(base + m.group(2).split("::")) or ("::".join(base) if "::".join(base) in mods else None)
         if target is not None:
             found.add(target)
     # `use super::{a, b}` groups
     for m in re.finditer(r"\buse ((?:super::)+)\{([^}]*)\}", text):
-        ups = m.group(1).count("super::")
+        ups = m.group(1).count("super::") - depth[m.start()]
+        if ups <= 0:
+            continue
         base = parts[: len(parts) - ups]
         for item in m.group(2).split(","):
             item = item.strip().split(" as ")[0]

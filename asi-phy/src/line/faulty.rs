@@ -1,6 +1,7 @@
 //! The fault wrapper: seeded random pulse faults and one-shot exact ones.
 
-use super::{Line, Tap};
+use super::base::Line;
+use super::tap::Tap;
 use crate::fault::apply_faults;
 use crate::{FaultInjector, FaultRates, Frame, Pulse, PulseFault, PulseTrain, SimTime};
 

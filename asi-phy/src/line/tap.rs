@@ -1,6 +1,6 @@
 //! The tap: records every pulse that goes on the line, as it is there.
 
-use super::Line;
+use super::base::Line;
 use crate::{Frame, Pulse, PulseTrain, SimTime};
 
 /// A line whose pulses are recorded while recording is on (a wrapper, like smoltcp's packet

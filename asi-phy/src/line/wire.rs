@@ -1,6 +1,6 @@
 //! The wire: pulses in, frames out, with the fast path for clean telegrams.
 
-use super::Line;
+use super::base::Line;
 use crate::{
     BusTiming, Checks, Expect, Frame, LineDecoder, Pulse, PulseTrain, SimDuration, SimTime,
 };
