@@ -82,6 +82,7 @@ pub(super) fn run_plain(opts: &TimingOptions) -> Result<(Collector, BusWindow), 
     bus.advance_to(start);
     lock(&shared).start_window();
     let before = bus.stats();
+    let las_at_start = bus.master().las().len();
     bus.advance_to(start + opts.duration);
     lock(&shared).end_window();
     let after = bus.stats();
@@ -93,6 +94,7 @@ pub(super) fn run_plain(opts: &TimingOptions) -> Result<(Collector, BusWindow), 
         BusWindow {
             failed_after_repeat: after.failed_after_repeat - before.failed_after_repeat,
             dropouts: after.dropouts - before.dropouts,
+            las_at_start,
         },
     ))
 }

@@ -208,4 +208,6 @@ pub(super) fn take(shared: &Mutex<Collector>) -> Collector {
 pub(super) struct BusWindow {
     pub(super) failed_after_repeat: u64,
     pub(super) dropouts: u64,
+    /// Slaves in LAS when the window began.
+    pub(super) las_at_start: u32,
 }

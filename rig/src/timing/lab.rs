@@ -154,6 +154,7 @@ pub(super) fn run_lab(
     let start = rig.now();
     lock(&shared).start_window();
     let before = rig.lab().bus.stats();
+    let las_at_start = rig.lab().bus.master().las().len();
     let mut floors: Vec<Ticker> = (0..4).map(|_| Ticker::new(1)).collect();
     let mut display = Ticker::new(1);
     let mut panel = Ticker::new(1);
@@ -231,6 +232,7 @@ pub(super) fn run_lab(
         BusWindow {
             failed_after_repeat: after.failed_after_repeat - before.failed_after_repeat,
             dropouts: after.dropouts - before.dropouts,
+            las_at_start,
         },
         lab,
     ))

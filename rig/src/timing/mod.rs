@@ -7,9 +7,12 @@
 //! management call, and one inclusion call while an address is left to include:
 //! (slots + 2) · 154 µs, or (slots + 1) · 154 µs with every address used; an address holding an
 //! A and a B slave is one slot serving them in alternate cycles, so each of them sees twice the
-//! cycle.
+//! cycle. The report's model row is this formula (module `formula`, from asi-phy's [`BusTiming`]
+//! parts and the bus's slots), never a simulated count: it agrees with the simulation only
+//! because the simulated master keeps the slot rule. Where the LAS changes in the window (a
+//! slave drops out) the formula does not apply and the report says so instead of giving a value.
 //!
-//! **Error model.** The line noise is asi-phy's seeded [`FaultRates::uniform`]`(p)`: each pulse
+//! **Error model.** The line noise is asi-phy's seeded [`asi_phy::FaultRates::uniform`]`(p)`: each pulse
 //! is dropped, flipped, shifted or followed by a spurious pulse with probability p/4 each, drawn
 //! independently, so a pulse comes through untouched with probability c = (1 − p/4)⁴. Every
 //! single pulse fault fails one of the seven receiver checks (asi-phy's exhaustive test), and a
@@ -19,8 +22,10 @@
 //! costing one transaction time; a corrupt response also delays the next request by the
 //! asynchronous pause minus the slave pause (18 − 10 = 8 µs, asi-master `bus`). The pulse
 //! counts depend on the bits, so the expectation is summed over the telegrams actually sent
-//! (the first tries; [`PulseTrain`] counts their pulses), which also gives its variance: the
-//! simulated repeat count and mean cycle are compared with it in standard errors.
+//! (the first tries; [`asi_phy::PulseTrain`] counts their pulses), which also gives its variance: the
+//! simulated repeat count and mean cycle are compared with it in standard errors. The expected
+//! cycle is the clean formula plus (slots + 1) times the mean expected extra time of an answered
+//! transaction.
 //!
 //! **Simulated.** The bus runs (for the lab bus: the whole rig, lift standing at floor 1 after
 //! its initialisation) for the measurement window; every transaction record feeds the
@@ -42,6 +47,7 @@
 mod bus;
 mod collector;
 mod error_model;
+mod formula;
 mod lab;
 mod options;
 mod render;
@@ -57,16 +63,58 @@ pub use stats::{Figure, Histogram};
 
 use asi_phy::BusTiming;
 use bus::run_plain;
+use collector::{BusWindow, Collector};
+use error_model::Expect;
+use formula::CycleModel;
 use lab::run_lab;
 use stats::{histogram, Summary};
 
-// ----- the analysis -------------------------------------------------------------------------
-
-/// Runs the analysis for `opts`.
+/// Runs the analysis for `opts`: the bus runs, then the model's figures are set beside the
+/// measured ones.
 pub fn analyse(opts: &TimingOptions) -> Result<TimingReport, TimingError> {
     opts.check()?;
-    let timing = BusTiming::default();
-    let (c, window, lab) = match opts.bus {
+    let model = CycleModel::new(opts.bus, &BusTiming::default());
+    let (c, window, lab) = run(opts)?;
+    let expected = Expected::new(&model, &c.expect, &window);
+    let cycle_values: Vec<f64> = c.cycles.iter().map(|&ns| ns as f64 / 1e3).collect();
+    let mut cycle_sum = Summary::default();
+    for v in &cycle_values {
+        cycle_sum.add(*v);
+    }
+    let cycles = c.cycles.len() as u64;
+    let transactions = c.first_tries + c.repeats;
+    let mut slave_update_us = c.update.figure(1e-3);
+    slave_update_us.analytic = expected
+        .cycle_us
+        .map(|t| model.update_us(t, expected.both_fail));
+    let mut cycle_us = cycle_sum.figure(1.0);
+    cycle_us.analytic = expected.cycle_us;
+    Ok(TimingReport {
+        bus: opts.bus.describe(),
+        slaves: model.slaves,
+        slots: model.slots,
+        inclusion_call: model.inclusion_call,
+        pulse_error_rate: opts.pulse_error_rate,
+        seed: opts.seed,
+        window_s: opts.duration.as_secs_f64(),
+        cycles,
+        transactions,
+        transaction_us: c.spacing.figure(1e-3).analytic(model.transaction_us),
+        seed_cycle_us: model.thesis_cycle_us(),
+        cycle_us,
+        cycle_histogram: histogram(&cycle_values, 1.0, 40),
+        slave_update_us,
+        repeats: repeats(&c, &window, &model, &expected),
+        error_model: (opts.pulse_error_rate > 0.0).then(|| error_model(&c)),
+        lab: lab.map(|l| lab_analytic(l, &model, &expected)),
+        model_note: expected.note,
+    })
+}
+
+/// Runs the bus of `opts`: the collector's statistics, the window's drop-outs, and on the lab
+/// bus its handshakes and latencies.
+fn run(opts: &TimingOptions) -> Result<(Collector, BusWindow, Option<LabTiming>), TimingError> {
+    Ok(match opts.bus {
         BusChoice::Lab { extra } => {
             let (c, w, lab) = run_lab(opts, extra)?;
             (c, w, Some(lab))
@@ -75,142 +123,136 @@ pub fn analyse(opts: &TimingOptions) -> Result<TimingReport, TimingError> {
             let (c, w) = run_plain(opts)?;
             (c, w, None)
         }
-    };
-    let tx_us = timing.transaction().as_micros_f64();
-    let n = opts.bus.slaves();
-    let slots = opts.bus.slots();
-    let inclusion = slots < 31;
-    let model_us = (slots + 1 + inclusion as u32) as f64 * tx_us;
-    let per_slave = if opts.bus == BusChoice::AbPairs {
-        2.0
-    } else {
-        1.0
-    };
-    let cycles = c.cycles.len() as u64;
-    let cycle_values: Vec<f64> = c.cycles.iter().map(|&ns| ns as f64 / 1e3).collect();
-    let mut cycle_sum = Summary::default();
-    for v in &cycle_values {
-        cycle_sum.add(*v);
+    })
+}
+
+/// The model's figures for a run: the cycle formula and, with line noise, the error model's
+/// expectation per answered transaction (from the telegrams sent: their pulse counts are the
+/// error model's input). The cycle counts and transaction counts of the run are not used.
+struct Expected {
+    /// The expected mean cycle, µs; none where the formula does not apply.
+    cycle_us: Option<f64>,
+    /// The probability that a Data_Exchange fails both tries (no update).
+    both_fail: f64,
+    /// The mean probability that an answered transaction fails.
+    fail_probability: f64,
+    /// Why the cycle formula does not apply to this run.
+    note: Option<String>,
+}
+
+impl Expected {
+    fn new(model: &CycleModel, e: &Expect, window: &BusWindow) -> Expected {
+        let per_answered = |x: f64| {
+            if e.answered > 0 {
+                x / e.answered as f64
+            } else {
+                0.0
+            }
+        };
+        let extra_us = per_answered(e.extra_ns) / 1e3;
+        let note = match (window.dropouts, window.las_at_start) {
+            (0, las) if las >= model.slaves => None,
+            (0, las) => Some(format!(
+                "the LAS held {las} of {} slaves when the window began",
+                model.slaves
+            )),
+            (d, _) => Some(format!("{d} slave drop-out(s) in the window")),
+        }
+        .map(|why| {
+            format!(
+                "{why}: the cycle formula holds for a constant LAS only, so the cycle, the \
+                 update period, the repeats per cycle and the lab's S-7.3 and handshake periods \
+                 have no analytic value"
+            )
+        });
+        Expected {
+            cycle_us: note.is_none().then(|| model.cycle_us(extra_us)),
+            both_fail: if e.dx > 0 { e.dx_q2 / e.dx as f64 } else { 0.0 },
+            fail_probability: per_answered(e.q),
+            note,
+        }
     }
-    let e = c.expect;
-    let noisy = opts.pulse_error_rate > 0.0;
-    // The clean cycles' transactions (the model's formula, unless slaves dropped out) plus
-    // the error model's expected extra time.
-    let expected_cycle = if cycles > 0 {
-        (c.first_tries as f64 * tx_us * 1e3 + e.extra_ns) / cycles as f64 / 1e3
-    } else {
-        model_us
-    };
-    // Both tries failing leaves a Data_Exchange without update.
-    let both_fail = if e.dx > 0 { e.dx_q2 / e.dx as f64 } else { 0.0 };
+}
+
+/// Repeats counted against the error model: the count against Σ q over the first tries sent,
+/// per cycle and as a fraction from the formula.
+fn repeats(c: &Collector, window: &BusWindow, model: &CycleModel, x: &Expected) -> Repeats {
+    let e = &c.expect;
+    let cycles = c.cycles.len() as u64;
     let transactions = c.first_tries + c.repeats;
-    let repeats = Repeats {
+    // Per cycle only where the cycle formula applies.
+    let applies = x.cycle_us.is_some();
+    Repeats {
         count: c.repeats,
         expected: e.repeats,
         standard_error: e.repeats_var.sqrt(),
         per_cycle: Figure {
+            analytic: applies.then(|| model.repeats_per_cycle(x.fail_probability)),
             mean: (cycles > 0).then(|| c.repeats as f64 / cycles as f64),
             samples: cycles,
             ..Figure::default()
-        }
-        .analytic(if cycles > 0 {
-            e.repeats / cycles as f64
-        } else {
-            0.0
-        }),
+        },
         fraction: Figure {
+            analytic: applies.then(|| model.repeat_fraction(x.fail_probability)),
             mean: (transactions > 0).then(|| c.repeats as f64 / transactions as f64),
             samples: transactions,
             ..Figure::default()
-        }
-        .analytic(if c.first_tries > 0 {
-            e.repeats / (c.first_tries as f64 + e.repeats)
-        } else {
-            0.0
-        }),
+        },
         failed_after_repeat: window.failed_after_repeat,
         dropouts: window.dropouts,
+    }
+}
+
+/// How the error model was evaluated over the telegrams sent.
+fn error_model(c: &Collector) -> ErrorModel {
+    let e = &c.expect;
+    let cycles = c.cycles.len() as u64;
+    let per_answered = |x: f64| {
+        if e.answered > 0 {
+            x / e.answered as f64
+        } else {
+            0.0
+        }
     };
-    let error_model = noisy.then(|| ErrorModel {
+    ErrorModel {
         pulse_clean: c.noise.clean,
-        mean_pulses: if e.answered > 0 {
-            e.pulses / e.answered as f64
-        } else {
-            0.0
-        },
-        mean_fail_probability: if e.answered > 0 {
-            e.q / e.answered as f64
-        } else {
-            0.0
-        },
+        mean_pulses: per_answered(e.pulses),
+        mean_fail_probability: per_answered(e.q),
         cycle_mean_standard_error_us: if cycles > 0 {
             e.extra_var.sqrt() / cycles as f64 / 1e3
         } else {
             0.0
         },
-    });
-    let lab = lab.map(|mut l| {
-        let t_ms = expected_cycle / 1e3;
-        let tx_ms = tx_us / 1e3;
-        let scan = l.plc_scan_ms;
-        // A handshake step: the PLC's answer leaves in the next Data_Exchange with the slave
-        // (within one cycle), the slave's next code comes back in the one after and reaches
-        // the image at its end; the PLC sees it in the next scan. While 2T + 154 µs ≤ scan
-        // every step takes one scan; beyond, a fraction (2T + 154 µs − scan)/T of them two.
-        let late = ((2.0 * t_ms + tx_ms - scan) / t_ms).clamp(0.0, 1.0);
-        let step = scan * (1.0 + late);
-        l.analog_value_ms = l.analog_value_ms.analytic(7.0 * t_ms / (1.0 - both_fail));
-        l.setpoint_refresh_ms = l
-            .setpoint_refresh_ms
-            .analytic(14.0 * t_ms / (1.0 - both_fail));
-        l.floor_word_ms = l.floor_word_ms.analytic(4.0 * step);
-        l.cabin_display_word_ms = l.cabin_display_word_ms.analytic(7.0 * step);
-        l.cabin_panel_word_ms = l.cabin_panel_word_ms.analytic(14.0 * step);
-        // The bounds hold without line errors (a repeat or a lost exchange adds to them).
-        let cycle_ms = model_us / 1e3;
-        let step_max = scan * ((2.0 * cycle_ms + tx_ms) / scan).ceil();
-        let lat = &mut l.latencies;
-        // Pressed just after the floor slave finished a word, the call waits for the next
-        // word (4 steps) and is reported as one extra step: its first code reaches the image
-        // one cycle later and the PLC's next scan answers it, then one step per scan.
-        let reg = cycle_ms + tx_ms + scan + 4.0 * step_max;
-        lat.press_to_registered_ms = lat.press_to_registered_ms.clone().bound(reg);
-        // The run bit leaves in the next Data_Exchange with the converter: within one cycle.
-        lat.registered_to_run_bit_ms = lat.registered_to_run_bit_ms.clone().bound(cycle_ms);
-        lat.press_to_run_bit_ms = lat.press_to_run_bit_ms.clone().bound(reg + cycle_ms);
-        // STOP is read by the next safety scan; EStopDelOut follows after the STOP delay.
-        let safety_scan = l.safety_scan_ms;
-        lat.stop_to_estop_out_ms = lat.stop_to_estop_out_ms.clone().bound(safety_scan);
-        lat.estop_out_to_k1_open_ms = lat
-            .estop_out_to_k1_open_ms
-            .clone()
-            .analytic(l.stop_delay_ms);
-        lat.stop_to_k1_open_ms = lat
-            .stop_to_k1_open_ms
-            .clone()
-            .bound(l.stop_delay_ms + safety_scan);
-        l
-    });
-    Ok(TimingReport {
-        bus: opts.bus.describe(),
-        slaves: n,
-        slots,
-        inclusion_call: inclusion,
-        pulse_error_rate: opts.pulse_error_rate,
-        seed: opts.seed,
-        window_s: opts.duration.as_secs_f64(),
-        cycles,
-        transactions,
-        transaction_us: c.spacing.figure(1e-3).analytic(tx_us),
-        seed_cycle_us: (n + 2) as f64 * tx_us,
-        cycle_us: cycle_sum.figure(1.0).analytic(expected_cycle),
-        cycle_histogram: histogram(&cycle_values, 1.0, 40),
-        slave_update_us: c
-            .update
-            .figure(1e-3)
-            .analytic(per_slave * expected_cycle / (1.0 - both_fail)),
-        repeats,
-        error_model,
-        lab,
-    })
+    }
+}
+
+/// The lab's analytic figures: S-7.3 and handshake periods from the expected cycle, the
+/// latencies' bounds from the clean cycle (they hold without line errors: a repeat or a lost
+/// exchange adds to them).
+fn lab_analytic(mut l: LabTiming, model: &CycleModel, x: &Expected) -> LabTiming {
+    let tx_ms = model.transaction_us / 1e3;
+    let scan = l.plc_scan_ms;
+    if let Some(t_ms) = x.cycle_us.map(|t| t / 1e3) {
+        let step = formula::handshake_step_ms(t_ms, tx_ms, scan);
+        // One S-7.3 value takes 7 cycles; the AC2618's two channels are served in turn.
+        l.analog_value_ms.analytic = Some(7.0 * t_ms / (1.0 - x.both_fail));
+        l.setpoint_refresh_ms.analytic = Some(14.0 * t_ms / (1.0 - x.both_fail));
+        l.floor_word_ms.analytic = Some(4.0 * step);
+        l.cabin_display_word_ms.analytic = Some(7.0 * step);
+        l.cabin_panel_word_ms.analytic = Some(14.0 * step);
+    }
+    let cycle_ms = model.clean_cycle_us() / 1e3;
+    let reg = formula::registration_bound_ms(cycle_ms, tx_ms, scan);
+    let safety_scan = l.safety_scan_ms;
+    let stop_delay = l.stop_delay_ms;
+    let lat = &mut l.latencies;
+    lat.press_to_registered_ms.bound = Some(reg);
+    // The run bit leaves in the next Data_Exchange with the converter: within one cycle.
+    lat.registered_to_run_bit_ms.bound = Some(cycle_ms);
+    lat.press_to_run_bit_ms.bound = Some(reg + cycle_ms);
+    // STOP is read by the next safety scan; EStopDelOut follows after the STOP delay.
+    lat.stop_to_estop_out_ms.bound = Some(safety_scan);
+    lat.estop_out_to_k1_open_ms.analytic = Some(stop_delay);
+    lat.stop_to_k1_open_ms.bound = Some(stop_delay + safety_scan);
+    l
 }

@@ -204,6 +204,9 @@ impl TimingReport {
                 m.cycle_mean_standard_error_us
             );
         }
+        if let Some(note) = &self.model_note {
+            let _ = writeln!(out, "\nmodel: {note}.");
+        }
         out
     }
 

@@ -131,4 +131,8 @@ pub struct TimingReport {
     pub error_model: Option<ErrorModel>,
     /// The lab bus's handshakes and latencies.
     pub lab: Option<LabTiming>,
+    /// Why the model's cycle formula does not apply to this run (the LAS changed), if it does
+    /// not: then the cycle and what follows from it have no analytic value.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub model_note: Option<String>,
 }

@@ -27,10 +27,6 @@ impl Figure {
         self.analytic = Some(v);
         self
     }
-    pub(super) fn bound(mut self, v: f64) -> Figure {
-        self.bound = Some(v);
-        self
-    }
 }
 
 /// A histogram: `counts[i]` values in `[lo + i·width, lo + (i + 1)·width)`.

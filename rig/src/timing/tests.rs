@@ -213,6 +213,28 @@ fn the_outputs_show_every_figure() {
     let json: serde_json::Value =
         serde_json::from_str(&r.to_json().expect("serialises")).expect("json");
     assert_eq!(json["cycle_us"]["analytic"].as_f64(), r.cycle_us.analytic);
+    // The formula applies: no note, and the JSON has no such field.
+    assert_eq!(r.model_note, None);
+    assert!(json.get("model_note").is_none());
     let svg = r.to_svg();
     assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
+}
+
+/// Slaves that drop out change the LAS, so the cycle formula does not apply: the report says so
+/// instead of giving a model value for the cycle and what follows from it.
+#[test]
+fn drop_outs_leave_the_cycle_without_a_model_value() {
+    let r = analyse(&opts(BusChoice::Standard { n: 3 }, 0.01, 2, 0)).expect("analysis");
+    assert!(r.repeats.dropouts > 0, "{:?}", r.repeats);
+    assert_eq!(r.cycle_us.analytic, None);
+    assert_eq!(r.slave_update_us.analytic, None);
+    assert_eq!(r.repeats.per_cycle.analytic, None);
+    assert!(r.cycle_us.mean.is_some());
+    let note = r.model_note.clone().expect("a note");
+    assert!(note.contains("drop-out"), "{note}");
+    assert!(r.to_text().contains(&format!("model: {note}")));
+    let json: serde_json::Value =
+        serde_json::from_str(&r.to_json().expect("serialises")).expect("json");
+    assert_eq!(json["model_note"].as_str(), Some(note.as_str()));
+    assert!(json["cycle_us"]["analytic"].is_null());
 }
