@@ -12,6 +12,8 @@ use crate::scenario::{Action, Scenario};
 use asi_master::lab::CONVERTER;
 use asi_phy::{SimDuration, SimTime};
 use lift_model::{Button, LoadLevel};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
 use std::sync::{Arc, Mutex};
 
 /// The lift stands at `floor`, ready to depart: program at the floor without a fault, drive
@@ -83,25 +85,21 @@ fn wait_resetting(
     }
 }
 
-/// SplitMix64: the seeded source of press moments.
-#[derive(Clone, Debug)]
-struct Rng(u64);
+/// Mixed into the options' seed for the press moments ("timing" in ASCII): the line noise is a
+/// ChaCha8 stream seeded with the seed itself (asi-phy's `FaultInjector`), and the press moments must
+/// not repeat its draws.
+const PRESS_STREAM: u64 = 0x7469_6D69_6E67;
 
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
+/// The seeded source of press moments.
+fn press_rng(seed: u64) -> ChaCha8Rng {
+    ChaCha8Rng::seed_from_u64(seed ^ PRESS_STREAM)
+}
 
-    /// A uniform duration in [0, span).
-    fn below(&mut self, span: SimDuration) -> SimDuration {
-        match span.as_nanos() {
-            0 => SimDuration::ZERO,
-            n => SimDuration::from_nanos(self.next() % n),
-        }
+/// A uniform duration in [0, span).
+fn below(rng: &mut ChaCha8Rng, span: SimDuration) -> SimDuration {
+    match span.as_nanos() {
+        0 => SimDuration::ZERO,
+        n => SimDuration::from_nanos(rng.random_range(0..n)),
     }
 }
 
@@ -253,7 +251,7 @@ fn track(rig: &Rig, floor: u8, arrival: &mut Option<SimTime>) {
 
 /// Shuttles the lift between floors 1 and 2 and times a hall call and a STOP on every trip.
 fn sample_latencies(rig: &mut Rig, shared: &Mutex<Collector>, opts: &TimingOptions) -> Latencies {
-    let mut rng = Rng(opts.seed ^ 0x7469_6D69_6E67);
+    let mut rng = press_rng(opts.seed);
     let dwell = rig.plc().program().config().dwell;
     let stop_delay = safety::LiftSafetyConfig::default().estop_delay;
     let mut out = Latencies::default();
@@ -278,7 +276,7 @@ fn sample_latencies(rig: &mut Rig, shared: &Mutex<Collector>, opts: &TimingOptio
             break;
         };
         let earliest = ready.max(arrival.unwrap_or(ready) + dwell) + SimDuration::from_millis(100);
-        let press = earliest + rng.below(SimDuration::from_millis(500));
+        let press = earliest + below(&mut rng, SimDuration::from_millis(500));
         let button = if there == 1 {
             Button::HallUp(1)
         } else {
@@ -323,7 +321,7 @@ fn sample_latencies(rig: &mut Rig, shared: &Mutex<Collector>, opts: &TimingOptio
         // STOP during the trip.
         let stop = rise.max(rig.now())
             + SimDuration::from_millis(300)
-            + rng.below(SimDuration::from_millis(700));
+            + below(&mut rng, SimDuration::from_millis(700));
         rig.schedule(
             stop,
             Action::Press {
