@@ -49,6 +49,7 @@ mod collector;
 mod error_model;
 mod formula;
 mod lab;
+mod latency;
 mod options;
 mod render;
 mod report;

@@ -2,7 +2,7 @@
 //! simulated min/mean/max), [`Histogram`]s, the running [`Summary`] behind them, and the
 //! [`Ticker`] that times a counter's increments.
 
-use asi_phy::SimTime;
+use asi_phy::{SimDuration, SimTime};
 use serde::Serialize;
 
 /// One quantity: analytic value or bound, and the simulated min/mean/max over `samples`.
@@ -159,4 +159,9 @@ impl Ticker {
             _ => {}
         }
     }
+}
+
+/// A duration in milliseconds.
+pub(super) fn ms(d: SimDuration) -> f64 {
+    d.as_nanos() as f64 / 1e6
 }
