@@ -14,6 +14,15 @@ fn num(v: Option<f64>, decimals: usize) -> String {
 impl TimingReport {
     /// The report as an aligned text table.
     pub fn to_text(&self) -> String {
+        let mut out = self.heading();
+        out.push('\n');
+        out.push_str(&table(&self.rows()));
+        out.push_str(&self.notes());
+        out
+    }
+
+    /// The table's rows: quantity, analytic value or bound, min, mean, max, unit.
+    fn rows(&self) -> Vec<[String; 6]> {
         let mut rows: Vec<[String; 6]> = Vec::new();
         let mut row = |q: &str, f: &Figure, unit: &str, d: usize| {
             let analytic = match (f.analytic, f.bound) {
@@ -124,15 +133,11 @@ impl TimingReport {
             );
             row("STOP → K1 open", &lat.stop_to_k1_open_ms, "ms", 2);
         }
-        let header = ["quantity", "analytic", "min", "mean", "max", "unit"];
-        let width = |i: usize| {
-            rows.iter()
-                .map(|r| r[i].chars().count())
-                .chain([header[i].chars().count()])
-                .max()
-                .unwrap_or(0)
-        };
-        let w: Vec<usize> = (0..6).map(width).collect();
+        rows
+    }
+
+    /// What was run: the bus, the noise, the window; on the lab bus the samples.
+    fn heading(&self) -> String {
         let mut out = String::new();
         let _ = writeln!(
             out,
@@ -161,38 +166,19 @@ impl TimingReport {
                     .unwrap_or_default()
             );
         }
-        out.push('\n');
-        let mut line = |cells: [&str; 6]| {
-            let mut s = String::new();
-            for (i, c) in cells.iter().enumerate() {
-                let pad = w[i].saturating_sub(c.chars().count());
-                if i == 0 || i == 5 {
-                    s.push_str(c);
-                    if i == 0 {
-                        s.push_str(&" ".repeat(pad));
-                    }
-                } else {
-                    s.push_str(&" ".repeat(pad));
-                    s.push_str(c);
-                }
-                if i < 5 {
-                    s.push_str("  ");
-                }
-            }
-            out.push_str(s.trim_end());
-            out.push('\n');
-        };
-        line(header);
-        for r in &rows {
-            line([&r[0], &r[1], &r[2], &r[3], &r[4], &r[5]]);
-        }
+        out
+    }
+
+    /// The error model's evaluation and why the model does not apply, where it does not.
+    fn notes(&self) -> String {
+        let mut out = String::new();
         if let Some(m) = &self.error_model {
             let _ = writeln!(
                 out,
                 "\nerror model: a pulse comes through with c = (1 − p/4)^4 = {:.6}; a transaction of \
                  m + s pulses fails with q = 1 − c^(m+s) (here {:.1} pulses, q = {:.4} on average) \
                  and is repeated once.\nrepeats: {} counted, {:.1} ± {:.1} expected; mean cycle \
-                 {:.2} µs simulated, {:.2} ± {:.2} µs expected.",
+                 {:.2} µs simulated, {} ± {:.2} µs expected.",
                 m.pulse_clean,
                 m.mean_pulses,
                 m.mean_fail_probability,
@@ -200,7 +186,9 @@ impl TimingReport {
                 self.repeats.expected,
                 self.repeats.standard_error,
                 self.cycle_us.mean.unwrap_or(0.0),
-                self.cycle_us.analytic.unwrap_or(0.0),
+                self.cycle_us
+                    .analytic
+                    .map_or("no model value".into(), |a| format!("{a:.2}")),
                 m.cycle_mean_standard_error_us
             );
         }
@@ -264,6 +252,45 @@ impl TimingReport {
         }
         svg(&panels)
     }
+}
+
+/// The rows as an aligned table under its header: text columns left, numbers right.
+fn table(rows: &[[String; 6]]) -> String {
+    let header = ["quantity", "analytic", "min", "mean", "max", "unit"];
+    let width = |i: usize| {
+        rows.iter()
+            .map(|r| r[i].chars().count())
+            .chain([header[i].chars().count()])
+            .max()
+            .unwrap_or(0)
+    };
+    let w: Vec<usize> = (0..6).map(width).collect();
+    let mut out = String::new();
+    let mut line = |cells: [&str; 6]| {
+        let mut s = String::new();
+        for (i, c) in cells.iter().enumerate() {
+            let pad = w[i].saturating_sub(c.chars().count());
+            if i == 0 || i == 5 {
+                s.push_str(c);
+                if i == 0 {
+                    s.push_str(&" ".repeat(pad));
+                }
+            } else {
+                s.push_str(&" ".repeat(pad));
+                s.push_str(c);
+            }
+            if i < 5 {
+                s.push_str("  ");
+            }
+        }
+        out.push_str(s.trim_end());
+        out.push('\n');
+    };
+    line(header);
+    for r in rows {
+        line([&r[0], &r[1], &r[2], &r[3], &r[4], &r[5]]);
+    }
+    out
 }
 
 fn esc(s: &str) -> String {
