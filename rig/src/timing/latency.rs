@@ -84,9 +84,9 @@ pub(super) fn wait_resetting(
     }
 }
 
-/// Mixed into the options' seed for the press moments ("timing" in ASCII): the line noise is a
-/// ChaCha8 stream seeded with the seed itself (asi-phy's `FaultInjector`), and the press moments must
-/// not repeat its draws.
+/// Mixed into the options' seed for the press moments ("timing" in ASCII): the line noise is
+/// a ChaCha8 stream seeded with the seed itself (asi-phy's `FaultInjector`), and the press
+/// moments must not repeat its draws.
 const PRESS_STREAM: u64 = 0x7469_6D69_6E67;
 
 /// The seeded source of press moments.

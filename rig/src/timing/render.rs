@@ -178,7 +178,7 @@ impl TimingReport {
                 "\nerror model: a pulse comes through with c = (1 − p/4)^4 = {:.6}; a transaction of \
                  m + s pulses fails with q = 1 − c^(m+s) (here {:.1} pulses, q = {:.4} on average) \
                  and is repeated once.\nrepeats: {} counted, {:.1} ± {:.1} expected; mean cycle \
-                 {:.2} µs simulated, {} ± {:.2} µs expected.",
+                 {:.2} µs simulated, {}.",
                 m.pulse_clean,
                 m.mean_pulses,
                 m.mean_fail_probability,
@@ -186,10 +186,13 @@ impl TimingReport {
                 self.repeats.expected,
                 self.repeats.standard_error,
                 self.cycle_us.mean.unwrap_or(0.0),
-                self.cycle_us
-                    .analytic
-                    .map_or("no model value".into(), |a| format!("{a:.2}")),
-                m.cycle_mean_standard_error_us
+                match self.cycle_us.analytic {
+                    Some(a) => format!(
+                        "{a:.2} ± {:.2} µs expected",
+                        m.cycle_mean_standard_error_us
+                    ),
+                    None => "no model value (see below)".into(),
+                }
             );
         }
         if let Some(note) = &self.model_note {
