@@ -37,7 +37,7 @@ enum Command {
     /// the failed checks; then a summary. A capture without telegrams says "no telegrams
     /// found" and exits with 0.
     Decode(cmd::decode::DecodeArgs),
-    /// Timing analysis (SPEC §7): transaction and cycle time, per-slave update period,
+    /// Timing analysis (docs/timing.md): transaction and cycle time, per-slave update period,
     /// repeats, handshake word times and end-to-end latencies, analytic and simulated side by
     /// side, compared with the seed's T = (n + 2) · 154 µs.
     Timing(cmd::timing::TimingArgs),

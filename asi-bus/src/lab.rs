@@ -1,4 +1,4 @@
-//! The lab lift's bus, ready-made (SPEC §3 table; seed 003 table 3.1).
+//! The lab lift's bus, ready-made (docs/lab-bus.md table; seed 003 table 3.1).
 //!
 //! | address | device |
 //! |---|---|
@@ -138,7 +138,7 @@ impl LabLift {
 
     /// The lab bus with master settings `cfg` and `extra` (0..=20) plain 4I/4O modules
     /// (AC2726, all pins low) at the free addresses [`EXTRA_ADDRESSES`], projected too: the
-    /// lab lift on a fuller bus, for cycle-time and latency studies (SPEC §7).
+    /// lab lift on a fuller bus, for cycle-time and latency studies (docs/timing.md).
     pub fn with_extra(cfg: MasterConfig, extra: u8) -> Result<LabLift, ConfigError> {
         let timing = cfg.timing;
         let extra = extra_addresses(extra)?;
@@ -255,7 +255,7 @@ impl LabLift {
 }
 
 /// A bus of `n` (1..=31) plain 4I/4O modules with `codes` at addresses 1..=n, all projected:
-/// the reference bus of the cycle-time formulas (SPEC §7) and of the benchmark.
+/// the reference bus of the cycle-time formulas (docs/timing.md) and of the benchmark.
 pub fn io_bus(n: u8, codes: SlaveCodes) -> Result<Bus, ConfigError> {
     if !(1..=31).contains(&n) {
         return Err(ConfigError::Setting {

@@ -1,5 +1,5 @@
 //! Cycle time in simulation against the seed's T = (n + 2) · 154 µs (seed 003 §2.1, formula
-//! (1); SPEC §2, §7).
+//! (1); docs/master.md, §7).
 
 mod common;
 use asi_bus::Bus;
@@ -134,7 +134,7 @@ fn sixty_two_ab_slaves_see_twice_the_cycle() {
 }
 
 /// The lab lift with 20 extra I/O modules fills all 31 addresses: (31 + 1) · 154 µs, and with
-/// 9 extra modules 20 slaves: (20 + 2) · 154 µs (SPEC §2).
+/// 9 extra modules 20 slaves: (20 + 2) · 154 µs (docs/master.md).
 #[test]
 fn the_lab_bus_with_extra_modules_follows_the_same_formula() {
     use asi_bus::lab::LabLift;

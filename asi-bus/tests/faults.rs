@@ -1,7 +1,7 @@
 //! Fault scenarios: corrupted telegrams and repeats, a slave lost and re-admitted, line noise,
 //! AS-i power fail, a wrong slave in protected mode, a replaced slave auto-addressed, two
-//! slaves answering at once, safety slaves that freeze, trip or go missing (SPEC §2, §3;
-//! reference/asi.md §2.5, §5, §7).
+//! slaves answering at once, safety slaves that freeze, trip or go missing (docs/master.md, §3;
+//! docs/asi.md §2.5, §5, §7).
 
 mod common;
 use asi_bus::Bus;

@@ -1,5 +1,5 @@
 //! The lab lift's handshakes over the simulated bus, with the PLC side stepped from the
-//! process image every 10 ms scan (SPEC §3, §5; seed 003 tables 4.2–4.7, 2.2).
+//! process image every 10 ms scan (docs/lab-bus.md, §5; seed 003 tables 4.2–4.7, 2.2).
 
 mod common;
 use asi_bus::lab::LabLift;

@@ -1,5 +1,5 @@
-//! Power-on start-up of the lab lift's bus: detection, activation, first cycles (SPEC §2;
-//! reference/asi.md §5.1).
+//! Power-on start-up of the lab lift's bus: detection, activation, first cycles (docs/master.md;
+//! docs/asi.md §5.1).
 
 mod common;
 use asi_bus::lab::LabLift;

@@ -1,10 +1,10 @@
-//! The projected configuration and the master's settings (SPEC §2, reference/asi.md
+//! The projected configuration and the master's settings (docs/master.md, docs/asi.md
 //! §5.1, §6.1; seed 003 §2.2.3).
 
 use crate::lists::SlaveList;
 use asi_phy::{BusTiming, Nibble, SimDuration, SlaveAddr, SlaveCodes};
 
-/// Protected or configuration mode (reference/asi.md §5.1).
+/// Protected or configuration mode (docs/asi.md §5.1).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum Mode {
     /// Only projected slaves whose codes match are activated.
@@ -46,7 +46,7 @@ impl Default for ProjectedConfig {
 /// A configuration item that does not fit, naming the item.
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
 pub enum ConfigError {
-    /// Address 0 cannot be projected (reference/asi.md §5.2).
+    /// Address 0 cannot be projected (docs/asi.md §5.2).
     #[error("projected slave {0}: address 0 cannot be projected")]
     AddressZero(SlaveAddr),
     /// The same address is projected twice.
@@ -168,7 +168,7 @@ pub struct MasterConfig {
     /// Start in protected or configuration mode.
     pub mode: Mode,
     /// A slave that still fails after its repeat in this many consecutive cycles leaves LAS and
-    /// LDS (SPEC §2 decision: 3).
+    /// LDS (docs/master.md decision: 3).
     pub max_failed_cycles: u8,
     /// The AS-i supply voltage below which APF is set and the master goes offline.
     /// **Decision**: 22.0 V (the AS-i supply delivers 29.5..31.6 V, seed 003 §2.2.1).

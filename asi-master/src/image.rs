@@ -1,5 +1,5 @@
 //! The host interface: input and output data images in the word layout of seed 003 table 4.1
-//! (Bihl+Wiedemann BWU1488 master; SPEC §2 "Input data image").
+//! (Bihl+Wiedemann BWU1488 master; docs/master.md "Input data image").
 //!
 //! | words | content |
 //! |---|---|

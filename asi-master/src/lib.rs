@@ -1,5 +1,5 @@
 //! asi-master: the AS-Interface master of asi-lift, its process image and host interface
-//! (SPEC §2, §3, §7; seed 003 §2.2.3, §2.3, §3, §4).
+//! (docs/master.md, §3, §7; seed 003 §2.2.3, §2.3, §3, §4).
 //!
 //! Sans-IO and deterministic, in the manner of smoltcp and quinn-proto: the [`Master`] is a
 //! state machine driven by simulated time passed in; nothing reads a clock, spawns a thread or

@@ -1,13 +1,13 @@
-//! The master's slave lists and flags (SPEC §2; reference/asi.md §5.2, §5.3).
+//! The master's slave lists and flags (docs/master.md; docs/asi.md §5.2, §5.3).
 //!
-//! A [`SlaveList`] is one bit per slave address in the Bihl+Wiedemann numbering (reference/asi.md
+//! A [`SlaveList`] is one bit per slave address in the Bihl+Wiedemann numbering (docs/asi.md
 //! §5.2, `aasidrv.h`): bit 0..31 = slave 0/0A..31/31A, bit 32..63 = 0B..31B. LDS, LAS, LPS, LCS
 //! and LPF are all of this type.
 
 use asi_phy::SlaveAddr;
 use core::fmt;
 
-/// A set of slave addresses: LDS, LAS, LPS, LCS or LPF (reference/asi.md §5.2).
+/// A set of slave addresses: LDS, LAS, LPS, LCS or LPF (docs/asi.md §5.2).
 #[derive(Clone, Copy, Default, PartialEq, Eq, Hash)]
 pub struct SlaveList(u64);
 
@@ -106,7 +106,7 @@ impl fmt::Display for SlaveList {
 }
 
 /// The master's execution-control flags, with the bit values of Bihl+Wiedemann `aasidrv.h`
-/// (reference/asi.md §5.3).
+/// (docs/asi.md §5.3).
 #[derive(Clone, Copy, Default, PartialEq, Eq, Hash)]
 pub struct EcFlags(u16);
 
@@ -230,9 +230,9 @@ impl fmt::Display for EcFlags {
     }
 }
 
-/// The host-interface flags the PLC sets (reference/asi.md §5.3, `aasidrv.h` HI flags).
+/// The host-interface flags the PLC sets (docs/asi.md §5.3, `aasidrv.h` HI flags).
 ///
-/// **Decision** (SPEC is silent on how the PLC sets them): they travel in the flag nibble of
+/// **Decision** (the thesis is silent on how the PLC sets them): they travel in the flag nibble of
 /// output word 0 (bits 15..12, where the input image has F3..F0), encoded so that an all-zero
 /// output image means normal operation: bit 12 = 1 locks data exchange (Data_Exchange_Active
 /// = 0), bit 13 = 1 asks for Offline, bit 14 = 1 disables automatic addressing

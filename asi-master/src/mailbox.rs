@@ -1,5 +1,5 @@
 //! The command mailbox in parameter words 32..49 (seed 003 table 4.1 "Příkaz | T | Výsledek";
-//! SPEC §2).
+//! docs/master.md).
 //!
 //! **Protocol** (decision; the seed gives only the word layout): the PLC writes the request
 //! bytes into output words 33..49 (byte 1 in the high half of word 33), then the command into
@@ -21,7 +21,7 @@
 //! | Store_Actual_Configuration (configuration mode only) | 0x07 | — | — |
 //! | Set_Operation_Mode | 0x08 | 0 protected / 1 configuration | — |
 //! | Read_List | 0x09 | 0 LDS, 1 LAS, 2 LPS, 3 LCS (cleared by reading), 4 LPF | 8 bytes, byte 1 = slaves 0..7 |
-//! | Read_Flags | 0x0A | — | EC flags high byte, low byte (reference/asi.md §5.3 values) |
+//! | Read_Flags | 0x0A | — | EC flags high byte, low byte (docs/asi.md §5.3 values) |
 
 use crate::image::{Image, MAILBOX_BYTES, MAILBOX_WORD};
 use asi_phy::SlaveAddr;

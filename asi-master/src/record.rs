@@ -1,4 +1,4 @@
-//! The transaction trace and the bus statistics (SPEC §7).
+//! The transaction trace and the bus statistics (docs/timing.md).
 //!
 //! Every transaction gives one [`TransactionRecord`]: start time, what the master was doing,
 //! the request, the checks the request failed on the line (as the slaves' receivers saw it),
@@ -98,7 +98,7 @@ pub fn describe_request(req: Request, ab: bool) -> String {
     call.to_string()
 }
 
-/// A request's 14 bits grouped as SPEC §1 writes them: `ST CB A4..A0 I4..I0 PB EB`.
+/// A request's 14 bits grouped as docs/physical-layer.md writes them: `ST CB A4..A0 I4..I0 PB EB`.
 pub fn request_bits(req: Request) -> String {
     let b = req.bits();
     format!(
@@ -112,7 +112,7 @@ pub fn request_bits(req: Request) -> String {
     )
 }
 
-/// A response's 7 bits grouped as SPEC §1 writes them: `ST I3..I0 PB EB`.
+/// A response's 7 bits grouped as docs/physical-layer.md writes them: `ST I3..I0 PB EB`.
 pub fn response_bits(resp: Response) -> String {
     let b = resp.bits();
     format!(
@@ -204,7 +204,7 @@ impl TraceRing {
     }
 }
 
-/// Cumulative bus statistics (SPEC §7).
+/// Cumulative bus statistics (docs/timing.md).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct BusStats {
     /// Transactions (requests sent), repeats included.
@@ -315,7 +315,7 @@ mod tests {
 
     #[test]
     fn bits_are_grouped_as_the_spec_writes_them() {
-        // SPEC §1 worked vectors.
+        // docs/physical-layer.md worked vectors.
         let q = Request::data_exchange(
             Address::new(5).expect("address"),
             Nibble::from_low_bits(0b1010),

@@ -11,7 +11,7 @@
 //! 3. Random corruption at several per-pulse rates (seeded): the undetected-error rate.
 //!
 //! The published claim to compare with: an effective Hamming distance of 5
-//! (feldbusse.de, reference/asi.md §3.2).
+//! (feldbusse.de, docs/asi.md §3.2).
 
 use asi_phy::fault::{apply_faults, single_faults, FaultInjector, FaultRates, PulseFault};
 use asi_phy::{

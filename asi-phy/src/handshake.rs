@@ -1,7 +1,7 @@
-//! The engines of the lab lift's nibble handshakes (seed 003 §4, tables 4.2–4.7; SPEC §3),
+//! The engines of the lab lift's nibble handshakes (seed 003 §4, tables 4.2–4.7; docs/lab-bus.md),
 //! both sides, as plain state machines over 4-bit values with no dependency on the bus.
 //!
-//! **Nibble use** (SPEC §3 decision), two kinds of handshake:
+//! **Nibble use** (docs/lab-bus.md decision), two kinds of handshake:
 //! - **The answerer owns K** (floor stations, table 4.3; cabin display, table 4.5; S-7.3 of
 //!   `asi_master::integrated_analog` and `asi_slaves::analog_firmware`): the *requester* puts
 //!   its 3-bit step code on D2..D0 (D3 = 0); the *answerer* puts 3 data bits on D2..D0 and
@@ -10,7 +10,7 @@
 //!   and puts out the next code ([`Requester`], [`Answerer`]).
 //! - **The requester owns K** (cabin buttons, table 4.7: "K 1 1 1", "K 1 0 1", ...): the master
 //!   puts K on D3 beside the step code on D2..D0 and toggles K with every request; the slave
-//!   answers the 3 data bits on D2..D0 and, **Decision (SPEC §3, revised)**, echoes the K it
+//!   answers the 3 data bits on D2..D0 and, **Decision (docs/lab-bus.md, revised)**, echoes the K it
 //!   answers to on D3. A step completes when the master sees its own K echoed
 //!   ([`ToggleRequester`], [`EchoAnswerer`]).
 //!
@@ -18,7 +18,7 @@
 //! PLC scan that is faster than the AS-i cycle, a repeated telegram, a lost response) without
 //! advancing.
 //!
-//! **Decisions beyond SPEC**:
+//! **Decisions beyond the seed documents**:
 //! - Code `110` is used by no sequence of the seed; in the handshakes where the answerer owns
 //!   K it is the *sync* code. A requester starts (and restarts after a reset) with `110`; the
 //!   answerer acknowledges it with K toggled and data 000. This makes the first K change a
@@ -287,7 +287,7 @@ impl Answerer {
 /// master side of the cabin button slave, seed 003 table 4.7 ("K 1 1 1", "K 1 0 1", ...).
 ///
 /// The request nibble is K on D3 and the step code on D2..D0; K toggles with every new
-/// request. **Decision** (SPEC §3, revised): the answerer echoes the K it answers to on D3
+/// request. **Decision** (docs/lab-bus.md, revised): the answerer echoes the K it answers to on D3
 /// beside its 3 data bits, and a step completes when the requester sees its own K echoed.
 ///
 /// - **Start** (power-up, [`ToggleRequester::reset`]): the first step only looks at the

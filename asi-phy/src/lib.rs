@@ -1,4 +1,4 @@
-//! asi-phy: the AS-Interface physical and link layer of asi-lift (SPEC §1, seed 003 §2.2).
+//! asi-phy: the AS-Interface physical and link layer of asi-lift (docs/physical-layer.md, seed 003 §2.2).
 //!
 //! Telegrams ([`Request`], [`Response`]) become Manchester half-bits ([`HalfBits`]), then APM
 //! pulses on the 3 µs grid ([`PulseTrain`]), then a sampled line voltage ([`waveform`]); the

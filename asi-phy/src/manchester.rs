@@ -1,4 +1,4 @@
-//! Manchester II coding of telegram bits (SPEC §1 "Pulse model"; seed 003 §2.2.1).
+//! Manchester II coding of telegram bits (docs/physical-layer.md "Pulse model"; seed 003 §2.2.1).
 //!
 //! The line idles high. A bit 0 is sent as low-then-high, a bit 1 as high-then-low, so every bit
 //! cell has a transition at its middle. [`HalfBits`] holds the level of each half-bit cell.

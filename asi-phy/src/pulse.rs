@@ -1,5 +1,5 @@
-//! Alternating Pulse Modulation: Manchester edges as line pulses on the half-bit grid (SPEC §1
-//! "Pulse model"; reference/asi.md §1.2; seed 003 §2.2.1, figure 2.1).
+//! Alternating Pulse Modulation: Manchester edges as line pulses on the half-bit grid (docs/physical-layer.md
+//! "Pulse model"; docs/asi.md §1.2; seed 003 §2.2.1, figure 2.1).
 //!
 //! Every Manchester edge becomes one sin²-shaped voltage pulse: a falling edge (transmit current
 //! switched on) a negative pulse, a rising edge a positive one. The line idles high, so the
@@ -231,7 +231,7 @@ impl fmt::Debug for PulseTrain {
 }
 
 impl fmt::Display for PulseTrain {
-    /// Grid points with signs, as in SPEC §1's table: `0- 1+ 2- 3+ ...`.
+    /// Grid points with signs, as in docs/physical-layer.md's table: `0- 1+ 2- 3+ ...`.
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let mut rest = self.occupied;
         let mut first = true;
@@ -260,7 +260,7 @@ mod tests {
 
     const H: SimDuration = SimDuration::from_micros(3);
 
-    /// The four worked vectors of SPEC §1.
+    /// The four worked vectors of docs/physical-layer.md.
     #[test]
     fn spec_vector_data_exchange_address_5_outputs_1010() {
         let r = Request::data_exchange(

@@ -1,10 +1,10 @@
-//! A slave's address and identification codes, as the telegrams carry them (reference/asi.md
+//! A slave's address and identification codes, as the telegrams carry them (docs/asi.md
 //! §5.2, §6.1; seed 003 §2.2.3): what a master projects and lists, and what a slave holds.
 
 use crate::{Address, Nibble, Select};
 use core::fmt;
 
-/// Acknowledge of Address_Assignment and Reset_Slave (reference/asi.md §4).
+/// Acknowledge of Address_Assignment and Reset_Slave (docs/asi.md §4).
 pub const ACK_0110: Nibble = Nibble::from_low_bits(0b0110);
 
 /// A slave address with its A/B select: 1..31 (A or B), 0 (A only). A standard (non A/B) slave
@@ -76,7 +76,7 @@ impl fmt::Display for SlaveAddr {
 }
 
 /// The four identification codes of a slave: IO configuration, ID code, extended ID1 and ID2
-/// (seed 003 §2.2.3; reference/asi.md §6.1). The profile is written `S-IO.ID.ID2`.
+/// (seed 003 §2.2.3; docs/asi.md §6.1). The profile is written `S-IO.ID.ID2`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct SlaveCodes {
     /// IO configuration (direction of D0..D3).
@@ -132,7 +132,7 @@ impl SlaveCodes {
     }
 
     /// The codes a master compares in protected mode: IO, ID and ID2, and ID1 except the A/B
-    /// select bit of an A/B slave (reference/asi.md §5.5).
+    /// select bit of an A/B slave (docs/asi.md §5.5).
     pub fn matches(&self, other: &SlaveCodes) -> bool {
         let id1_mask = if self.is_ab() { 0b0111 } else { 0b1111 };
         self.io == other.io

@@ -1,4 +1,4 @@
-//! Simulated time: the one clock every asi-lift component runs on (SPEC §0).
+//! Simulated time: the one clock every asi-lift component runs on (docs/architecture.md).
 //!
 //! Time is a value passed in, never read from the operating system. [`SimTime`] is a point on
 //! the simulated clock and [`SimDuration`] a span, both in integer nanoseconds, so that the 3 µs

@@ -1,4 +1,4 @@
-//! Bus timing: bit time, pauses, reply window (SPEC §1 "Timing"; reference/asi.md §2.3).
+//! Bus timing: bit time, pauses, reply window (docs/physical-layer.md "Timing"; docs/asi.md §2.3).
 //!
 //! All spans are measured between pulses: a request occupies 14 bit times from its first pulse
 //! (start of the start bit) to its last (end of the end bit), a response 7. With the defaults a
@@ -35,7 +35,7 @@ pub struct TimingError {
 }
 
 impl Default for BusTiming {
-    /// SPEC §1: bit 6 µs, master pause 18 µs (3 bit times), replies within 2..5 bit times,
+    /// docs/physical-layer.md: bit 6 µs, master pause 18 µs (3 bit times), replies within 2..5 bit times,
     /// response timeout 10 bit times, slave pause 10 µs; receivers tolerate ±0.5 µs of pulse
     /// jitter, end a telegram after 9 µs (1.5 bit times) of silence and need 18 µs (3 bit
     /// times) of silence after an erroneous telegram (A²SI asynchronous state).

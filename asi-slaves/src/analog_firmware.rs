@@ -1,4 +1,4 @@
-//! The slave firmware's side of the S-7.3 analog transfer (seed 003 §2.3, table 2.2; reference/asi.md §6.3; SPEC §3).
+//! The slave firmware's side of the S-7.3 analog transfer (seed 003 §2.3, table 2.2; docs/asi.md §6.3; docs/lab-bus.md).
 //!
 //! A 16-bit value travels with its channel E3..E1, overflow O and valid V in 7 steps of 3 data
 //! bits plus the control bit K: E3E2E1 | D16..D14 | D13..D11 | D10..D8 | D7..D5 | D4..D2 |

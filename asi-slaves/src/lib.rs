@@ -1,4 +1,4 @@
-//! asi-slaves: the AS-Interface slaves of asi-lift (SPEC §2, §3; seed 003 §2.3, §3, §4): the
+//! asi-slaves: the AS-Interface slaves of asi-lift (docs/master.md, §3; seed 003 §2.3, §3, §4): the
 //! slave IC, the lab lift's slave devices, the device side of the nibble handshakes and of
 //! S-7.3, and the passive Safety at Work monitor.
 //!

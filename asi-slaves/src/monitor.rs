@@ -1,5 +1,5 @@
-//! AS-i Safety at Work: code tables and the passive safety monitor (reference/asi.md §7; SPEC
-//! §3, §6).
+//! AS-i Safety at Work: code tables and the passive safety monitor (docs/asi.md §7; docs/lab-bus.md,
+//! docs/safety.md).
 //!
 //! A free safe slave sends, cycle after cycle, the 8 values of its own code table; tripped it
 //! sends 0000. The [`SafetyMonitor`] listens on the bus with its own receiver (so it judges only
@@ -32,7 +32,7 @@
 //!   (`bad_codes_to_trip` = 1: noise never produces one, so one is a fault). No valid code for
 //!   `max_silence` (default 40 ms, the monitors' response delay) drops it too (missing code).
 //! - After a drop the monitor releases again after 8 consecutive correct codes (one rotation);
-//!   restart interlocks (manual restart) belong to the safety logic (SPEC §6, MON).
+//!   restart interlocks (manual restart) belong to the safety logic (docs/safety.md, MON).
 
 use asi_phy::{Address, Call, Expect, Frame, Listener, SimDuration, SimTime, TelegramKind};
 use rand::seq::SliceRandom;
@@ -324,7 +324,7 @@ impl Channel {
     }
 }
 
-/// A passive Safety-at-Work monitor on the bus (reference/asi.md §7).
+/// A passive Safety-at-Work monitor on the bus (docs/asi.md §7).
 #[derive(Clone, Debug)]
 pub struct SafetyMonitor {
     cfg: MonitorConfig,

@@ -1,7 +1,7 @@
 //! An AS-i slave: the slave IC's behaviour on the bus, and the device behind its 4-bit
-//! peripheral ports (SPEC §2 call table, §3; reference/asi.md §4, §6).
+//! peripheral ports (docs/master.md call table, §3; docs/asi.md §4, §6).
 //!
-//! The [`Slave`] answers the calls of SPEC §2 as the ZMD slave ICs do (reference/asi.md §4):
+//! The [`Slave`] answers the calls of docs/master.md as the ZMD slave ICs do (docs/asi.md §4):
 //! it answers only a valid request addressed to it (the bus hands it only requests its
 //! receiver accepted), Data_Exchange only after a Write_Parameter since its last reset (that is
 //! what activation does), Write_Extended_ID1 and Address_Assignment only at address 0. What
@@ -29,7 +29,7 @@ pub trait Peripheral: Any + fmt::Debug + Send {
     }
     /// The slave IC was reset (power-up, Reset_Slave, broadcast reset).
     fn reset(&mut self) {}
-    /// The device reports a peripheral fault (status bit S1, reference/asi.md §6.2).
+    /// The device reports a peripheral fault (status bit S1, docs/asi.md §6.2).
     fn periphery_fault(&self) -> bool {
         false
     }
@@ -158,7 +158,7 @@ impl Slave {
         self.eeprom_write_time = d;
     }
 
-    /// Status S3..S0 at `now` (reference/asi.md §6.2, spec 2.1 slave).
+    /// Status S3..S0 at `now` (docs/asi.md §6.2, spec 2.1 slave).
     pub fn status(&self, now: SimTime) -> Nibble {
         let mut s = 0;
         if now < self.eeprom_busy_until || self.address != self.nv_address {

@@ -1,6 +1,6 @@
 //! Telegram fields as asi-lift writes them for machines: the JSON of `run --trace FILE.jsonl`
 //! and of `decode --json` share these shapes, so a trace and a decoded capture compare field by
-//! field (SPEC §1 bit order ST..EB; check names as in the report).
+//! field (docs/physical-layer.md bit order ST..EB; check names as in the report).
 
 use asi_phy::{Check, Checks, Received, Request, Response, TelegramKind};
 use serde::Serialize;
@@ -19,7 +19,7 @@ pub const fn check_key(c: Check) -> &'static str {
     }
 }
 
-/// The keys of the failed checks, in the fixed order of SPEC §1.
+/// The keys of the failed checks, in the fixed order of docs/physical-layer.md.
 pub fn check_keys(c: Checks) -> Vec<&'static str> {
     c.iter().map(check_key).collect()
 }
@@ -130,7 +130,7 @@ pub struct TelegramRecord {
     pub info: Option<String>,
     /// A valid response's I3..I0 as 4 digits.
     pub data: Option<String>,
-    /// The failed checks' keys ([`check_key`]) in the order of SPEC §1; empty if valid.
+    /// The failed checks' keys ([`check_key`]) in the order of docs/physical-layer.md; empty if valid.
     pub errors: Vec<&'static str>,
 }
 
@@ -204,7 +204,7 @@ mod tests {
 
     #[test]
     fn fields_of_the_spec_vectors() {
-        // SPEC §1 worked vectors.
+        // docs/physical-layer.md worked vectors.
         let q = Request::data_exchange(
             Address::new(5).expect("address"),
             Nibble::from_low_bits(0b1010),

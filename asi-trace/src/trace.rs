@@ -43,7 +43,7 @@ pub struct TraceEntry {
     /// The response the master received intact, or null (none came, or it was corrupt).
     pub response: Option<ResponseFields>,
     /// The receiver checks that failed, on the request (as the slaves saw it) and on the
-    /// response (as the master saw it), in the order of SPEC §1.
+    /// response (as the master saw it), in the order of docs/physical-layer.md.
     pub errors: Vec<&'static str>,
     /// `true` for the immediate repeat of a failed transaction.
     pub repeat: bool,

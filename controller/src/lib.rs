@@ -1,4 +1,4 @@
-//! controller: the lab lift's PLC program (seed 003 §6; SPEC §5).
+//! controller: the lab lift's PLC program (seed 003 §6; docs/controller.md).
 //!
 //! The program runs with a fixed scan (10 ms by default), asynchronous to the AS-i cycle, and
 //! reads and writes only the master's process image (seed table 4.1) and the few standard

@@ -29,7 +29,7 @@ use asi_master::{Image, ProcessImage, SlaveList};
 use asi_phy::handshake_words::DisplayWord;
 use asi_phy::{Nibble, SimTime, SlaveAddr};
 
-/// The lab lift's slave addresses (SPEC §3 table).
+/// The lab lift's slave addresses (docs/lab-bus.md table).
 pub mod addr {
     /// Floor station of floor 1; floor `f` is at address `f` (1..=4).
     pub const FLOOR_1: u8 = 1;
@@ -112,7 +112,7 @@ impl LasReader {
 }
 
 /// Scans without the echo of the PLC's own K after which the PLC starts a new cabin button
-/// word (seed 003 table 4.7; SPEC §3): a step normally completes within a scan or two; a panel
+/// word (seed 003 table 4.7; docs/lab-bus.md): a step normally completes within a scan or two; a panel
 /// that was reset or re-admitted in the middle of a word refuses the request out of sequence,
 /// which only a new word recovers (250 ms instead of the engine's default 2.5 s at a 10 ms
 /// scan).

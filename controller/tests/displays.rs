@@ -1,4 +1,4 @@
-//! What the floor and cabin displays show (seed 003 tables 6.3–6.5; SPEC §5): the program
+//! What the floor and cabin displays show (seed 003 tables 6.3–6.5; docs/controller.md): the program
 //! against the lift plant, without the bus, every display word of every 10 ms scan recorded.
 //!
 //! The rule the tables give: the current floor is shown at departure and on arrival

@@ -1,4 +1,4 @@
-//! Cost of running the plant (SPEC §4 "events exact in time"): advancing from one edge to the
+//! Cost of running the plant (docs/lift-plant.md "events exact in time"): advancing from one edge to the
 //! next, and advancing by a PLC scan, on a 24-floor lift shuttling between its overtravel
 //! sensors at Rychlost 11000 (reversing on each trip, so every kind of motion segment occurs).
 //!

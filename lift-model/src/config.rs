@@ -1,4 +1,4 @@
-//! What the plant is built from: floors, vanes, trip zones, ends, drive (SPEC §4), and the
+//! What the plant is built from: floors, vanes, trip zones, ends, drive (docs/lift-plant.md), and the
 //! checks that reject a configuration the lift could not run with.
 
 use serde::{Deserialize, Serialize};
@@ -8,7 +8,7 @@ use crate::sensor::{End, VaneSensor};
 
 /// The fewest floors a lift has.
 pub const MIN_FLOORS: u8 = 2;
-/// The most floors: the display word carries floor numbers 1..24 (SPEC §3, seed 003 table 4.2).
+/// The most floors: the display word carries floor numbers 1..24 (docs/lab-bus.md, seed 003 table 4.2).
 pub const MAX_FLOORS: u8 = 24;
 /// The longest length this model accepts, in mm (100 m): keeps every time and position
 /// computation far from overflow.
@@ -17,10 +17,10 @@ pub const MAX_LENGTH_MM: f64 = 100_000.0;
 /// (either way): the window in which the rig counts an arrival and the tests judge a stop.
 pub const LEVEL_WINDOW_MM: f64 = 10.0;
 
-/// The lift as built (SPEC §4 geometry; seed 003 §6.3, §6.4). All lengths in mm, positions of
+/// The lift as built (docs/lift-plant.md geometry; seed 003 §6.3, §6.4). All lengths in mm, positions of
 /// the cabin measured upward from the level of floor 1.
 ///
-/// Defaults are SPEC §4's decisions for the lab lift: 4 floors 400 mm apart, vanes with a
+/// Defaults are docs/lift-plant.md's decisions for the lab lift: 4 floors 400 mm apart, vanes with a
 /// ±40 mm long and a ±10 mm short sensor track, overtravel trip 60 mm beyond the end floors,
 /// mechanical ends 80 mm beyond the trip points, the cabin starting level with floor 1.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -68,7 +68,7 @@ impl Default for LiftConfig {
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum ConfigError {
     /// Fewer than 2 or more than 24 floors.
-    #[error("floors = {floors}: the lift needs 2 to 24 floors (the display word carries floor numbers 1..24, SPEC §3)")]
+    #[error("floors = {floors}: the lift needs 2 to 24 floors (the display word carries floor numbers 1..24, docs/lab-bus.md)")]
     FloorCount {
         /// The number given.
         floors: u8,
@@ -242,7 +242,7 @@ impl LiftConfig {
         Ok(())
     }
 
-    /// The level of floor `floor` (1-based) in mm: (floor − 1) · pitch (SPEC §4); `None` for
+    /// The level of floor `floor` (1-based) in mm: (floor − 1) · pitch (docs/lift-plant.md); `None` for
     /// a floor the lift does not have.
     pub fn floor_level_mm(&self, floor: u8) -> Option<f64> {
         (1..=self.floors)
@@ -264,7 +264,7 @@ impl LiftConfig {
     /// The track `(from, to)` in mm, both ends inclusive, on which `sensor` is on at `floor`;
     /// `None` for a floor the lift does not have.
     ///
-    /// SPEC §4, seed 003 §6.4: at floors 2..N the right sensor (Snimac_2) has the long track
+    /// docs/lift-plant.md, seed 003 §6.4: at floors 2..N the right sensor (Snimac_2) has the long track
     /// and the left (Snimac_1) the short one; the floor-1 vane is turned 90° to the left, so
     /// there the left sensor has the long track.
     pub fn vane_track_mm(&self, sensor: VaneSensor, floor: u8) -> Option<(f64, f64)> {
@@ -274,7 +274,7 @@ impl LiftConfig {
     }
 
     /// Where the overtravel sensor at `end` trips: 60 mm (by default) below floor 1 or above
-    /// the top floor (SPEC §4). The sensor is tripped at this point and beyond.
+    /// the top floor (docs/lift-plant.md). The sensor is tripped at this point and beyond.
     pub fn trip_position_mm(&self, end: End) -> f64 {
         match end {
             End::Bottom => self.level(1) - self.trip_beyond_floor_mm,
@@ -283,7 +283,7 @@ impl LiftConfig {
     }
 
     /// Where the mechanical end (buffer) at `end` is: 80 mm (by default) beyond the trip point
-    /// (SPEC §4). The cabin can reach it but not pass it.
+    /// (docs/lift-plant.md). The cabin can reach it but not pass it.
     pub fn end_position_mm(&self, end: End) -> f64 {
         match end {
             End::Bottom => self.trip_position_mm(end) - self.end_beyond_trip_mm,

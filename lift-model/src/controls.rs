@@ -1,4 +1,4 @@
-//! What people operate: buttons, the STOP switch, the load (SPEC §3, §4; seed 003 tables
+//! What people operate: buttons, the STOP switch, the load (docs/lab-bus.md, §4; seed 003 tables
 //! 4.3, 4.6 and 6.2).
 
 use core::fmt;
@@ -6,7 +6,7 @@ use core::fmt;
 use asi_phy::SimTime;
 use serde::{Deserialize, Serialize};
 
-/// A push button of the lift (SPEC §4 "other signals").
+/// A push button of the lift (docs/lift-plant.md "other signals").
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
 pub enum Button {
     /// Cabin button for floor `n` (1-based; `TlacitkoKabina<n>`).
@@ -56,7 +56,7 @@ impl Button {
     }
 }
 
-/// The load sensor's reading (IG5886, SPEC §3 slave 8; seed 003 `Zatizeni_Kabiny`).
+/// The load sensor's reading (IG5886, docs/lab-bus.md slave 8; seed 003 `Zatizeni_Kabiny`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
 pub enum LoadLevel {
     /// 0: empty.
@@ -95,7 +95,7 @@ impl LoadLevel {
         LoadLevel::ALL.into_iter().find(|l| l.name() == name)
     }
 
-    /// The 2-bit code on the sensor's D1..D0 (SPEC §3): 0 empty .. 3 overloaded.
+    /// The 2-bit code on the sensor's D1..D0 (docs/lab-bus.md): 0 empty .. 3 overloaded.
     pub fn code(self) -> u8 {
         match self {
             LoadLevel::Empty => 0,
@@ -106,7 +106,7 @@ impl LoadLevel {
     }
 }
 
-/// One of the two NC channels of the STOP switch wired to the safety logic (SPEC §6).
+/// One of the two NC channels of the STOP switch wired to the safety logic (docs/safety.md).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
 pub enum StopChannel {
     /// The first NC contact (ESTOP input 1).

@@ -1,4 +1,4 @@
-//! The display word shown on the floor displays and in the cabin (SPEC §3; seed 003 tables
+//! The display word shown on the floor displays and in the cabin (docs/lab-bus.md; seed 003 tables
 //! 4.2 and 4.4).
 //!
 //! Layout, bit 0 = D1:
@@ -9,7 +9,7 @@
 //! ```
 //!
 //! **Parity (decision; the seed names the bit but not the rule):** even, like every AS-i
-//! parity (SPEC §1): D1 is chosen so that D10..D1 together have an even number of ones.
+//! parity (docs/physical-layer.md): D1 is chosen so that D10..D1 together have an even number of ones.
 
 use core::fmt;
 
@@ -120,7 +120,7 @@ impl fmt::Display for DisplayWord {
     }
 }
 
-/// Which display: one per floor, one in the cabin (SPEC §3: slaves 1..4 and 5).
+/// Which display: one per floor, one in the cabin (docs/lab-bus.md: slaves 1..4 and 5).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
 pub enum DisplayId {
     /// The display at floor `n` (1-based).

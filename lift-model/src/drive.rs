@@ -1,5 +1,5 @@
 //! The drive chain: current-loop set-point → converter frequency → motor → gearbox → sprocket →
-//! cabin velocity (SPEC §4, seed 003 §6.4 equations (2)–(5) and table 6.6).
+//! cabin velocity (docs/lift-plant.md, seed 003 §6.4 equations (2)–(5) and table 6.6).
 
 use serde::{Deserialize, Serialize};
 
@@ -19,7 +19,7 @@ pub const CONVERTER_CHARACTERISTIC: [(u16, f64); 4] =
 /// The converter's output frequency in Hz for a current-loop set-point `Rychlost` in µA.
 ///
 /// Linear interpolation between the measured points of [`CONVERTER_CHARACTERISTIC`]
-/// (SPEC §4). Outside the measured range (a decision; the seed is silent):
+/// (docs/lift-plant.md). Outside the measured range (a decision; the seed is silent):
 /// - below 4000 µA the converter stands still (0 Hz): 0–4 mA is below the live zero of a
 ///   4–20 mA input, which a converter treats as "no speed", not as reverse;
 /// - above 11000 µA the last measured slope (2.1 Hz per mA, 10→11 mA) continues up to
@@ -41,11 +41,11 @@ pub fn converter_frequency_hz(setpoint_ua: u16) -> f64 {
     f0 + (f1 - f0) * f64::from(sp - ua0) / f64::from(ua1 - ua0)
 }
 
-/// Motor, gearbox, sprocket, converter ramp and brake (SPEC §4; seed 003 §6.4).
+/// Motor, gearbox, sprocket, converter ramp and brake (docs/lift-plant.md; seed 003 §6.4).
 ///
 /// Defaults are the lab lift's: motor 1LA7063-4AB12 (p = 2 pole pairs, slip s = 0.1 from
 /// 1350 rpm at 50 Hz, seed equation (2)), gearbox i = 25, sprocket d = 79 mm, converter ramp
-/// 50 Hz/s and brake deceleration 500 mm/s² (SPEC §4 decisions).
+/// 50 Hz/s and brake deceleration 500 mm/s² (docs/lift-plant.md decisions).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct DriveConfig {
@@ -57,9 +57,9 @@ pub struct DriveConfig {
     pub gear_ratio: f64,
     /// Diameter d of the chain sprocket in mm (seed 003 equation (5): 79 mm).
     pub sprocket_diameter_mm: f64,
-    /// Converter ramp in Hz/s, for acceleration and deceleration alike (SPEC §4: 50 Hz/s).
+    /// Converter ramp in Hz/s, for acceleration and deceleration alike (docs/lift-plant.md: 50 Hz/s).
     pub ramp_hz_per_s: f64,
-    /// Deceleration of the brake when the drive has no power, in mm/s² (SPEC §4: 500 mm/s²).
+    /// Deceleration of the brake when the drive has no power, in mm/s² (docs/lift-plant.md: 500 mm/s²).
     pub brake_decel_mm_s2: f64,
 }
 

@@ -1,5 +1,5 @@
 //! What the plant reports as it runs: every edge it makes on its own, with its exact time
-//! (SPEC §4 "events exact in time").
+//! (docs/lift-plant.md "events exact in time").
 
 use core::fmt;
 

@@ -1,4 +1,4 @@
-//! Piecewise motion of the cabin and exact crossing times (SPEC §4 "events exact in time";
+//! Piecewise motion of the cabin and exact crossing times (docs/lift-plant.md "events exact in time";
 //! the contract is stated in the crate documentation).
 //!
 //! Between two changes the cabin moves with constant acceleration (a converter ramp, the

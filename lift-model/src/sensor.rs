@@ -34,12 +34,12 @@ impl fmt::Display for VaneSensor {
     }
 }
 
-/// An end of the shaft: where an overtravel sensor and a mechanical end are (SPEC §4).
+/// An end of the shaft: where an overtravel sensor and a mechanical end are (docs/lift-plant.md).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
 pub enum End {
-    /// Below floor 1 (safety slave 11, SPEC §3).
+    /// Below floor 1 (safety slave 11, docs/lab-bus.md).
     Bottom,
-    /// Above the top floor (safety slave 12, SPEC §3).
+    /// Above the top floor (safety slave 12, docs/lab-bus.md).
     Top,
 }
 

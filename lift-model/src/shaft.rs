@@ -1,5 +1,5 @@
 //! The shaft as the cabin's sensors see it: vane tracks, overtravel trip zones and mechanical
-//! ends, flattened into one sorted list of boundaries (SPEC §4; seed 003 §6.3, §6.4).
+//! ends, flattened into one sorted list of boundaries (docs/lift-plant.md; seed 003 §6.3, §6.4).
 //!
 //! Every zone is a closed interval of cabin position: a vane sensor is on for `from ≤ x ≤ to`,
 //! an overtravel sensor is tripped at its trip point and beyond, the cabin may touch a
@@ -183,7 +183,7 @@ mod tests {
 
     #[test]
     fn track_ends_belong_to_the_track() {
-        // Floor 1: left long ±40, right short ±10 (SPEC §4).
+        // Floor 1: left long ±40, right short ±10 (docs/lift-plant.md).
         assert!(levels_at(40.0).left && !levels_at(40.0).right);
         assert!(!levels_at(40.000_001).left);
         assert!(levels_at(-10.0).right && levels_at(10.0).right);

@@ -1,5 +1,5 @@
 //! A configuration the lift could not run with is rejected at construction, with an error
-//! that names the field and the cause (SPEC §4: geometry all configurable, 2..24 floors).
+//! that names the field and the cause (docs/lift-plant.md: geometry all configurable, 2..24 floors).
 
 use lift_model::{ConfigError, DriveConfig, Lift, LiftConfig, VaneSensor};
 

@@ -1,4 +1,4 @@
-//! What people operate and see (SPEC §3, §4): presses with a duration and their release
+//! What people operate and see (docs/lab-bus.md, §4): presses with a duration and their release
 //! edges, STOP's three contacts, door, load, displays; and inputs that make no sense are
 //! refused with an error, never a panic.
 

@@ -1,4 +1,4 @@
-//! Safety-relevant physics (SPEC §4, §6; seed 003 §6.3): K1 and the brake, EDM through the
+//! Safety-relevant physics (docs/lift-plant.md, §6; seed 003 §6.3): K1 and the brake, EDM through the
 //! mirror contact, the hand crank, overtravel trips and crashes into the mechanical ends.
 
 mod common;
@@ -206,7 +206,7 @@ fn the_overtravel_sensors_trip_at_their_zones() {
 
 #[test]
 fn k1_dropping_at_the_trip_stops_the_cabin_short_of_the_buffer() {
-    // SPEC §6: the overtravel trip drops K1 at once (here with no reaction delay).
+    // docs/safety.md: the overtravel trip drops K1 at once (here with no reaction delay).
     let mut lift = driving(0.0, false, 11_000);
     run_to(&mut lift, |k| matches!(k, EventKind::Overtravel { .. }));
     let t = lift.now();

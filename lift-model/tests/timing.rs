@@ -1,4 +1,4 @@
-//! Edges exact in time (SPEC §4): each vane edge and trip comes at the analytic crossing time,
+//! Edges exact in time (docs/lift-plant.md): each vane edge and trip comes at the analytic crossing time,
 //! rounded up to the first nanosecond at which the new level holds, for steady speed, ramps
 //! and braking, and whatever step the caller takes.
 

@@ -1,4 +1,4 @@
-//! The order of the vane sensors' edges (SPEC §4; seed 003 §6.4 and tables 6.3–6.5): the
+//! The order of the vane sensors' edges (docs/lift-plant.md; seed 003 §6.4 and tables 6.3–6.5): the
 //! floor-1 vane is turned so the left sensor meets its long track first going down, at every
 //! other floor the right sensor does; going up the order mirrors; both on is the level zone.
 

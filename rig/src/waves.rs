@@ -1,5 +1,5 @@
 //! Waveform outputs of a run: the VCD of `asi-lift run --vcd` and the line-voltage CSV of
-//! `--csv` (SPEC §1 "Waveform", §7).
+//! `--csv` (docs/physical-layer.md "Waveform", §7).
 //!
 //! The VCD holds, for the whole run, the AS-i line as the Manchester level (one record per
 //! pulse, so a pulse that repeats the level — a line fault — is still a record), the decoded

@@ -1,9 +1,9 @@
-//! safety: the TwinSAFE logic and PLCopen safety blocks that guard the asi-lift lift (SPEC §6).
+//! safety: the TwinSAFE logic and PLCopen safety blocks that guard the asi-lift lift (docs/safety.md).
 //!
 //! - [`primitives`]: IEC `R_TRIG`, `F_TRIG`, `TON` and the TwinSAFE 0→1→0 pulse detector;
 //! - [`kl6904`]: the Beckhoff KL6904 logic terminal (seed 004);
 //! - [`plcopen`]: SF_EmergencyStop (seed 002), SF_Equivalent and SF_EDM;
-//! - [`lift`]: the lift's safety project (SPEC §6), the API the rig wires.
+//! - [`lift`]: the lift's safety project (docs/safety.md), the API the rig wires.
 //!
 //! All time is [`asi_phy::SimTime`], passed in by the caller; nothing reads the wall clock and
 //! nothing is random, so a run is reproducible scan by scan.

@@ -1,4 +1,4 @@
-//! The lift's safety project (SPEC §6; reference/safety.md §8.4): a KL6904 that owns the drive
+//! The lift's safety project (docs/safety.md; docs/safety-logic.md §8.4): a KL6904 that owns the drive
 //! contactor K1 and guards the lift for the cabin STOP button, the overtravel limits and
 //! overload.
 //!
@@ -38,7 +38,7 @@ use crate::kl6904::TwinSafeLogic;
 ///
 /// Why: the logic must see every change of its inputs at a finer grain than the times it
 /// monitors. 1 ms resolves the 50 ms STOP discrepancy time to 2 % and the 100 ms watchdog to
-/// 1 %; it is shorter than one AS-i cycle of the lab bus ((9 + 2) · 154 µs ≈ 1.7 ms, SPEC §2),
+/// 1 %; it is shorter than one AS-i cycle of the lab bus ((9 + 2) · 154 µs ≈ 1.7 ms, docs/master.md),
 /// so the safety monitor's release state is sampled at least once per bus cycle, and ten times
 /// finer than the controller's 10 ms scan, so a controller pulse (≥ one controller scan) is
 /// always seen high and low. Each connection exchanges one telegram per scan; scanning much
@@ -46,7 +46,7 @@ use crate::kl6904::TwinSafeLogic;
 pub const SAFETY_SCAN_PERIOD: SimDuration = SimDuration::from_millis(1);
 
 /// How the default STOP delay (the time EStopDelOut keeps K1 closed after STOP) is derived from
-/// the lift: the controller stops at the next floor in the direction of travel (SPEC §5), so
+/// the lift: the controller stops at the next floor in the direction of travel (docs/controller.md), so
 /// the delay must cover the worst case of a STOP pressed just after leaving a floor.
 ///
 /// Worst case = run at travel speed up to the approach point, creep over the approach
@@ -54,7 +54,7 @@ pub const SAFETY_SCAN_PERIOD: SimDuration = SimDuration::from_millis(1);
 ///
 /// `delay = (pitch − approach) / v_travel + approach / v_creep + v_creep / a_brake + margin`
 ///
-/// With the defaults (SPEC §4: pitch 400 mm; Rychlost 10000 → 59.416 mm/s, 6000 → 20.550 mm/s;
+/// With the defaults (docs/lift-plant.md: pitch 400 mm; Rychlost 10000 → 59.416 mm/s, 6000 → 20.550 mm/s;
 /// the long vane track starts braking 40 mm before the level; 500 mm/s² brake; 1 s margin for
 /// ramps and the controller's 10 ms reaction) that is 6.059 + 1.946 + 0.041 + 1 = 9.046 s,
 /// rounded up to the next 100 ms: **9.1 s**. A plain "one pitch at travel speed plus braking"
@@ -109,7 +109,7 @@ impl StopDelayModel {
 pub struct LiftSafetyConfig {
     /// Delay of EStopDelOut: how long K1 stays closed after STOP (default: [`StopDelayModel`]).
     pub estop_delay: SimDuration,
-    /// Discrepancy time of the two STOP channels (SPEC §6: 50 ms).
+    /// Discrepancy time of the two STOP channels (docs/safety.md: 50 ms).
     pub stop_discrepancy: SimDuration,
     /// Watchdog time of both TwinSAFE connections.
     ///

@@ -1,6 +1,6 @@
 //! IEC 61131-3 standard function blocks and the TwinSAFE 0→1→0 pulse detector.
 //!
-//! reference/safety.md §8.1 item 2: `R_TRIG`, `F_TRIG` and `TON` with IEC semantics, and the
+//! docs/safety-logic.md §8.1 item 2: `R_TRIG`, `F_TRIG` and `TON` with IEC semantics, and the
 //! "0→1→0" pulse that Restart and ERR_ACK use, acting on the falling edge (§10 point 2).
 //! Time is passed in as [`SimTime`]; nothing here reads a clock.
 
@@ -59,7 +59,7 @@ impl FTrig {
 /// On-delay timer `TON` (IEC 61131-3 table 36).
 ///
 /// While IN is TRUE, the elapsed time ET counts from the call at which IN became TRUE, and
-/// Q is TRUE once ET ≥ PT. IN = FALSE resets ET and Q at once. **Decision** (reference/safety.md
+/// Q is TRUE once ET ≥ PT. IN = FALSE resets ET and Q at once. **Decision** (docs/safety-logic.md
 /// §8.1): with PT = 0, Q is TRUE on the same call at which IN first is TRUE.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Ton {
@@ -110,10 +110,10 @@ impl Ton {
 /// The TwinSAFE "0→1→0" pulse detector for Restart and ERR_ACK (seed 004 §3.1, §4.4).
 ///
 /// The rising edge *arms* it and the falling edge *fires* it, so a button held down does
-/// nothing until it is let go (reference/safety.md §6.1: the RESET state "waits for the negative
+/// nothing until it is let go (docs/safety-logic.md §6.1: the RESET state "waits for the negative
 /// edge"; §10 point 2: act on the falling edge).
 ///
-/// **Decisions** (reference/safety.md §8.1 item 3, left open by the sources):
+/// **Decisions** (docs/safety-logic.md §8.1 item 3, left open by the sources):
 /// - the pulse counts only if the caller's condition holds at the rising edge *and* stays true
 ///   until the falling edge; a pulse begun while the condition was false is ignored and a fresh
 ///   pulse is needed;

@@ -1,5 +1,5 @@
 //! A KL6904 project running scan by scan: groups, ERR_ACK, connections over the black channel
-//! (reference/safety.md §9.2 "Group / connection"), DECOUPLE, OUT_ERR and the logic fault.
+//! (docs/safety-logic.md §9.2 "Group / connection"), DECOUPLE, OUT_ERR and the logic fault.
 
 use asi_phy::{SimDuration, SimTime};
 use safety::kl6904::connection::{ChannelFault, ConnDiag};

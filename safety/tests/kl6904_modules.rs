@@ -1,4 +1,4 @@
-//! KL6904 function modules scan by scan: reference/safety.md §9.2 "KL6904 ESTOP", MON with
+//! KL6904 function modules scan by scan: docs/safety-logic.md §9.2 "KL6904 ESTOP", MON with
 //! manual restart, OPMODE with none, one and two inputs.
 
 use asi_phy::{SimDuration, SimTime};

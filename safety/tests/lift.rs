@@ -1,4 +1,4 @@
-//! The lift's safety project (SPEC §6): K1 is never closed while STOP is demanded past the
+//! The lift's safety project (docs/safety.md): K1 is never closed while STOP is demanded past the
 //! delay, while overloaded, while an overtravel sensor is tripped, or after a group error
 //! until acknowledged; and the rig's API around it.
 

@@ -1,4 +1,4 @@
-//! The invariants of reference/safety.md §9.1 as property tests over random input traces.
+//! The invariants of docs/safety-logic.md §9.1 as property tests over random input traces.
 
 use asi_phy::{SimDuration, SimTime};
 use proptest::prelude::*;
@@ -118,7 +118,7 @@ proptest! {
         }
     }
 
-    /// The composite "DiagnosticsConcept" of reference/safety.md §9.1 as the lift's STOP chain:
+    /// The composite "DiagnosticsConcept" of docs/safety-logic.md §9.1 as the lift's STOP chain:
     /// two NC channels → SF_Equivalent → SF_EmergencyStop → SF_EDM → contactor.
     #[test]
     fn stop_chain_invariants(

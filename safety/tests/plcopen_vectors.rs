@@ -1,4 +1,4 @@
-//! Cycle-by-cycle vectors of reference/safety.md §9.2 for the PLCopen blocks.
+//! Cycle-by-cycle vectors of docs/safety-logic.md §9.2 for the PLCopen blocks.
 
 use asi_phy::{SimDuration, SimTime};
 use safety::plcopen::{
@@ -6,7 +6,7 @@ use safety::plcopen::{
     SfEquivalentInputs,
 };
 
-/// One row of a SF_EmergencyStop vector, in the column order of reference/safety.md §9.2:
+/// One row of a SF_EmergencyStop vector, in the column order of docs/safety-logic.md §9.2:
 /// Activate, S_EStopIn, Reset → DiagCode, S_EStopOut, SafetyDemand, ResetRequest, Error.
 type Row = (u8, u8, u8, u16, u8, u8, u8, u8);
 
@@ -45,7 +45,7 @@ fn run_estop(start_reset: bool, auto_reset: bool, rows: &[Row]) {
 
 #[test]
 fn estop_fig23_start_reset_demand_restart() {
-    // reference/safety.md §9.2, S_StartReset = 0, S_AutoReset = 0.
+    // docs/safety-logic.md §9.2, S_StartReset = 0, S_AutoReset = 0.
     run_estop(
         false,
         false,
@@ -226,7 +226,7 @@ fn equivalent(fb: &mut SfEquivalent, t: u64, a: bool, b: bool) -> (u16, bool, bo
 
 #[test]
 fn equivalent_b_follows_a_within_the_discrepancy_time() {
-    // reference/safety.md §9.2: DiscrepancyTime 100 ms, scan 10 ms.
+    // docs/safety-logic.md §9.2: DiscrepancyTime 100 ms, scan 10 ms.
     let mut fb = SfEquivalent::new();
     assert_eq!(equivalent(&mut fb, 0, false, false), (0x8801, false, false));
     assert_eq!(equivalent(&mut fb, 10, true, false), (0x8802, false, false));

@@ -1,5 +1,5 @@
 //! The cabin button handshake of seed 003 table 4.7 on the whole rig: K in the PLC's request,
-//! echoed by the panel (SPEC §3). The first word after power-on needs no resynchronisation,
+//! echoed by the panel (docs/lab-bus.md). The first word after power-on needs no resynchronisation,
 //! no torn word is taken while the panel is off the bus, and words resume as soon as it is
 //! back.
 

@@ -12,7 +12,7 @@ use rig::scenario::Scenario;
 use rig::waves::WaveOutputs;
 
 /// The telegrams of a JSON-lines trace: each request at its start, each response 102 µs later
-/// (84 µs of request and the 18 µs master pause, SPEC §1).
+/// (84 µs of request and the 18 µs master pause, docs/physical-layer.md).
 fn telegrams_of_trace(jsonl: &[u8]) -> Vec<TelegramRecord> {
     let mut out = Vec::new();
     for line in String::from_utf8_lossy(jsonl).lines() {

@@ -1,4 +1,4 @@
-//! The whole AS-i segment as one sans-IO object: master, slaves, medium, monitors (SPEC §0–3).
+//! The whole AS-i segment as one sans-IO object: master, slaves, medium, monitors (docs/architecture.md–3).
 //!
 //! Drive it from a discrete-event loop: [`Bus::poll_at`] is the time of the next bus event,
 //! [`Bus::advance_to`] processes every event up to a time. Each transaction is three events:
@@ -15,7 +15,7 @@
 //! that still reached the slaves, a corrupt or colliding response) the master starts its next
 //! request no earlier than the asynchronous pause (18 µs) after the last pulse, instead of the
 //! 10 µs slave pause: receivers that saw the error need that pause to accept the repeat
-//! (A²SI; reference/asi.md §2.3). A repeat after a corrupt request (no response) still comes
+//! (A²SI; docs/asi.md §2.3). A repeat after a corrupt request (no response) still comes
 //! 154 µs after the first try; after a corrupt response it comes 162 µs after.
 //!
 //! Device inputs set between `advance_to` calls are seen by the transactions after the call
@@ -54,7 +54,7 @@ pub struct SlaveId(pub usize);
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub struct MonitorId(pub usize);
 
-/// **Decision**: slave ICs work down to 16 V (reference/asi.md §1.1: ~16..33 V); below that
+/// **Decision**: slave ICs work down to 16 V (docs/asi.md §1.1: ~16..33 V); below that
 /// they lose power and reset.
 pub const SLAVE_MIN_VOLTS: f64 = 16.0;
 /// The nominal AS-i supply (seed 003 §2.2.1: 29.5..31.6 V).

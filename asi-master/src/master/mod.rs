@@ -1,5 +1,5 @@
-//! The AS-i master: phases, lists, flags, the cycle and the process image (SPEC §2;
-//! reference/asi.md §5; seed 003 §2.2.3, table 4.1).
+//! The AS-i master: phases, lists, flags, the cycle and the process image (docs/master.md;
+//! docs/asi.md §5; seed 003 §2.2.3, table 4.1).
 //!
 //! Sans-IO: the master never sees pulses or a clock. [`Master::poll_transmit`] gives the
 //! request to start now, [`Master::handle_outcome`] takes what came back (a valid response, a
@@ -9,7 +9,7 @@
 //! The implementation is split by concern: `host` the mailbox jobs, `schedule` the next
 //! call of each phase, `requests` the telegrams, `outcomes` what a response changes.
 //!
-//! **Phases** (reference/asi.md §5.1): offline → detection (Read_IO_Configuration, Read_ID_Code,
+//! **Phases** (docs/asi.md §5.1): offline → detection (Read_IO_Configuration, Read_ID_Code,
 //! Read_ID1, Read_ID2 at 0A, 1A..31A, then 1B..31B where the A half does not hold a standard
 //! slave; builds LDS; repeated until a slave is found) → activation (protected mode: the slaves
 //! of LPS whose codes match PCD; configuration mode: every detected slave but 0; each gets
@@ -19,7 +19,7 @@
 //! LAS slave round-robin, which keeps LPF); one inclusion call to the next address that is not
 //! activated (skipped when none is left).
 //!
-//! **Decisions beyond SPEC**:
+//! **Decisions beyond the seed documents**:
 //! - Address 0 is an inclusion address only while some address 1..31 is free: with 31
 //!   standard slaves there is nothing left to include and the cycle is (31 + 1) · 154 µs.
 //! - A/B: an address with an A and a B slave in LAS is one slot, serving A in even and B in odd
@@ -55,7 +55,7 @@ mod outcomes;
 mod requests;
 mod schedule;
 
-/// The master's phase (reference/asi.md §5.1).
+/// The master's phase (docs/asi.md §5.1).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Phase {
     /// No traffic (power-on, APF, host Offline).
@@ -353,7 +353,7 @@ impl Master {
         &self.stats
     }
 
-    /// The execution-control flags (reference/asi.md §5.3).
+    /// The execution-control flags (docs/asi.md §5.3).
     pub fn flags(&self) -> EcFlags {
         self.flags
     }

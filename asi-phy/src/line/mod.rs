@@ -1,4 +1,4 @@
-//! The bus line: one medium that every receiver hears (SPEC §1; reference/asi.md §1.2), in
+//! The bus line: one medium that every receiver hears (docs/physical-layer.md; docs/asi.md §1.2), in
 //! smoltcp's manner: a [`Wire`] that carries pulses and decodes frames, and wrappers around any
 //! [`Line`] that add something on the way: [`Faulty`] corrupts the pulses (a seeded
 //! [`FaultInjector`](crate::FaultInjector) and one-shot exact [`PulseFault`](crate::PulseFault)s

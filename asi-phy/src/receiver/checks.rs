@@ -34,7 +34,7 @@ impl Check {
         Check::Length,
     ];
 
-    /// The check's name as SPEC §1 spells it.
+    /// The check's name as docs/physical-layer.md spells it.
     pub const fn name(self) -> &'static str {
         match self {
             Check::StartBit => "start bit",
@@ -102,7 +102,7 @@ impl Checks {
         Checks(self.0 | ((failed as u8) << check as u8))
     }
 
-    /// The first failed check in the fixed order of SPEC §1, the telegram's primary class.
+    /// The first failed check in the fixed order of docs/physical-layer.md, the telegram's primary class.
     pub const fn primary(self) -> Option<Check> {
         if self.0 == 0 {
             return None;

@@ -1,10 +1,10 @@
-//! The AS-i receiver: pulses in, telegrams out, each with the seven receiver checks (SPEC §1
-//! "The seven receiver checks"; reference/asi.md §3.1; seed 003 §2.2.2).
+//! The AS-i receiver: pulses in, telegrams out, each with the seven receiver checks (docs/physical-layer.md
+//! "The seven receiver checks"; docs/asi.md §3.1; seed 003 §2.2.2).
 //!
 //! A telegram is the run of pulses between two pauses. The receiver anchors the half-bit grid at
 //! the first pulse of the run, places every later pulse on the nearest grid point, and decodes
 //! bit `i` from the pulse at the middle of its cell (grid point `2i + 1`: negative = 1,
-//! positive = 0). It then applies the checks of SPEC §1, with these precisions (**Decision**,
+//! positive = 0). It then applies the checks of docs/physical-layer.md, with these precisions (**Decision**,
 //! recorded in the README):
 //!
 //! | check | fails when |

@@ -4,7 +4,7 @@ use super::fields::{Address, Nibble, Select};
 use super::frames::Request;
 use core::fmt;
 
-/// What a request asks for (SPEC §2 table; reference/asi.md §4).
+/// What a request asks for (docs/master.md table; docs/asi.md §4).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Call {
     /// Data_Exchange: outputs in, inputs back. For an A/B slave I3 is the select bit
@@ -83,7 +83,7 @@ pub enum Call {
     },
     /// Broadcast reset; no answer.
     BroadcastReset,
-    /// A code that is no call of SPEC §2 (reserved or manufacturer-specific), with its bits.
+    /// A code that is no call of docs/master.md (reserved or manufacturer-specific), with its bits.
     Unknown {
         /// The control bit.
         cb: bool,
@@ -171,7 +171,7 @@ impl fmt::Display for Call {
 }
 
 impl Request {
-    /// Classifies the request (SPEC §2 table). Every bit pattern has an answer: codes that are
+    /// Classifies the request (docs/master.md table). Every bit pattern has an answer: codes that are
     /// no call keep their raw fields in [`Call::Unknown`].
     ///
     /// Overlapping encodings are resolved as a slave IC does: at address 0 a CB = 0 call is

@@ -10,7 +10,7 @@ pub struct Nibble(pub(super) u8);
 impl Nibble {
     /// 0000.
     pub const ZERO: Nibble = Nibble(0);
-    /// 1111 (the default output value of a master, reference/asi.md §5.1).
+    /// 1111 (the default output value of a master, docs/asi.md §5.1).
     pub const ALL: Nibble = Nibble(0xF);
 
     /// `v` as a nibble, or `None` if `v > 15`.
@@ -92,7 +92,7 @@ impl fmt::Display for Address {
     }
 }
 
-/// The A/B select of extended addressing (SPEC §2; reference/asi.md §4.2). A standard slave
+/// The A/B select of extended addressing (docs/master.md; docs/asi.md §4.2). A standard slave
 /// answers the `A` encodings.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub enum Select {

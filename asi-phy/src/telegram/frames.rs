@@ -45,16 +45,16 @@ pub enum TelegramError {
         /// The call's name.
         call: &'static str,
     },
-    /// Address 0B does not exist (reference/asi.md §4.2).
+    /// Address 0B does not exist (docs/asi.md §4.2).
     #[error("address 0B does not exist")]
     ZeroB,
 }
 
-/// A master request, 14 bits: ST CB A4..A0 I4..I0 PB EB (SPEC §1).
+/// A master request, 14 bits: ST CB A4..A0 I4..I0 PB EB (docs/physical-layer.md).
 #[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub struct Request(u16);
 
-/// A slave response, 7 bits: ST I3..I0 PB EB (SPEC §1).
+/// A slave response, 7 bits: ST I3..I0 PB EB (docs/physical-layer.md).
 #[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub struct Response(u8);
 
@@ -147,7 +147,7 @@ impl Request {
     }
 
     /// Data_Exchange with an A/B slave: three outputs D2..D0; I3 carries the select bit,
-    /// 1 for A and 0 for B (SPEC §2 decision).
+    /// 1 for A and 0 for B (docs/master.md decision).
     pub const fn data_exchange_ab(
         address: Address,
         select: Select,

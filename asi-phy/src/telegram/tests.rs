@@ -8,7 +8,7 @@ fn n(v: u8) -> Nibble {
     Nibble::new(v).expect("test nibble")
 }
 
-/// The literal strings of SAP5 Table 6 (reference/asi.md §1.3) and SPEC §1's vectors.
+/// The literal strings of SAP5 Table 6 (docs/asi.md §1.3) and docs/physical-layer.md's vectors.
 #[test]
 fn bit_strings_match_the_datasheet_literals() {
     assert_eq!(Request::broadcast_reset().bits(), 0b01111111010111);
@@ -22,7 +22,7 @@ fn bit_strings_match_the_datasheet_literals() {
     assert_eq!(Response::new(n(0b0000)).bits(), 0b0000001);
 }
 
-/// The information-field codes of reference/asi.md §4 (hex view, standard mode).
+/// The information-field codes of docs/asi.md §4 (hex view, standard mode).
 #[test]
 fn command_codes_match_the_call_table() {
     let cases: [(Result<Request, TelegramError>, u8); 6] = [

@@ -4,7 +4,7 @@ use super::render::{Waveform, WaveformError};
 use crate::pulse::{Polarity, Pulse};
 use crate::time::{SimDuration, SimTime};
 
-/// Comparator settings (SPEC §1; reference/asi.md §1.1).
+/// Comparator settings (docs/physical-layer.md; docs/asi.md §1.1).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct DemodConfig {
     /// Nominal pulse amplitude in volts (the 30 % ignore level is taken from it).

@@ -12,7 +12,7 @@ use asi_phy::{Nibble, SimTime};
 pub const AC2618_MAX_UA: u16 = 20_000;
 
 /// The IFM AC2618 two-channel current-loop output at address 10 (S-7.3.5). Channel 1 carries
-/// the lift's speed set-point Rychlost in µA (4000 = 4 mA = standstill, SPEC §4).
+/// the lift's speed set-point Rychlost in µA (4000 = 4 mA = standstill, docs/lift-plant.md).
 ///
 /// **Decisions**: the value is the current in µA; values above 20000 are driven as 20000 µA
 /// and values with bit 15 set (negative) as 0; until the first valid value after power-up the

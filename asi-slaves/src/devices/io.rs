@@ -50,7 +50,7 @@ impl Peripheral for IoModule {
     any_impls!();
 }
 
-/// The converter's I/O module at address 7 (AC2258; SPEC §3): out D0 = run, D1 = direction
+/// The converter's I/O module at address 7 (AC2258; docs/lab-bus.md): out D0 = run, D1 = direction
 /// (1 up, 0 down); in D0 = converter ready, D1 = converter fault.
 #[derive(Clone, Debug, Default)]
 pub struct Converter {
@@ -94,7 +94,7 @@ impl Peripheral for Converter {
     any_impls!();
 }
 
-/// The IFM IG5886 load sensor at address 8 (S-1.1; SPEC §3 decision): inputs D1..D0 = load
+/// The IFM IG5886 load sensor at address 8 (S-1.1; docs/lab-bus.md decision): inputs D1..D0 = load
 /// level 0 empty, 1 loaded, 2 full, 3 overloaded; D2 = operation ready (S-1.1, always 1 while
 /// powered); D3 is an output (IO code 1) and reads back as sent.
 #[derive(Clone, Debug, Default)]

@@ -1,4 +1,4 @@
-//! The lab lift's slave devices (SPEC §3 table; seed 003 table 3.1) and generic ones, each a
+//! The lab lift's slave devices (docs/lab-bus.md table; seed 003 table 3.1) and generic ones, each a
 //! [`Peripheral`](crate::slave::Peripheral) with its peripheral side as plain signals the rig
 //! connects to the lift plant.
 //!
@@ -32,7 +32,7 @@ pub const AC2258: SlaveCodes = SlaveCodes::new(0x7, 0x0, 0xF, 0xE);
 pub const IG5886: SlaveCodes = SlaveCodes::new(0x1, 0x1, 0xF, 0xF);
 /// IFM AC2618, two-channel current-loop output: S-7.3.5 (seed 003 table 3.1).
 pub const AC2618: SlaveCodes = SlaveCodes::new(0x7, 0x3, 0xF, 0x5);
-/// IFM GG505S, safety sensor: S-0.B.F (seed 003 §6.3; SPEC §3).
+/// IFM GG505S, safety sensor: S-0.B.F (seed 003 §6.3; docs/lab-bus.md).
 pub const GG505S: SlaveCodes = SlaveCodes::new(0x0, 0xB, 0xF, 0xF);
 /// A generic two-channel S-7.3 analog input: S-7.3.D (ID2 = 1101: input, analog, 2 channels).
 pub const ANALOG_INPUT_2CH: SlaveCodes = SlaveCodes::new(0x7, 0x3, 0xF, 0xD);

@@ -1,4 +1,4 @@
-//! The IFM GG505S safety sensor (S-0.B.F, Safety at Work; reference/asi.md §7; SPEC §3).
+//! The IFM GG505S safety sensor (S-0.B.F, Safety at Work; docs/asi.md §7; docs/lab-bus.md).
 
 use super::any_impls;
 use crate::monitor::CodeTable;
@@ -6,7 +6,7 @@ use crate::slave::Peripheral;
 use asi_phy::{Nibble, SimDuration, SimTime};
 
 /// How long a safe slave keeps the same code after a Data_Exchange, so that an immediate master
-/// repeat gets the same code (SAP5 datasheet p.50: 224 µs + 16 µs; reference/asi.md §7).
+/// repeat gets the same code (SAP5 datasheet p.50: 224 µs + 16 µs; docs/asi.md §7).
 pub const CODE_HOLD: SimDuration = SimDuration::from_micros(240);
 
 /// A safe input slave: while free it answers each Data_Exchange with the next value of its own

@@ -1,4 +1,4 @@
-//! Captures of the line decoded into telegrams (`asi-lift decode`; SPEC §1).
+//! Captures of the line decoded into telegrams (`asi-lift decode`; docs/physical-layer.md).
 //!
 //! A capture is an oscilloscope's `time,voltage` CSV, or a VCD with one of two signals:
 //!

@@ -8,7 +8,7 @@ use asi_phy::{Address, Nibble, PulseTrain, Request, Response};
 use proptest::prelude::*;
 use std::fmt::Write as _;
 
-/// SPEC §1 worked vectors: Data_Exchange 5 out=1010 from 10 µs, then the response 0110
+/// docs/physical-layer.md worked vectors: Data_Exchange 5 out=1010 from 10 µs, then the response 0110
 /// 18 µs after the request's last pulse (94 µs).
 fn spec_records() -> Vec<TelegramRecord> {
     vec![
@@ -35,7 +35,7 @@ fn spec_records() -> Vec<TelegramRecord> {
     ]
 }
 
-/// Pulses in SPEC §1 notation (`0- 1+ ..`, grid points of 3 µs) from `start_us`.
+/// Pulses in docs/physical-layer.md notation (`0- 1+ ..`, grid points of 3 µs) from `start_us`.
 fn spec_pulses(spec: &str, start_us: u64) -> Vec<Pulse> {
     spec.split_whitespace()
         .map(|tok| {
@@ -93,7 +93,7 @@ fn telegrams(text: &str) -> Vec<TelegramRecord> {
 const SPEC_WIRE_VCD: &str = "\
 $date asi-lift test $end
 $version hand-written $end
-$comment SPEC 1 worked vectors: Data_Exchange 5 out=1010, response 0110 $end
+$comment docs/physical-layer.md worked vectors: Data_Exchange 5 out=1010, response 0110 $end
 $timescale 1 us $end
 $scope module rig $end
 $scope module bus $end

@@ -5,7 +5,7 @@ use asi_phy::SimDuration;
 use core::fmt;
 
 /// The program's settings. Defaults: the seed's set-points (µA of the current loop) and timer,
-/// a 10 ms scan (SPEC §5).
+/// a 10 ms scan (docs/controller.md).
 #[derive(Clone, Debug, PartialEq)]
 pub struct ControllerConfig {
     /// Floors served, 2..=24.

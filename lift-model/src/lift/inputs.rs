@@ -9,9 +9,9 @@ use crate::display::{DisplayId, DisplayState};
 use crate::sensor::{End, VaneSensor};
 
 impl Lift {
-    /// The coil of contactor K1, driven by the safety logic (SPEC §6): `true` energised.
+    /// The coil of contactor K1, driven by the safety logic (docs/safety.md): `true` energised.
     ///
-    /// K1 feeds the converter (a decision: SPEC §4 says only "power only while K1 is closed").
+    /// K1 feeds the converter (a decision: docs/lift-plant.md says only "power only while K1 is closed").
     /// Opening it removes drive power: the converter goes dark (ready and fault outputs 0,
     /// a latched stall fault is cleared) and the brake stops the cabin at
     /// `drive.brake_decel_mm_s2`. Closing it again restarts the converter at once, catching
@@ -25,7 +25,7 @@ impl Lift {
         Ok(())
     }
 
-    /// Fault injection: K1's main contacts weld (SPEC §4, for testing EDM, SPEC §6).
+    /// Fault injection: K1's main contacts weld (docs/lift-plant.md, for testing EDM, docs/safety.md).
     ///
     /// Welded contacts are closed and stay closed when the coil drops. If the contacts are
     /// open when the fault is set, they weld the next time they close (welding happens
@@ -51,7 +51,7 @@ impl Lift {
     }
 
     /// The converter's inputs: run, direction (`up`: 1 up, 0 down; slave 7 outputs D0, D1,
-    /// SPEC §3) and the current-loop set-point `Rychlost` in µA (slave 10, seed 003 table 6.6).
+    /// docs/lab-bus.md) and the current-loop set-point `Rychlost` in µA (slave 10, seed 003 table 6.6).
     ///
     /// With power and no fault the converter ramps its frequency at `drive.ramp_hz_per_s`
     /// toward [`crate::converter_frequency_hz`] of the set-point in the given direction, or
@@ -132,7 +132,7 @@ impl Lift {
     }
 
     /// Fault injection on one NC channel of the STOP switch (for the safety logic's
-    /// discrepancy check, SPEC §6).
+    /// discrepancy check, docs/safety.md).
     pub fn set_stop_channel_fault(
         &mut self,
         now: SimTime,
@@ -158,14 +158,14 @@ impl Lift {
         Ok(())
     }
 
-    /// The lab door, moved by hand (SPEC §4): `true` closed.
+    /// The lab door, moved by hand (docs/lift-plant.md): `true` closed.
     pub fn set_door(&mut self, now: SimTime, closed: bool) -> Result<(), PlantError> {
         self.catch_up(now)?;
         self.door_closed = closed;
         Ok(())
     }
 
-    /// The load in the cabin (SPEC §3 slave 8). It does not change the drive's speed: the
+    /// The load in the cabin (docs/lab-bus.md slave 8). It does not change the drive's speed: the
     /// seed's slip is a constant 0.1.
     pub fn set_load(&mut self, now: SimTime, load: LoadLevel) -> Result<(), PlantError> {
         self.catch_up(now)?;

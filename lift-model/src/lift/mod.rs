@@ -1,4 +1,4 @@
-//! The plant: its state and how it is built (SPEC §4). The event loop and the cabin's motion
+//! The plant: its state and how it is built (docs/lift-plant.md). The event loop and the cabin's motion
 //! are in `time`, the inputs in `inputs`, the outputs in `outputs`.
 
 mod inputs;
@@ -87,7 +87,7 @@ enum Goal {
     Crank { target_mm: f64 },
 }
 
-/// Contactor K1 between the mains and the converter (SPEC §4, §6).
+/// Contactor K1 between the mains and the converter (docs/lift-plant.md, §6).
 #[derive(Clone, Copy, Debug)]
 struct Contactor {
     coil: bool,
@@ -121,7 +121,7 @@ impl Iterator for Events<'_> {
 impl ExactSizeIterator for Events<'_> {}
 
 /// The laboratory lift of seed 003 as a plant: shaft, cabin, converter, motor, brake, K1,
-/// sensors, buttons, door, load and displays (SPEC §4). Sans-IO: time is passed in.
+/// sensors, buttons, door, load and displays (docs/lift-plant.md). Sans-IO: time is passed in.
 ///
 /// # Time and events
 ///

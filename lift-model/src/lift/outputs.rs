@@ -50,7 +50,7 @@ impl Lift {
     }
 
     /// The overtravel safety sensor at `end` is free (not tripped); its safety slave sends its
-    /// code sequence while free (SPEC §3 slaves 11, 12).
+    /// code sequence while free (docs/lab-bus.md slaves 11, 12).
     pub fn overtravel_free(&self, end: End) -> bool {
         match end {
             End::Bottom => !self.levels.bottom_tripped,
@@ -73,7 +73,7 @@ impl Lift {
         self.k1.main_closed
     }
 
-    /// K1's auxiliary contact for EDM (SPEC §6): an NC mirror contact (IEC 60947-4-1
+    /// K1's auxiliary contact for EDM (docs/safety.md): an NC mirror contact (IEC 60947-4-1
     /// Annex F), closed (`true`) exactly when the main contacts are open. So it reads `true`
     /// when K1 has dropped and stays `false` while welded main contacts hold, which is how
     /// the safety logic's EDM input (1 = contactor released) detects the weld.
@@ -106,25 +106,25 @@ impl Lift {
         self.buttons.is_pressed(button)
     }
 
-    /// The standard contact of STOP read by the cabin slave (`Stop_1`, SPEC §3 D11):
+    /// The standard contact of STOP read by the cabin slave (`Stop_1`, docs/lab-bus.md D11):
     /// `true` pressed.
     pub fn stop_pressed(&self) -> bool {
         self.buttons.is_pressed(Button::Stop)
     }
 
-    /// The two NC channels of STOP for the safety logic (SPEC §6): `true` closed, i.e. not
+    /// The two NC channels of STOP for the safety logic (docs/safety.md): `true` closed, i.e. not
     /// pressed, unless a channel fault is injected.
     pub fn stop_channels(&self) -> [bool; 2] {
         let pressed = self.stop_pressed();
         self.stop_faults.map(|fault| fault.nc_reads(pressed))
     }
 
-    /// The door-closed sensor `SnZavD` (SPEC §3 D13): `true` closed.
+    /// The door-closed sensor `SnZavD` (docs/lab-bus.md D13): `true` closed.
     pub fn door_closed(&self) -> bool {
         self.door_closed
     }
 
-    /// The load in the cabin (SPEC §3 slave 8).
+    /// The load in the cabin (docs/lab-bus.md slave 8).
     pub fn load(&self) -> LoadLevel {
         self.load
     }

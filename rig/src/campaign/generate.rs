@@ -31,7 +31,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::collections::BTreeSet;
 
-/// The slave addresses of the lab bus (SPEC §3) that faults take offline.
+/// The slave addresses of the lab bus (docs/lab-bus.md) that faults take offline.
 pub const LAB_ADDRESSES: [u8; 11] = [1, 2, 3, 4, 5, 6, 7, 8, 10, 11, 12];
 
 /// The largest total of the hand cranks in one run, mm (either way).

@@ -1,5 +1,5 @@
 //! The rig: the AS-i bus with the lab lift's slaves, the lift plant, the PLC and the safety
-//! logic on one simulated clock (SPEC §0), driven by a scenario.
+//! logic on one simulated clock (docs/architecture.md), driven by a scenario.
 //!
 //! A discrete-event loop: the next moment is the earliest of the next bus event, the plant's
 //! next edge, the next PLC scan, the next safety scan, the next scenario event and the end of

@@ -170,7 +170,7 @@ impl fmt::Display for ScenarioError {
 impl std::error::Error for ScenarioError {}
 
 /// The legal cabin heights at power-on (`lift.start_mm`) for a lift of `floors` floors, mm
-/// above the floor-1 level: the whole shaft between the mechanical ends (SPEC §4: the
+/// above the floor-1 level: the whole shaft between the mechanical ends (docs/lift-plant.md: the
 /// overtravel sensors trip 60 mm beyond the end floors, the ends are 80 mm further), because
 /// a power-on after an overrun finds the cabin on or beyond a sensor; it is recovered by hand
 /// (README, Scenario files). The one place that says so: the scenario reader checks

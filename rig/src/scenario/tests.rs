@@ -254,7 +254,7 @@ mod round_trip {
 
 #[test]
 fn the_start_range_is_the_shaft_between_the_mechanical_ends() {
-    // Sensors 60 mm beyond the end floors, the ends 80 mm further (SPEC §4).
+    // Sensors 60 mm beyond the end floors, the ends 80 mm further (docs/lift-plant.md).
     assert_eq!(start_range_mm(4), -140.0..=1340.0);
     assert_eq!(start_range_mm(2), -140.0..=540.0);
     let at = |mm: f64| format!("[lift]\nfloors = 2\nstart_mm = {mm:?}\n");

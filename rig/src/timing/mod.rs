@@ -1,9 +1,9 @@
-//! `asi-lift timing`: the timing analysis of SPEC §7 for the lab bus, a bus of N standard
+//! `asi-lift timing`: the timing analysis of docs/timing.md for the lab bus, a bus of N standard
 //! slaves or 62 A/B slaves, analytic and simulated side by side.
 //!
 //! **Analytic.** One transaction is request + master pause + response + slave pause (154 µs
-//! with the default [`BusTiming`], SPEC §1). The seed's cycle is T = (n + 2) · 154 µs for n
-//! slaves (seed 003 §2.1). The model's own cycle (SPEC §2) is one transaction per LAS slot, one
+//! with the default [`BusTiming`], docs/physical-layer.md). The seed's cycle is T = (n + 2) · 154 µs for n
+//! slaves (seed 003 §2.1). The model's own cycle (docs/master.md) is one transaction per LAS slot, one
 //! management call, and one inclusion call while an address is left to include:
 //! (slots + 2) · 154 µs, or (slots + 1) · 154 µs with every address used; an address holding an
 //! A and a B slave is one slot serving them in alternate cycles, so each of them sees twice the
@@ -17,7 +17,7 @@
 //! independently, so a pulse comes through untouched with probability c = (1 − p/4)⁴. Every
 //! single pulse fault fails one of the seven receiver checks (asi-phy's exhaustive test), and a
 //! corrupt request gets no answer, so a transaction of m request and s response pulses fails
-//! with q = 1 − c^(m+s). A failure is repeated once at once (SPEC §2), so the expected number
+//! with q = 1 − c^(m+s). A failure is repeated once at once (docs/master.md), so the expected number
 //! of repeats per cycle is Σ q over the cycle's transactions that expect an answer, each repeat
 //! costing one transaction time; a corrupt response also delays the next request by the
 //! asynchronous pause minus the slave pause (18 − 10 = 8 µs, asi-master `bus`). The pulse
@@ -40,7 +40,7 @@
 //! registered when the PLC program holds it (as target or in FIFO_Patra); the converter's run
 //! bit is first seen on the bus in the first intact Data_Exchange to address 7 that carries it.
 //! 0.3..1 s after the run bit, STOP is pressed at a random moment: the safety logic's EStopOut
-//! drops, and K1 opens after the STOP delay (SPEC §6); the cabin stops at the floor it was
+//! drops, and K1 opens after the STOP delay (docs/safety.md); the cabin stops at the floor it was
 //! heading for, and a cabin request there restarts the STOP circuit for the next sample. So one
 //! trip gives one sample of each chain.
 

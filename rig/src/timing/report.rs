@@ -94,7 +94,7 @@ pub struct LabTiming {
     pub latencies: Latencies,
 }
 
-/// The timing analysis of one bus configuration (SPEC §7).
+/// The timing analysis of one bus configuration (docs/timing.md).
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct TimingReport {
     /// The bus, in words.

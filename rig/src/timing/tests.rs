@@ -22,7 +22,7 @@ fn exact(f: &Figure, v: f64) {
     }
 }
 
-/// Without errors every cycle is the model's formula (SPEC §2), which is the seed's
+/// Without errors every cycle is the model's formula (docs/master.md), which is the seed's
 /// (n + 2) · 154 µs wherever an inclusion address is left; 31 slaves leave none.
 #[test]
 fn clean_buses_run_the_model_formula_exactly() {
@@ -123,7 +123,7 @@ fn the_lab_lift_on_a_full_bus_is_deterministic() {
 }
 
 /// With line noise the repeat count and the mean cycle lie within 5 standard errors of the
-/// error model's expectation (SPEC §7: "within statistical bounds").
+/// error model's expectation (docs/timing.md: "within statistical bounds").
 #[test]
 fn noisy_buses_agree_with_the_error_model() {
     for (bus, p, secs) in [

@@ -1,5 +1,5 @@
 //! TwinSAFE connections: the safe telegram over an untrusted ("black") channel (seed 004 §3.2,
-//! §3.3; reference/safety.md §1.3, §1.4, §6.3, §9.2 "Group / connection").
+//! §3.3; docs/safety-logic.md §1.3, §1.4, §6.3, §9.2 "Group / connection").
 //!
 //! The logic is the TwinSAFE master of every connection to a safe I/O terminal. Each safety
 //! scan it sends one request to the partner and checks the partner's reply:
@@ -10,11 +10,11 @@
 //! ```
 //!
 //! **Decisions** (the KL-series TwinSAFE protocol is not public; it is close to PROFIsafe,
-//! reference/safety.md §1.4 INFER, §10 point 9 — the KL model is used, not FSoE):
+//! docs/safety-logic.md §1.4 INFER, §10 point 9 — the KL model is used, not FSoE):
 //! - the telegram is 8 bytes: data, status/control, sequence number (u16 LE), sender address
 //!   (u16 LE), CRC (u16 LE);
 //! - the CRC is the FSoE CRC-16 (polynomial 0x39B7, MSB first, initial value 0, no final XOR;
-//!   reference/safety.md §6.3) over both addresses, the sequence number, data and status; the
+//!   docs/safety-logic.md §6.3) over both addresses, the sequence number, data and status; the
 //!   *receiver's* address enters the CRC without being sent, so a telegram meant for another
 //!   connection fails the CRC;
 //! - the master drives the sequence number (PROFIsafe consecutive number): it sends N until a
@@ -28,7 +28,7 @@
 //!   address bit; the event text names the address;
 //! - any error latches in the diag byte, the logic then uses fail-safe values (all inputs 0,
 //!   diag bit 7 "ActivateFV") and the group shows COM_ERR; restoring telegrams does not clear it,
-//!   only the group's ERR_ACK, and only while valid telegrams arrive (reference/safety.md §9.2);
+//!   only the group's ERR_ACK, and only while valid telegrams arrive (docs/safety-logic.md §9.2);
 //! - one telegram per direction per safety scan; the black channel delivers it within the scan
 //!   unless a fault says otherwise; diag bit 1 (invalid K-bus state) is never raised.
 
@@ -116,7 +116,7 @@ impl fmt::Display for ConnDiag {
 }
 
 /// CRC-16 with polynomial 0x39B7, MSB first, initial value 0, no final XOR (the FSoE CRC of
-/// ETG.5100 §8.1.3.2; reference/safety.md §6.3).
+/// ETG.5100 §8.1.3.2; docs/safety-logic.md §6.3).
 pub fn crc16(bytes: &[u8]) -> u16 {
     bytes.iter().fold(0u16, |crc, &b| {
         (0..8).fold(crc ^ (u16::from(b) << 8), |c, _| {
@@ -655,7 +655,7 @@ mod tests {
 
     #[test]
     fn crc_matches_the_fsoe_table_check_values() {
-        // reference/safety.md §6.3: t[1] = 0x39B7, t[2] = 0x736E, t[255] = 0x07C1; with a zero
+        // docs/safety-logic.md §6.3: t[1] = 0x39B7, t[2] = 0x736E, t[255] = 0x07C1; with a zero
         // initial value the CRC of the single byte b is the table entry t[b].
         assert_eq!(crc16(&[1]), 0x39B7);
         assert_eq!(crc16(&[2]), 0x736E);

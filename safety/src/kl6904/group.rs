@@ -1,10 +1,10 @@
-//! TwinSAFE groups (seed 004 §3.1, tables 3-1 and 3-2; reference/safety.md §1.2, §6.1).
+//! TwinSAFE groups (seed 004 §3.1, tables 3-1 and 3-2; docs/safety-logic.md §1.2, §6.1).
 
 use core::fmt;
 
 use crate::primitives::PulseDetector;
 
-/// The state of a group (reference/safety.md §6.1, the group states of the Beckhoff manual).
+/// The state of a group (docs/safety-logic.md §6.1, the group states of the Beckhoff manual).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum GroupState {
     /// RUN = FALSE (or not yet started): all modules in STOP, all outputs safe.
@@ -42,7 +42,7 @@ impl fmt::Display for GroupState {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub struct GroupErrors {
     /// At least one module of the group has an error; FALSE means no module has one (the
-    /// seed's Czech FALSE text, "all modules are faulty", is inverted: SPEC §8).
+    /// seed's Czech FALSE text, "all modules are faulty", is inverted: docs/seed-errors.md).
     pub fb_err: bool,
     /// At least one connection of the group reports an error.
     pub com_err: bool,

@@ -1,5 +1,5 @@
 //! The KL6904 runtime: one safety scan at a time on injected time (seed 004 §3;
-//! reference/safety.md §8.1, §8.3).
+//! docs/safety-logic.md §8.1, §8.3).
 //!
 //! A scan:
 //! 1. reads the inputs: the standard inputs as last set, and one telegram exchange per
@@ -73,7 +73,7 @@ pub struct GroupStatus {
     pub errors: GroupErrors,
 }
 
-/// What happened in a scan, for the log (reference/safety.md §1.4 diagnostics in words).
+/// What happened in a scan, for the log (docs/safety-logic.md §1.4 diagnostics in words).
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct LogicEvent {
     /// The scan's time.

@@ -1,5 +1,5 @@
 //! A TwinSAFE project as data: groups, connections, function modules and their wiring
-//! (seed 004 §3; reference/safety.md §1), written as a TOML file or built in code.
+//! (seed 004 §3; docs/safety-logic.md §1), written as a TOML file or built in code.
 //!
 //! A file looks like this (the lift's project is `safety/projects/lift.toml`):
 //!

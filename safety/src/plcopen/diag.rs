@@ -5,7 +5,7 @@ use core::fmt;
 /// A PLCopen DiagCode (WORD): `0000` idle, `8xxx` active without error, `Cxxx` error.
 ///
 /// In v2.x codes the bit `0x0800` marks SafetyDemand and `0x0400` marks ResetRequest
-/// (reference/safety.md §5.1).
+/// (docs/safety-logic.md §5.1).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub struct DiagCode(pub u16);
 

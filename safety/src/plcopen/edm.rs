@@ -1,4 +1,4 @@
-//! SF_EDM, PLCopen v2.01 (reference/safety.md §5.2; FBS_EDM).
+//! SF_EDM, PLCopen v2.01 (docs/safety-logic.md §5.2; FBS_EDM).
 
 use asi_phy::{SimDuration, SimTime};
 
@@ -58,7 +58,7 @@ pub enum EdmState {
     /// `C040`/`C050`/`C060`: EDM1 / EDM2 / both still FALSE after MonitoringTime in 8810.
     NotReleasedInTime(EdmChannels),
     /// `C070`/`C080`/`C090`: EDM1 / EDM2 / both still TRUE after MonitoringTime in 8000.
-    /// **INFER**: the source table is truncated here (reference/safety.md §5.2, §10 point 7);
+    /// **INFER**: the source table is truncated here (docs/safety-logic.md §5.2, §10 point 7);
     /// the codes continue the pattern and are unverified.
     NotSwitchedInTime(EdmChannels),
 }
@@ -118,7 +118,7 @@ impl EdmState {
 /// PLCopen SF_EDM: drives an actuator (contactor) and monitors its feedback contacts.
 ///
 /// It checks the released state before enabling and that the feedback switches within
-/// MonitoringTime after every enable and disable (reference/safety.md §5.2). Transitions
+/// MonitoringTime after every enable and disable (docs/safety-logic.md §5.2). Transitions
 /// (**Decision** where the published table is silent; one per call, first match wins):
 ///
 /// | from | condition | to |

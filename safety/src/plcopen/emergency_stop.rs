@@ -1,4 +1,4 @@
-//! SF_EmergencyStop, PLCopen v2.x (seed 002, tables 22–25; reference/safety.md §2, §5.3).
+//! SF_EmergencyStop, PLCopen v2.x (seed 002, tables 22–25; docs/safety-logic.md §2, §5.3).
 
 use super::diag::DiagCode;
 use crate::primitives::RTrig;
@@ -79,7 +79,7 @@ impl EStopState {
 
 /// PLCopen SF_EmergencyStop: monitors an emergency-stop button (seed 002).
 ///
-/// Transitions (reference/safety.md §5.3, v2.01 codes; one per call, first match wins):
+/// Transitions (docs/safety-logic.md §5.3, v2.01 codes; one per call, first match wins):
 ///
 /// | from | condition | to |
 /// |---|---|---|
@@ -93,7 +93,7 @@ impl EStopState {
 /// | 8000 | ¬In | 8804 |
 /// | C001, C011 | ¬Reset | 8802, 8804 |
 ///
-/// **Decision** (reference/safety.md §2 AMBIG, §10 point 1): C001 and C011 share one text in
+/// **Decision** (docs/safety-logic.md §2 AMBIG, §10 point 1): C001 and C011 share one text in
 /// the seed; C001 is the static Reset on the start path (from 8802), C011 after a demand (from
 /// 8804). The static Reset is flagged in the *wait-for-input* states, as the v2 texts say
 /// ("checks Reset = FALSE and waits for S_EStopIn = TRUE"), so a held button can never

@@ -1,4 +1,4 @@
-//! SF_Equivalent, PLCopen v2.01 codes (reference/safety.md §5.2, §9.2; FBS_EQUI).
+//! SF_Equivalent, PLCopen v2.01 codes (docs/safety-logic.md §5.2, §9.2; FBS_EQUI).
 
 use asi_phy::{SimDuration, SimTime};
 
@@ -15,7 +15,7 @@ pub struct SfEquivalentInputs {
     /// Channel B.
     pub s_channel_b: bool,
     /// The longest time the two channels may differ. PLCopen meaning: `0` is *zero tolerance*,
-    /// not "unpaired" as in the Beckhoff blocks (reference/safety.md §10 point 3).
+    /// not "unpaired" as in the Beckhoff blocks (docs/safety-logic.md §10 point 3).
     pub discrepancy_time: SimDuration,
 }
 
@@ -34,7 +34,7 @@ pub struct SfEquivalentOutputs {
     pub diag_code: DiagCode,
 }
 
-/// The states of SF_Equivalent (FBS_EQUI; the v1 code of reference/safety.md §5.2 in brackets).
+/// The states of SF_Equivalent (FBS_EQUI; the v1 code of docs/safety-logic.md §5.2 in brackets).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum EquivalentState {
     /// `0000` not active.
@@ -85,7 +85,7 @@ impl EquivalentState {
 /// PLCopen SF_Equivalent: two equivalent (both NC) channels to one output with discrepancy-time
 /// monitoring. It has no restart interlock; put SF_EmergencyStop or similar behind it.
 ///
-/// Transitions (reference/safety.md §5.2, one per call, first match wins):
+/// Transitions (docs/safety-logic.md §5.2, one per call, first match wins):
 ///
 /// | from | condition | to |
 /// |---|---|---|
@@ -98,7 +98,7 @@ impl EquivalentState {
 /// | Cxxx | ¬A ∧ ¬B | 8801 |
 ///
 /// The discrepancy timer runs while in 8802/8804/8806 and is read at the start of the next
-/// call, so Error appears one call after the timer expires (reference/safety.md §9.1: the
+/// call, so Error appears one call after the timer expires (docs/safety-logic.md §9.1: the
 /// property "timer.Q ∧ Ready ⇒ Error" is known to fail by that one call). An error clears
 /// without Reset once both channels are FALSE.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]

@@ -6,7 +6,7 @@ use core::fmt;
 
 use crate::primitives::PulseDetector;
 
-/// The state of a stateful function module (reference/safety.md §6.1).
+/// The state of a stateful function module (docs/safety-logic.md §6.1).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum FbState {
     /// The group does not run: all outputs 0.

@@ -1,4 +1,4 @@
-//! The ESTOP function module (seed 004 §4.4; reference/safety.md §1.6).
+//! The ESTOP function module (seed 004 §4.4; docs/safety-logic.md §1.6).
 
 use asi_phy::{SimDuration, SimTime};
 

@@ -3,7 +3,7 @@
 use crate::kl6904::signal::Contact;
 
 /// AND: every activated input, after its contact type, must be 1. Inputs not activated are
-/// neutral (reference/safety.md §1.5 INFER). No error output, no discrepancy check.
+/// neutral (docs/safety-logic.md §1.5 INFER). No error output, no discrepancy check.
 ///
 /// `inputs` pairs each activated input's contact type with its raw value.
 pub fn and(inputs: impl IntoIterator<Item = (Contact, bool)>) -> bool {
@@ -17,7 +17,7 @@ pub fn or(inputs: impl IntoIterator<Item = (Contact, bool)>) -> bool {
 }
 
 /// DECOUPLE: DecIn*n* → DecOut*n*, one to one. Its point is the group boundary: the outputs
-/// are switched off with the module's own group (reference/safety.md §1.7), which the logic
+/// are switched off with the module's own group (docs/safety-logic.md §1.7), which the logic
 /// does for every module output.
 pub fn decouple(inputs: [bool; 8]) -> [bool; 8] {
     inputs

@@ -2,8 +2,8 @@
 //!
 //! Each stateful module is a plain state machine called once per safety scan with the time,
 //! whether its group runs, and its input values; it returns every output on every call
-//! (reference/safety.md §5.1 "every output must be assigned in every cycle"). The states follow
-//! the newer Beckhoff FB state names (reference/safety.md §6.1): STOP, SAFE, RUN, DELAYOUT,
+//! (docs/safety-logic.md §5.1 "every output must be assigned in every cycle"). The states follow
+//! the newer Beckhoff FB state names (docs/safety-logic.md §6.1): STOP, SAFE, RUN, DELAYOUT,
 //! ERROR; the group's RESET state lives in [`crate::kl6904::group`].
 
 /// The diagnostic accessors every stateful module (ESTOP, MON, OPMODE) has, over its [`Core`].

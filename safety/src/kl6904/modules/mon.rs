@@ -1,4 +1,4 @@
-//! The MON function module (seed 004 §4.5; reference/safety.md §1.6).
+//! The MON function module (seed 004 §4.5; docs/safety-logic.md §1.6).
 
 use asi_phy::{SimDuration, SimTime};
 
@@ -8,7 +8,7 @@ use crate::kl6904::signal::Contact;
 /// Parameters of a MON module (seed 004 §4.5.3).
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct MonConfig {
-    /// MonIn1..4 (four inputs, SPEC §8): `None` = not activated, else the contact type.
+    /// MonIn1..4 (four inputs, docs/seed-errors.md): `None` = not activated, else the contact type.
     pub inputs: [Option<Contact>; 4],
     /// Discrepancy time of pairs MonIn1/2 and MonIn3/4; non-zero makes a pair.
     pub discrepancy: [SimDuration; 2],
@@ -70,7 +70,7 @@ const SECURE_BIT: u8 = 2;
 ///   that is not 1 at that moment is an error (diag bit 4/5).
 /// - Automatic restart: the safe state is left as soon as nothing demands it; an EDM input that
 ///   is not 1 then keeps the module in SAFE *without* an error (seed 004 §4.5.1: "an EDM error
-///   is only detected with manual restart"; reference/safety.md §10 point 5 — kept as the seed
+///   is only detected with manual restart"; docs/safety-logic.md §10 point 5 — kept as the seed
 ///   says, and shown as a SAFE module whose EDM input is 0).
 /// - MonIn pairs and the Secure pair are discrepancy-monitored; manual function test as in
 ///   [`MonConfig::function_test`].

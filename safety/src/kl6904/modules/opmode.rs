@@ -1,4 +1,4 @@
-//! The OPMODE function module (seed 004 §4.3; SPEC §8; reference/safety.md §1.6).
+//! The OPMODE function module (seed 004 §4.3; docs/seed-errors.md; docs/safety-logic.md §1.6).
 
 use asi_phy::{SimDuration, SimTime};
 
@@ -37,9 +37,9 @@ pub struct OpModeOutputs {
 /// The KL6904 operating-mode selector.
 ///
 /// Only when exactly one active input is 1 is its output set; with no input or more than one
-/// input set all outputs are 0 (SPEC §8 corrects the seed's "one or more").
+/// input set all outputs are 0 (docs/seed-errors.md corrects the seed's "one or more").
 ///
-/// **Decisions** (reference/safety.md §10 point 6, not specified in detail):
+/// **Decisions** (docs/safety-logic.md §10 point 6, not specified in detail):
 /// - the discrepancy time bounds how long the selection may be invalid (none or several inputs
 ///   set) — the moment a selector switch spends between two positions; longer is an ERROR with
 ///   diag bit 0, resolved once exactly one input is set again; without a discrepancy time an
@@ -47,7 +47,7 @@ pub struct OpModeOutputs {
 /// - with Restart, any departure from the running mode (to another mode or to an invalid
 ///   selection) makes all outputs safe until a Restart pulse while a valid mode is selected;
 ///   without Restart a change from one valid mode to another switches the output in the same
-///   scan (the latched mode is what is output, never the raw inputs: reference/safety.md §5.2,
+///   scan (the latched mode is what is output, never the raw inputs: docs/safety-logic.md §5.2,
 ///   the SF_ModeSelector lesson).
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct OpMode {
