@@ -23,21 +23,11 @@ use asi_slaves::devices::{
 };
 use asi_slaves::monitor::{CodeTable, MonitorConfig, SafetyMonitor};
 use asi_slaves::slave::{Peripheral, Slave};
+use lab::address::{
+    CABIN_DISPLAY, CABIN_PANEL, CONVERTER, FREE, LOAD_SENSOR, SAFETY_BOTTOM, SAFETY_TOP,
+    SPEED_SETPOINT,
+};
 
-/// Address of the cabin display.
-pub const CABIN_DISPLAY: u8 = 5;
-/// Address of the cabin panel (buttons, bell, STOP, door, vane sensors).
-pub const CABIN_PANEL: u8 = 6;
-/// Address of the converter I/O module.
-pub const CONVERTER: u8 = 7;
-/// Address of the load sensor.
-pub const LOAD_SENSOR: u8 = 8;
-/// Address of the current-loop output.
-pub const ANALOG_OUTPUT: u8 = 10;
-/// Address of the bottom overtravel safety sensor.
-pub const SAFETY_BOTTOM: u8 = 11;
-/// Address of the top overtravel safety sensor.
-pub const SAFETY_TOP: u8 = 12;
 /// Serial numbers that seed the two safety sensors' code tables.
 pub const SAFETY_SERIALS: [u64; 2] = [0x0505_0011, 0x0505_0012];
 
@@ -51,24 +41,17 @@ pub const LAB_SLAVES: [(u8, &str, SlaveCodes); 11] = [
     (CABIN_PANEL, "cabin panel", AC2726),
     (CONVERTER, "converter I/O", AC2258),
     (LOAD_SENSOR, "load sensor", IG5886),
-    (ANALOG_OUTPUT, "current loop", AC2618),
+    (SPEED_SETPOINT, "current loop", AC2618),
     (SAFETY_BOTTOM, "bottom overtravel", GG505S),
     (SAFETY_TOP, "top overtravel", GG505S),
 ];
 
-/// The addresses the lab lift leaves free, in the order extra I/O modules take them.
-pub const EXTRA_ADDRESSES: [u8; 20] = [
-    9, 13, 14, 15, 16, 17, 18, 19, 20, 21, 22, 23, 24, 25, 26, 27, 28, 29, 30, 31,
-];
-
 fn extra_addresses(n: u8) -> Result<&'static [u8], ConfigError> {
-    EXTRA_ADDRESSES
-        .get(..n as usize)
-        .ok_or_else(|| ConfigError::Setting {
-            field: "extra I/O modules",
-            value: n.to_string(),
-            rule: "must be 0..=20 (the addresses the lab leaves free)",
-        })
+    FREE.get(..n as usize).ok_or_else(|| ConfigError::Setting {
+        field: "extra I/O modules",
+        value: n.to_string(),
+        rule: "must be 0..=20 (the addresses the lab leaves free)",
+    })
 }
 
 /// The lab lift's bus with typed access to its devices.
@@ -101,7 +84,7 @@ impl LabLift {
     }
 
     /// The projected configuration of the lab lift with `extra` plain I/O modules at the
-    /// addresses the lab leaves free ([`EXTRA_ADDRESSES`], in that order).
+    /// addresses the lab leaves free ([`FREE`], in that order).
     pub fn projected_with(extra: u8) -> Result<ProjectedConfig, ConfigError> {
         let extra = extra_addresses(extra)?;
         let lab = LAB_SLAVES.iter().map(|&(n, _, codes)| (n, codes));
@@ -124,7 +107,7 @@ impl LabLift {
             CABIN_PANEL => Box::new(CabinPanel::new()),
             CONVERTER => Box::new(Converter::new()),
             LOAD_SENSOR => Box::new(LoadSensor::new()),
-            ANALOG_OUTPUT => Box::new(AnalogOutput::new()),
+            SPEED_SETPOINT => Box::new(AnalogOutput::new()),
             SAFETY_BOTTOM => Box::new(SafetySensor::new(CodeTable::from_serial(SAFETY_SERIALS[0]))),
             SAFETY_TOP => Box::new(SafetySensor::new(CodeTable::from_serial(SAFETY_SERIALS[1]))),
             _ => return None,
@@ -137,7 +120,7 @@ impl LabLift {
     }
 
     /// The lab bus with master settings `cfg` and `extra` (0..=20) plain 4I/4O modules
-    /// (AC2726, all pins low) at the free addresses [`EXTRA_ADDRESSES`], projected too: the
+    /// (AC2726, all pins low) at the free addresses [`FREE`], projected too: the
     /// lab lift on a fuller bus, for cycle-time and latency studies (docs/timing.md).
     pub fn with_extra(cfg: MasterConfig, extra: u8) -> Result<LabLift, ConfigError> {
         let timing = cfg.timing;
@@ -220,7 +203,7 @@ impl LabLift {
     }
     /// The current-loop output.
     pub fn analog_output(&self) -> Option<&AnalogOutput> {
-        self.dev(ANALOG_OUTPUT)
+        self.dev(SPEED_SETPOINT)
     }
     /// The safety sensor at `address` (11 or 12).
     pub fn safety_sensor(&self, address: u8) -> Option<&SafetySensor> {

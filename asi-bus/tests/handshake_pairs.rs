@@ -30,28 +30,35 @@ where
 #[test]
 #[allow(clippy::unusual_byte_groupings)] // grouped by the fields of table 4.2
 fn display_word_layout_of_table_4_2() {
-    let w = DisplayWord::new(3, true, false, true, false).expect("ok");
+    let w = display_bits(3, true, false, true, false);
     // D10..D6 = 00011, D5 up = 1, D4 = 0, D3 moving = 1, D2 = 0, D1 parity.
-    assert_eq!(w.bits() >> 1, 0b00011_1_0_1_0);
-    assert!(w.parity_ok());
-    assert_eq!(w.bits() & 1, 0, "four ones already: parity 0");
-    let w = DisplayWord::new(1, false, true, false, false).expect("ok");
-    assert_eq!(w.bits(), 0b00001_0_1_0_0_0);
-    let w = DisplayWord::new(2, false, false, false, false).expect("ok");
-    assert_eq!(w.bits(), 0b00010_0_0_0_0_1, "one 1: parity 1");
-    assert_eq!((w.floor(), w.up(), w.down()), (2, false, false));
+    assert_eq!(w >> 1, 0b00011_1_0_1_0);
+    assert!(lab::display::parity_ok(w));
+    assert_eq!(w & 1, 0, "four ones already: parity 0");
     assert_eq!(
-        DisplayWord::new(25, false, false, false, false),
-        Err(DisplayWordError(25))
+        display_bits(1, false, true, false, false),
+        0b00001_0_1_0_0_0
     );
-    assert!(!DisplayWord::from_bits(0b1).parity_ok());
+    let w = display_bits(2, false, false, false, false);
+    assert_eq!(w, 0b00010_0_0_0_0_1, "one 1: parity 1");
+    let shown = lab::DisplayWord::decode(w).expect("valid");
+    assert_eq!((shown.floor, shown.up, shown.down), (2, false, false));
+    let floor_25 = lab::DisplayWord {
+        floor: 25,
+        ..lab::DisplayWord::default()
+    };
+    assert_eq!(
+        floor_25.encode(),
+        Err(lab::DisplayWordError::Floor { floor: 25 })
+    );
+    assert!(!lab::display::parity_ok(0b1));
 }
 
 #[test]
 fn floor_word_and_buttons_pass_in_both_directions() {
     let mut m = FloorStationMaster::new();
     let mut s = FloorStationSlave::new();
-    let w = DisplayWord::new(4, false, true, true, false).expect("ok");
+    let w = display_bits(4, false, true, true, false);
     m.set_word(w);
     s.set_buttons(true, false);
     s.set_buttons(false, false); // a short press, latched
@@ -91,7 +98,7 @@ fn a_floor_step_needs_the_k_toggle() {
 fn cabin_display_word_passes_in_seven_steps() {
     let mut m = CabinDisplayMaster::new();
     let mut s = CabinDisplaySlave::new();
-    let w = DisplayWord::new(17, true, false, true, true).expect("ok");
+    let w = display_bits(17, true, false, true, true);
     m.set_word(w);
     let mut dev = |o| s.step(o);
     run(|i| m.step(i), &mut dev, 40, 2);
@@ -278,7 +285,7 @@ fn cabin_panel_master_restart_mid_word_needs_no_stall() {
 fn a_requester_reset_mid_word_recovers() {
     let mut m = CabinDisplayMaster::new();
     let mut s = CabinDisplaySlave::new();
-    let w = DisplayWord::new(2, false, false, false, false).expect("ok");
+    let w = display_bits(2, false, false, false, false);
     m.set_word(w);
     let mut input = Nibble::ZERO;
     for i in 0..400 {
@@ -359,4 +366,17 @@ fn input_values_alternate_channels() {
         }
     )));
     assert!(got.iter().any(|(ch, v)| *ch == 2 && v.overflow));
+}
+
+/// The bits of the display word (lab crate) for `floor` and the four indicators.
+fn display_bits(floor: u8, up: bool, down: bool, moving: bool, fault: bool) -> u16 {
+    lab::DisplayWord {
+        floor,
+        up,
+        down,
+        moving,
+        fault,
+    }
+    .encode()
+    .expect("a floor 1..=24")
 }

@@ -4,7 +4,7 @@
 
 use asi_master::integrated_analog::S73OutputMaster;
 use asi_master::plc_handshake::{CabinDisplayMaster, CabinPanelMaster, FloorStationMaster};
-use asi_phy::handshake_words::{CabinPanelState, DisplayWord};
+use asi_phy::handshake_words::CabinPanelState;
 use asi_phy::Nibble;
 use asi_slaves::analog_firmware::S73OutputSlave;
 use asi_slaves::device_handshake::{CabinDisplaySlave, CabinPanelSlave, FloorStationSlave};
@@ -50,15 +50,17 @@ fn drive(
     }
 }
 
-fn word(floor: u8, bits: u8) -> DisplayWord {
-    DisplayWord::new(
+/// The bits of the display word (lab crate) for `floor` and the indicator bits of `bits`.
+fn word(floor: u8, bits: u8) -> u16 {
+    lab::DisplayWord {
         floor,
-        bits & 1 != 0,
-        bits & 2 != 0,
-        bits & 4 != 0,
-        bits & 8 != 0,
-    )
-    .expect("word")
+        up: bits & 1 != 0,
+        down: bits & 2 != 0,
+        moving: bits & 4 != 0,
+        fault: bits & 8 != 0,
+    }
+    .encode()
+    .expect("a floor 1..=24")
 }
 
 proptest! {

@@ -8,7 +8,7 @@ use asi_master::plc_handshake::{
     CabinDisplayMaster, CabinPanelMaster, FloorCalls, FloorStationMaster,
 };
 use asi_master::TransactionRecord;
-use asi_phy::handshake_words::{CabinPanelState, DisplayWord};
+use asi_phy::handshake_words::CabinPanelState;
 use asi_phy::{Call, Nibble, SimDuration, SimTime};
 use common::*;
 
@@ -57,7 +57,7 @@ fn exchanges_with(trace: &[TransactionRecord], n: u8) -> Vec<TransactionRecord> 
 #[test]
 fn floor_display_word_and_up_button() {
     let mut lab = running_lab(29);
-    let word = DisplayWord::new(3, true, false, true, false).expect("word");
+    let word = display_bits(3, true, false, true, false);
     let mut plc = FloorStationMaster::new();
     plc.set_word(word);
     let calls = std::cell::Cell::new(FloorCalls::default());
@@ -133,7 +133,7 @@ fn cabin_32_bit_button_word() {
 #[test]
 fn cabin_display_word() {
     let mut lab = running_lab(29);
-    let word = DisplayWord::new(4, false, true, true, true).expect("word");
+    let word = display_bits(4, false, true, true, true);
     let mut plc = CabinDisplayMaster::new();
     plc.set_word(word);
     run_plc(
@@ -216,4 +216,17 @@ fn a_held_floor_button_is_one_press() {
     scan_until(&mut lab, ms(1000), &mut reports, &mut presses);
     assert_eq!(presses, 2);
     assert!(scans > 90);
+}
+
+/// The bits of the display word (lab crate) for `floor` and the four indicators.
+fn display_bits(floor: u8, up: bool, down: bool, moving: bool, fault: bool) -> u16 {
+    lab::DisplayWord {
+        floor,
+        up,
+        down,
+        moving,
+        fault,
+    }
+    .encode()
+    .expect("a floor 1..=24")
 }

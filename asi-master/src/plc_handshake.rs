@@ -8,7 +8,7 @@ use asi_phy::handshake::{
     SEVEN_STEPS,
 };
 use asi_phy::handshake_words::{
-    cabin_transport, floor_transport, split_seven_step_word, CabinPanelState, DisplayWord, WordLog,
+    cabin_transport, floor_transport, split_seven_step_word, CabinPanelState, WordLog,
 };
 use asi_phy::Nibble;
 
@@ -26,7 +26,8 @@ pub struct FloorCalls {
 #[derive(Clone, Debug)]
 struct DisplaySender {
     answerer: Answerer,
-    word: DisplayWord,
+    /// The display word's bits D10..D1.
+    word: u16,
     words_sent: u32,
 }
 
@@ -34,7 +35,7 @@ impl DisplaySender {
     fn new(steps: &'static [u8]) -> DisplaySender {
         DisplaySender {
             answerer: Answerer::new(steps),
-            word: DisplayWord::new(1, false, false, false, false).unwrap_or_default(),
+            word: lab::display::FLOOR_1_AT_REST,
             words_sent: 0,
         }
     }
@@ -42,7 +43,7 @@ impl DisplaySender {
     fn step(
         &mut self,
         input: Nibble,
-        transport: fn(DisplayWord) -> u32,
+        transport: fn(u16) -> u32,
     ) -> (Nibble, Option<AnswererEvent>) {
         let word = self.word;
         let (out, ev) = self.answerer.step_with(input, || transport(word));
@@ -84,8 +85,8 @@ impl FloorStationMaster {
         }
     }
 
-    /// The display word to send from the next word on.
-    pub fn set_word(&mut self, w: DisplayWord) {
+    /// The display word to send from the next word on: its bits D10..D1 (`lab::DisplayWord::encode`).
+    pub fn set_word(&mut self, w: u16) {
         self.sender.word = w;
     }
 
@@ -166,8 +167,8 @@ impl CabinDisplayMaster {
         }
     }
 
-    /// The display word to send from the next word on.
-    pub fn set_word(&mut self, w: DisplayWord) {
+    /// The display word to send from the next word on: its bits D10..D1 (`lab::DisplayWord::encode`).
+    pub fn set_word(&mut self, w: u16) {
         self.sender.word = w;
     }
 

@@ -1,77 +1,10 @@
 //! The words the lab lift's nibble handshakes carry (seed 003 tables 4.2–4.7; S-7.3), shared by
-//! the master (PLC) side and the device side: the display word, the cabin panel's 32-bit word,
+//! the master (PLC) side and the device side: the display word's bits, the cabin panel's 32-bit word,
 //! the S-7.3 analog value and seven-step layout, and the log of words a receiver took.
 
-/// The display word sent to the floor displays and the cabin display (seed 003 tables 4.2,
-/// 4.4): D10..D6 floor number 1..24 (binary), D5 up, D4 down, D3 moving, D2 fault, D1 parity.
-///
-/// Held as a plain `u16` with Dn in bit n − 1 (bits 15..10 zero), so the rig can hand it to the
-/// lift model. **Decision** (parity): D1 makes the number of ones in D10..D1 even.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
-pub struct DisplayWord(u16);
-
-/// A display word field out of range.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
-#[error("display word: floor {0} is out of range 1..=24 (seed 003 table 4.2)")]
-pub struct DisplayWordError(pub u8);
-
-impl DisplayWord {
-    /// The word for `floor` (1..=24) and the four indicator bits, with its parity bit.
-    pub fn new(
-        floor: u8,
-        up: bool,
-        down: bool,
-        moving: bool,
-        fault: bool,
-    ) -> Result<DisplayWord, DisplayWordError> {
-        if !(1..=24).contains(&floor) {
-            return Err(DisplayWordError(floor));
-        }
-        let body = ((floor as u16) << 5)
-            | ((up as u16) << 4)
-            | ((down as u16) << 3)
-            | ((moving as u16) << 2)
-            | ((fault as u16) << 1);
-        let parity = body.count_ones() as u16 & 1;
-        Ok(DisplayWord(body | parity))
-    }
-
-    /// The word from its raw bits D10..D1 (bits 9..0; higher bits are dropped). The parity is
-    /// taken as given: see [`DisplayWord::parity_ok`].
-    pub const fn from_bits(bits: u16) -> DisplayWord {
-        DisplayWord(bits & 0x3FF)
-    }
-
-    /// The raw bits, Dn in bit n − 1.
-    pub const fn bits(self) -> u16 {
-        self.0
-    }
-
-    /// The floor number D10..D6.
-    pub const fn floor(self) -> u8 {
-        (self.0 >> 5) as u8 & 0x1F
-    }
-    /// D5: travelling up.
-    pub const fn up(self) -> bool {
-        self.0 & (1 << 4) != 0
-    }
-    /// D4: travelling down.
-    pub const fn down(self) -> bool {
-        self.0 & (1 << 3) != 0
-    }
-    /// D3: moving (1) or standing (0).
-    pub const fn moving(self) -> bool {
-        self.0 & (1 << 2) != 0
-    }
-    /// D2: fault.
-    pub const fn fault(self) -> bool {
-        self.0 & (1 << 1) != 0
-    }
-    /// `true` if D10..D1 hold an even number of ones.
-    pub const fn parity_ok(self) -> bool {
-        self.0.count_ones() % 2 == 0
-    }
-}
+/// The 10 bits D10..D1 of a display word (seed 003 tables 4.2, 4.4; its fields are the lab
+/// crate's `DisplayWord`) as the handshakes carry it: bits above D10 are not part of it.
+pub const DISPLAY_BITS: u16 = (1 << 10) - 1;
 
 /// **Decision** on O and V closing a word (seed 003 tables 4.3, 4.5; S-7.3 meaning of table
 /// 2.2): O = 0 (value in range), V = 1 (valid data). A receiver ignores a word with V = 0, O = 1
@@ -79,9 +12,9 @@ impl DisplayWord {
 pub const OV_VALID: u32 = 0b01;
 
 /// The 12 bits of a floor word transfer: D10..D1 O V.
-/// The floor station's word as it travels (table 4.3): the display word, then O and V.
-pub const fn floor_transport(w: DisplayWord) -> u32 {
-    ((w.0 as u32) << 2) | OV_VALID
+/// The floor station's word as it travels (table 4.3): the display word's bits, then O and V.
+pub const fn floor_transport(bits: u16) -> u32 {
+    (((bits & DISPLAY_BITS) as u32) << 2) | OV_VALID
 }
 
 /// The 21 bits of a 7-step transfer (S-7.3 layout, seed 003 table 2.2): E3..E1, D16..D1, O, V.
@@ -147,8 +80,8 @@ impl<T: Copy> WordLog<T> {
 pub const CABIN_DISPLAY_CHANNEL: u8 = 1;
 
 /// The cabin display's word as it travels (table 4.5): S-7.3 channel [`CABIN_DISPLAY_CHANNEL`].
-pub fn cabin_transport(w: DisplayWord) -> u32 {
-    seven_step_word(CABIN_DISPLAY_CHANNEL, w.bits(), false, true)
+pub fn cabin_transport(bits: u16) -> u32 {
+    seven_step_word(CABIN_DISPLAY_CHANNEL, bits & DISPLAY_BITS, false, true)
 }
 
 /// The cabin's buttons and sensors as one 32-bit word travels them (seed 003 table 4.6).

@@ -8,8 +8,8 @@ use asi_phy::handshake::{
     SEVEN_STEPS,
 };
 use asi_phy::handshake_words::{
-    seven_step_word, split_seven_step_word, CabinPanelState, DisplayWord, WordLog,
-    CABIN_DISPLAY_CHANNEL, OV_VALID,
+    seven_step_word, split_seven_step_word, CabinPanelState, WordLog, CABIN_DISPLAY_CHANNEL,
+    DISPLAY_BITS, OV_VALID,
 };
 use asi_phy::Nibble;
 
@@ -25,7 +25,7 @@ pub struct FloorStationSlave {
     down_pressed: bool,
     up_latched: bool,
     down_latched: bool,
-    words: WordLog<DisplayWord>,
+    words: WordLog<u16>,
 }
 
 impl Default for FloorStationSlave {
@@ -71,8 +71,8 @@ impl FloorStationSlave {
         let (out, ev) = self.requester.step(outputs);
         match ev {
             Some(RequesterEvent::Word(bits)) => {
-                let w = DisplayWord::from_bits((bits >> 2) as u16);
-                let ok = bits & 0b11 == OV_VALID && w.parity_ok();
+                let w = (bits >> 2) as u16 & DISPLAY_BITS;
+                let ok = bits & 0b11 == OV_VALID && lab::display::parity_ok(w);
                 self.words.record(ok.then_some(w));
             }
             Some(RequesterEvent::Extra(c)) => {
@@ -89,12 +89,12 @@ impl FloorStationSlave {
     }
 
     /// The last good display word received.
-    pub fn display(&self) -> Option<DisplayWord> {
+    pub fn display(&self) -> Option<u16> {
         self.words.last()
     }
 
     /// Words received and dropped.
-    pub fn words(&self) -> &WordLog<DisplayWord> {
+    pub fn words(&self) -> &WordLog<u16> {
         &self.words
     }
 
@@ -108,7 +108,7 @@ impl FloorStationSlave {
 #[derive(Clone, Debug)]
 pub struct CabinDisplaySlave {
     requester: Requester,
-    words: WordLog<DisplayWord>,
+    words: WordLog<u16>,
 }
 
 impl Default for CabinDisplaySlave {
@@ -131,20 +131,21 @@ impl CabinDisplaySlave {
         let (out, ev) = self.requester.step(outputs);
         if let Some(RequesterEvent::Word(bits)) = ev {
             let (e, d, o, v) = split_seven_step_word(bits);
-            let w = DisplayWord::from_bits(d);
-            let ok = e == CABIN_DISPLAY_CHANNEL && v && !o && d >> 10 == 0 && w.parity_ok();
+            let w = d & DISPLAY_BITS;
+            let ok =
+                e == CABIN_DISPLAY_CHANNEL && v && !o && d >> 10 == 0 && lab::display::parity_ok(w);
             self.words.record(ok.then_some(w));
         }
         out
     }
 
     /// The last good display word.
-    pub fn display(&self) -> Option<DisplayWord> {
+    pub fn display(&self) -> Option<u16> {
         self.words.last()
     }
 
     /// Words received and dropped.
-    pub fn words(&self) -> &WordLog<DisplayWord> {
+    pub fn words(&self) -> &WordLog<u16> {
         &self.words
     }
 

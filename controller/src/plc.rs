@@ -26,28 +26,8 @@ use asi_master::image::{F0_CONFIG_ERROR, F1_APF};
 use asi_master::mailbox::{self, Command, JobResult};
 use asi_master::plc_handshake::{CabinDisplayMaster, CabinPanelMaster, FloorStationMaster};
 use asi_master::{Image, ProcessImage, SlaveList};
-use asi_phy::handshake_words::DisplayWord;
 use asi_phy::{Nibble, SimTime, SlaveAddr};
-
-/// The lab lift's slave addresses (docs/lab-bus.md table).
-pub mod addr {
-    /// Floor station of floor 1; floor `f` is at address `f` (1..=4).
-    pub const FLOOR_1: u8 = 1;
-    /// The cabin display (handshake of tables 4.4/4.5).
-    pub const CABIN_DISPLAY: u8 = 5;
-    /// The cabin buttons and sensors (tables 4.6/4.7).
-    pub const CABIN_PANEL: u8 = 6;
-    /// The converter I/O module: out D0 run, D1 direction; in D0 ready, D1 fault.
-    pub const CONVERTER: u8 = 7;
-    /// The load sensor: in D1..D0 = 0 empty .. 3 overloaded.
-    pub const LOAD: u8 = 8;
-    /// The current-loop output of the speed set-point, channel 1.
-    pub const SPEED: u8 = 10;
-    /// The lab bus has floor stations for this many floors.
-    pub const FLOOR_STATIONS: u8 = 4;
-    /// The slaves the cabin cannot move without (see the module's decision).
-    pub const ESSENTIAL: [u8; 4] = [CABIN_PANEL, CONVERTER, LOAD, SPEED];
-}
+use lab::address;
 
 /// Scans without an answer from the mailbox after which the LAS counts as unknown, and the
 /// essential slaves as missing.
@@ -102,7 +82,7 @@ impl LasReader {
         }
         self.essential_ok = match self.las {
             _ if self.waited >= LAS_STALE_SCANS => false,
-            Some(las) => addr::ESSENTIAL
+            Some(las) => address::ESSENTIAL
                 .iter()
                 .all(|&n| SlaveAddr::a(n).is_some_and(|a| las.contains(a))),
             None => self.essential_ok,
@@ -143,14 +123,15 @@ pub struct Plc {
     panel: CabinPanelMaster,
     /// The bus was healthy (no configuration error, no AS-i power fail) at the last scan.
     bus_healthy: bool,
-    shown: Option<DisplayWord>,
+    /// The display word's bits last handed to the display handshakes.
+    shown: Option<u16>,
     las: LasReader,
 }
 
 impl Plc {
     /// A PLC with the program set to RUN.
     pub fn new(cfg: ControllerConfig) -> Result<Plc, ControllerConfigError> {
-        if cfg.floors > addr::FLOOR_STATIONS {
+        if cfg.floors > address::FLOOR_STATIONS {
             return Err(ControllerConfigError {
                 field: "floors",
                 value: cfg.floors.to_string(),
@@ -199,7 +180,7 @@ impl Plc {
         let mut hall_up = 0u32;
         let mut hall_down = 0u32;
         for (i, station) in self.floors.iter_mut().enumerate() {
-            let Some(a) = SlaveAddr::a(addr::FLOOR_1 + i as u8) else {
+            let Some(a) = SlaveAddr::a(address::FLOOR_1 + i as u8) else {
                 continue;
             };
             output.set_nibble(a, station.step(input.nibble(a)));
@@ -207,7 +188,7 @@ impl Plc {
             hall_up |= (calls.up as u32) << i;
             hall_down |= (calls.down as u32) << i;
         }
-        if let Some(a) = SlaveAddr::a(addr::CABIN_DISPLAY) {
+        if let Some(a) = SlaveAddr::a(address::CABIN_DISPLAY) {
             output.set_nibble(a, self.cabin_display.step(input.nibble(a)));
         }
         let mut cabin = None;
@@ -221,7 +202,7 @@ impl Plc {
             self.panel.reset();
             self.bus_healthy = healthy;
         }
-        if let Some(a) = SlaveAddr::a(addr::CABIN_PANEL) {
+        if let Some(a) = SlaveAddr::a(address::CABIN_PANEL) {
             output.set_nibble(a, self.panel.step(input.nibble(a)));
             cabin = self.panel.take_update().map(|s| CabinWord {
                 buttons: s.floor_buttons,
@@ -232,10 +213,11 @@ impl Plc {
                 vane_right: s.vane_right,
             });
         }
-        let converter = SlaveAddr::a(addr::CONVERTER).map_or(Nibble::ZERO, |a| input.nibble(a));
+        let converter = SlaveAddr::a(address::CONVERTER).map_or(Nibble::ZERO, |a| input.nibble(a));
         // D2 is the load sensor's "operation ready" bit (S-1.1): 0 when the slave is off the
         // bus, without power or not ready, and then the load counts as unknown (overloaded).
-        let load_nibble = SlaveAddr::a(addr::LOAD).map_or(Nibble::ZERO, |a| input.nibble(a));
+        let load_nibble =
+            SlaveAddr::a(address::LOAD_SENSOR).map_or(Nibble::ZERO, |a| input.nibble(a));
         let load = load_nibble.get() & 0b11;
         let load_lost = !load_nibble.bit(2);
 
@@ -263,13 +245,13 @@ impl Plc {
 
     /// OvladaniMotoru and the display words: converter nibble, speed set-point, displays.
     fn write_outputs(&mut self, out: &Outputs, output: &mut asi_master::Image) {
-        if let Some(a) = SlaveAddr::a(addr::CONVERTER) {
+        if let Some(a) = SlaveAddr::a(address::CONVERTER) {
             let n = Nibble::ZERO.with_bit(0, out.run).with_bit(1, out.up);
             output.set_nibble(a, n);
         }
-        output.set_analog(addr::SPEED, 1, out.setpoint_ua);
-        let d = out.display;
-        if let Ok(word) = DisplayWord::new(d.floor, d.up, d.down, d.moving, d.fault) {
+        output.set_analog(address::SPEED_SETPOINT, 1, out.setpoint_ua);
+        // The program shows floors 1..=floors (at most 24): every word it decides encodes.
+        if let Ok(word) = out.display.encode() {
             if self.shown != Some(word) {
                 self.shown = Some(word);
                 for station in &mut self.floors {

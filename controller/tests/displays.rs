@@ -8,7 +8,8 @@
 mod common;
 
 use asi_phy::{SimDuration, SimTime};
-use controller::{ControllerConfig, DisplayState, EventKind, Program, State};
+use controller::{ControllerConfig, EventKind, Program, State};
+use lab::DisplayWord;
 use lift_model::{Button, Lift, LiftConfig, LoadLevel};
 
 const SCAN: SimDuration = SimDuration::from_millis(10);
@@ -19,7 +20,7 @@ struct Loop {
     now: SimTime,
     bus_ok: bool,
     /// (scan time, display, events of that scan).
-    scans: Vec<(SimTime, DisplayState, Vec<EventKind>)>,
+    scans: Vec<(SimTime, DisplayWord, Vec<EventKind>)>,
 }
 
 impl Loop {
@@ -82,7 +83,7 @@ impl Loop {
     }
 
     /// The display in the scan of the first event matching `want`, from scan `from` on.
-    fn display_at(&self, from: usize, want: impl Fn(&EventKind) -> bool) -> DisplayState {
+    fn display_at(&self, from: usize, want: impl Fn(&EventKind) -> bool) -> DisplayWord {
         self.scans[from..]
             .iter()
             .find(|(_, _, e)| e.iter().any(&want))
@@ -108,7 +109,7 @@ impl Loop {
 struct Shown(u8, char, bool, bool);
 
 impl Shown {
-    fn of(d: &DisplayState) -> Shown {
+    fn of(d: &DisplayWord) -> Shown {
         let arrow = match (d.up, d.down) {
             (true, false) => '↑',
             (false, true) => '↓',

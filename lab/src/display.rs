@@ -15,6 +15,15 @@ use core::fmt;
 
 use serde::{Deserialize, Serialize};
 
+/// The bits of "floor 1, standing, no fault" (D6 and the parity bit D1): what the PLC side
+/// sends before the program has decided anything.
+pub const FLOOR_1_AT_REST: u16 = (1 << 5) | 1;
+
+/// Whether the bits D10..D1 of a received word pass the even parity (the decision above).
+pub const fn parity_ok(bits: u16) -> bool {
+    bits.count_ones() % 2 == 0
+}
+
 /// The highest floor number the word carries (five bits, D10..D6, numbers 1..24 in table 4.2).
 pub const MAX_FLOOR: u8 = 24;
 
@@ -27,7 +36,9 @@ const PARITY: u16 = 1;
 const WIDTH_MASK: u16 = (1 << 10) - 1;
 
 /// What a display shows: floor number, arrows, moving and fault lamps (seed 003 table 4.2).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+/// The PLC program decides it, [`DisplayWord::encode`] gives the 10 bits D10..D1 the
+/// handshakes carry, and a display reads them back with [`DisplayWord::decode`].
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
 pub struct DisplayWord {
     /// Floor number 1..=24 (D10..D6, `Cislo_Patra`).
     pub floor: u8,
@@ -85,7 +96,7 @@ impl DisplayWord {
         if raw & !WIDTH_MASK != 0 {
             return Err(DisplayWordError::TooWide { raw });
         }
-        if raw.count_ones() % 2 != 0 {
+        if !parity_ok(raw) {
             return Err(DisplayWordError::Parity { raw });
         }
         // Five bits: always fits in a u8.
@@ -126,6 +137,15 @@ impl fmt::Display for DisplayWord {
 #[allow(clippy::unusual_byte_groupings)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_word_before_the_program_decides_is_floor_1_at_rest() {
+        let word = DisplayWord {
+            floor: 1,
+            ..DisplayWord::default()
+        };
+        assert_eq!(word.encode(), Ok(FLOOR_1_AT_REST));
+    }
 
     #[test]
     fn floor_3_up_moving_has_the_documented_bits() {

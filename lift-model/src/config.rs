@@ -9,7 +9,7 @@ use crate::sensor::{End, VaneSensor};
 /// The fewest floors a lift has.
 pub const MIN_FLOORS: u8 = 2;
 /// The most floors: the display word carries floor numbers 1..24 (docs/lab-bus.md, seed 003 table 4.2).
-pub const MAX_FLOORS: u8 = 24;
+pub const MAX_FLOORS: u8 = lab::display::MAX_FLOOR;
 /// The longest length this model accepts, in mm (100 m): keeps every time and position
 /// computation far from overflow.
 pub const MAX_LENGTH_MM: f64 = 100_000.0;

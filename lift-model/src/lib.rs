@@ -69,7 +69,7 @@ mod shaft;
 
 pub use config::{ConfigError, LiftConfig, LEVEL_WINDOW_MM};
 pub use controls::{Button, ContactFault, LoadLevel, SensorFault, StopChannel};
-pub use display::{DisplayId, DisplayState, DisplayWord, DisplayWordError};
+pub use display::{DisplayId, DisplayState};
 pub use drive::{converter_frequency_hz, DriveConfig};
 pub use event::{Crash, EventKind, PlantEvent};
 pub use lift::{Events, Lift, PlantError};

@@ -6,9 +6,10 @@ mod common;
 
 use asi_phy::{SimDuration, SimTime};
 use common::*;
+use lab::{DisplayWord, DisplayWordError};
 use lift_model::{
-    Button, ContactFault, DisplayId, DisplayState, DisplayWord, DisplayWordError, EventKind, Lift,
-    LiftConfig, LoadLevel, PlantError, StopChannel,
+    Button, ContactFault, DisplayId, DisplayState, EventKind, Lift, LiftConfig, LoadLevel,
+    PlantError, StopChannel,
 };
 use proptest::prelude::*;
 

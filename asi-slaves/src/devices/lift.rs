@@ -8,7 +8,7 @@
 use super::any_impls;
 use crate::device_handshake::{CabinDisplaySlave, CabinPanelSlave, FloorStationSlave};
 use crate::slave::Peripheral;
-use asi_phy::handshake_words::{CabinPanelState, DisplayWord};
+use asi_phy::handshake_words::CabinPanelState;
 use asi_phy::{Nibble, SimTime};
 use core::fmt::Debug;
 
@@ -81,14 +81,14 @@ impl FloorStation {
         self.engine.set_buttons(up, down);
     }
     /// The display word shown (last good word received), `None` while blank.
-    pub fn display(&self) -> Option<DisplayWord> {
+    pub fn display(&self) -> Option<u16> {
         self.engine.display()
     }
 }
 
 impl CabinDisplay {
     /// The display word shown, `None` while blank.
-    pub fn display(&self) -> Option<DisplayWord> {
+    pub fn display(&self) -> Option<u16> {
         self.engine.display()
     }
 }

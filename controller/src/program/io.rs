@@ -2,6 +2,8 @@
 //! the cabin word of table 4.6, the displays of tables 4.2/4.4), and the vane sensor edges
 //! derived from the inputs.
 
+use lab::DisplayWord;
+
 /// The cabin's 32-bit word (seed table 4.6), as the PLC assembles it from the two halves.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct CabinWord {
@@ -46,21 +48,6 @@ pub struct Inputs {
     pub power_ok: bool,
 }
 
-/// What a passenger sees on the floor and cabin displays (seed tables 4.2/4.4).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct DisplayState {
-    /// Cislo_Patra, 1..=24.
-    pub floor: u8,
-    /// Smer_Nahoru.
-    pub up: bool,
-    /// Smer_Dolu.
-    pub down: bool,
-    /// Pojezd: the cabin is commanded to move.
-    pub moving: bool,
-    /// Porucha: a fault state.
-    pub fault: bool,
-}
-
 /// What the program writes at the end of a scan.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Outputs {
@@ -71,7 +58,7 @@ pub struct Outputs {
     /// Rychlost, the speed set-point in µA.
     pub setpoint_ua: u16,
     /// The display word content.
-    pub display: DisplayState,
+    pub display: DisplayWord,
     /// The Restart input of the safety logic's STOP circuit (pulsed).
     pub restart: bool,
     /// The overload signal for the safety logic's AND input.

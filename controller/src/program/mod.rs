@@ -26,12 +26,13 @@ mod state;
 
 pub use config::{ControllerConfig, ControllerConfigError};
 pub use events::{Event, EventKind, HaltReason, InitStart, LostReason, NO_VANE_RETRY};
-pub use io::{CabinWord, DisplayState, Inputs, Outputs};
+pub use io::{CabinWord, Inputs, Outputs};
 pub use state::State;
 
 use crate::dispatch::{Dir, Dispatcher, HallDir, ServedCall, Source, Stored};
 use asi_phy::{SimDuration, SimTime};
 use io::{floors, overloaded, Edges};
+use lab::DisplayWord;
 use state::{Phase, Step};
 
 /// The lift's PLC program.
@@ -121,9 +122,9 @@ impl Program {
             shown_dir: None,
             out: Outputs {
                 setpoint_ua: cfg.standstill_ua,
-                display: DisplayState {
+                display: DisplayWord {
                     floor: 1,
-                    ..DisplayState::default()
+                    ..DisplayWord::default()
                 },
                 ..Outputs::default()
             },
@@ -301,7 +302,7 @@ impl Program {
         if self.phase == Phase::Service(Step::Overload) {
             (self.shown_floor, self.shown_dir) = (self.current, None);
         }
-        self.out.display = DisplayState {
+        self.out.display = DisplayWord {
             floor: self.shown_floor,
             up: self.shown_dir == Some(Dir::Up),
             down: self.shown_dir == Some(Dir::Down),

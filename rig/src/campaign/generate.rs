@@ -31,9 +31,6 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::collections::BTreeSet;
 
-/// The slave addresses of the lab bus (docs/lab-bus.md) that faults take offline.
-pub const LAB_ADDRESSES: [u8; 11] = [1, 2, 3, 4, 5, 6, 7, 8, 10, 11, 12];
-
 /// The largest total of the hand cranks in one run, mm (either way).
 pub const MAX_CRANK_SUM_MM: f64 = 40.0;
 
@@ -244,7 +241,7 @@ impl Builder<'_> {
             EventKind::Reset => self.push(t, Action::Reset),
             EventKind::Ack => self.push(t, Action::Ack),
             EventKind::Slave => {
-                let slave = LAB_ADDRESSES[self.rng.random_range(0..LAB_ADDRESSES.len())];
+                let slave = lab::address::ALL[self.rng.random_range(0..lab::address::ALL.len())];
                 self.touched.slaves.insert(slave);
                 self.push(t, Action::Fault(Fault::SlaveOffline { slave }));
                 if let Some(back) = self.later(t, 1_000, 30_000) {
@@ -328,7 +325,7 @@ pub fn generate(campaign_seed: u64, index: u64, profile: &Profile) -> Generated 
     let door_closed = !rng.random_bool(profile.door_open_chance);
     let pulse_error_rate = profile.pulse_error_rate.pick(&mut rng).unwrap_or(0.0);
     let extra_slaves = if rng.random_bool(profile.extra_slaves_chance) {
-        rng.random_range(1..=asi_bus::lab::EXTRA_ADDRESSES.len() as u8)
+        rng.random_range(1..=lab::address::FREE.len() as u8)
     } else {
         0
     };
@@ -567,7 +564,7 @@ mod tests {
                 match e.action {
                     Action::Crank { mm } if !tail => crank += mm,
                     Action::Fault(Fault::SlaveOffline { slave }) => {
-                        assert!(LAB_ADDRESSES.contains(&slave));
+                        assert!(lab::address::ALL.contains(&slave));
                         offline.insert(slave);
                     }
                     Action::Fault(Fault::SlaveOnline { slave }) => {
@@ -684,7 +681,7 @@ mod tests {
         .into_iter()
         .map(String::from)
         .collect();
-        for a in LAB_ADDRESSES {
+        for a in lab::address::ALL {
             want.push(format!("offline {a}"));
             want.push(format!("online {a}"));
         }

@@ -27,13 +27,14 @@ use crate::report::{
 use crate::scenario::{Action, Fault, Scenario, ScenarioEvent};
 use crate::waves::{RigSample, WaveOutputs, Waves};
 use asi_bus::bus::NOMINAL_VOLTS;
-use asi_bus::lab::{LabLift, SAFETY_BOTTOM, SAFETY_TOP};
+use asi_bus::lab::LabLift;
 use asi_phy::fault::FaultRates;
 use asi_phy::{SimDuration, SimTime};
 use asi_trace::trace::TraceFormat;
 use controller::plc::{FromSafety, Plc, ToSafety};
 use controller::{ControllerConfig, EventKind as Ctl};
 use invariants::{InvariantWatch, Observed};
+use lab::address::{SAFETY_BOTTOM, SAFETY_TOP};
 use las::LasWatch;
 use lift_model::drive::STANDSTILL_UA;
 use lift_model::{EventKind as Plant, Lift, LiftConfig, LoadLevel};

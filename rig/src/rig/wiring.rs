@@ -2,25 +2,19 @@
 //! slaves drive (converter run and direction, the speed set-point, the display words) to the
 //! plant, at the moment they drive it.
 
-use asi_bus::lab::{LabLift, SAFETY_BOTTOM, SAFETY_TOP};
+use asi_bus::lab::LabLift;
 use asi_phy::SimTime;
-use controller::plc::addr;
+use lab::address::{
+    self, CABIN_DISPLAY, CONVERTER, FLOOR_STATIONS, SAFETY_BOTTOM, SAFETY_TOP, SPEED_SETPOINT,
+};
 use lift_model::{Button, DisplayId, Lift, PlantError};
 
 /// The slaves whose outputs drive the plant: the floor displays, the cabin display, the
 /// converter I/O and the speed set-point; as a mask of addresses.
 pub(super) fn drives_plant() -> u32 {
-    [
-        1,
-        2,
-        3,
-        4,
-        addr::CABIN_DISPLAY,
-        addr::CONVERTER,
-        addr::SPEED,
-    ]
-    .iter()
-    .fold(0, |m, a| m | 1 << a)
+    (address::FLOOR_1..=FLOOR_STATIONS)
+        .chain([CABIN_DISPLAY, CONVERTER, SPEED_SETPOINT])
+        .fold(0, |m, a| m | 1 << a)
 }
 
 /// What the rig last handed the plant from the slaves.
@@ -35,7 +29,7 @@ pub(super) struct Applied {
 
 /// The plant's signals on the slaves' peripheral inputs.
 pub(super) fn plant_to_slaves(l: &Lift, lab: &mut LabLift, floors: u8) {
-    for f in 1..=floors.min(addr::FLOOR_STATIONS) {
+    for f in 1..=floors.min(FLOOR_STATIONS) {
         let up = l.is_pressed(Button::HallUp(f));
         let down = l.is_pressed(Button::HallDown(f));
         if let Some(st) = lab.floor_mut(f) {
@@ -74,13 +68,10 @@ pub(super) fn slave_outputs(lab: &LabLift) -> Applied {
         .map_or((false, false), |c| (c.run(), c.direction_up()));
     let setpoint_ua = lab.analog_output().map_or(0, |a| a.current_ua(1));
     let mut displays = [None; 5];
-    for f in 1..=addr::FLOOR_STATIONS {
-        displays[f as usize - 1] = lab.floor(f).and_then(|s| s.display()).map(|w| w.bits());
+    for f in 1..=FLOOR_STATIONS {
+        displays[f as usize - 1] = lab.floor(f).and_then(|s| s.display());
     }
-    displays[4] = lab
-        .cabin_display()
-        .and_then(|d| d.display())
-        .map(|w| w.bits());
+    displays[4] = lab.cabin_display().and_then(|d| d.display());
     Applied {
         run,
         up,

@@ -2,10 +2,10 @@
 //! release a sensor, why K1 is open, the bus's counts and cycle times.
 
 use crate::report::{round3, BusReport, CycleTimes, ErrorCounts, SlaveDropouts};
-use asi_bus::lab::{SAFETY_BOTTOM, SAFETY_TOP};
 use asi_master::BusStats;
 use asi_phy::Check;
 use asi_slaves::monitor::{NotReleased, SafetyMonitor};
+use lab::address::{SAFETY_BOTTOM, SAFETY_TOP};
 use safety::lift::K1Cause;
 
 /// A drop of the Safety-at-Work monitor: its cause's key in the report and its words.

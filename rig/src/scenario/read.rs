@@ -426,7 +426,7 @@ fn read_bus(loc: &Locator<'_>, b: &RawBus, sc: &mut Scenario) -> Result<(), Scen
         let v = *n.get_ref();
         sc.extra_slaves = u8::try_from(v)
             .ok()
-            .filter(|v| *v as usize <= asi_bus::lab::EXTRA_ADDRESSES.len())
+            .filter(|v| *v as usize <= lab::address::FREE.len())
             .ok_or_else(|| {
                 loc.error(
                     Some(n.span()),

@@ -9,8 +9,8 @@ use super::report::LabTiming;
 use super::stats::{ms, Summary, Ticker};
 use crate::rig::Rig;
 use crate::scenario::Scenario;
-use asi_bus::lab::CONVERTER;
 use asi_phy::SimDuration;
+use lab::address::CONVERTER;
 use lift_model::LoadLevel;
 use std::sync::{Arc, Mutex};
 
