@@ -116,7 +116,10 @@ fn a_slave_lost_and_readmitted() {
 #[test]
 fn line_noise_is_absorbed_by_repeats() {
     let mut lab = running_lab(40);
-    lab.bus.set_line_faults(42, FaultRates::uniform(0.002));
+    lab.bus.set_line_faults(
+        42,
+        FaultRates::uniform(asi_phy::PulseErrorRate::new(0.002).expect("a probability")),
+    );
     lab.bus.advance_to(ms(2_040));
     let s = lab.bus.stats();
     let trace = lab.bus.drain_trace();

@@ -17,7 +17,10 @@ fn the_recorded_line_decodes_to_the_trace() {
     for rate in [0.0, 0.002] {
         let mut lab = LabLift::new().expect("lab bus");
         if rate > 0.0 {
-            lab.bus.set_line_faults(7, FaultRates::uniform(rate));
+            lab.bus.set_line_faults(
+                7,
+                FaultRates::uniform(asi_phy::PulseErrorRate::new(rate).expect("a probability")),
+            );
         }
         lab.bus.enable_trace(100_000);
         lab.bus.record_line(true);

@@ -24,7 +24,7 @@ proptest! {
         lab.bus.enable_trace(4096);
         let mut previous: Option<TransactionRecord> = None;
         let mut repeats = 0u64;
-        lab.bus.set_line_faults(seed, FaultRates::uniform(rate));
+        lab.bus.set_line_faults(seed, FaultRates::uniform(asi_phy::PulseErrorRate::new(rate).expect("a probability")));
         for t in 0..120u64 {
             for (i, v, at) in &writes {
                 if *at == t {

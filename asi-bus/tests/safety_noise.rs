@@ -15,7 +15,10 @@ const SENSORS: [u8; 2] = [11, 12];
 /// The lab bus with line noise `p` from power-on, run until both sensors are released.
 fn noisy_lab(seed: u64, p: f64) -> LabLift {
     let mut lab = LabLift::new().expect("lab");
-    lab.bus.set_line_faults(seed, FaultRates::uniform(p));
+    lab.bus.set_line_faults(
+        seed,
+        FaultRates::uniform(asi_phy::PulseErrorRate::new(p).expect("a probability")),
+    );
     let mut t = SimTime::ZERO;
     while !(lab.released(11) && lab.released(12)) {
         t += SimDuration::from_millis(1);
@@ -67,7 +70,7 @@ proptest! {
     #[test]
     fn noise_never_releases_a_tripped_sensor(seed in any::<u64>(), p in 1e-3f64..3e-2) {
         let mut lab = noisy_lab(seed, 1e-3);
-        lab.bus.set_line_faults(seed ^ 0x5a5a, FaultRates::uniform(p));
+        lab.bus.set_line_faults(seed ^ 0x5a5a, FaultRates::uniform(asi_phy::PulseErrorRate::new(p).expect("a probability")));
         for n in SENSORS {
             lab.safety_sensor_mut(n).expect("sensor").set_free(false);
         }

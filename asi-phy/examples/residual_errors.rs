@@ -273,7 +273,7 @@ fn random_rate(kind: Kind, rate: f64, trials: u64, seed: u64) -> Tally {
     let all = trains(kind, SimTime::from_micros(100));
     let mut inj = FaultInjector::new(
         seed,
-        FaultRates::uniform(rate),
+        FaultRates::uniform(asi_phy::PulseErrorRate::new(rate).expect("a probability")),
         BusTiming::default().half_bit(),
     );
     let mut pick = ChaCha8Rng::seed_from_u64(seed ^ 0x5eed);

@@ -139,6 +139,36 @@ pub struct FaultRates {
     pub jitter: SimDuration,
 }
 
+/// The total probability of a fault per pulse on the line, checked: a finite probability,
+/// 0 ≤ p ≤ 1. The one check of a pulse error rate wherever one comes from (a scenario file,
+/// `asi-lift timing --error-rate`, a campaign profile).
+#[derive(Clone, Copy, Debug, Default, PartialEq, PartialOrd)]
+pub struct PulseErrorRate(f64);
+
+/// A pulse error rate that is no probability.
+#[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]
+#[error("{0}: a pulse error rate is a probability, 0..=1")]
+pub struct PulseErrorRateError(pub f64);
+
+impl PulseErrorRate {
+    /// A quiet line.
+    pub const ZERO: PulseErrorRate = PulseErrorRate(0.0);
+
+    /// The rate `p`, if it is a probability.
+    pub fn new(p: f64) -> Result<PulseErrorRate, PulseErrorRateError> {
+        if p.is_finite() && (0.0..=1.0).contains(&p) {
+            Ok(PulseErrorRate(p))
+        } else {
+            Err(PulseErrorRateError(p))
+        }
+    }
+
+    /// The probability.
+    pub const fn get(self) -> f64 {
+        self.0
+    }
+}
+
 impl FaultRates {
     /// No corruption at all.
     pub const NONE: FaultRates = FaultRates {
@@ -150,8 +180,8 @@ impl FaultRates {
     };
 
     /// A total fault probability `rate` per pulse, shared equally by the four kinds.
-    pub fn uniform(rate: f64) -> FaultRates {
-        let r = clamp_probability(rate) / 4.0;
+    pub fn uniform(rate: PulseErrorRate) -> FaultRates {
+        let r = rate.get() / 4.0;
         FaultRates {
             drop: r,
             insert: r,
@@ -364,7 +394,11 @@ mod tests {
         let base: Vec<Pulse> = (0..1000).map(|k| p(3 * k, k % 2 == 1)).collect();
         let h = SimDuration::from_micros(3);
         let run = |seed| {
-            let mut inj = FaultInjector::new(seed, FaultRates::uniform(0.1), h);
+            let mut inj = FaultInjector::new(
+                seed,
+                FaultRates::uniform(PulseErrorRate::new(0.1).expect("a probability")),
+                h,
+            );
             let mut out = Vec::new();
             let n = inj.corrupt(base.iter().copied(), &mut out);
             (n, out)
@@ -418,6 +452,9 @@ mod tests {
         let mut out = Vec::new();
         assert_eq!(inj.corrupt(base, &mut out), 0);
         assert_eq!(out, base);
-        assert_eq!(FaultRates::uniform(f64::NAN), FaultRates::NONE);
+        for bad in [f64::NAN, -0.1, 1.5, f64::INFINITY] {
+            assert!(PulseErrorRate::new(bad).is_err(), "{bad}");
+        }
+        assert_eq!(FaultRates::uniform(PulseErrorRate::ZERO), FaultRates::NONE);
     }
 }

@@ -31,7 +31,7 @@ pub mod time;
 pub mod timing;
 pub mod waveform;
 
-pub use fault::{FaultInjector, FaultRates, PulseFault};
+pub use fault::{FaultInjector, FaultRates, PulseErrorRate, PulseErrorRateError, PulseFault};
 pub use manchester::{HalfBits, Level};
 pub use pulse::{Polarity, Pulse, PulseTrain};
 pub use receiver::{

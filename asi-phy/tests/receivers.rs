@@ -13,7 +13,11 @@ use asi_phy::{
 fn listeners_that_agree_on_kind_and_sync_are_identical() {
     let t = BusTiming::default();
     let cfg = t.receiver(Expect::Both);
-    let mut inj = FaultInjector::new(7, FaultRates::uniform(0.02), t.half_bit());
+    let mut inj = FaultInjector::new(
+        7,
+        FaultRates::uniform(asi_phy::PulseErrorRate::new(0.02).expect("a probability")),
+        t.half_bit(),
+    );
     let mut line = LineDecoder::new(&cfg);
     // Listeners that joined the line at different times.
     let mut ls: Vec<Listener> = Vec::new();

@@ -100,8 +100,8 @@ pub struct FinalState {
     pub floor: u8,
     /// The cabin height, mm.
     pub position_mm: f64,
-    /// The controller's state in words.
-    pub state: String,
+    /// The controller's state.
+    pub state: controller::State,
     /// The cabin moves.
     pub moving: bool,
     /// K1's main contacts are closed.
@@ -340,7 +340,7 @@ impl Report {
             final_state: FinalState {
                 floor: 1,
                 position_mm: start_mm,
-                state: String::new(),
+                state: controller::State::WaitingForInputs,
                 moving: false,
                 contactor_closed: false,
                 k1_open_cause: None,

@@ -2,7 +2,9 @@
 
 use super::open_output;
 use asi_phy::SimDuration;
-use rig::timing::{analyse, BusChoice, TimingOptions, MAX_DURATION, MAX_SAMPLES};
+use rig::timing::{
+    analysable_error_rate, analyse, BusChoice, TimingOptions, MAX_DURATION, MAX_SAMPLES,
+};
 use std::io::Write;
 use std::path::PathBuf;
 
@@ -119,11 +121,8 @@ fn timing_options(
         }
         (b, None) => b,
     };
-    if !(error_rate.is_finite() && (0.0..1.0).contains(&error_rate)) {
-        return Err(format!(
-            "--error-rate: {error_rate}: a pulse error probability is 0 <= P < 1"
-        ));
-    }
+    analysable_error_rate(error_rate)
+        .map_err(|rule| format!("--error-rate: {error_rate}: {rule}"))?;
     let duration: SimDuration = duration.parse().map_err(|e| format!("--duration: {e}"))?;
     if duration.is_zero() || duration > MAX_DURATION {
         return Err(format!(

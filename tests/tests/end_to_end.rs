@@ -48,7 +48,7 @@ fn initialises_from_several_heights_including_floor_1() {
             "from {start} mm: {} mm off level",
             first.position_mm
         );
-        assert_eq!(r.final_state.state, "at floor");
+        assert_eq!(r.final_state.state, controller::State::AtFloor);
         assert!(
             r.safety.trips.is_empty(),
             "from {start} mm: {:?}",

@@ -364,9 +364,4 @@ impl Program {
     pub fn state(&self) -> State {
         self.phase.state(self.dir)
     }
-
-    /// The program's state in words, as the report shows it ([`State::name`]).
-    pub fn state_name(&self) -> &'static str {
-        self.state().name()
-    }
 }

@@ -82,6 +82,25 @@ pub enum State {
 }
 
 impl State {
+    /// Every state.
+    pub const ALL: [State; 10] = [
+        State::WaitingForInputs,
+        State::Initialising,
+        State::BusFault,
+        State::AtFloor,
+        State::OverloadFault,
+        State::MovingUp,
+        State::MovingDown,
+        State::Braking,
+        State::StopFault,
+        State::Halted,
+    ];
+
+    /// The state of a name ([`State::name`]).
+    pub fn from_name(name: &str) -> Option<State> {
+        State::ALL.into_iter().find(|s| s.name() == name)
+    }
+
     /// The state in words, as the report shows it.
     pub fn name(self) -> &'static str {
         match self {
@@ -101,7 +120,22 @@ impl State {
 
 impl fmt::Display for State {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
+        f.pad(self.name())
+    }
+}
+
+/// In files (reports, campaign lines) a state is its name.
+impl serde::Serialize for State {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(self.name())
+    }
+}
+
+impl<'de> serde::Deserialize<'de> for State {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<State, D::Error> {
+        let name = <std::borrow::Cow<'de, str>>::deserialize(d)?;
+        State::from_name(&name)
+            .ok_or_else(|| serde::de::Error::custom(format!("unknown controller state `{name}`")))
     }
 }
 

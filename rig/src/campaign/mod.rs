@@ -22,6 +22,7 @@ pub mod summary;
 use crate::report::{round3, Report, ViolationKind};
 use crate::rig::Rig;
 use crate::scenario::Scenario;
+use controller::State;
 use generate::Probe;
 use serde::{Deserialize, Serialize};
 use std::fmt;
@@ -74,7 +75,12 @@ impl fmt::Display for Outcome {
 
 /// The controller states of normal service (`final.state` of the report): the lift at the
 /// end of a run is in service only in one of these.
-pub const SERVICE_STATES: [&str; 4] = ["at floor", "moving up", "moving down", "braking"];
+pub const SERVICE_STATES: [State; 4] = [
+    State::AtFloor,
+    State::MovingUp,
+    State::MovingDown,
+    State::Braking,
+];
 
 /// What running a scenario gave.
 #[derive(Clone, Debug)]
@@ -154,9 +160,9 @@ pub fn judge(exec: &Execution, probe: Option<&Probe>) -> Verdict {
             // served or the lift is still working through the calls queued before it (it
             // served one after the probe was pressed, or the automat is moving the cabin).
             let in_service = probe.filter(|p| p.judged).map(|p| {
-                let state = r.final_state.state.as_str();
+                let state = r.final_state.state;
                 let working = r.served.iter().any(|s| s.served_at_s >= p.at.as_secs_f64())
-                    || (r.final_state.moving && state != "at floor");
+                    || (r.final_state.moving && state != State::AtFloor);
                 (probe_served(r, p) || working) && SERVICE_STATES.contains(&state)
             });
             let first_violation = r.violations.first().map(|v| v.kind);
@@ -225,7 +231,7 @@ pub struct RunLine {
     /// Simulated seconds.
     pub simulated_s: f64,
     /// The controller's final state.
-    pub final_state: Option<String>,
+    pub final_state: Option<State>,
     /// The panic's or the rig's error message.
     pub error: Option<String>,
     /// The file name of the shrunk reproducer in the failures directory, for a failure.
@@ -360,7 +366,7 @@ pub fn line(ctx: LineContext<'_>, exec: &Execution, verdict: &Verdict) -> RunLin
                 repeats: r.bus.repeats,
             };
             l.simulated_s = r.simulated_s;
-            l.final_state = Some(r.final_state.state.clone());
+            l.final_state = Some(r.final_state.state);
         }
     }
     l

@@ -369,9 +369,10 @@ impl Profile {
             &mut p.pulse_error_rate,
             &raw.pulse_error_rate,
             "pulse_error_rate",
-            |k| match k.parse::<f64>() {
-                Ok(v) if (0.0..=1.0).contains(&v) => Ok(v),
-                _ => Err(format!("`{k}`: a probability is 0..1")),
+            |k| match k.parse::<f64>().map(asi_phy::PulseErrorRate::new) {
+                Ok(Ok(rate)) => Ok(rate.get()),
+                Ok(Err(e)) => Err(format!("`{k}`: {e}")),
+                Err(_) => Err(format!("`{k}`: not a number; a pulse error rate is 0..=1")),
             },
         )
         .map_err(err)?;
@@ -575,7 +576,9 @@ mod tests {
         assert!(err("[floors]\n5 = 1\n").contains("[floors] `5`"));
         assert!(err("[event]\nmeteor = 1\n").contains("[event] `meteor`: unknown event kind"));
         assert!(err("[scan]\n\"30ms\" = 1\n").contains("1..20 ms"));
-        assert!(err("[pulse_error_rate]\n\"2\" = 1\n").contains("0..1"));
+        assert!(
+            err("[pulse_error_rate]\n\"2\" = 1\n").contains("a pulse error rate is a probability")
+        );
         assert!(err("duration = [\"3min\", \"2min\"]\n")
             .contains("duration: 180 s is longer than 120 s"));
         assert!(err("duration = [\"40s\", \"2min\"]\n").contains("too short"));

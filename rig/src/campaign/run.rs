@@ -208,7 +208,7 @@ fn reproducer_text(
         let _ = writeln!(
             h,
             "# in service means: the last cabin call (the probe) is served and the controller ends in one of: {}",
-            super::SERVICE_STATES.join(", ")
+            super::SERVICE_STATES.map(|s| s.name()).join(", ")
         );
     }
     let _ = writeln!(h, "# reproduce: asi-lift run {file_name}");

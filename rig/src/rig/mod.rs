@@ -28,7 +28,7 @@ use crate::scenario::{Action, Fault, Scenario, ScenarioEvent};
 use crate::waves::{RigSample, WaveOutputs, Waves};
 use asi_bus::bus::NOMINAL_VOLTS;
 use asi_bus::lab::LabLift;
-use asi_phy::fault::FaultRates;
+use asi_phy::fault::{FaultRates, PulseErrorRate};
 use asi_phy::{SimDuration, SimTime};
 use asi_trace::trace::TraceFormat;
 use controller::plc::{FromSafety, Plc, ToSafety};
@@ -59,6 +59,9 @@ pub enum RigError {
     /// The safety project cannot be built.
     #[error("safety: {0}")]
     Safety(#[from] safety::lift::LiftSafetyError),
+    /// The line noise is no probability.
+    #[error("bus: {0}")]
+    LineNoise(#[from] asi_phy::PulseErrorRateError),
     /// The plant refuses the scenario's initial state.
     #[error("lift: {0}")]
     Plant(#[from] lift_model::PlantError),
@@ -121,9 +124,9 @@ impl Rig {
         let mut lab = LabLift::with_extra(asi_master::MasterConfig::default(), sc.extra_slaves)?;
         lab.bus.watch_outputs(wiring::drives_plant());
         lab.bus.enable_trace(0);
-        if sc.pulse_error_rate > 0.0 {
-            lab.bus
-                .set_line_faults(sc.seed, FaultRates::uniform(sc.pulse_error_rate));
+        let rate = PulseErrorRate::new(sc.pulse_error_rate)?;
+        if rate.get() > 0.0 {
+            lab.bus.set_line_faults(sc.seed, FaultRates::uniform(rate));
         }
         let plc = Plc::new(ControllerConfig {
             floors: sc.floors,
@@ -256,7 +259,7 @@ impl Rig {
             converter_run: self.applied.run,
             converter_up: self.applied.up,
             setpoint_ua: self.applied.setpoint_ua,
-            controller_state: p.state_name(),
+            controller_state: p.state().name(),
             floor: p.current_floor(),
             target_floor: p.target(),
             fifo_cabin: p.fifo_cabin().len() as u8,
@@ -656,7 +659,7 @@ impl Rig {
 
     fn plc_scan(&mut self, t: SimTime) {
         self.to_safety = self.plc.scan(t, self.lab.bus.image_mut(), self.from_safety);
-        let held = self.plc.program().state_name() == "bus fault";
+        let held = self.plc.program().state() == controller::State::BusFault;
         match (self.bus_fault_since, held) {
             (None, true) => {
                 self.bus_fault_since = Some(t);
@@ -753,7 +756,7 @@ impl Rig {
         self.report.final_state = FinalState {
             floor: p.current_floor(),
             position_mm: round3(self.lift.position_mm()),
-            state: p.state_name().into(),
+            state: p.state(),
             moving: self.lift.velocity_mm_s() != 0.0,
             contactor_closed: self.lift.k1_closed(),
             k1_open_cause: self

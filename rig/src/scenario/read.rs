@@ -5,7 +5,7 @@ use super::{
     start_range_mm, Action, Fault, Scenario, ScenarioError, ScenarioEvent, DEFAULT_HOLD,
     PLC_SCAN_RANGE,
 };
-use asi_phy::{SimDuration, SimTime};
+use asi_phy::{PulseErrorRate, SimDuration, SimTime};
 use controller::Algorithm;
 use lift_model::config::{MAX_FLOORS, MIN_FLOORS};
 use lift_model::{Button, LoadLevel, SensorFault, VaneSensor};
@@ -412,15 +412,9 @@ fn read_lift(loc: &Locator<'_>, l: &RawLift, sc: &mut Scenario) -> Result<(), Sc
 /// `[bus]`: line noise and extra slaves.
 fn read_bus(loc: &Locator<'_>, b: &RawBus, sc: &mut Scenario) -> Result<(), ScenarioError> {
     if let Some(r) = &b.pulse_error_rate {
-        let v = *r.get_ref();
-        if !(0.0..=1.0).contains(&v) {
-            return Err(loc.error(
-                Some(r.span()),
-                "bus.pulse_error_rate",
-                format!("{v}: a probability is 0..1"),
-            ));
-        }
-        sc.pulse_error_rate = v;
+        let rate = PulseErrorRate::new(*r.get_ref())
+            .map_err(|e| loc.error(Some(r.span()), "bus.pulse_error_rate", e.to_string()))?;
+        sc.pulse_error_rate = rate.get();
     }
     if let Some(n) = &b.extra_slaves {
         let v = *n.get_ref();

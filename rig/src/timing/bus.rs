@@ -2,7 +2,7 @@
 //! window.
 
 use super::collector::{lock, take, BusWindow, Collector};
-use super::options::{BusChoice, TimingError, TimingOptions};
+use super::options::{analysable_error_rate, BusChoice, TimingError, TimingOptions};
 use asi_bus::lab::io_bus;
 use asi_bus::Bus;
 use asi_master::{ConfigError, MasterConfig, ProjectedConfig, ProjectedSlave};
@@ -54,8 +54,14 @@ pub(super) fn run_plain(opts: &TimingOptions) -> Result<(Collector, BusWindow), 
         BusChoice::Standard { n } => io_bus(n, AC2726)?,
         _ => ab_bus()?,
     };
-    if opts.pulse_error_rate > 0.0 {
-        bus.set_line_faults(opts.seed, FaultRates::uniform(opts.pulse_error_rate));
+    let rate =
+        analysable_error_rate(opts.pulse_error_rate).map_err(|rule| TimingError::Option {
+            option: "pulse error rate",
+            value: opts.pulse_error_rate.to_string(),
+            rule,
+        })?;
+    if rate.get() > 0.0 {
+        bus.set_line_faults(opts.seed, FaultRates::uniform(rate));
     }
     let shared = Arc::new(Mutex::new(Collector::new(
         bus.timing(),

@@ -10,6 +10,7 @@ use super::stats::{figure_of, ms};
 use crate::rig::Rig;
 use crate::scenario::Action;
 use asi_phy::{SimDuration, SimTime};
+use controller::State;
 use lift_model::Button;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -109,7 +110,7 @@ const HOLD: SimDuration = SimDuration::from_millis(300);
 /// The program has arrived at `floor` (it stands there, possibly in the STOP fault).
 fn arrived(rig: &Rig, floor: u8) -> bool {
     let p = rig.plc().program();
-    p.current_floor() == floor && matches!(p.state_name(), "at floor" | "STOP fault")
+    p.current_floor() == floor && matches!(p.state(), State::AtFloor | State::StopFault)
 }
 
 /// Notes the first moment the program is seen arrived at `floor`.

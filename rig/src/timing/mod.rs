@@ -58,7 +58,9 @@ mod stats;
 mod tests;
 
 pub use error_model::ErrorModel;
-pub use options::{BusChoice, TimingError, TimingOptions, MAX_DURATION, MAX_SAMPLES};
+pub use options::{
+    analysable_error_rate, BusChoice, TimingError, TimingOptions, MAX_DURATION, MAX_SAMPLES,
+};
 pub use report::{HallSample, LabTiming, Latencies, Repeats, StopSample, TimingReport};
 pub use stats::{Figure, Histogram};
 

@@ -3,6 +3,7 @@
 
 use crate::rig::RigError;
 use asi_master::ConfigError;
+use asi_phy::PulseErrorRate;
 use asi_phy::SimDuration;
 
 /// The bus to analyse.
@@ -137,6 +138,16 @@ pub enum TimingError {
     },
 }
 
+/// The pulse error rates the analysis takes: a probability (asi-phy's [`PulseErrorRate`]) below
+/// 1, because at 1 no transaction gets through and there is nothing to measure.
+pub fn analysable_error_rate(p: f64) -> Result<PulseErrorRate, &'static str> {
+    match PulseErrorRate::new(p) {
+        Ok(rate) if rate.get() < 1.0 => Ok(rate),
+        Ok(_) => Err("must be below 1: at 1 no transaction gets through"),
+        Err(_) => Err("must be a probability 0 <= p < 1"),
+    }
+}
+
 impl TimingOptions {
     /// Checks the options.
     pub fn check(&self) -> Result<(), TimingError> {
@@ -160,13 +171,8 @@ impl TimingOptions {
             }
             _ => {}
         }
-        let p = self.pulse_error_rate;
-        if !(p.is_finite() && (0.0..1.0).contains(&p)) {
-            return err(
-                "pulse error rate",
-                p.to_string(),
-                "must be a probability 0 <= p < 1",
-            );
+        if let Err(rule) = analysable_error_rate(self.pulse_error_rate) {
+            return err("pulse error rate", self.pulse_error_rate.to_string(), rule);
         }
         if self.duration.is_zero() || self.duration > MAX_DURATION {
             return err(
