@@ -38,10 +38,10 @@ use crate::kl6904::TwinSafeLogic;
 ///
 /// Why: the logic must see every change of its inputs at a finer grain than the times it
 /// monitors. 1 ms resolves the 50 ms STOP discrepancy time to 2 % and the 100 ms watchdog to
-/// 1 %; it is shorter than one AS-i cycle of the lab bus ((9 + 2) · 154 µs ≈ 1.7 ms, docs/master.md),
-/// so the safety monitor's release state is sampled at least once per bus cycle, and ten times
-/// finer than the controller's 10 ms scan, so a controller pulse (≥ one controller scan) is
-/// always seen high and low. Each connection exchanges one telegram per scan; scanning much
+/// 1 %; it is shorter than one AS-i cycle of the lab bus ((11 + 2) · 154 µs ≈ 2.0 ms for its
+/// 11 slaves, docs/master.md §2.4), so the safety monitor's release state is sampled at least
+/// once per bus cycle, and ten times finer than the controller's 10 ms scan, so a controller
+/// pulse (≥ one controller scan) is always seen high and low. Each connection exchanges one telegram per scan; scanning much
 /// slower than the watchdog (100 ms) would trip COM_ERR by itself.
 pub const SAFETY_SCAN_PERIOD: SimDuration = SimDuration::from_millis(1);
 
