@@ -10,7 +10,7 @@ use std::fmt::Write as _;
 
 /// A telegram named on the command line.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Telegram {
+pub enum LineTelegram {
     /// A master request.
     Request(Request),
     /// A slave response.
@@ -42,7 +42,7 @@ pub enum CallError {
     Extra(String),
     /// The fields make no telegram.
     #[error(transparent)]
-    Telegram(#[from] asi_phy::TelegramError),
+    LineTelegram(#[from] asi_phy::TelegramError),
 }
 
 fn parse_address(s: &str) -> Result<(Address, Option<Select>), CallError> {
@@ -70,7 +70,7 @@ fn parse_nibble(s: &str) -> Result<Nibble, CallError> {
 
 /// Reads a call from its ZMD mnemonic and arguments, e.g. `dexg 5 1010`, `rdst 7B`,
 /// `adra 12`, `br01`, `resp 0110` (a slave response).
-pub fn parse_call(args: &[String]) -> Result<Telegram, CallError> {
+pub fn parse_call(args: &[String]) -> Result<LineTelegram, CallError> {
     let Some((name, rest)) = args.split_first() else {
         return Err(CallError::UnknownCall(String::new()));
     };
@@ -91,15 +91,15 @@ pub fn parse_call(args: &[String]) -> Result<Telegram, CallError> {
                 (_, None) => Request::write_parameter(a, v)?,
                 (_, Some(s)) => Request::write_parameter_ab(a, s, v)?,
             };
-            (Telegram::Request(r), 2)
+            (LineTelegram::Request(r), 2)
         }
         "adra" => {
             let (a, _) = parse_address(arg(0, "the new address")?)?;
-            (Telegram::Request(Request::address_assignment(a)), 1)
+            (LineTelegram::Request(Request::address_assignment(a)), 1)
         }
         "wid1" => {
             let v = parse_nibble(arg(0, "an ID1 value")?)?;
-            (Telegram::Request(Request::write_extended_id1(v)), 1)
+            (LineTelegram::Request(Request::write_extended_id1(v)), 1)
         }
         "dela" | "res" | "rdio" | "rdid" | "rid1" | "rid2" | "rdst" => {
             let (a, sel) = parse_address(arg(0, "an address")?)?;
@@ -113,11 +113,11 @@ pub fn parse_call(args: &[String]) -> Result<Telegram, CallError> {
                 "rid2" => Request::read_id2(a, s)?,
                 _ => Request::read_status(a, s)?,
             };
-            (Telegram::Request(r), 1)
+            (LineTelegram::Request(r), 1)
         }
-        "br01" => (Telegram::Request(Request::broadcast_reset()), 0),
+        "br01" => (LineTelegram::Request(Request::broadcast_reset()), 0),
         "resp" => (
-            Telegram::Response(Response::new(parse_nibble(arg(0, "a value")?)?)),
+            LineTelegram::Response(Response::new(parse_nibble(arg(0, "a value")?)?)),
             1,
         ),
         _ => return Err(CallError::UnknownCall(name.clone())),
@@ -129,23 +129,23 @@ pub fn parse_call(args: &[String]) -> Result<Telegram, CallError> {
 }
 
 /// The pulse train of `t` starting at time zero.
-pub fn pulse_train(t: Telegram) -> PulseTrain {
+pub fn pulse_train(t: LineTelegram) -> PulseTrain {
     let h = BusTiming::default().half_bit();
     match t {
-        Telegram::Request(r) => PulseTrain::request(r, SimTime::ZERO, h),
-        Telegram::Response(r) => PulseTrain::response(r, SimTime::ZERO, h),
+        LineTelegram::Request(r) => PulseTrain::request(r, SimTime::ZERO, h),
+        LineTelegram::Response(r) => PulseTrain::response(r, SimTime::ZERO, h),
     }
 }
 
 /// A readable description of how `t` travels: bits, Manchester levels, pulses.
-pub fn describe(t: Telegram) -> String {
+pub fn describe(t: LineTelegram) -> String {
     let mut s = String::new();
     let (bits, halves) = match t {
-        Telegram::Request(r) => {
+        LineTelegram::Request(r) => {
             let _ = writeln!(s, "call        {}", r.call());
             (r.to_string(), HalfBits::from(r))
         }
-        Telegram::Response(r) => {
+        LineTelegram::Response(r) => {
             let _ = writeln!(s, "response    {}", r.data());
             (r.to_string(), HalfBits::from(r))
         }
@@ -165,7 +165,7 @@ pub fn describe(t: Telegram) -> String {
 
 /// The line voltage of `t` with 10 µs of idle line before and after, as `time,voltage` CSV.
 pub fn waveform_csv(
-    t: Telegram,
+    t: LineTelegram,
     cfg: &WaveformConfig,
 ) -> Result<String, asi_phy::waveform::WaveformError> {
     let lead = SimDuration::from_micros(10);
@@ -191,23 +191,25 @@ mod tests {
         let a5 = Address::new(5).expect("a");
         assert_eq!(
             parse_call(&args("dexg 5 1010")),
-            Ok(Telegram::Request(
+            Ok(LineTelegram::Request(
                 Request::data_exchange(a5, Nibble::from_low_bits(0b1010)).expect("v")
             ))
         );
         assert_eq!(
             parse_call(&args("RDST 5B")),
-            Ok(Telegram::Request(
+            Ok(LineTelegram::Request(
                 Request::read_status(a5, Select::B).expect("v")
             ))
         );
         assert_eq!(
             parse_call(&args("br01")),
-            Ok(Telegram::Request(Request::broadcast_reset()))
+            Ok(LineTelegram::Request(Request::broadcast_reset()))
         );
         assert_eq!(
             parse_call(&args("resp 0b110")),
-            Ok(Telegram::Response(Response::new(Nibble::from_low_bits(6))))
+            Ok(LineTelegram::Response(Response::new(
+                Nibble::from_low_bits(6)
+            )))
         );
     }
 
@@ -235,7 +237,7 @@ mod tests {
         ));
         assert!(matches!(
             parse_call(&args("dexg 0 1")),
-            Err(CallError::Telegram(_))
+            Err(CallError::LineTelegram(_))
         ));
     }
 

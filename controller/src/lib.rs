@@ -19,6 +19,6 @@ pub mod program;
 
 pub use dispatch::{Algorithm, Dir, HallDir, ServedCall, Source};
 pub use program::{
-    CabinWord, ControllerConfig, ControllerConfigError, Event, EventKind, HaltReason, InitStart,
-    Inputs, LostReason, Outputs, Program, State,
+    CabinWord, ControllerConfig, ControllerConfigError, Event, HaltReason, InitStart, Inputs,
+    LostReason, Outputs, Program, ProgramEventKind, State,
 };

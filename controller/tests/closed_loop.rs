@@ -5,14 +5,14 @@
 mod common;
 
 use asi_phy::{SimDuration, SimTime};
-use controller::{Algorithm, ControllerConfig, EventKind, Program, Source, State};
+use controller::{Algorithm, ControllerConfig, Program, ProgramEventKind, Source, State};
 use lift_model::{Button, Lift, LiftConfig, LoadLevel};
 
 struct Loop {
     lift: Lift,
     prog: Program,
     now: SimTime,
-    events: Vec<(SimTime, EventKind)>,
+    events: Vec<(SimTime, ProgramEventKind)>,
     estop_ok: bool,
 }
 
@@ -82,7 +82,7 @@ impl Loop {
         self.events
             .iter()
             .filter_map(|(_, e)| match e {
-                EventKind::Arrived { floor } => Some(*floor),
+                ProgramEventKind::Arrived { floor } => Some(*floor),
                 _ => None,
             })
             .collect()
@@ -92,7 +92,7 @@ impl Loop {
         self.events
             .iter()
             .filter_map(|(_, e)| match e {
-                EventKind::Served(s) => Some((s.floor, s.source)),
+                ProgramEventKind::Served(s) => Some((s.floor, s.source)),
                 _ => None,
             })
             .collect()

@@ -8,7 +8,7 @@
 mod common;
 
 use asi_phy::{SimDuration, SimTime};
-use controller::{ControllerConfig, EventKind, Program, State};
+use controller::{ControllerConfig, Program, ProgramEventKind, State};
 use lab::DisplayWord;
 use lift_model::{Button, Lift, LiftConfig, LoadLevel};
 
@@ -20,7 +20,7 @@ struct Loop {
     now: SimTime,
     bus_ok: bool,
     /// (scan time, display, events of that scan).
-    scans: Vec<(SimTime, DisplayWord, Vec<EventKind>)>,
+    scans: Vec<(SimTime, DisplayWord, Vec<ProgramEventKind>)>,
 }
 
 impl Loop {
@@ -78,12 +78,12 @@ impl Loop {
             .expect("press");
     }
 
-    fn saw(&self, want: impl Fn(&EventKind) -> bool) -> bool {
+    fn saw(&self, want: impl Fn(&ProgramEventKind) -> bool) -> bool {
         self.scans.iter().any(|(_, _, e)| e.iter().any(&want))
     }
 
     /// The display in the scan of the first event matching `want`, from scan `from` on.
-    fn display_at(&self, from: usize, want: impl Fn(&EventKind) -> bool) -> DisplayWord {
+    fn display_at(&self, from: usize, want: impl Fn(&ProgramEventKind) -> bool) -> DisplayWord {
         self.scans[from..]
             .iter()
             .find(|(_, _, e)| e.iter().any(&want))
@@ -144,7 +144,7 @@ fn initialisation_shows_floor_1_and_down_to_its_last_step() {
         "{:?}",
         l.shown(0)
     );
-    let last_step = l.display_at(0, |e| *e == EventKind::Initialised);
+    let last_step = l.display_at(0, |e| *e == ProgramEventKind::Initialised);
     assert_eq!(Shown::of(&last_step), Shown(1, '↓', STANDING, OK));
 }
 
@@ -171,7 +171,7 @@ fn a_journey_up_shows_the_departure_floor_until_the_arrival() {
     let from = l.scans.len() - 1;
     l.press(Button::Cabin(3));
     l.run_until(SimDuration::from_secs(30), |l| {
-        l.saw(|e| *e == EventKind::Arrived { floor: 3 })
+        l.saw(|e| *e == ProgramEventKind::Arrived { floor: 3 })
     });
     l.run_for(SimDuration::from_secs(1));
     assert_eq!(
@@ -182,21 +182,21 @@ fn a_journey_up_shows_the_departure_floor_until_the_arrival() {
             Shown(3, '-', STANDING, OK), // arrival
         ]
     );
-    let departed = l.display_at(from, |e| matches!(e, EventKind::Departed { .. }));
+    let departed = l.display_at(from, |e| matches!(e, ProgramEventKind::Departed { .. }));
     assert_eq!(Shown::of(&departed), Shown(1, '↑', MOVING, OK));
-    let passed = l.display_at(from, |e| *e == EventKind::Passed { floor: 2 });
+    let passed = l.display_at(from, |e| *e == ProgramEventKind::Passed { floor: 2 });
     assert_eq!(
         Shown::of(&passed),
         Shown(1, '↑', MOVING, OK),
         "passing floor 2"
     );
-    let braking = l.display_at(from, |e| *e == EventKind::Braking { floor: 3 });
+    let braking = l.display_at(from, |e| *e == ProgramEventKind::Braking { floor: 3 });
     assert_eq!(
         Shown::of(&braking),
         Shown(1, '↑', MOVING, OK),
         "braking for 3"
     );
-    let arrived = l.display_at(from, |e| *e == EventKind::Arrived { floor: 3 });
+    let arrived = l.display_at(from, |e| *e == ProgramEventKind::Arrived { floor: 3 });
     assert_eq!(Shown::of(&arrived), Shown(3, '-', STANDING, OK));
 }
 
@@ -206,13 +206,13 @@ fn a_journey_down_shows_the_departure_floor_until_the_arrival() {
     let mut l = initialised(650.0);
     l.press(Button::Cabin(4));
     l.run_until(SimDuration::from_secs(40), |l| {
-        l.saw(|e| *e == EventKind::Arrived { floor: 4 })
+        l.saw(|e| *e == ProgramEventKind::Arrived { floor: 4 })
     });
     l.run_for(SimDuration::from_secs(3));
     let from = l.scans.len() - 1;
     l.press(Button::Cabin(1));
     l.run_until(SimDuration::from_secs(40), |l| {
-        l.saw(|e| *e == EventKind::Arrived { floor: 1 })
+        l.saw(|e| *e == ProgramEventKind::Arrived { floor: 1 })
     });
     l.run_for(SimDuration::from_secs(1));
     assert_eq!(
@@ -256,7 +256,7 @@ fn stop_shows_the_floor_it_stops_at_on_arrival() {
     let from = l.scans.len();
     l.press(Button::Stop);
     l.run_until(SimDuration::from_secs(20), |l| {
-        l.saw(|e| *e == EventKind::Arrived { floor: 3 })
+        l.saw(|e| *e == ProgramEventKind::Arrived { floor: 3 })
     });
     l.run_for(SimDuration::from_secs(1));
     assert_eq!(

@@ -8,7 +8,7 @@ use std::hint::black_box;
 
 use asi_phy::{SimDuration, SimTime};
 use criterion::{criterion_main, Criterion, Throughput};
-use lift_model::{EventKind, Lift, LiftConfig};
+use lift_model::{Lift, LiftConfig, PlantEventKind};
 
 /// A 24-floor lift running up from floor 1 at 68.8 mm/s.
 fn shuttle() -> Lift {
@@ -31,7 +31,7 @@ fn advance(lift: &mut Lift, t: SimTime, up: &mut bool) -> usize {
     if let Ok(events) = lift.advance_to(t) {
         for e in events {
             edges += 1;
-            tripped |= matches!(e.kind, EventKind::Overtravel { tripped: true, .. });
+            tripped |= matches!(e.kind, PlantEventKind::Overtravel { tripped: true, .. });
         }
     }
     if tripped {

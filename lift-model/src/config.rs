@@ -66,7 +66,7 @@ impl Default for LiftConfig {
 
 /// Why a [`LiftConfig`] was rejected; each message names the field and the cause.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
-pub enum ConfigError {
+pub enum LiftConfigError {
     /// Fewer than 2 or more than 24 floors.
     #[error("floors = {floors}: the lift needs 2 to 24 floors (the display word carries floor numbers 1..24, docs/lab-bus.md)")]
     FloorCount {
@@ -149,9 +149,9 @@ pub enum ConfigError {
 
 impl LiftConfig {
     /// Checks every rule; the first one broken is returned. [`crate::Lift::new`] calls this.
-    pub fn validate(&self) -> Result<(), ConfigError> {
+    pub fn validate(&self) -> Result<(), LiftConfigError> {
         if !(MIN_FLOORS..=MAX_FLOORS).contains(&self.floors) {
-            return Err(ConfigError::FloorCount {
+            return Err(LiftConfigError::FloorCount {
                 floors: self.floors,
             });
         }
@@ -184,25 +184,25 @@ impl LiftConfig {
         for (field, value, max) in positive {
             check_finite(field, value)?;
             if value <= 0.0 {
-                return Err(ConfigError::NotPositive { field, value });
+                return Err(LiftConfigError::NotPositive { field, value });
             }
             if value > max {
-                return Err(ConfigError::TooLarge { field, value, max });
+                return Err(LiftConfigError::TooLarge { field, value, max });
             }
         }
         check_finite("drive.slip", d.slip)?;
         check_finite("initial_position_mm", self.initial_position_mm)?;
         if d.pole_pairs == 0 {
-            return Err(ConfigError::NotPositive {
+            return Err(LiftConfigError::NotPositive {
                 field: "drive.pole_pairs",
                 value: 0.0,
             });
         }
         if !(0.0..1.0).contains(&d.slip) {
-            return Err(ConfigError::Slip { slip: d.slip });
+            return Err(LiftConfigError::Slip { slip: d.slip });
         }
         if self.short_track_half_mm >= self.long_track_half_mm {
-            return Err(ConfigError::TrackLengths {
+            return Err(LiftConfigError::TrackLengths {
                 short_mm: self.short_track_half_mm,
                 long_mm: self.long_track_half_mm,
             });
@@ -212,7 +212,7 @@ impl LiftConfig {
                 let (_, lower_top_mm) = self.track(sensor, lower);
                 let (upper_bottom_mm, _) = self.track(sensor, lower + 1);
                 if lower_top_mm >= upper_bottom_mm {
-                    return Err(ConfigError::VanesOverlap {
+                    return Err(LiftConfigError::VanesOverlap {
                         sensor,
                         lower_floor: lower,
                         upper_floor: lower + 1,
@@ -223,7 +223,7 @@ impl LiftConfig {
             }
         }
         if self.trip_beyond_floor_mm <= self.long_track_half_mm {
-            return Err(ConfigError::TripZoneOverlapsFloor {
+            return Err(LiftConfigError::TripZoneOverlapsFloor {
                 trip_mm: self.trip_beyond_floor_mm,
                 track_mm: self.long_track_half_mm,
             });
@@ -233,7 +233,7 @@ impl LiftConfig {
             self.end_position_mm(End::Top),
         );
         if !(lowest_mm..=highest_mm).contains(&self.initial_position_mm) {
-            return Err(ConfigError::InitialPosition {
+            return Err(LiftConfigError::InitialPosition {
                 position_mm: self.initial_position_mm,
                 lowest_mm,
                 highest_mm,
@@ -310,10 +310,10 @@ impl LiftConfig {
     }
 }
 
-fn check_finite(field: &'static str, value: f64) -> Result<(), ConfigError> {
+fn check_finite(field: &'static str, value: f64) -> Result<(), LiftConfigError> {
     if value.is_finite() {
         Ok(())
     } else {
-        Err(ConfigError::NotFinite { field, value })
+        Err(LiftConfigError::NotFinite { field, value })
     }
 }

@@ -15,14 +15,14 @@ pub struct PlantEvent {
     /// nanosecond before.
     pub at: SimTime,
     /// What changed.
-    pub kind: EventKind,
+    pub kind: PlantEventKind,
 }
 
 /// The edges the plant makes by itself. Changes that an input causes at once (contactor
 /// contacts, converter ready, a button pressed, the door) are not reported: the caller made
 /// them and can read them from the getters.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub enum EventKind {
+pub enum PlantEventKind {
     /// A vane sensor on the cabin changed (seed 003 §6.4; `Snimac_1`, `Snimac_2`).
     Vane {
         /// Which sensor.
@@ -82,24 +82,26 @@ pub struct Crash {
     pub powered: bool,
 }
 
-impl fmt::Display for EventKind {
+impl fmt::Display for PlantEventKind {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let on_off = |on: bool| if on { "on" } else { "off" };
         match *self {
-            EventKind::Vane { sensor, on } => write!(f, "{sensor} {}", on_off(on)),
-            EventKind::Overtravel { end, tripped } => {
+            PlantEventKind::Vane { sensor, on } => write!(f, "{sensor} {}", on_off(on)),
+            PlantEventKind::Overtravel { end, tripped } => {
                 let state = if tripped { "tripped" } else { "free" };
                 write!(f, "{end} overtravel {state}")
             }
-            EventKind::RampEnd { velocity_mm_s } => {
+            PlantEventKind::RampEnd { velocity_mm_s } => {
                 write!(f, "ramp end at {velocity_mm_s:.3} mm/s")
             }
-            EventKind::Stopped { position_mm } => write!(f, "stopped at {position_mm:.3} mm"),
-            EventKind::Crash { end, impact_mm_s } => {
+            PlantEventKind::Stopped { position_mm } => write!(f, "stopped at {position_mm:.3} mm"),
+            PlantEventKind::Crash { end, impact_mm_s } => {
                 write!(f, "CRASH into the {end} end at {impact_mm_s:.3} mm/s")
             }
-            EventKind::ConverterFault { fault } => write!(f, "converter fault {}", on_off(fault)),
-            EventKind::Released { button } => write!(f, "{button} released"),
+            PlantEventKind::ConverterFault { fault } => {
+                write!(f, "converter fault {}", on_off(fault))
+            }
+            PlantEventKind::Released { button } => write!(f, "{button} released"),
         }
     }
 }

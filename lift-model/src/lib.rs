@@ -37,7 +37,7 @@
 //!
 //! ```
 //! use asi_phy::SimTime;
-//! use lift_model::{EventKind, Lift, LiftConfig, VaneSensor};
+//! use lift_model::{PlantEventKind, Lift, LiftConfig, VaneSensor};
 //!
 //! let mut lift = Lift::new(LiftConfig::default())?;
 //! let t0 = SimTime::ZERO;
@@ -47,7 +47,7 @@
 //! while let Some(t) = lift.next_event() {
 //!     let rose = lift
 //!         .advance_to(t)?
-//!         .any(|e| e.kind == EventKind::Vane { sensor: VaneSensor::Right, on: true });
+//!         .any(|e| e.kind == PlantEventKind::Vane { sensor: VaneSensor::Right, on: true });
 //!     if rose {
 //!         break;
 //!     }
@@ -67,10 +67,10 @@ mod motion;
 mod sensor;
 mod shaft;
 
-pub use config::{ConfigError, LiftConfig, LEVEL_WINDOW_MM};
+pub use config::{LiftConfig, LiftConfigError, LEVEL_WINDOW_MM};
 pub use controls::{Button, ContactFault, LoadLevel, SensorFault, StopChannel};
 pub use display::{DisplayId, DisplayState};
 pub use drive::{converter_frequency_hz, DriveConfig};
-pub use event::{Crash, EventKind, PlantEvent};
+pub use event::{Crash, PlantEvent, PlantEventKind};
 pub use lift::{Events, Lift, PlantError};
 pub use sensor::{End, VaneSensor};

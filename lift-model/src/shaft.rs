@@ -8,7 +8,7 @@
 //! passed, so the next edge in either direction is one step away.
 
 use crate::config::LiftConfig;
-use crate::event::EventKind;
+use crate::event::PlantEventKind;
 use crate::sensor::{End, VaneSensor};
 
 /// What changes when the cabin crosses a boundary.
@@ -78,7 +78,7 @@ impl Levels {
 
     /// Applies the crossing of `b` moving up or down and says what changed, or which
     /// mechanical end the cabin hit (that changes no level: the cabin stops at the end).
-    pub fn cross(&mut self, b: &Boundary, up: bool) -> Result<EventKind, End> {
+    pub fn cross(&mut self, b: &Boundary, up: bool) -> Result<PlantEventKind, End> {
         let level = if up {
             b.level_above()
         } else {
@@ -90,7 +90,7 @@ impl Levels {
                     VaneSensor::Left => &mut self.left,
                     VaneSensor::Right => &mut self.right,
                 };
-                (slot, EventKind::Vane { sensor, on: level })
+                (slot, PlantEventKind::Vane { sensor, on: level })
             }
             Signal::Overtravel(end) => {
                 let slot = match end {
@@ -99,7 +99,7 @@ impl Levels {
                 };
                 (
                     slot,
-                    EventKind::Overtravel {
+                    PlantEventKind::Overtravel {
                         end,
                         tripped: level,
                     },

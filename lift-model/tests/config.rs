@@ -1,10 +1,10 @@
 //! A configuration the lift could not run with is rejected at construction, with an error
 //! that names the field and the cause (docs/lift-plant.md: geometry all configurable, 2..24 floors).
 
-use lift_model::{ConfigError, DriveConfig, Lift, LiftConfig, VaneSensor};
+use lift_model::{DriveConfig, Lift, LiftConfig, LiftConfigError, VaneSensor};
 
 /// The error for `config`, which must be rejected, with its message.
-fn rejected(config: LiftConfig) -> (ConfigError, String) {
+fn rejected(config: LiftConfig) -> (LiftConfigError, String) {
     match Lift::new(config) {
         Ok(_) => panic!("configuration accepted"),
         Err(e) => {
@@ -55,7 +55,7 @@ fn zero_one_or_too_many_floors_are_rejected() {
             floors,
             ..LiftConfig::default()
         });
-        assert_eq!(e, ConfigError::FloorCount { floors });
+        assert_eq!(e, LiftConfigError::FloorCount { floors });
         assert!(message.starts_with(&format!("floors = {floors}: the lift needs 2 to 24 floors")));
     }
     for floors in [2u8, 24] {
@@ -76,7 +76,7 @@ fn a_negative_or_zero_pitch_is_rejected() {
         });
         assert_eq!(
             e,
-            ConfigError::NotPositive {
+            LiftConfigError::NotPositive {
                 field: "floor_pitch_mm",
                 value: pitch
             }
@@ -96,7 +96,7 @@ fn a_number_that_is_not_finite_is_rejected() {
     });
     assert!(matches!(
         e,
-        ConfigError::NotFinite {
+        LiftConfigError::NotFinite {
             field: "long_track_half_mm",
             ..
         }
@@ -141,7 +141,7 @@ fn every_length_speed_and_rate_must_be_positive() {
         break_it(&mut config);
         let (e, message) = rejected(config);
         assert!(
-            matches!(e, ConfigError::NotPositive { field: f, .. } if f == field),
+            matches!(e, LiftConfigError::NotPositive { field: f, .. } if f == field),
             "{e:?}"
         );
         assert!(message.starts_with(field) && message.ends_with("must be greater than zero"));
@@ -156,7 +156,7 @@ fn an_absurdly_large_value_is_rejected() {
     });
     assert!(matches!(
         e,
-        ConfigError::TooLarge {
+        LiftConfigError::TooLarge {
             field: "floor_pitch_mm",
             ..
         }
@@ -174,7 +174,7 @@ fn a_slip_of_one_or_more_is_rejected() {
             slip,
             ..DriveConfig::default()
         }));
-        assert_eq!(e, ConfigError::Slip { slip });
+        assert_eq!(e, LiftConfigError::Slip { slip });
         assert!(message.contains("slip of an induction motor is at least 0 and below 1"));
     }
 }
@@ -187,7 +187,7 @@ fn a_short_track_not_shorter_than_the_long_one_is_rejected() {
     });
     assert_eq!(
         e,
-        ConfigError::TrackLengths {
+        LiftConfigError::TrackLengths {
             short_mm: 40.0,
             long_mm: 40.0
         }
@@ -204,7 +204,7 @@ fn overlapping_vanes_are_rejected() {
     });
     assert_eq!(
         e,
-        ConfigError::VanesOverlap {
+        LiftConfigError::VanesOverlap {
             sensor: VaneSensor::Right,
             lower_floor: 2,
             upper_floor: 3,
@@ -225,7 +225,7 @@ fn overlapping_vanes_are_rejected() {
     });
     assert!(matches!(
         e,
-        ConfigError::VanesOverlap {
+        LiftConfigError::VanesOverlap {
             sensor: VaneSensor::Left,
             lower_floor: 1,
             upper_floor: 2,
@@ -248,7 +248,7 @@ fn trip_zones_overlapping_the_end_floors_are_rejected() {
     });
     assert_eq!(
         e,
-        ConfigError::TripZoneOverlapsFloor {
+        LiftConfigError::TripZoneOverlapsFloor {
             trip_mm: 40.0,
             track_mm: 40.0
         }
@@ -268,7 +268,7 @@ fn a_start_outside_the_mechanical_ends_is_rejected() {
         });
         assert_eq!(
             e,
-            ConfigError::InitialPosition {
+            LiftConfigError::InitialPosition {
                 position_mm: position,
                 lowest_mm: -140.0,
                 highest_mm: 1340.0

@@ -5,7 +5,7 @@ mod common;
 
 use asi_phy::SimTime;
 use common::*;
-use lift_model::{converter_frequency_hz, DriveConfig, EventKind, VaneSensor};
+use lift_model::{converter_frequency_hz, DriveConfig, PlantEventKind, VaneSensor};
 
 /// `value` printed with as many decimals as the seed's `table` text has.
 fn as_in_table(value: f64, table: &str) -> String {
@@ -28,7 +28,7 @@ fn check_row(setpoint_ua: u16, f_hz: &str, n1: &str, n2: &str, v_mm_s: &str) {
     );
 
     let mut lift = driving(0.0, true, setpoint_ua);
-    let end = run_to(&mut lift, |k| matches!(k, EventKind::RampEnd { .. }));
+    let end = run_to(&mut lift, |k| matches!(k, PlantEventKind::RampEnd { .. }));
     // The ramp takes f / 50 Hz/s, rounded up to the nanosecond.
     assert_eq!(
         end.at,
@@ -41,13 +41,13 @@ fn check_row(setpoint_ua: u16, f_hz: &str, n1: &str, n2: &str, v_mm_s: &str) {
     // Measured on the shaft, as one would with a stopwatch: the right sensor's 80 mm track
     // at floor 2 (360..440 mm) takes 80 / v seconds to pass at constant speed.
     let on = run_to(&mut lift, |k| {
-        *k == EventKind::Vane {
+        *k == PlantEventKind::Vane {
             sensor: VaneSensor::Right,
             on: true,
         }
     });
     let off = run_to(&mut lift, |k| {
-        *k == EventKind::Vane {
+        *k == PlantEventKind::Vane {
             sensor: VaneSensor::Right,
             on: false,
         }

@@ -8,8 +8,8 @@ use asi_phy::{SimDuration, SimTime};
 use common::*;
 use lab::{DisplayWord, DisplayWordError};
 use lift_model::{
-    Button, ContactFault, DisplayId, DisplayState, EventKind, Lift, LiftConfig, LoadLevel,
-    PlantError, StopChannel,
+    Button, ContactFault, DisplayId, DisplayState, Lift, LiftConfig, LoadLevel, PlantError,
+    PlantEventKind, StopChannel,
 };
 use proptest::prelude::*;
 
@@ -27,7 +27,7 @@ fn a_press_holds_from_its_start_until_the_nanosecond_before_its_end() {
     assert_eq!(released[0].at, secs(1.2));
     assert_eq!(
         released[0].kind,
-        EventKind::Released {
+        PlantEventKind::Released {
             button: Button::Cabin(3)
         }
     );
@@ -60,14 +60,14 @@ fn presses_ending_together_are_reported_in_one_instant_in_button_order() {
     ok(lift.press(SimTime::ZERO, Button::Stop, d));
     ok(lift.press(SimTime::ZERO, Button::HallDown(4), d));
     ok(lift.press(SimTime::ZERO, Button::Cabin(1), d));
-    let kinds: Vec<EventKind> = advance(&mut lift, secs(1.0))
+    let kinds: Vec<PlantEventKind> = advance(&mut lift, secs(1.0))
         .iter()
         .map(|e| e.kind)
         .collect();
     assert_eq!(
         kinds,
         [Button::Cabin(1), Button::HallDown(4), Button::Stop]
-            .map(|button| EventKind::Released { button })
+            .map(|button| PlantEventKind::Released { button })
     );
 }
 

@@ -5,7 +5,7 @@ mod common;
 
 use asi_phy::{SimDuration, SimTime};
 use common::*;
-use lift_model::{DriveConfig, End, EventKind, LiftConfig, PlantError, VaneSensor};
+use lift_model::{DriveConfig, End, LiftConfig, PlantError, PlantEventKind, VaneSensor};
 
 fn near(x: f64, expected: f64) -> bool {
     (x - expected).abs() < 1e-6
@@ -19,7 +19,7 @@ fn speed(setpoint: u16) -> f64 {
 /// The lift running up at `setpoint` at constant speed, at the end of its ramp.
 fn running_up(setpoint: u16, config: LiftConfig) -> lift_model::Lift {
     let mut lift = driving_with(config, true, setpoint);
-    run_to(&mut lift, |k| matches!(k, EventKind::RampEnd { .. }));
+    run_to(&mut lift, |k| matches!(k, PlantEventKind::RampEnd { .. }));
     lift
 }
 
@@ -39,7 +39,7 @@ fn k1_opening_stops_the_cabin_within_the_brake_distance() {
         let (x, v) = (lift.position_mm(), lift.velocity_mm_s());
         ok(lift.set_contactor(t, false));
         assert!(!lift.converter_ready() && lift.acceleration_mm_s2() == -brake);
-        let stop = run_to(&mut lift, |k| matches!(k, EventKind::Stopped { .. }));
+        let stop = run_to(&mut lift, |k| matches!(k, PlantEventKind::Stopped { .. }));
         let distance = lift.position_mm() - x;
         // v²/2a: 4.733 mm from 68.797 mm/s at 500 mm/s².
         assert!(near(distance, v * v / (2.0 * brake)), "{distance}");
@@ -64,7 +64,7 @@ fn k1_closing_mid_brake_catches_the_motor_without_a_jump() {
     ok(lift.set_contactor(t_close, true));
     assert_eq!(lift.velocity_mm_s(), v);
     assert!(lift.converter_ready());
-    let back = run_to(&mut lift, |k| matches!(k, EventKind::RampEnd { .. }));
+    let back = run_to(&mut lift, |k| matches!(k, PlantEventKind::RampEnd { .. }));
     // From 48.8 mm/s back to 68.8 mm/s on the 50 Hz/s ramp.
     let ramp = DriveConfig::default().ramp_mm_s2();
     let expected = (speed(11_000) - v) / ramp;
@@ -124,16 +124,18 @@ fn the_crank_moves_the_cabin_only_without_power() {
     ok(lift.set_contactor_welded(secs(1.0), false));
     // Without power: 200 mm up at 10 mm/s takes 20 s and meets floor 2's vane on the way.
     ok(lift.crank(secs(2.0), 200.0));
-    let right = run_to(&mut lift, |k| matches!(k, EventKind::Vane { on: true, .. }));
+    let right = run_to(&mut lift, |k| {
+        matches!(k, PlantEventKind::Vane { on: true, .. })
+    });
     assert_eq!(
         right.kind,
-        EventKind::Vane {
+        PlantEventKind::Vane {
             sensor: VaneSensor::Right,
             on: true
         }
     );
     assert_eq!(right.at, secs(2.0 + 16.0)); // 360 mm reached exactly
-    let stop = run_to(&mut lift, |k| matches!(k, EventKind::Stopped { .. }));
+    let stop = run_to(&mut lift, |k| matches!(k, PlantEventKind::Stopped { .. }));
     assert_eq!(stop.at, secs(22.0));
     assert_eq!(lift.position_mm(), 400.0);
     assert!(lift.in_level_zone());
@@ -169,7 +171,7 @@ fn closing_k1_ends_a_crank_turn_where_the_cabin_is() {
     ok(lift.set_contactor(secs(3.0), true));
     // Flying restart from the crank speed, then a ramp to rest: the converter is not running.
     assert_eq!(lift.velocity_mm_s(), 10.0);
-    run_to(&mut lift, |k| matches!(k, EventKind::Stopped { .. }));
+    run_to(&mut lift, |k| matches!(k, PlantEventKind::Stopped { .. }));
     assert!(lift.position_mm() > 30.0 && lift.position_mm() < 30.3);
     assert_eq!(lift.next_event(), None);
 }
@@ -179,10 +181,12 @@ fn the_overtravel_sensors_trip_at_their_zones() {
     // Down from floor 1 at 6000 with nothing to stop it: the bottom trips at −60 mm.
     let mut lift = driving(0.0, false, 6000);
     assert!(lift.overtravel_bottom_free() && lift.overtravel_top_free());
-    let trip = run_to(&mut lift, |k| matches!(k, EventKind::Overtravel { .. }));
+    let trip = run_to(&mut lift, |k| {
+        matches!(k, PlantEventKind::Overtravel { .. })
+    });
     assert_eq!(
         trip.kind,
-        EventKind::Overtravel {
+        PlantEventKind::Overtravel {
             end: End::Bottom,
             tripped: true
         }
@@ -192,10 +196,12 @@ fn the_overtravel_sensors_trip_at_their_zones() {
 
     // Up from floor 4 at 6000: the top trips at 1200 + 60 mm.
     let mut lift = driving(1200.0, true, 6000);
-    let trip = run_to(&mut lift, |k| matches!(k, EventKind::Overtravel { .. }));
+    let trip = run_to(&mut lift, |k| {
+        matches!(k, PlantEventKind::Overtravel { .. })
+    });
     assert_eq!(
         trip.kind,
-        EventKind::Overtravel {
+        PlantEventKind::Overtravel {
             end: End::Top,
             tripped: true
         }
@@ -208,10 +214,12 @@ fn the_overtravel_sensors_trip_at_their_zones() {
 fn k1_dropping_at_the_trip_stops_the_cabin_short_of_the_buffer() {
     // docs/safety.md: the overtravel trip drops K1 at once (here with no reaction delay).
     let mut lift = driving(0.0, false, 11_000);
-    run_to(&mut lift, |k| matches!(k, EventKind::Overtravel { .. }));
+    run_to(&mut lift, |k| {
+        matches!(k, PlantEventKind::Overtravel { .. })
+    });
     let t = lift.now();
     ok(lift.set_contactor(t, false));
-    run_to(&mut lift, |k| matches!(k, EventKind::Stopped { .. }));
+    run_to(&mut lift, |k| matches!(k, PlantEventKind::Stopped { .. }));
     // 68.797² / 1000 = 4.733 mm past the trip point, 75 mm short of the buffer.
     assert!(near(
         lift.position_mm(),
@@ -223,8 +231,8 @@ fn k1_dropping_at_the_trip_stops_the_cabin_short_of_the_buffer() {
 #[test]
 fn a_drive_into_the_bottom_end_is_a_recorded_crash_and_trips_the_converter() {
     let mut lift = driving(0.0, false, 6000);
-    let crash = run_to(&mut lift, |k| matches!(k, EventKind::Crash { .. }));
-    let EventKind::Crash { end, impact_mm_s } = crash.kind else {
+    let crash = run_to(&mut lift, |k| matches!(k, PlantEventKind::Crash { .. }));
+    let PlantEventKind::Crash { end, impact_mm_s } = crash.kind else {
         unreachable!()
     };
     assert_eq!(end, End::Bottom);
@@ -247,10 +255,12 @@ fn a_drive_into_the_bottom_end_is_a_recorded_crash_and_trips_the_converter() {
         Err(PlantError::CrankBlocked { end: End::Bottom })
     );
     ok(lift.crank(t, 100.0));
-    let free = run_to(&mut lift, |k| matches!(k, EventKind::Overtravel { .. }));
+    let free = run_to(&mut lift, |k| {
+        matches!(k, PlantEventKind::Overtravel { .. })
+    });
     assert_eq!(
         free.kind,
-        EventKind::Overtravel {
+        PlantEventKind::Overtravel {
             end: End::Bottom,
             tripped: false
         }
@@ -272,14 +282,16 @@ fn braking_into_the_buffer_and_cranking_into_it_are_crashes_too() {
         ..LiftConfig::default()
     };
     let mut lift = driving_with(config, false, 11_000);
-    run_to(&mut lift, |k| matches!(k, EventKind::Overtravel { .. }));
+    run_to(&mut lift, |k| {
+        matches!(k, PlantEventKind::Overtravel { .. })
+    });
     let (t, x, v) = (lift.now(), lift.position_mm(), lift.velocity_mm_s());
     ok(lift.set_contactor(t, false));
-    let crash = run_to(&mut lift, |k| matches!(k, EventKind::Crash { .. }));
+    let crash = run_to(&mut lift, |k| matches!(k, PlantEventKind::Crash { .. }));
     let expected = (v * v - 2.0 * 20.0 * (x + 140.0)).sqrt();
     assert_eq!(
         crash.kind,
-        EventKind::Crash {
+        PlantEventKind::Crash {
             end: End::Bottom,
             impact_mm_s: lift.crashes()[0].impact_mm_s
         }
@@ -290,10 +302,10 @@ fn braking_into_the_buffer_and_cranking_into_it_are_crashes_too() {
     // Cranked 500 mm up from floor 4: it stops at the top buffer, the rest is dropped.
     let mut lift = lift_at(1200.0);
     ok(lift.crank(SimTime::ZERO, 500.0));
-    let crash = run_to(&mut lift, |k| matches!(k, EventKind::Crash { .. }));
+    let crash = run_to(&mut lift, |k| matches!(k, PlantEventKind::Crash { .. }));
     assert_eq!(
         crash.kind,
-        EventKind::Crash {
+        PlantEventKind::Crash {
             end: End::Top,
             impact_mm_s: 10.0
         }

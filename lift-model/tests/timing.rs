@@ -6,7 +6,7 @@ mod common;
 
 use asi_phy::{SimDuration, SimTime};
 use common::*;
-use lift_model::{DriveConfig, EventKind, Lift, LiftConfig, PlantEvent, VaneSensor};
+use lift_model::{DriveConfig, Lift, LiftConfig, PlantEvent, PlantEventKind, VaneSensor};
 use proptest::prelude::*;
 
 /// Asserts that `at` is the first nanosecond at or after the exact instant `exact_ns`
@@ -20,18 +20,18 @@ fn assert_rounded_up(at: SimTime, exact_ns: f64) {
 }
 
 /// The sensor level an edge is about.
-fn level(lift: &Lift, kind: &EventKind) -> Option<bool> {
+fn level(lift: &Lift, kind: &PlantEventKind) -> Option<bool> {
     match *kind {
-        EventKind::Vane { sensor, .. } => Some(lift.vane(sensor)),
-        EventKind::Overtravel { end, .. } => Some(!lift.overtravel_free(end)),
+        PlantEventKind::Vane { sensor, .. } => Some(lift.vane(sensor)),
+        PlantEventKind::Overtravel { end, .. } => Some(!lift.overtravel_free(end)),
         _ => None,
     }
 }
 
-fn new_level(kind: &EventKind) -> Option<bool> {
+fn new_level(kind: &PlantEventKind) -> Option<bool> {
     match *kind {
-        EventKind::Vane { on, .. } => Some(on),
-        EventKind::Overtravel { tripped, .. } => Some(tripped),
+        PlantEventKind::Vane { on, .. } => Some(on),
+        PlantEventKind::Overtravel { tripped, .. } => Some(tripped),
         _ => None,
     }
 }
@@ -39,7 +39,7 @@ fn new_level(kind: &EventKind) -> Option<bool> {
 #[test]
 fn at_steady_speed_every_edge_is_the_rounded_up_crossing_time() {
     let mut lift = driving(0.0, true, 10_000);
-    let ramp = run_to(&mut lift, |k| matches!(k, EventKind::RampEnd { .. }));
+    let ramp = run_to(&mut lift, |k| matches!(k, PlantEventKind::RampEnd { .. }));
     let (t_r, x_r) = (ramp.at.as_nanos() as f64, lift.position_mm());
     let v = DriveConfig::default().setpoint_velocity_mm_s(10_000);
     // Every edge from floor 1 to the top trip point, with the boundary it must lie on.
@@ -77,22 +77,22 @@ fn during_a_ramp_the_edges_solve_the_quadratic() {
     let (mut lift, a) = slow_ramp(5.0, 0.0, true);
     // The ramp to 13.3 Hz takes 2.66 s and 79 mm: both edges fall inside it.
     let right = run_to(&mut lift, |k| {
-        matches!(k, EventKind::Vane { on: false, .. })
+        matches!(k, PlantEventKind::Vane { on: false, .. })
     });
     assert_eq!(
         right.kind,
-        EventKind::Vane {
+        PlantEventKind::Vane {
             sensor: VaneSensor::Right,
             on: false
         }
     );
     assert_rounded_up(right.at, (2.0 * 10.0 / a).sqrt() * 1e9);
     let left = run_to(&mut lift, |k| {
-        matches!(k, EventKind::Vane { on: false, .. })
+        matches!(k, PlantEventKind::Vane { on: false, .. })
     });
     assert_eq!(
         left.kind,
-        EventKind::Vane {
+        PlantEventKind::Vane {
             sensor: VaneSensor::Left,
             on: false
         }
@@ -106,14 +106,18 @@ fn while_ramping_down_and_braking_the_edges_solve_the_quadratic() {
     // 440 mm (floor 2's long track) the set-point drops to 4000 and the cabin ramps to rest
     // over 39.5 mm, the left sensor rising at 410 mm on the way.
     let (mut lift, a) = slow_ramp(10.0, 600.0, false);
-    run_to(&mut lift, |k| matches!(k, EventKind::Vane { on: true, .. }));
+    run_to(&mut lift, |k| {
+        matches!(k, PlantEventKind::Vane { on: true, .. })
+    });
     let (t0, x0, v0) = (lift.now(), lift.position_mm(), lift.velocity_mm_s());
     assert!((x0 - 440.0).abs() < 1e-6 && v0 < 0.0);
     ok(lift.set_setpoint(t0, 4000));
-    let left = run_to(&mut lift, |k| matches!(k, EventKind::Vane { on: true, .. }));
+    let left = run_to(&mut lift, |k| {
+        matches!(k, PlantEventKind::Vane { on: true, .. })
+    });
     assert_eq!(
         left.kind,
-        EventKind::Vane {
+        PlantEventKind::Vane {
             sensor: VaneSensor::Left,
             on: true
         }
@@ -122,23 +126,23 @@ fn while_ramping_down_and_braking_the_edges_solve_the_quadratic() {
     let d = 410.0 - x0;
     let tau = (-v0 - (v0 * v0 + 2.0 * a * d).sqrt()) / a;
     assert_rounded_up(left.at, t0.as_nanos() as f64 + tau * 1e9);
-    let stop = run_to(&mut lift, |k| matches!(k, EventKind::Stopped { .. }));
+    let stop = run_to(&mut lift, |k| matches!(k, PlantEventKind::Stopped { .. }));
     assert_rounded_up(stop.at, t0.as_nanos() as f64 + -v0 / a * 1e9);
 
     // Now the brake: K1 opens at full speed 2 mm above the left track's end at 1190.
     let mut lift = driving(0.0, true, 10_000);
     let v = DriveConfig::default().setpoint_velocity_mm_s(10_000);
-    run_to(&mut lift, |k| matches!(k, EventKind::RampEnd { .. }));
+    run_to(&mut lift, |k| matches!(k, PlantEventKind::RampEnd { .. }));
     let x = lift.position_mm();
     let t_open = lift.now() + SimDuration::from_secs_f64((1188.0 - x) / v).unwrap_or_default();
     advance(&mut lift, t_open);
     let x_open = lift.position_mm();
     ok(lift.set_contactor(t_open, false));
     let brake = 500.0;
-    let edge = run_to(&mut lift, |k| matches!(k, EventKind::Vane { .. }));
+    let edge = run_to(&mut lift, |k| matches!(k, PlantEventKind::Vane { .. }));
     assert_eq!(
         edge.kind,
-        EventKind::Vane {
+        PlantEventKind::Vane {
             sensor: VaneSensor::Left,
             on: true
         }
@@ -271,23 +275,23 @@ fn run_scenario(steps: &[Step]) -> (Vec<PlantEvent>, u64, u64) {
 #[test]
 fn the_scenario_reaches_every_kind_of_edge() {
     let (events, _, _) = run_scenario(&[]);
-    let has = |f: fn(&EventKind) -> bool| events.iter().any(|e| f(&e.kind));
-    assert!(has(|k| matches!(k, EventKind::RampEnd { .. })));
-    assert!(has(|k| matches!(k, EventKind::Stopped { .. })));
-    assert!(has(|k| matches!(k, EventKind::Crash { .. })));
+    let has = |f: fn(&PlantEventKind) -> bool| events.iter().any(|e| f(&e.kind));
+    assert!(has(|k| matches!(k, PlantEventKind::RampEnd { .. })));
+    assert!(has(|k| matches!(k, PlantEventKind::Stopped { .. })));
+    assert!(has(|k| matches!(k, PlantEventKind::Crash { .. })));
     assert!(has(|k| matches!(
         k,
-        EventKind::ConverterFault { fault: true }
+        PlantEventKind::ConverterFault { fault: true }
     )));
     assert!(has(|k| matches!(
         k,
-        EventKind::Overtravel { tripped: true, .. }
+        PlantEventKind::Overtravel { tripped: true, .. }
     )));
     assert!(has(|k| matches!(
         k,
-        EventKind::Overtravel { tripped: false, .. }
+        PlantEventKind::Overtravel { tripped: false, .. }
     )));
-    assert!(has(|k| matches!(k, EventKind::Released { .. })));
+    assert!(has(|k| matches!(k, PlantEventKind::Released { .. })));
     assert!(events.windows(2).all(|w| w[0].at <= w[1].at));
 }
 

@@ -6,7 +6,7 @@ mod common;
 
 use asi_phy::SimDuration;
 use common::*;
-use lift_model::{EventKind, LiftConfig, VaneSensor};
+use lift_model::{LiftConfig, PlantEventKind, VaneSensor};
 
 use VaneSensor::{Left, Right};
 
@@ -35,7 +35,7 @@ fn assert_edges(actual: &[(VaneSensor, f64)], expected: &[(VaneSensor, f64)]) {
 fn down_onto_floor_1_the_left_sensor_rises_first_and_the_right_within_2_s_at_6000() {
     let mut lift = driving(400.0, false, 6000);
     let left = run_to(&mut lift, |k| {
-        *k == EventKind::Vane {
+        *k == PlantEventKind::Vane {
             sensor: Left,
             on: true,
         }
@@ -43,7 +43,7 @@ fn down_onto_floor_1_the_left_sensor_rises_first_and_the_right_within_2_s_at_600
     assert!(near(lift.position_mm(), 40.0));
     assert!(!lift.vane_right());
     let right = run_to(&mut lift, |k| {
-        *k == EventKind::Vane {
+        *k == PlantEventKind::Vane {
             sensor: Right,
             on: true,
         }
@@ -65,26 +65,30 @@ fn the_seed_initialisation_finds_floor_1_within_its_2_s_timer() {
     // Passing floors 3 and 2 the right sensor (long track) rises first, so the seed's
     // routine does not mistake them for floor 1.
     for floor_level in [800.0, 400.0] {
-        let first = run_to(&mut lift, |k| matches!(k, EventKind::Vane { on: true, .. }));
+        let first = run_to(&mut lift, |k| {
+            matches!(k, PlantEventKind::Vane { on: true, .. })
+        });
         assert_eq!(
             first.kind,
-            EventKind::Vane {
+            PlantEventKind::Vane {
                 sensor: Right,
                 on: true
             }
         );
         assert!(near(lift.position_mm(), floor_level + 40.0));
         run_to(&mut lift, |k| {
-            *k == EventKind::Vane {
+            *k == PlantEventKind::Vane {
                 sensor: Left,
                 on: true,
             }
         });
     }
-    let left = run_to(&mut lift, |k| matches!(k, EventKind::Vane { on: true, .. }));
+    let left = run_to(&mut lift, |k| {
+        matches!(k, PlantEventKind::Vane { on: true, .. })
+    });
     assert_eq!(
         left.kind,
-        EventKind::Vane {
+        PlantEventKind::Vane {
             sensor: Left,
             on: true
         }
@@ -93,7 +97,7 @@ fn the_seed_initialisation_finds_floor_1_within_its_2_s_timer() {
     advance(&mut lift, react);
     ok(lift.set_setpoint(react, 6000));
     let right = run_to(&mut lift, |k| {
-        *k == EventKind::Vane {
+        *k == PlantEventKind::Vane {
             sensor: Right,
             on: true,
         }
@@ -169,7 +173,7 @@ fn the_level_zone_is_where_both_sensors_are_on() {
     let mut zone = Vec::new();
     let (mut left, mut right) = (false, false);
     for (e, x) in &trace {
-        if let EventKind::Vane { sensor, on } = e.kind {
+        if let PlantEventKind::Vane { sensor, on } = e.kind {
             match sensor {
                 Left => left = on,
                 Right => right = on,
@@ -192,7 +196,7 @@ fn stopping_on_both_sensors_at_6000_ends_inside_the_level_zone() {
     // sensors are on. Ramping down from 20.55 mm/s at 50 Hz/s covers under 1 mm.
     let mut lift = driving(800.0, false, 6000);
     run_to(&mut lift, |k| {
-        *k == EventKind::Vane {
+        *k == PlantEventKind::Vane {
             sensor: Left,
             on: true,
         }
@@ -200,7 +204,7 @@ fn stopping_on_both_sensors_at_6000_ends_inside_the_level_zone() {
     assert!(lift.in_level_zone());
     let now = lift.now();
     ok(lift.set_setpoint(now, 4000));
-    run_to(&mut lift, |k| matches!(k, EventKind::Stopped { .. }));
+    run_to(&mut lift, |k| matches!(k, PlantEventKind::Stopped { .. }));
     let x = lift.position_mm();
     assert!(x < 410.0 && x > 390.0, "{x}");
     assert!(lift.in_level_zone());
@@ -223,7 +227,7 @@ fn any_number_of_floors_from_2_to_24_is_counted_the_same_way() {
         assert_eq!(firsts, vec![Right; usize::from(floors) - 1], "{floors}");
         let trips: Vec<f64> = trace
             .iter()
-            .filter(|(e, _)| matches!(e.kind, EventKind::Overtravel { tripped: true, .. }))
+            .filter(|(e, _)| matches!(e.kind, PlantEventKind::Overtravel { tripped: true, .. }))
             .map(|(_, x)| *x)
             .collect();
         assert_eq!(trips.len(), 1, "{floors}");
@@ -252,7 +256,7 @@ fn a_stuck_sensor_reads_its_stuck_value_and_reports_no_edges() {
     while lift.now() < end {
         let next = lift.next_event().unwrap_or(end).min(end);
         for e in lift.advance_to(next).expect("advance") {
-            if let EventKind::Vane { sensor, on } = e.kind {
+            if let PlantEventKind::Vane { sensor, on } = e.kind {
                 edges.push((sensor, on));
             }
         }

@@ -12,7 +12,7 @@ use crate::report::round3;
 use asi_master::record::{describe_request, TransactionRecord};
 use asi_phy::waveform::{render, WaveformConfig};
 use asi_phy::{BusTiming, Polarity, Pulse, SimDuration, SimTime};
-use asi_trace::vcd::write::{Value, VarId, VarKind, VcdWriter};
+use asi_trace::vcd::write::{Sample, VarId, VarKind, VcdWriter};
 use std::fmt::Write as _;
 use std::io::{self, Write};
 
@@ -223,14 +223,14 @@ impl Waves {
             return;
         };
         let t = r.start.as_nanos();
-        w.change(t, ids.request, Value::Bits(r.request.bits() as u64));
-        w.change(t, ids.call, Value::Text(describe_request(r.request, r.ab)));
+        w.change(t, ids.request, Sample::Bits(r.request.bits() as u64));
+        w.change(t, ids.call, Sample::Text(describe_request(r.request, r.ab)));
         w.change(
             t,
             ids.address,
-            Value::Bits(r.request.address().get() as u64),
+            Sample::Bits(r.request.address().get() as u64),
         );
-        w.change(t, ids.info, Value::Bits(r.request.info() as u64));
+        w.change(t, ids.info, Sample::Bits(r.request.info() as u64));
         w.change(t, ids.repeat, r.repeat.into());
         let failed = r.request_failed.union(r.response_failed);
         let mut errors = String::new();
@@ -245,16 +245,16 @@ impl Waves {
         if errors.is_empty() {
             errors.push_str(if r.no_response { "no_response" } else { "ok" });
         }
-        w.change(t, ids.errors, Value::Text(errors));
+        w.change(t, ids.errors, Sample::Text(errors));
         let tr = (r.start + self.response_after).as_nanos();
         match r.response {
             Some(resp) => {
-                w.change(tr, ids.response, Value::Bits(resp.bits() as u64));
-                w.change(tr, ids.data, Value::Bits(resp.data().get() as u64));
+                w.change(tr, ids.response, Sample::Bits(resp.bits() as u64));
+                w.change(tr, ids.data, Sample::Bits(resp.data().get() as u64));
             }
             None => {
-                w.change(tr, ids.response, Value::Unknown);
-                w.change(tr, ids.data, Value::Unknown);
+                w.change(tr, ids.response, Sample::Unknown);
+                w.change(tr, ids.data, Sample::Unknown);
             }
         }
     }
@@ -272,8 +272,8 @@ impl Waves {
             }
         };
         if real_due {
-            w.change(n, ids.position, Value::Real(round3(s.position_mm)));
-            w.change(n, ids.velocity, Value::Real(round3(s.velocity_mm_s)));
+            w.change(n, ids.position, Sample::Real(round3(s.position_mm)));
+            w.change(n, ids.velocity, Sample::Real(round3(s.velocity_mm_s)));
             self.last_real = Some((t, s.position_mm, s.velocity_mm_s));
         }
         let bits = [
@@ -301,11 +301,11 @@ impl Waves {
             (ids.fifo_hall, s.fifo_hall as u64),
         ];
         for (id, v) in words {
-            w.change(n, id, Value::Bits(v));
+            w.change(n, id, Sample::Bits(v));
         }
-        w.change(n, ids.state, Value::Text(s.controller_state.into()));
-        w.change(n, ids.group, Value::Text(s.group_state.into()));
-        w.change(n, ids.supply, Value::Real(s.supply_v));
+        w.change(n, ids.state, Sample::Text(s.controller_state.into()));
+        w.change(n, ids.group, Sample::Text(s.group_state.into()));
+        w.change(n, ids.supply, Sample::Real(s.supply_v));
     }
 
     /// Writes what is complete up to `now` (the bus's time).
@@ -370,7 +370,7 @@ impl Waves {
         if let Some((w, ids)) = &mut self.vcd {
             for (i, v) in wf.samples.iter().enumerate() {
                 let t = wf.time_of(i as f64).as_nanos();
-                w.change(t, ids.line_voltage, Value::Real(round5(*v)));
+                w.change(t, ids.line_voltage, Sample::Real(round5(*v)));
             }
         }
         if let Some(c) = &mut self.csv {

@@ -6,7 +6,7 @@
 use asi_phy::SimDuration;
 use rig::campaign::profile::Profile;
 use rig::campaign::run::{run_campaign, Finished, Plan, Shard};
-use rig::campaign::Outcome;
+use rig::campaign::RunOutcome;
 use std::path::PathBuf;
 
 /// Short runs (70..75 s, probe 10 s before the end, 1..5 events) for fast tests.
@@ -165,7 +165,7 @@ fn a_ci_campaign_of_300_runs_has_no_failure() {
     );
     let failing: Vec<String> = finished
         .iter()
-        .filter(|f| f.line.outcome != Outcome::Ok)
+        .filter(|f| f.line.outcome != RunOutcome::Ok)
         .map(|f| {
             format!(
                 "run {}: {} {:?}\n{}",

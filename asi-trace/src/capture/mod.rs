@@ -86,7 +86,7 @@ impl Default for DecodeOptions {
 
 /// What the telegrams were read from.
 #[derive(Clone, Debug, PartialEq)]
-pub enum Source {
+pub enum CaptureSource {
     /// Sampled line voltage: a CSV, or a VCD real variable held onto a grid.
     Voltage {
         /// The VCD variable (`None` for a CSV).
@@ -113,7 +113,7 @@ pub struct Decoded {
     /// Number of pulses found on the line.
     pub pulses: usize,
     /// What they were read from.
-    pub source: Source,
+    pub source: CaptureSource,
 }
 
 impl Decoded {
@@ -322,7 +322,7 @@ fn decode_vcd_wire<R: BufRead>(
     Ok(Decoded {
         telegrams: records(&found, 0),
         pulses,
-        source: Source::Wire {
+        source: CaptureSource::Wire {
             signal: var.path.clone(),
         },
     })
@@ -432,7 +432,7 @@ fn decode_voltage(
     Ok(Decoded {
         telegrams: records(&found, origin_ns),
         pulses,
-        source: Source::Voltage {
+        source: CaptureSource::Voltage {
             signal,
             samples: wf.samples.len(),
             period_ns: wf.period_ns,

@@ -1,7 +1,7 @@
 //! A decoded capture for people and machines: one line per telegram and a summary, or JSON
 //! lines.
 
-use super::{Decoded, Source};
+use super::{CaptureSource, Decoded};
 use core::fmt;
 use std::fmt::Write as _;
 /// `t_ns` as seconds with nine decimals: `0.000112000`, `-0.000001500`.
@@ -11,11 +11,11 @@ pub fn seconds(t_ns: i64) -> String {
     format!("{sign}{}.{:09}", a / 1_000_000_000, a % 1_000_000_000)
 }
 
-impl fmt::Display for Source {
+impl fmt::Display for CaptureSource {
     /// `1201 samples every 100 ns, nominal amplitude 2.500 V` or `wire rig.bus.line`.
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            Source::Voltage {
+            CaptureSource::Voltage {
                 signal,
                 samples,
                 period_ns,
@@ -31,7 +31,7 @@ impl fmt::Display for Source {
                     None => f.write_str(", a flat line"),
                 }
             }
-            Source::Wire { signal } => write!(f, "wire {signal}"),
+            CaptureSource::Wire { signal } => write!(f, "wire {signal}"),
         }
     }
 }

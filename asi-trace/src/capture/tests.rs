@@ -146,7 +146,7 @@ fn a_wire_vcd_of_the_spec_vectors_decodes_to_them() {
     assert_eq!(d.pulses, 32);
     assert_eq!(
         d.source,
-        Source::Wire {
+        CaptureSource::Wire {
             signal: "rig.bus.line".into()
         }
     );
@@ -203,7 +203,7 @@ fn a_real_vcd_rendered_from_the_pulses_decodes_the_same() {
         };
         let d = decode(&s, &opts).expect("decodes");
         assert_eq!(d.telegrams, spec_records(), "{signal}");
-        let Source::Voltage {
+        let CaptureSource::Voltage {
             samples, period_ns, ..
         } = d.source
         else {
@@ -295,7 +295,7 @@ fn a_run_of_neither_length_is_unknown() {
     let d = Decoded {
         telegrams: got,
         pulses: 12,
-        source: Source::Wire { signal: "l".into() },
+        source: CaptureSource::Wire { signal: "l".into() },
     };
     assert!(to_text(&d).contains("unknown   0011001"), "{}", to_text(&d));
 }

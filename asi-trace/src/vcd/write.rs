@@ -1,4 +1,4 @@
-//! A Value Change Dump writer (IEEE 1364 §18) for GTKWave and Surfer.
+//! A Sample Change Dump writer (IEEE 1364 §18) for GTKWave and Surfer.
 //!
 //! Variables are declared first (scope, name, kind); then changes arrive in any order within a
 //! window and [`VcdWriter::flush_until`] writes those up to a time, sorted by time (changes at
@@ -21,7 +21,7 @@ pub enum VarKind {
 
 /// A value of a variable.
 #[derive(Clone, Debug, PartialEq)]
-pub enum Value {
+pub enum Sample {
     /// A scalar or vector value (low `width` bits).
     Bits(u64),
     /// All bits unknown (`x`): no value, e.g. no response.
@@ -32,9 +32,9 @@ pub enum Value {
     Text(String),
 }
 
-impl From<bool> for Value {
-    fn from(b: bool) -> Value {
-        Value::Bits(b as u64)
+impl From<bool> for Sample {
+    fn from(b: bool) -> Sample {
+        Sample::Bits(b as u64)
     }
 }
 
@@ -49,14 +49,14 @@ struct Var {
     kind: VarKind,
     code: String,
     every_record: bool,
-    last: Option<Value>,
+    last: Option<Sample>,
 }
 
 /// Writes a VCD file.
 pub struct VcdWriter<W: Write> {
     out: W,
     vars: Vec<Var>,
-    pending: Vec<(u64, VarId, Value)>,
+    pending: Vec<(u64, VarId, Sample)>,
     header_done: bool,
     time: Option<u64>,
     flushed_to: u64,
@@ -111,7 +111,7 @@ impl<W: Write> VcdWriter<W> {
 
     /// Records that `var` takes `value` at `t_ns` (written at the next flush that reaches it).
     /// A change earlier than the last flush is written at the flush time.
-    pub fn change(&mut self, t_ns: u64, var: VarId, value: Value) {
+    pub fn change(&mut self, t_ns: u64, var: VarId, value: Sample) {
         self.pending.push((t_ns.max(self.flushed_to), var, value));
     }
 
@@ -188,7 +188,7 @@ impl<W: Write> VcdWriter<W> {
         Ok(())
     }
 
-    fn write_change(&mut self, t: u64, var: VarId, value: Value) -> io::Result<()> {
+    fn write_change(&mut self, t: u64, var: VarId, value: Sample) -> io::Result<()> {
         let v = &mut self.vars[var.0];
         if !v.every_record && v.last.as_ref() == Some(&value) {
             return Ok(());
@@ -199,26 +199,26 @@ impl<W: Write> VcdWriter<W> {
         }
         let o = &mut self.out;
         match (&value, v.kind) {
-            (Value::Bits(b), VarKind::Wire(1)) => writeln!(o, "{}{}", b & 1, v.code)?,
-            (Value::Unknown, VarKind::Wire(1)) => writeln!(o, "x{}", v.code)?,
-            (Value::Bits(b), VarKind::Wire(w)) => {
+            (Sample::Bits(b), VarKind::Wire(1)) => writeln!(o, "{}{}", b & 1, v.code)?,
+            (Sample::Unknown, VarKind::Wire(1)) => writeln!(o, "x{}", v.code)?,
+            (Sample::Bits(b), VarKind::Wire(w)) => {
                 let digits: String = (0..w)
                     .rev()
                     .map(|i| if b >> i & 1 == 1 { '1' } else { '0' })
                     .collect();
                 writeln!(o, "b{digits} {}", v.code)?
             }
-            (Value::Unknown, VarKind::Wire(_)) => writeln!(o, "bx {}", v.code)?,
-            (Value::Real(x), _) => writeln!(o, "r{x} {}", v.code)?,
-            (Value::Text(s), _) => {
+            (Sample::Unknown, VarKind::Wire(_)) => writeln!(o, "bx {}", v.code)?,
+            (Sample::Real(x), _) => writeln!(o, "r{x} {}", v.code)?,
+            (Sample::Text(s), _) => {
                 let s: String = s
                     .chars()
                     .map(|c| if c.is_whitespace() { '_' } else { c })
                     .collect();
                 writeln!(o, "s{s} {}", v.code)?
             }
-            (Value::Unknown, _) => writeln!(o, "s? {}", v.code)?,
-            (Value::Bits(b), _) => writeln!(o, "r{b} {}", v.code)?,
+            (Sample::Unknown, _) => writeln!(o, "s? {}", v.code)?,
+            (Sample::Bits(b), _) => writeln!(o, "r{b} {}", v.code)?,
         }
         v.last = Some(value);
         Ok(())
@@ -263,15 +263,15 @@ mod tests {
         let req = w.var(&["rig", "bus"], "request", VarKind::Wire(14));
         let line = w.var_every_record(&["rig", "bus"], "manchester", VarKind::Wire(1));
         let st = w.var(&["rig"], "state", VarKind::Text);
-        w.change(0, st, Value::Text("init down".into()));
+        w.change(0, st, Sample::Text("init down".into()));
         w.change(20, k1, true.into());
-        w.change(5, req, Value::Bits(0b00001010101001));
+        w.change(5, req, Sample::Bits(0b00001010101001));
         w.change(5, line, false.into());
         w.change(8, line, false.into());
-        w.change(10, pos, Value::Real(650.5));
+        w.change(10, pos, Sample::Real(650.5));
         w.change(30, k1, true.into());
         w.flush_until(25).expect("write");
-        w.change(40, req, Value::Unknown);
+        w.change(40, req, Sample::Unknown);
         let text = String::from_utf8(w.finish(50).expect("write")).expect("utf-8");
         let want = "\
 $comment asi-lift: the AS-i lab lift, simulated $end

@@ -1,7 +1,7 @@
 //! The automat (seed 003 tables 6.4/6.5): standing at a floor, departing, travelling,
 //! braking, arriving and serving calls; STOP, overload and the holds between floors.
 
-use super::events::{EventKind, HaltReason, LostReason};
+use super::events::{HaltReason, LostReason, ProgramEventKind};
 use super::io::{overloaded, Edges, Inputs};
 use super::state::{Phase, Step};
 use super::{Program, COAST};
@@ -40,7 +40,7 @@ impl Program {
             // The STOP circuit runs again after a cabin request: service resumes.
             self.restart_wanted = false;
             self.stop_pending = false;
-            self.event(now, EventKind::Resumed);
+            self.event(now, ProgramEventKind::Resumed);
             if step == Step::StopFault {
                 self.phase = Phase::Service(Step::AtFloor);
                 return false;
@@ -92,7 +92,7 @@ impl Program {
                         self.start_init(now);
                     }
                 } else if overloaded {
-                    self.event(now, EventKind::OverloadFault);
+                    self.event(now, ProgramEventKind::OverloadFault);
                     self.phase = Phase::Service(Step::Overload);
                 } else {
                     self.choose_target(now);
@@ -108,7 +108,7 @@ impl Program {
             }
             Step::Overload => {
                 if !overloaded {
-                    self.event(now, EventKind::OverloadCleared);
+                    self.event(now, ProgramEventKind::OverloadCleared);
                     self.phase = Phase::Service(Step::AtFloor);
                 }
             }
@@ -129,7 +129,7 @@ impl Program {
                 if let Some(reason) = halt {
                     self.hold();
                     self.drive_off_at = now;
-                    self.event(now, EventKind::Halted(reason));
+                    self.event(now, ProgramEventKind::Halted(reason));
                     self.phase = Phase::Service(Step::Halted { reason, braking });
                     // The edges of this scan still count.
                     self.coast(now, e, braking);
@@ -186,7 +186,7 @@ impl Program {
                         self.start_init(now);
                     }
                 } else if cleared && door_closed && !overloaded && inp.estop_ok {
-                    self.event(now, EventKind::Continued);
+                    self.event(now, ProgramEventKind::Continued);
                     self.progress_at = now;
                     self.running_since = now;
                     self.out.run = true;
@@ -206,7 +206,7 @@ impl Program {
     pub(super) fn enter(&mut self, now: SimTime, step: Step) {
         if step == Step::StopFault {
             self.hold();
-            self.event(now, EventKind::StopFault);
+            self.event(now, ProgramEventKind::StopFault);
         }
         self.phase = Phase::Service(step);
     }
@@ -239,7 +239,7 @@ impl Program {
         (self.shown_floor, self.shown_dir) = (self.current, dir);
         self.event(
             now,
-            EventKind::Departed {
+            ProgramEventKind::Departed {
                 from: self.current,
                 to: self.target,
             },
@@ -257,7 +257,7 @@ impl Program {
         };
         let dropped = (stop_at != self.target).then_some(self.target);
         self.target = stop_at;
-        self.event(now, EventKind::StopDemanded { dropped, stop_at });
+        self.event(now, ProgramEventKind::StopDemanded { dropped, stop_at });
     }
 
     pub(super) fn arrive(&mut self, now: SimTime) {
@@ -278,7 +278,7 @@ impl Program {
         self.target = floor;
         self.depart_after = now + self.cfg.dwell;
         (self.shown_floor, self.shown_dir) = (floor, None);
-        self.event(now, EventKind::Arrived { floor });
+        self.event(now, ProgramEventKind::Arrived { floor });
         self.serve(now, self.dir);
         if self.stop_pending {
             self.stop_pending = false;
@@ -293,7 +293,7 @@ impl Program {
         served.clear();
         self.dispatch.serve(self.current, dir, &mut served);
         for s in &served {
-            self.event(now, EventKind::Served(*s));
+            self.event(now, ProgramEventKind::Served(*s));
         }
         self.served = served;
     }

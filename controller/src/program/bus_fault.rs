@@ -2,7 +2,7 @@
 //! or an AS-i power fail hold the cabin; the journey resumes if the program kept sight of the
 //! cabin, else initialisation finds it again.
 
-use super::events::EventKind;
+use super::events::ProgramEventKind;
 use super::io::{Edges, Inputs};
 use super::state::{Phase, Step};
 use super::{Program, COAST};
@@ -14,7 +14,7 @@ impl Program {
         self.hold();
         self.drive_off_at = now;
         self.phase = Phase::BusFault { resume, blind };
-        self.event(now, EventKind::BusFault);
+        self.event(now, ProgramEventKind::BusFault);
     }
 
     /// A scan while the bus is not healthy: the cabin is held; when the bus is back, the journey
@@ -59,13 +59,13 @@ impl Program {
         );
         match resume {
             Some(step) if bus_ok && !blind => {
-                self.event(now, EventKind::BusRestored);
+                self.event(now, ProgramEventKind::BusRestored);
                 self.resume(now, step);
             }
             // Initialisation chooses its way from the vane sensors: only a cabin word
             // that completed since the bus came back shows where the cabin is now.
             _ if bus_ok && inp.cabin.is_some() => {
-                self.event(now, EventKind::BusRestored);
+                self.event(now, ProgramEventKind::BusRestored);
                 if journey || self.target != self.current {
                     self.dispatch.requeue(self.target);
                 }
@@ -84,7 +84,7 @@ impl Program {
         if let (Some(reason), Step::Travel | Step::Braking) = (self.cabin_blocks_motion(), step) {
             // The door opened or the cabin was loaded during the bus fault: held, not resumed.
             self.drive_off_at = now;
-            self.event(now, EventKind::Halted(reason));
+            self.event(now, ProgramEventKind::Halted(reason));
             self.phase = Phase::Service(Step::Halted { reason, braking });
             return;
         }

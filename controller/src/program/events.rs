@@ -42,7 +42,7 @@ impl fmt::Display for HaltReason {
 
 /// Something the program did, for the log and the report.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum EventKind {
+pub enum ProgramEventKind {
     /// Initialisation began, from the sensor state seen.
     InitStarted {
         /// What the vane sensors showed.
@@ -161,7 +161,7 @@ pub struct Event {
     /// The scan's time.
     pub at: SimTime,
     /// What happened.
-    pub kind: EventKind,
+    pub kind: ProgramEventKind,
 }
 
 /// The vane sensors at the start of initialisation, which decide how it proceeds.
@@ -178,14 +178,14 @@ pub enum InitStart {
     BelowFloor1,
 }
 
-impl fmt::Display for EventKind {
+impl fmt::Display for ProgramEventKind {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let src = |s: &Source| match s {
             Source::Cabin => "cabin",
             Source::Hall => "hall",
         };
         match self {
-            EventKind::InitStarted { start } => write!(
+            ProgramEventKind::InitStarted { start } => write!(
                 f,
                 "initialisation: {}",
                 match start {
@@ -195,34 +195,36 @@ impl fmt::Display for EventKind {
                     InitStart::BelowFloor1 => "just below floor 1's vane, creeping up",
                 }
             ),
-            EventKind::Initialised => f.write_str("initialised at floor 1"),
-            EventKind::CallStored { floor, source } => {
+            ProgramEventKind::Initialised => f.write_str("initialised at floor 1"),
+            ProgramEventKind::CallStored { floor, source } => {
                 write!(f, "{} call to floor {floor} stored", src(source))
             }
-            EventKind::CallLost { floor, source } => {
+            ProgramEventKind::CallLost { floor, source } => {
                 write!(f, "{} call to floor {floor} lost: memory full", src(source))
             }
-            EventKind::Departed { from, to } => write!(f, "departs floor {from} for floor {to}"),
-            EventKind::Passed { floor } => write!(f, "passes floor {floor}"),
-            EventKind::Braking { floor } => write!(f, "brakes for floor {floor}"),
-            EventKind::Arrived { floor } => write!(f, "arrives at floor {floor}"),
-            EventKind::Served(s) => {
+            ProgramEventKind::Departed { from, to } => {
+                write!(f, "departs floor {from} for floor {to}")
+            }
+            ProgramEventKind::Passed { floor } => write!(f, "passes floor {floor}"),
+            ProgramEventKind::Braking { floor } => write!(f, "brakes for floor {floor}"),
+            ProgramEventKind::Arrived { floor } => write!(f, "arrives at floor {floor}"),
+            ProgramEventKind::Served(s) => {
                 write!(f, "{} call to floor {} served", src(&s.source), s.floor)
             }
-            EventKind::StopDemanded { dropped, stop_at } => match dropped {
+            ProgramEventKind::StopDemanded { dropped, stop_at } => match dropped {
                 Some(d) => write!(f, "STOP: stops at floor {stop_at}, target {d} dropped"),
                 None => write!(f, "STOP: stops at floor {stop_at}"),
             },
-            EventKind::StopFault => f.write_str("STOP fault: waiting for a cabin request"),
-            EventKind::Resumed => f.write_str("cabin request after STOP: service resumes"),
-            EventKind::OverloadFault => f.write_str("overloaded: no departure"),
-            EventKind::OverloadCleared => f.write_str("load back to normal"),
-            EventKind::Halted(r) => write!(f, "halted between floors: {r}"),
-            EventKind::Continued => f.write_str("continues travel"),
-            EventKind::BusFault => f.write_str("cabin slave or bus lost: cabin stopped"),
-            EventKind::BusRestored => f.write_str("bus restored: initialising again"),
-            EventKind::InitHeld(r) => write!(f, "initialisation held: {r}"),
-            EventKind::PositionLost { why } => {
+            ProgramEventKind::StopFault => f.write_str("STOP fault: waiting for a cabin request"),
+            ProgramEventKind::Resumed => f.write_str("cabin request after STOP: service resumes"),
+            ProgramEventKind::OverloadFault => f.write_str("overloaded: no departure"),
+            ProgramEventKind::OverloadCleared => f.write_str("load back to normal"),
+            ProgramEventKind::Halted(r) => write!(f, "halted between floors: {r}"),
+            ProgramEventKind::Continued => f.write_str("continues travel"),
+            ProgramEventKind::BusFault => f.write_str("cabin slave or bus lost: cabin stopped"),
+            ProgramEventKind::BusRestored => f.write_str("bus restored: initialising again"),
+            ProgramEventKind::InitHeld(r) => write!(f, "initialisation held: {r}"),
+            ProgramEventKind::PositionLost { why } => {
                 write!(f, "floor count not trusted ({why}): initialising again")
             }
         }

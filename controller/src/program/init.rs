@@ -1,7 +1,7 @@
 //! Initialisation (seed 003 table 6.3, extended for starts inside floor 1's vane, level at a
 //! floor or just below floor 1): finds floor 1 and hands over to the automat.
 
-use super::events::{EventKind, HaltReason, InitStart, NO_VANE_RETRY};
+use super::events::{HaltReason, InitStart, ProgramEventKind, NO_VANE_RETRY};
 use super::io::{Edges, Inputs};
 use super::state::{InitStep, Phase, Step};
 use super::Program;
@@ -31,7 +31,7 @@ impl Program {
         self.left_proven = false;
         self.lost = false;
         (self.shown_floor, self.shown_dir) = (1, Some(Dir::Down));
-        self.event(now, EventKind::InitStarted { start });
+        self.event(now, ProgramEventKind::InitStarted { start });
         self.phase = Phase::Init(step);
         self.drive_init(step);
     }
@@ -95,14 +95,14 @@ impl Program {
                 self.hold();
                 self.init_held = Some(r);
                 self.drive_off_at = now;
-                self.event(now, EventKind::InitHeld(r));
+                self.event(now, ProgramEventKind::InitHeld(r));
                 return;
             }
             (Some(held), Some(r)) => {
                 self.hold();
                 if held != r {
                     self.init_held = Some(r);
-                    self.event(now, EventKind::InitHeld(r));
+                    self.event(now, ProgramEventKind::InitHeld(r));
                 }
                 return;
             }
@@ -132,7 +132,7 @@ impl Program {
             self.no_vane_since = Some(now);
             self.init_held = Some(HaltReason::NoVane);
             self.drive_off_at = now;
-            self.event(now, EventKind::InitHeld(HaltReason::NoVane));
+            self.event(now, ProgramEventKind::InitHeld(HaltReason::NoVane));
             return;
         }
         let next = match step {
@@ -196,7 +196,7 @@ impl Program {
         self.stop_pending = false;
         self.initialised_at = Some(now);
         self.depart_after = now + self.cfg.dwell;
-        self.event(now, EventKind::Initialised);
+        self.event(now, ProgramEventKind::Initialised);
         self.phase = Phase::Service(Step::AtFloor);
     }
 }

@@ -8,7 +8,7 @@
 //!   displays;
 //! - `config`: the settings ([`ControllerConfig`]);
 //! - `io`: the inputs and outputs of a scan, the vane sensor edges;
-//! - `events`: [`EventKind`] and the reasons it carries, with their words;
+//! - `events`: [`ProgramEventKind`] and the reasons it carries, with their words;
 //! - `state`: the phases and steps, and the [`State`] shown;
 //! - `init`: initialisation (seed table 6.3);
 //! - `automat`: the automat (seed tables 6.4/6.5);
@@ -25,7 +25,7 @@ mod position;
 mod state;
 
 pub use config::{ControllerConfig, ControllerConfigError};
-pub use events::{Event, EventKind, HaltReason, InitStart, LostReason, NO_VANE_RETRY};
+pub use events::{Event, HaltReason, InitStart, LostReason, ProgramEventKind, NO_VANE_RETRY};
 pub use io::{CabinWord, Inputs, Outputs};
 pub use state::State;
 
@@ -252,8 +252,8 @@ impl Program {
             Some(d) => self.dispatch.hall_call(floor, d, now),
         };
         match stored {
-            Stored::New => self.event(now, EventKind::CallStored { floor, source }),
-            Stored::Full => self.event(now, EventKind::CallLost { floor, source }),
+            Stored::New => self.event(now, ProgramEventKind::CallStored { floor, source }),
+            Stored::Full => self.event(now, ProgramEventKind::CallLost { floor, source }),
             Stored::Duplicate => {}
         }
     }
@@ -311,7 +311,7 @@ impl Program {
         };
     }
 
-    fn event(&mut self, at: SimTime, kind: EventKind) {
+    fn event(&mut self, at: SimTime, kind: ProgramEventKind) {
         self.events.push(Event { at, kind });
     }
 

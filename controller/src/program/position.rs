@@ -2,7 +2,7 @@
 //! checks: the vane's shape against the floor counted, stuck sensors, a cabin moved by hand;
 //! and what happens when the count is lost.
 
-use super::events::{EventKind, LostReason};
+use super::events::{LostReason, ProgramEventKind};
 use super::io::Edges;
 use super::state::{Phase, Step};
 use super::Program;
@@ -28,10 +28,10 @@ impl Program {
         }
         if floor == self.target {
             self.out.setpoint_ua = self.cfg.creep_ua;
-            self.event(now, EventKind::Braking { floor });
+            self.event(now, ProgramEventKind::Braking { floor });
             self.phase = Phase::Service(Step::Braking);
         } else {
-            self.event(now, EventKind::Passed { floor });
+            self.event(now, ProgramEventKind::Passed { floor });
         }
     }
 
@@ -115,7 +115,7 @@ impl Program {
     pub(super) fn mark_lost(&mut self, now: SimTime, why: LostReason) {
         if !self.lost {
             self.lost = true;
-            self.event(now, EventKind::PositionLost { why });
+            self.event(now, ProgramEventKind::PositionLost { why });
         }
     }
 

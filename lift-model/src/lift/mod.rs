@@ -9,7 +9,7 @@ use std::collections::VecDeque;
 
 use asi_phy::SimTime;
 
-use crate::config::{ConfigError, LiftConfig};
+use crate::config::{LiftConfig, LiftConfigError};
 use crate::controls::{Button, Buttons, ContactFault, LoadLevel, SensorFault};
 use crate::display::DisplayState;
 use crate::event::{Crash, PlantEvent};
@@ -168,7 +168,7 @@ pub struct Lift {
 impl Lift {
     /// Builds the plant at time zero, the cabin at rest at `config.initial_position_mm`,
     /// K1 open, converter stopped at 4000 µA, door closed, cabin empty, displays blank.
-    pub fn new(config: LiftConfig) -> Result<Lift, ConfigError> {
+    pub fn new(config: LiftConfig) -> Result<Lift, LiftConfigError> {
         config.validate()?;
         let shaft = Shaft::new(&config);
         let x = config.initial_position_mm;

@@ -5,7 +5,7 @@ use asi_phy::SimTime;
 
 use super::{Events, Goal, Lift, PlantError};
 use crate::controls::SensorFault;
-use crate::event::{Crash, EventKind, PlantEvent};
+use crate::event::{Crash, PlantEvent, PlantEventKind};
 use crate::motion::{Segment, SegmentEnd};
 use crate::sensor::End;
 
@@ -59,7 +59,7 @@ impl Lift {
             self.buttons.release_due(now, |button| {
                 events.push_back(PlantEvent {
                     at: now,
-                    kind: EventKind::Released { button },
+                    kind: PlantEventKind::Released { button },
                 });
             });
         } else if self.next_crossing == Some(now) {
@@ -72,9 +72,9 @@ impl Lift {
         true
     }
 
-    pub(super) fn emit(&mut self, kind: EventKind) {
+    pub(super) fn emit(&mut self, kind: PlantEventKind) {
         // A failed sensor's output does not follow the vane: no edge to report.
-        if let EventKind::Vane { sensor, .. } = kind {
+        if let PlantEventKind::Vane { sensor, .. } = kind {
             if self.vane_faults[sensor as usize] != SensorFault::None {
                 return;
             }
@@ -115,11 +115,11 @@ impl Lift {
             impact_mm_s,
             powered,
         });
-        self.emit(EventKind::Crash { end, impact_mm_s });
+        self.emit(PlantEventKind::Crash { end, impact_mm_s });
         self.crank_target_mm = None;
         if self.converter_driving() {
             self.converter.stalled = true;
-            self.emit(EventKind::ConverterFault { fault: true });
+            self.emit(PlantEventKind::ConverterFault { fault: true });
         }
         self.goal = self.compute_goal();
         self.start_motion(self.config.end_position_mm(end), 0.0);
@@ -129,7 +129,7 @@ impl Lift {
         let x = self.motion.position_at(self.now);
         let v = match how {
             SegmentEnd::RampEnd { v_end } => {
-                self.emit(EventKind::RampEnd {
+                self.emit(PlantEventKind::RampEnd {
                     velocity_mm_s: v_end,
                 });
                 v_end
@@ -139,7 +139,7 @@ impl Lift {
                     self.crank_target_mm = None;
                     self.goal = self.compute_goal();
                 }
-                self.emit(EventKind::Stopped { position_mm: x });
+                self.emit(PlantEventKind::Stopped { position_mm: x });
                 0.0
             }
         };

@@ -2,7 +2,7 @@
 #![allow(dead_code)]
 
 use asi_phy::{SimDuration, SimTime};
-use lift_model::{EventKind, Lift, LiftConfig, PlantEvent};
+use lift_model::{Lift, LiftConfig, PlantEvent, PlantEventKind};
 
 /// A lift with the default (lab) configuration, the cabin at `position_mm`.
 pub fn lift_at(position_mm: f64) -> Lift {
@@ -37,7 +37,7 @@ pub fn events_until(lift: &mut Lift, until: SimTime) -> Vec<PlantEvent> {
 
 /// Jumps from edge to edge until an edge matches `wanted`; the plant stays at that edge's
 /// time. Panics if the plant falls quiet or ten minutes pass first.
-pub fn run_to(lift: &mut Lift, wanted: impl Fn(&EventKind) -> bool) -> PlantEvent {
+pub fn run_to(lift: &mut Lift, wanted: impl Fn(&PlantEventKind) -> bool) -> PlantEvent {
     let limit = lift.now() + SimDuration::from_secs(600);
     while let Some(t) = lift.next_event().filter(|&t| t <= limit) {
         if let Some(e) = advance(lift, t).into_iter().find(|e| wanted(&e.kind)) {
@@ -80,7 +80,7 @@ pub fn vane_edges(trace: &[(PlantEvent, f64)]) -> Vec<(lift_model::VaneSensor, b
     trace
         .iter()
         .filter_map(|(e, x)| match e.kind {
-            EventKind::Vane { sensor, on } => Some((sensor, on, *x)),
+            PlantEventKind::Vane { sensor, on } => Some((sensor, on, *x)),
             _ => None,
         })
         .collect()

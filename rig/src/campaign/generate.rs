@@ -4,7 +4,7 @@
 //! A run has three parts on its timeline:
 //!
 //! 1. **Activity**, from 1 s to `act_end` = probe − 16 s: a random number of random events
-//!    ([`EventKind`], drawn by the profile's weights) at random millisecond times. Some kinds
+//!    ([`ActivityKind`], drawn by the profile's weights) at random millisecond times. Some kinds
 //!    bring their own follow-ups: a slave comes back online and a vane sensor is repaired
 //!    1..30 s later, an opened door is mostly closed 2..20 s later, a crank follows a STOP
 //!    once K1 has opened (10..15 s later) and is sometimes turned back. Every follow-up falls
@@ -23,7 +23,7 @@
 //! campaign seed and the index ([`run_seed`]), and a ChaCha8 generator seeded with it makes
 //! every choice; the scenario's line-noise seed is the run's seed.
 
-use super::profile::{EventKind, Profile};
+use super::profile::{ActivityKind, Profile};
 use crate::scenario::{needs_rescue, start_range_mm, Action, Fault, Scenario, ScenarioEvent};
 use asi_phy::{SimDuration, SimTime};
 use lift_model::{Button, LiftConfig, LoadLevel, SensorFault, VaneSensor};
@@ -166,13 +166,13 @@ impl Builder<'_> {
         self.push(t, Action::Press { button, hold });
     }
 
-    fn episode(&mut self, t: u64, kind: EventKind) {
+    fn episode(&mut self, t: u64, kind: ActivityKind) {
         match kind {
-            EventKind::Cabin => {
+            ActivityKind::Cabin => {
                 let (f, h) = (self.floor(), self.hold());
                 self.press(t, Button::Cabin(f), h);
             }
-            EventKind::Hall => {
+            ActivityKind::Hall => {
                 let f = self.floor();
                 let up = match f {
                     1 => true,
@@ -187,15 +187,15 @@ impl Builder<'_> {
                 };
                 self.press(t, b, h);
             }
-            EventKind::Stop => {
+            ActivityKind::Stop => {
                 let h = SimDuration::from_millis(self.rng.random_range(300..=3000));
                 self.press(t, Button::Stop, h);
             }
-            EventKind::Bell => {
+            ActivityKind::Bell => {
                 let h = self.hold();
                 self.press(t, Button::Bell, h);
             }
-            EventKind::Load => {
+            ActivityKind::Load => {
                 let level = match self.rng.random_range(0..4) {
                     0 => LoadLevel::Empty,
                     1 => LoadLevel::Loaded,
@@ -205,7 +205,7 @@ impl Builder<'_> {
                 self.touched.load = true;
                 self.push(t, Action::Load(level));
             }
-            EventKind::Door => {
+            ActivityKind::Door => {
                 self.touched.door = true;
                 self.push(t, Action::Door { closed: false });
                 if self.rng.random_bool(0.7) {
@@ -214,7 +214,7 @@ impl Builder<'_> {
                     }
                 }
             }
-            EventKind::Crank => {
+            ActivityKind::Crank => {
                 // STOP, then crank once K1 has opened (the STOP delay is 9.1 s).
                 let h = SimDuration::from_millis(self.rng.random_range(500..=2000));
                 self.press(t, Button::Stop, h);
@@ -238,9 +238,9 @@ impl Builder<'_> {
                     }
                 }
             }
-            EventKind::Reset => self.push(t, Action::Reset),
-            EventKind::Ack => self.push(t, Action::Ack),
-            EventKind::Slave => {
+            ActivityKind::Reset => self.push(t, Action::Reset),
+            ActivityKind::Ack => self.push(t, Action::Ack),
+            ActivityKind::Slave => {
                 let slave = lab::address::ALL[self.rng.random_range(0..lab::address::ALL.len())];
                 self.touched.slaves.insert(slave);
                 self.push(t, Action::Fault(Fault::SlaveOffline { slave }));
@@ -248,15 +248,15 @@ impl Builder<'_> {
                     self.push(back, Action::Fault(Fault::SlaveOnline { slave }));
                 }
             }
-            EventKind::PowerFail => {
+            ActivityKind::PowerFail => {
                 let duration = SimDuration::from_millis(self.rng.random_range(100..=5000));
                 self.push(t, Action::Fault(Fault::PowerFail { duration }));
             }
-            EventKind::SafeLinkDrop => {
+            ActivityKind::SafeLinkDrop => {
                 let duration = SimDuration::from_millis(self.rng.random_range(50..=2000));
                 self.push(t, Action::Fault(Fault::SafeLinkDrop { duration }));
             }
-            EventKind::Vane => {
+            ActivityKind::Vane => {
                 let (sensor, fault) = self.vane_fault();
                 self.touched.vanes.insert(sensor_index(sensor));
                 self.push(t, Action::Fault(Fault::Vane { sensor, fault }));

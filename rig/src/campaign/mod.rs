@@ -31,7 +31,7 @@ use std::panic::{catch_unwind, AssertUnwindSafe};
 /// How a run ended.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
-pub enum Outcome {
+pub enum RunOutcome {
     /// No violation, and in service at the end (or not judged).
     Ok,
     /// The rig found a safety invariant broken.
@@ -45,29 +45,29 @@ pub enum Outcome {
     Error,
 }
 
-impl Outcome {
+impl RunOutcome {
     /// Every outcome, in the order of the summary.
-    pub const ALL: [Outcome; 5] = [
-        Outcome::Ok,
-        Outcome::Violation,
-        Outcome::OutOfService,
-        Outcome::Panic,
-        Outcome::Error,
+    pub const ALL: [RunOutcome; 5] = [
+        RunOutcome::Ok,
+        RunOutcome::Violation,
+        RunOutcome::OutOfService,
+        RunOutcome::Panic,
+        RunOutcome::Error,
     ];
 
     /// The name in the JSON lines.
     pub fn name(self) -> &'static str {
         match self {
-            Outcome::Ok => "ok",
-            Outcome::Violation => "violation",
-            Outcome::OutOfService => "out-of-service",
-            Outcome::Panic => "panic",
-            Outcome::Error => "error",
+            RunOutcome::Ok => "ok",
+            RunOutcome::Violation => "violation",
+            RunOutcome::OutOfService => "out-of-service",
+            RunOutcome::Panic => "panic",
+            RunOutcome::Error => "error",
         }
     }
 }
 
-impl fmt::Display for Outcome {
+impl fmt::Display for RunOutcome {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.write_str(self.name())
     }
@@ -115,19 +115,19 @@ pub fn execute(sc: &Scenario) -> Execution {
 
 /// The judgement of one run.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Verdict {
+pub struct RunVerdict {
     /// How it ended.
-    pub outcome: Outcome,
+    pub outcome: RunOutcome,
     /// In service at the end: `None` without a judged probe (or without a report).
     pub in_service: Option<bool>,
     /// The first violation's kind, if any.
     pub first_violation: Option<ViolationKind>,
 }
 
-impl Verdict {
+impl RunVerdict {
     /// What "fails the same way" compares while shrinking: the outcome and the first
     /// violation's kind.
-    pub fn signature(&self) -> (Outcome, Option<ViolationKind>) {
+    pub fn signature(&self) -> (RunOutcome, Option<ViolationKind>) {
         (self.outcome, self.first_violation)
     }
 }
@@ -142,16 +142,16 @@ pub fn probe_served(report: &Report, probe: &Probe) -> bool {
         .any(|p| p.button == button && p.pressed_at_s == at && p.served_at_s.is_some())
 }
 
-/// Judges a run of a scenario with `probe` (see [`Outcome`]).
-pub fn judge(exec: &Execution, probe: Option<&Probe>) -> Verdict {
+/// Judges a run of a scenario with `probe` (see [`RunOutcome`]).
+pub fn judge(exec: &Execution, probe: Option<&Probe>) -> RunVerdict {
     match exec {
-        Execution::Panic(_) => Verdict {
-            outcome: Outcome::Panic,
+        Execution::Panic(_) => RunVerdict {
+            outcome: RunOutcome::Panic,
             in_service: None,
             first_violation: None,
         },
-        Execution::Error(_) => Verdict {
-            outcome: Outcome::Error,
+        Execution::Error(_) => RunVerdict {
+            outcome: RunOutcome::Error,
             in_service: None,
             first_violation: None,
         },
@@ -167,13 +167,13 @@ pub fn judge(exec: &Execution, probe: Option<&Probe>) -> Verdict {
             });
             let first_violation = r.violations.first().map(|v| v.kind);
             let outcome = if first_violation.is_some() {
-                Outcome::Violation
+                RunOutcome::Violation
             } else if in_service == Some(false) {
-                Outcome::OutOfService
+                RunOutcome::OutOfService
             } else {
-                Outcome::Ok
+                RunOutcome::Ok
             };
-            Verdict {
+            RunVerdict {
                 outcome,
                 in_service,
                 first_violation,
@@ -210,7 +210,7 @@ pub struct RunLine {
     /// FNV-1a of the generated scenario's TOML text, 16 hex digits.
     pub digest: String,
     /// How it ended.
-    pub outcome: Outcome,
+    pub outcome: RunOutcome,
     /// The violations, in order.
     pub violations: Vec<LineViolation>,
     /// Presses of call buttons (cabin and hall).
@@ -304,7 +304,7 @@ pub struct LineContext<'a> {
 }
 
 /// The line of a run.
-pub fn line(ctx: LineContext<'_>, exec: &Execution, verdict: &Verdict) -> RunLine {
+pub fn line(ctx: LineContext<'_>, exec: &Execution, verdict: &RunVerdict) -> RunLine {
     let mut l = RunLine {
         index: ctx.index,
         runs: ctx.runs,
@@ -400,8 +400,8 @@ mod tests {
         sc.floors = 30;
         let exec = execute(&sc);
         assert!(matches!(exec, Execution::Error(_)), "{exec:?}");
-        assert_eq!(judge(&exec, None).outcome, Outcome::Error);
+        assert_eq!(judge(&exec, None).outcome, RunOutcome::Error);
         let exec = Execution::Panic("boom".into());
-        assert_eq!(judge(&exec, None).outcome, Outcome::Panic);
+        assert_eq!(judge(&exec, None).outcome, RunOutcome::Panic);
     }
 }

@@ -16,7 +16,7 @@ use std::fmt;
 
 /// The kinds of random event the generator draws (README.md, "Campaigns").
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
-pub enum EventKind {
+pub enum ActivityKind {
     /// A cabin call button (`press = "cabin:N"`).
     Cabin,
     /// A hall call button (`hall-up:N`, `hall-down:N`).
@@ -45,40 +45,40 @@ pub enum EventKind {
     Vane,
 }
 
-impl EventKind {
+impl ActivityKind {
     /// Every kind, in the order of the profile format.
-    pub const ALL: [EventKind; 13] = [
-        EventKind::Cabin,
-        EventKind::Hall,
-        EventKind::Stop,
-        EventKind::Bell,
-        EventKind::Load,
-        EventKind::Door,
-        EventKind::Crank,
-        EventKind::Reset,
-        EventKind::Ack,
-        EventKind::Slave,
-        EventKind::PowerFail,
-        EventKind::SafeLinkDrop,
-        EventKind::Vane,
+    pub const ALL: [ActivityKind; 13] = [
+        ActivityKind::Cabin,
+        ActivityKind::Hall,
+        ActivityKind::Stop,
+        ActivityKind::Bell,
+        ActivityKind::Load,
+        ActivityKind::Door,
+        ActivityKind::Crank,
+        ActivityKind::Reset,
+        ActivityKind::Ack,
+        ActivityKind::Slave,
+        ActivityKind::PowerFail,
+        ActivityKind::SafeLinkDrop,
+        ActivityKind::Vane,
     ];
 
     /// The name in a profile's `[event]` table.
     pub fn name(self) -> &'static str {
         match self {
-            EventKind::Cabin => "cabin",
-            EventKind::Hall => "hall",
-            EventKind::Stop => "stop",
-            EventKind::Bell => "bell",
-            EventKind::Load => "load",
-            EventKind::Door => "door",
-            EventKind::Crank => "crank",
-            EventKind::Reset => "reset",
-            EventKind::Ack => "ack",
-            EventKind::Slave => "slave",
-            EventKind::PowerFail => "power-fail",
-            EventKind::SafeLinkDrop => "safe-link-drop",
-            EventKind::Vane => "vane",
+            ActivityKind::Cabin => "cabin",
+            ActivityKind::Hall => "hall",
+            ActivityKind::Stop => "stop",
+            ActivityKind::Bell => "bell",
+            ActivityKind::Load => "load",
+            ActivityKind::Door => "door",
+            ActivityKind::Crank => "crank",
+            ActivityKind::Reset => "reset",
+            ActivityKind::Ack => "ack",
+            ActivityKind::Slave => "slave",
+            ActivityKind::PowerFail => "power-fail",
+            ActivityKind::SafeLinkDrop => "safe-link-drop",
+            ActivityKind::Vane => "vane",
         }
     }
 
@@ -86,7 +86,10 @@ impl EventKind {
     pub fn is_fault(self) -> bool {
         matches!(
             self,
-            EventKind::Slave | EventKind::PowerFail | EventKind::SafeLinkDrop | EventKind::Vane
+            ActivityKind::Slave
+                | ActivityKind::PowerFail
+                | ActivityKind::SafeLinkDrop
+                | ActivityKind::Vane
         )
     }
 }
@@ -168,7 +171,7 @@ pub struct Profile {
     /// The load at power-on.
     pub load: Weights<LoadLevel>,
     /// The random events.
-    pub event: Weights<EventKind>,
+    pub event: Weights<ActivityKind>,
     /// Chance that a run has extra I/O modules on the bus (then 1..20 of them).
     pub extra_slaves_chance: f64,
     /// Chance that the cabin starts level at a floor (else anywhere in the legal range).
@@ -194,7 +197,7 @@ impl Profile {
             "default" => {}
             "quiet" => {
                 p.name = "quiet".into();
-                for k in EventKind::ALL.iter().filter(|k| k.is_fault()) {
+                for k in ActivityKind::ALL.iter().filter(|k| k.is_fault()) {
                     p.event.set(*k, 0);
                 }
                 p.pulse_error_rate = Weights::new(vec![(0.0, 1)]);
@@ -216,7 +219,7 @@ impl Profile {
     }
 
     fn default_profile() -> Profile {
-        use EventKind as K;
+        use ActivityKind as K;
         Profile {
             name: "default".into(),
             duration: (SimDuration::from_secs(120), SimDuration::from_secs(240)),
@@ -393,12 +396,12 @@ impl Profile {
         })
         .map_err(err)?;
         merge(&mut p.event, &raw.event, "event", |k| {
-            EventKind::ALL
+            ActivityKind::ALL
                 .iter()
                 .find(|e| e.name() == k)
                 .copied()
                 .ok_or_else(|| {
-                    let names: Vec<&str> = EventKind::ALL.iter().map(|e| e.name()).collect();
+                    let names: Vec<&str> = ActivityKind::ALL.iter().map(|e| e.name()).collect();
                     format!("`{k}`: unknown event kind: use {}", names.join(", "))
                 })
         })
@@ -537,7 +540,7 @@ mod tests {
             assert_eq!(p.check(), Ok(()), "{name}");
         }
         let quiet = Profile::built_in("quiet").expect("quiet");
-        assert!(EventKind::ALL
+        assert!(ActivityKind::ALL
             .iter()
             .filter(|k| k.is_fault())
             .all(|k| quiet.event.weight(*k) == 0));
@@ -563,8 +566,8 @@ mod tests {
         );
         assert_eq!(p.floors.weight(2), 0);
         assert_eq!(p.floors.weight(4), 2);
-        assert_eq!(p.event.weight(EventKind::Slave), 4);
-        assert_eq!(p.event.weight(EventKind::Vane), 0);
+        assert_eq!(p.event.weight(ActivityKind::Slave), 4);
+        assert_eq!(p.event.weight(ActivityKind::Vane), 0);
         assert_eq!(p.scan.weight(SimDuration::from_millis(2)), 3);
     }
 

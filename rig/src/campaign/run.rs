@@ -5,7 +5,7 @@
 use super::generate::{generate, Generated};
 use super::profile::Profile;
 use super::shrink::{shrink, Case, Shrunk};
-use super::{digest, execute, judge, line, LineContext, Outcome, RunLine};
+use super::{digest, execute, judge, line, LineContext, RunLine, RunOutcome};
 use crossbeam_channel::{unbounded, Receiver, Sender};
 use std::collections::BTreeMap;
 use std::fmt;
@@ -127,7 +127,7 @@ pub fn run_one(plan: &Plan, index: u64) -> Finished {
         digest: dig.clone(),
     };
     let line = line(ctx, &exec, &verdict);
-    if verdict.outcome == Outcome::Ok {
+    if verdict.outcome == RunOutcome::Ok {
         return Finished {
             line,
             reproducer: None,
@@ -204,7 +204,7 @@ fn reproducer_text(
         sc.duration,
         shrunk.attempts
     );
-    if shrunk.verdict.outcome == Outcome::OutOfService {
+    if shrunk.verdict.outcome == RunOutcome::OutOfService {
         let _ = writeln!(
             h,
             "# in service means: the last cabin call (the probe) is served and the controller ends in one of: {}",

@@ -1,5 +1,5 @@
 //! Shrinking a failing run to a minimal scenario that still fails the same way: the same
-//! outcome and the same first violation kind ([`super::Verdict::signature`]).
+//! outcome and the same first violation kind ([`super::RunVerdict::signature`]).
 //!
 //! Deterministic, and bounded by a budget of runs. The steps, each kept only if the run
 //! still fails the same way:
@@ -15,7 +15,7 @@
 //! 5. steps 3 and 1 again, for the smaller run.
 
 use super::generate::{recovery_index, Probe, RECOVERY_NOT_BEFORE};
-use super::{execute, judge, Execution, Outcome, Verdict};
+use super::{execute, judge, Execution, RunOutcome, RunVerdict};
 use crate::report::ViolationKind;
 use crate::scenario::{Action, Fault, Scenario};
 use asi_phy::{SimDuration, SimTime};
@@ -39,22 +39,22 @@ pub struct Shrunk {
     /// Its run.
     pub execution: Execution,
     /// Its judgement (the same signature as the original's).
-    pub verdict: Verdict,
+    pub verdict: RunVerdict,
     /// Runs spent shrinking.
     pub attempts: u32,
 }
 
 /// Runs a case and judges it.
-pub type Oracle<'a> = &'a dyn Fn(&Case) -> (Execution, Verdict);
+pub type Oracle<'a> = &'a dyn Fn(&Case) -> (Execution, RunVerdict);
 
 struct Shrinker<'a> {
     oracle: Oracle<'a>,
-    target: (Outcome, Option<ViolationKind>),
+    target: (RunOutcome, Option<ViolationKind>),
     budget: u32,
     attempts: u32,
     best: Case,
     execution: Execution,
-    verdict: Verdict,
+    verdict: RunVerdict,
 }
 
 impl Shrinker<'_> {
@@ -63,7 +63,7 @@ impl Shrinker<'_> {
         if self.attempts >= self.budget || cand == self.best {
             return false;
         }
-        if self.target.0 == Outcome::OutOfService && !repaired(&cand) {
+        if self.target.0 == RunOutcome::OutOfService && !repaired(&cand) {
             return false;
         }
         self.attempts += 1;
@@ -149,7 +149,7 @@ impl Shrinker<'_> {
     }
 
     fn drop_events(&mut self) {
-        let keep_tail = self.target.0 == Outcome::OutOfService;
+        let keep_tail = self.target.0 == RunOutcome::OutOfService;
         // An out-of-service run keeps its acknowledge, reset and probe; a repair of the
         // recovery may go once nothing needs it ([`repaired`]).
         let droppable = |c: &Case| -> Vec<usize> {
@@ -266,7 +266,7 @@ fn has_probe_event(case: &Case, p: &Probe) -> bool {
 
 /// Shrinks `case`, which ran as `execution` and was judged `verdict` (a failure), spending
 /// at most `budget` runs. With a budget of 0 the case comes back as it is.
-pub fn shrink(case: Case, execution: Execution, verdict: Verdict, budget: u32) -> Shrunk {
+pub fn shrink(case: Case, execution: Execution, verdict: RunVerdict, budget: u32) -> Shrunk {
     let oracle = |c: &Case| {
         let exec = execute(&c.scenario);
         let verdict = judge(&exec, c.probe.as_ref());
@@ -280,7 +280,7 @@ pub fn shrink_with(
     oracle: Oracle<'_>,
     case: Case,
     execution: Execution,
-    verdict: Verdict,
+    verdict: RunVerdict,
     budget: u32,
 ) -> Shrunk {
     let target = (verdict.outcome, verdict.first_violation);
@@ -384,8 +384,8 @@ mod tests {
         }
     }
 
-    fn verdict(outcome: Outcome, kind: Option<ViolationKind>) -> Verdict {
-        Verdict {
+    fn verdict(outcome: RunOutcome, kind: Option<ViolationKind>) -> RunVerdict {
+        RunVerdict {
             outcome,
             in_service: None,
             first_violation: kind,
@@ -418,10 +418,10 @@ mod tests {
                     };
                     (
                         report(vec![v]),
-                        verdict(Outcome::Violation, Some(ViolationKind::OverloadedMoving)),
+                        verdict(RunOutcome::Violation, Some(ViolationKind::OverloadedMoving)),
                     )
                 }
-                _ => (report(vec![]), verdict(Outcome::Ok, None)),
+                _ => (report(vec![]), verdict(RunOutcome::Ok, None)),
             }
         };
         let c = case();
@@ -461,15 +461,15 @@ mod tests {
                 .iter()
                 .any(|e| e.action == Action::Fault(Fault::SlaveOffline { slave: 2 }));
             let outcome = if hit {
-                Outcome::OutOfService
+                RunOutcome::OutOfService
             } else {
-                Outcome::Ok
+                RunOutcome::Ok
             };
             (report(vec![]), verdict(outcome, None))
         };
         let c = case();
         let (exec, v) = oracle(&c);
-        assert_eq!(v.outcome, Outcome::OutOfService);
+        assert_eq!(v.outcome, RunOutcome::OutOfService);
         let s = shrink_with(&oracle, c, exec, v, 200);
         let kept: Vec<(u64, &Action)> = s
             .case

@@ -1,7 +1,7 @@
 //! `asi-lift campaign summarize`: the lines of one campaign, from any number of files (the
 //! shards), merged into one table.
 
-use super::{p95, Outcome, RunLine};
+use super::{p95, RunLine, RunOutcome};
 use crate::report::ViolationKind;
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -79,7 +79,7 @@ pub struct Failure {
     /// Its index.
     pub index: u64,
     /// Its outcome.
-    pub outcome: Outcome,
+    pub outcome: RunOutcome,
     /// Its first violation's kind, if any.
     pub first_violation: Option<ViolationKind>,
     /// Its reproducer's file name, if written.
@@ -145,7 +145,7 @@ pub fn summarize(files: &[(String, String)]) -> Result<Summary, String> {
         campaign_runs: f.runs,
         runs: lines.len() as u64,
         missing: f.runs - lines.len() as u64,
-        outcomes: Outcome::ALL
+        outcomes: RunOutcome::ALL
             .iter()
             .map(|o| (o.name().to_owned(), 0))
             .collect(),
@@ -192,7 +192,7 @@ pub fn summarize(files: &[(String, String)]) -> Result<Summary, String> {
         s.transactions += l.bus.transactions;
         s.repeats += l.bus.repeats;
         s.simulated_s += l.simulated_s;
-        if l.outcome != Outcome::Ok {
+        if l.outcome != RunOutcome::Ok {
             s.failures.push(Failure {
                 index: l.index,
                 outcome: l.outcome,
@@ -247,7 +247,7 @@ impl Summary {
             }
         };
         let _ = writeln!(t, "\n{:<28}{:>8}{:>9}", "outcome", "runs", "%");
-        for o in Outcome::ALL {
+        for o in RunOutcome::ALL {
             let n = self.outcomes.get(o.name()).copied().unwrap_or(0);
             let _ = writeln!(t, "{:<28}{n:>8}{:>8.1}%", o.name(), pct(n, self.runs));
         }

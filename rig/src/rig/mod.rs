@@ -32,12 +32,12 @@ use asi_phy::fault::{FaultRates, PulseErrorRate};
 use asi_phy::{SimDuration, SimTime};
 use asi_trace::trace::TraceFormat;
 use controller::plc::{FromSafety, Plc, ToSafety};
-use controller::{ControllerConfig, EventKind as Ctl};
+use controller::{ControllerConfig, ProgramEventKind as Ctl};
 use invariants::{InvariantWatch, Observed};
 use lab::address::{SAFETY_BOTTOM, SAFETY_TOP};
 use las::LasWatch;
 use lift_model::drive::STANDSTILL_UA;
-use lift_model::{EventKind as Plant, Lift, LiftConfig, LoadLevel};
+use lift_model::{Lift, LiftConfig, LoadLevel, PlantEventKind as Plant};
 use operator::{describe, Rescue, OPERATOR_PULSE};
 use outputs::Outputs;
 use passengers::Passengers;
@@ -49,7 +49,7 @@ use wiring::Applied;
 pub enum RigError {
     /// The lift plant rejects its configuration.
     #[error("lift: {0}")]
-    Lift(#[from] lift_model::ConfigError),
+    Lift(#[from] lift_model::LiftConfigError),
     /// The bus cannot be built.
     #[error("bus: {0}")]
     Bus(#[from] asi_master::ConfigError),

@@ -2,7 +2,7 @@
 //! window.
 
 use super::collector::{lock, take, BusWindow, Collector};
-use super::options::{analysable_error_rate, BusChoice, TimingError, TimingOptions};
+use super::options::{analysable_error_rate, AnalysisError, BusChoice, TimingOptions};
 use asi_bus::lab::io_bus;
 use asi_bus::Bus;
 use asi_master::{ConfigError, MasterConfig, ProjectedConfig, ProjectedSlave};
@@ -49,13 +49,13 @@ fn ab_bus() -> Result<Bus, ConfigError> {
 /// How long a bus or the rig may take to get ready.
 pub(super) const READY_WITHIN: SimDuration = SimDuration::from_secs(60);
 
-pub(super) fn run_plain(opts: &TimingOptions) -> Result<(Collector, BusWindow), TimingError> {
+pub(super) fn run_plain(opts: &TimingOptions) -> Result<(Collector, BusWindow), AnalysisError> {
     let mut bus = match opts.bus {
         BusChoice::Standard { n } => io_bus(n, AC2726)?,
         _ => ab_bus()?,
     };
     let rate =
-        analysable_error_rate(opts.pulse_error_rate).map_err(|rule| TimingError::Option {
+        analysable_error_rate(opts.pulse_error_rate).map_err(|rule| AnalysisError::Option {
             option: "pulse error rate",
             value: opts.pulse_error_rate.to_string(),
             rule,
@@ -75,7 +75,7 @@ pub(super) fn run_plain(opts: &TimingOptions) -> Result<(Collector, BusWindow), 
     let mut t = SimTime::ZERO;
     while !(bus.is_running() && bus.master().las().len() == want) {
         if t >= deadline {
-            return Err(TimingError::NotReady {
+            return Err(AnalysisError::NotReady {
                 what: "the master did not activate every slave",
                 within: READY_WITHIN,
             });

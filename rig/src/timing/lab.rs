@@ -4,7 +4,7 @@
 use super::bus::READY_WITHIN;
 use super::collector::{lock, take, BusWindow, Collector};
 use super::latency::{ready_at, sample_latencies, wait_resetting};
-use super::options::{TimingError, TimingOptions};
+use super::options::{AnalysisError, TimingOptions};
 use super::report::LabTiming;
 use super::stats::{ms, Summary, Ticker};
 use crate::rig::Rig;
@@ -18,7 +18,7 @@ use std::sync::{Arc, Mutex};
 pub(super) fn run_lab(
     opts: &TimingOptions,
     extra: u8,
-) -> Result<(Collector, BusWindow, LabTiming), TimingError> {
+) -> Result<(Collector, BusWindow, LabTiming), AnalysisError> {
     let sc = lab_scenario(opts, extra);
     let plc_scan = sc.plc_scan;
     let mut rig = Rig::new(sc)?;
@@ -67,11 +67,11 @@ fn lab_scenario(opts: &TimingOptions, extra: u8) -> Scenario {
 /// Brings the lift to ready at floor 1; the operator's resets on the way. The Safety-at-Work
 /// monitor may trip under line noise during initialisation too: the operator resets it, as
 /// during the latency samples.
-fn initialise(rig: &mut Rig) -> Result<u32, TimingError> {
+fn initialise(rig: &mut Rig) -> Result<u32, AnalysisError> {
     let mut resets = 0;
     match wait_resetting(rig, READY_WITHIN, &mut resets, |r| ready_at(r, 1)) {
         Some(_) => Ok(resets),
-        None => Err(TimingError::NotReady {
+        None => Err(AnalysisError::NotReady {
             what: "the lift did not initialise at floor 1",
             within: READY_WITHIN,
         }),

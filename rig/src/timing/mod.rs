@@ -59,7 +59,7 @@ mod tests;
 
 pub use error_model::ErrorModel;
 pub use options::{
-    analysable_error_rate, BusChoice, TimingError, TimingOptions, MAX_DURATION, MAX_SAMPLES,
+    analysable_error_rate, AnalysisError, BusChoice, TimingOptions, MAX_DURATION, MAX_SAMPLES,
 };
 pub use report::{HallSample, LabTiming, Latencies, Repeats, StopSample, TimingReport};
 pub use stats::{Figure, Histogram};
@@ -74,7 +74,7 @@ use stats::{histogram, Summary};
 
 /// Runs the analysis for `opts`: the bus runs, then the model's figures are set beside the
 /// measured ones.
-pub fn analyse(opts: &TimingOptions) -> Result<TimingReport, TimingError> {
+pub fn analyse(opts: &TimingOptions) -> Result<TimingReport, AnalysisError> {
     opts.check()?;
     let model = CycleModel::new(opts.bus, &BusTiming::default());
     let (c, window, lab) = run(opts)?;
@@ -116,7 +116,7 @@ pub fn analyse(opts: &TimingOptions) -> Result<TimingReport, TimingError> {
 
 /// Runs the bus of `opts`: the collector's statistics, the window's drop-outs, and on the lab
 /// bus its handshakes and latencies.
-fn run(opts: &TimingOptions) -> Result<(Collector, BusWindow, Option<LabTiming>), TimingError> {
+fn run(opts: &TimingOptions) -> Result<(Collector, BusWindow, Option<LabTiming>), AnalysisError> {
     Ok(match opts.bus {
         BusChoice::Lab { extra } => {
             let (c, w, lab) = run_lab(opts, extra)?;

@@ -111,7 +111,7 @@ pub const MAX_SAMPLES: u32 = 10_000;
 
 /// Why the analysis cannot run.
 #[derive(Debug, thiserror::Error)]
-pub enum TimingError {
+pub enum AnalysisError {
     /// An option out of range.
     #[error("{option} = {value}: {rule}")]
     Option {
@@ -150,9 +150,9 @@ pub fn analysable_error_rate(p: f64) -> Result<PulseErrorRate, &'static str> {
 
 impl TimingOptions {
     /// Checks the options.
-    pub fn check(&self) -> Result<(), TimingError> {
+    pub fn check(&self) -> Result<(), AnalysisError> {
         let err = |option, value: String, rule| {
-            Err(TimingError::Option {
+            Err(AnalysisError::Option {
                 option,
                 value,
                 rule,

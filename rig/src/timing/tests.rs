@@ -192,7 +192,7 @@ fn options_are_checked() {
         },
     ] {
         assert!(
-            matches!(analyse(&bad), Err(TimingError::Option { .. })),
+            matches!(analyse(&bad), Err(AnalysisError::Option { .. })),
             "{bad:?}"
         );
     }
