@@ -12,8 +12,8 @@
 //!
 //! Decoding is pure: [`decode_capture`] returns [`TelegramRecord`]s, the shape of the run's
 //! trace, timed in the capture's own time base (a CSV's seconds, a VCD's timescale), so that a
-//! VCD of a run decodes to the times of the simulator's clock. [`to_text`] and
-//! [`to_json_lines`] render them.
+//! VCD of a run decodes to the times of the simulator's clock. [`render::to_text`] and
+//! [`render::to_json_lines`] render them.
 
 pub mod render;
 

@@ -86,7 +86,7 @@ pub fn to_text(d: &Decoded) -> String {
     s
 }
 
-/// One JSON object per telegram and line, the fields of [`TelegramRecord`].
+/// One JSON object per telegram and line, the fields of [`TelegramRecord`](crate::telegrams::TelegramRecord).
 pub fn to_json_lines(d: &Decoded) -> Result<String, serde_json::Error> {
     let mut s = String::new();
     for t in &d.telegrams {

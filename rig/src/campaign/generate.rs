@@ -13,7 +13,7 @@
 //!    vane sensor ever broken is repaired (but one a profile deliberately leaves broken), the
 //!    load goes back to empty, loaded or full if it ever changed, the door is closed if it was
 //!    ever open. Then the operator rescues a cabin left beyond an end floor, acknowledges
-//!    (ERR_ACK) and presses the safety reset, twice ([`ROUNDS`]), the probe 22 s after the
+//!    (ERR_ACK) and presses the safety reset, twice (`ROUNDS`), the probe 22 s after the
 //!    repairs. The recovery repairs everything the activity could have broken, whatever
 //!    events remain, so a shrunk scenario that keeps the recovery is still repaired.
 //! 3. **Probe**: a cabin call `probe_lead` before the end. The lift is in service at the end
@@ -415,7 +415,7 @@ pub fn generate(campaign_seed: u64, index: u64, profile: &Profile) -> Generated 
         tail.push((recovery, Action::Door { closed: true }));
     }
     // The operator rescues a cabin left on an overtravel sensor (a vane sensor fault can take
-    // it there), acknowledges and resets, twice ([`ROUNDS`]); a rescue does nothing to a cabin
+    // it there), acknowledges and resets, twice (`ROUNDS`); a rescue does nothing to a cabin
     // inside the shaft's floors.
     for (rescue, ack, reset) in ROUNDS {
         tail.push((recovery + dur_ms(rescue), Action::Rescue));

@@ -1,8 +1,8 @@
 //! Scenario files: what happens to the lift, and when (TOML; documented in README.md).
 //!
-//! The scenario itself and its limits are here; [`read`] reads a file (a malformed one gets an
+//! The scenario itself and its limits are here; `read` reads a file (a malformed one gets an
 //! error that names the file, the line and the field at fault; unknown keys are errors, not
-//! silently ignored), [`write`] writes one back.
+//! silently ignored), `write` writes one back.
 
 mod read;
 #[cfg(test)]
