@@ -467,3 +467,36 @@ press = "cabin:4"
     assert_arrivals_agree(&r);
     assert_eq!(served(&r), [(4, "cabin".into())]);
 }
+
+#[test]
+fn a_monitor_trip_from_line_noise_halts_safely_until_the_operator_resets() {
+    // Campaign 12, run 6768: with the line noise still present after every repair, the top
+    // overtravel sensor's codes miss the monitor's tolerance time once. The safety logic
+    // counts the unread sensor as tripped and opens K1; the cabin halts between floors and
+    // waits for the operator, whose acknowledge and reset bring it back into service.
+    let r = run_toml(
+        "noise trip after the recovery",
+        include_str!("data/noise-trip-after-recovery.toml"),
+    );
+    assert_no_violations(&r);
+    let dropped = logged_at(&r, "monitor", "safety sensor 12 not released").expect("drop");
+    let opened = logged_after(&r, "safety", "K1 opened", dropped).expect("K1 opens");
+    assert!(opened - dropped < 0.01, "{}", r.to_text());
+    assert!(
+        logged_after(&r, "controller", "halted between floors", opened).is_some(),
+        "{}",
+        r.to_text()
+    );
+    let reset = logged_after(
+        &r,
+        "safety",
+        "overtravel monitor reset by the operator",
+        opened,
+    )
+    .expect("the operator's reset");
+    assert!(reset >= 151.0);
+    assert!(logged_after(&r, "safety", "K1 closed", reset - 0.001).is_some());
+    let last = r.served.last().expect("a call served");
+    assert!(last.served_at_s > reset, "{last:?}");
+    assert_eq!(r.final_state.state, controller::State::AtFloor);
+}
