@@ -1,6 +1,6 @@
 //! `asi-lift encode`: a master call or slave response on its way to the line.
 
-use super::write_output;
+use super::{print_out, write_output};
 use asi_phy::waveform::WaveformConfig;
 use asi_trace::encode::{describe, parse_call, waveform_csv};
 use std::path::{Path, PathBuf};
@@ -40,7 +40,7 @@ pub fn run(args: EncodeArgs) -> Result<u8, String> {
     } = args;
     let t = parse_call(&call).map_err(|e| e.to_string())?;
     match csv {
-        None => print!("{}", describe(t)),
+        None => print_out(&describe(t))?,
         Some(path) => {
             let cfg = WaveformConfig {
                 amplitude,
@@ -51,8 +51,7 @@ pub fn run(args: EncodeArgs) -> Result<u8, String> {
             let text = waveform_csv(t, &cfg).map_err(|e| e.to_string())?;
             write_output(&path, &text, force)?;
             if path != Path::new("-") {
-                print!("{}", describe(t));
-                println!("wrote       {}", path.display());
+                print_out(&format!("{}wrote       {}\n", describe(t), path.display()))?;
             }
         }
     }

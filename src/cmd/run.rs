@@ -1,6 +1,6 @@
 //! `asi-lift run`: a scenario on the whole rig, its report, trace and waveforms.
 
-use super::{open_output, read_input, write_output, EXIT_VIOLATIONS};
+use super::{open_output, print_out, read_input, write_output, EXIT_VIOLATIONS};
 use asi_phy::{SimDuration, SimTime};
 use asi_trace::trace::TraceFormat;
 use clap::ValueEnum;
@@ -163,10 +163,18 @@ pub fn run(args: RunArgs) -> Result<u8, String> {
     };
     write_output(&report, &body, force)?;
     if report != Path::new("-") {
-        let text = rep.to_text();
-        let summary = text.split("\nsummary").nth(1).unwrap_or("");
-        print!("summary{summary}");
-        println!("report written to {}", report.display());
+        let summary = format!(
+            "{}report written to {}\n",
+            rep.summary_text(),
+            report.display()
+        );
+        // Human text goes to standard error when a data stream (the trace) is on standard
+        // output; a reader that has gone (`| head`) is no error.
+        if trace.as_deref() == Some(Path::new("-")) {
+            eprint!("{summary}");
+        } else {
+            print_out(&summary)?;
+        }
     }
     Ok(if rep.violations.is_empty() {
         0

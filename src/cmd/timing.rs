@@ -1,6 +1,6 @@
 //! `asi-lift timing`: the bus and reaction times, computed and simulated side by side.
 
-use super::open_output;
+use super::{open_output, print_out};
 use asi_phy::SimDuration;
 use rig::timing::{
     analysable_error_rate, analyse, BusChoice, TimingOptions, MAX_DURATION, MAX_SAMPLES,
@@ -81,20 +81,19 @@ pub fn run(args: TimingArgs) -> Result<u8, String> {
     };
     let rep = analyse(&opts).map_err(|e| e.to_string())?;
     if json {
-        println!(
-            "{}",
-            rep.to_json()
-                .map_err(|e| format!("the report as JSON: {e}"))?
-        );
+        let text = rep
+            .to_json()
+            .map_err(|e| format!("the report as JSON: {e}"))?;
+        print_out(&(text + "\n"))?;
     } else {
-        print!("{}", rep.to_text());
+        print_out(&rep.to_text())?;
     }
     if let Some((path, out)) = &mut svg_out {
         out.write_all(rep.to_svg().as_bytes())
             .and_then(|()| out.flush())
             .map_err(|e| format!("{}: {e}", path.display()))?;
         if !json {
-            println!("SVG written to {}", path.display());
+            print_out(&format!("SVG written to {}\n", path.display()))?;
         }
     }
     Ok(0)
