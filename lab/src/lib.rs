@@ -5,12 +5,14 @@
 //!   puts the devices there, the PLC program addresses them, the rig wires them to the plant,
 //!   the campaign takes them offline;
 //! - [`display`]: the display word of the floor and cabin displays (seed 003 tables 4.2 and
-//!   4.4): the PLC program writes it, the handshakes carry it, the plant's displays show it.
+//!   4.4): the PLC program writes it, the handshakes carry it, the plant's displays show it;
+//! - [`setpoint`]: the speed set-point that means standstill (seed 003 §6.4).
 //!
 //! The crate depends on nothing of asi-lift, so that the bus, the plant and the controller can
 //! all use it.
 
 pub mod address;
 pub mod display;
+pub mod setpoint;
 
 pub use display::{DisplayWord, DisplayWordError};

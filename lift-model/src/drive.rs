@@ -3,10 +3,6 @@
 
 use serde::{Deserialize, Serialize};
 
-/// The set-point that means standstill: 4000 µA = 4 mA, the live zero of the 4–20 mA loop
-/// (seed 003 §6.4: "hodnota 4000 odpovídá klidovému stavu kabiny").
-pub const STANDSTILL_UA: u16 = 4000;
-
 /// The largest set-point the current loop can drive: 20000 µA = 20 mA (seed 003 §3.1, AC2618
 /// output 0–20 mA). Larger values are clamped to it.
 pub const MAX_SETPOINT_UA: u16 = 20000;

@@ -56,7 +56,7 @@ impl Default for ControllerConfig {
             scan: SimDuration::from_millis(10),
             travel_ua: 10_000,
             creep_ua: 6_000,
-            standstill_ua: 4_000,
+            standstill_ua: lab::setpoint::STANDSTILL_UA,
             init_ua: 11_000,
             init_timer: SimDuration::from_secs(2),
             restart_every: SimDuration::from_millis(500),

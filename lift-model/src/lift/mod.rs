@@ -193,7 +193,7 @@ impl Lift {
             converter: Converter {
                 run: false,
                 up: false,
-                setpoint_ua: crate::drive::STANDSTILL_UA,
+                setpoint_ua: lab::setpoint::STANDSTILL_UA,
                 injected_fault: false,
                 stalled: false,
             },
