@@ -2,6 +2,8 @@
 //! the PLC side of asi-master and the device side of asi-slaves, on the engines and words of
 //! asi-phy.
 
+mod common;
+
 use asi_master::integrated_analog::*;
 use asi_master::plc_handshake::*;
 use asi_phy::handshake::*;
@@ -9,6 +11,7 @@ use asi_phy::handshake_words::*;
 use asi_phy::Nibble;
 use asi_slaves::analog_firmware::*;
 use asi_slaves::device_handshake::*;
+use common::display_bits;
 
 /// Runs a PLC-side and a device-side step function against each other: the device steps
 /// `dev_per_plc` times per PLC step (cycles per scan).
@@ -366,17 +369,4 @@ fn input_values_alternate_channels() {
         }
     )));
     assert!(got.iter().any(|(ch, v)| *ch == 2 && v.overflow));
-}
-
-/// The bits of the display word (lab crate) for `floor` and the four indicators.
-fn display_bits(floor: u8, up: bool, down: bool, moving: bool, fault: bool) -> u16 {
-    lab::DisplayWord {
-        floor,
-        up,
-        down,
-        moving,
-        fault,
-    }
-    .encode()
-    .expect("a floor 1..=24")
 }

@@ -2,6 +2,8 @@
 //! AS-i cycles and wherever either side is reset, the next word gets through, whole and
 //! unchanged.
 
+mod common;
+
 use asi_master::integrated_analog::S73OutputMaster;
 use asi_master::plc_handshake::{CabinDisplayMaster, CabinPanelMaster, FloorStationMaster};
 use asi_phy::handshake_words::CabinPanelState;
@@ -52,15 +54,13 @@ fn drive(
 
 /// The bits of the display word (lab crate) for `floor` and the indicator bits of `bits`.
 fn word(floor: u8, bits: u8) -> u16 {
-    lab::DisplayWord {
+    common::display_bits(
         floor,
-        up: bits & 1 != 0,
-        down: bits & 2 != 0,
-        moving: bits & 4 != 0,
-        fault: bits & 8 != 0,
-    }
-    .encode()
-    .expect("a floor 1..=24")
+        bits & 1 != 0,
+        bits & 2 != 0,
+        bits & 4 != 0,
+        bits & 8 != 0,
+    )
 }
 
 proptest! {

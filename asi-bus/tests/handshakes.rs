@@ -217,16 +217,3 @@ fn a_held_floor_button_is_one_press() {
     assert_eq!(presses, 2);
     assert!(scans > 90);
 }
-
-/// The bits of the display word (lab crate) for `floor` and the four indicators.
-fn display_bits(floor: u8, up: bool, down: bool, moving: bool, fault: bool) -> u16 {
-    lab::DisplayWord {
-        floor,
-        up,
-        down,
-        moving,
-        fault,
-    }
-    .encode()
-    .expect("a floor 1..=24")
-}

@@ -94,3 +94,16 @@ pub fn folded<'a>(records: impl IntoIterator<Item = &'a TransactionRecord>) -> S
     }
     out
 }
+
+/// The bits of the display word (lab crate) for `floor` and the four indicators.
+pub fn display_bits(floor: u8, up: bool, down: bool, moving: bool, fault: bool) -> u16 {
+    lab::DisplayWord {
+        floor,
+        up,
+        down,
+        moving,
+        fault,
+    }
+    .encode()
+    .expect("a floor 1..=24")
+}
