@@ -200,6 +200,13 @@ pub struct SafetyReport {
     /// (absent when it never did).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub monitor: Vec<MonitorTrip>,
+    /// How many rounds (rescue, acknowledge, reset) the attendant made (absent when none).
+    #[serde(skip_serializing_if = "is_zero")]
+    pub attendant_rounds: u32,
+}
+
+fn is_zero(n: &u32) -> bool {
+    *n == 0
 }
 
 /// The Safety-at-Work monitor dropped a sensor's release.
@@ -361,6 +368,7 @@ impl Report {
             safety: SafetyReport {
                 trips: Vec::new(),
                 monitor: Vec::new(),
+                attendant_rounds: 0,
             },
             violations: Vec::new(),
             availability: Availability::default(),
@@ -481,6 +489,9 @@ impl Report {
             );
         }
         let _ = writeln!(s, "  safety trips       {}", self.safety.trips.len());
+        if self.safety.attendant_rounds > 0 {
+            let _ = writeln!(s, "  attendant rounds   {}", self.safety.attendant_rounds);
+        }
         if !self.safety.monitor.is_empty() {
             let mut causes: Vec<(String, usize)> = Vec::new();
             for m in &self.safety.monitor {

@@ -12,10 +12,13 @@
 //! 2. **Recovery**, 22 s before the probe: every slave ever taken offline is put back, every
 //!    vane sensor ever broken is repaired (but one a profile deliberately leaves broken), the
 //!    load goes back to empty, loaded or full if it ever changed, the door is closed if it was
-//!    ever open. Then the operator rescues a cabin left beyond an end floor, acknowledges
-//!    (ERR_ACK) and presses the safety reset, twice (`ROUNDS`), the probe 22 s after the
-//!    repairs. The recovery repairs everything the activity could have broken, whatever
-//!    events remain, so a shrunk scenario that keeps the recovery is still repaired.
+//!    ever open. With the repairs an attendant takes over (`attend`): from then on, whenever
+//!    K1 stays open for a cause an operator answers (an overtravel, a group error, a monitor
+//!    waiting for its reset), the attendant rescues a cabin left beyond an end floor,
+//!    acknowledges (ERR_ACK) and presses the safety reset, and again while K1 stays open. The
+//!    probe comes 22 s after the repairs. The recovery repairs everything the activity could
+//!    have broken, whatever events remain, so a shrunk scenario that keeps the recovery is
+//!    still repaired.
 //! 3. **Probe**: a cabin call `probe_lead` before the end. The lift is in service at the end
 //!    if the probe is served and the controller ends in a normal service state.
 //!
@@ -39,25 +42,6 @@ pub const MAX_CRANK_SUM_MM: f64 = 40.0;
 const QUIET_GAP: SimDuration = SimDuration::from_secs(6);
 /// From the recovery's repairs to the probe.
 const RECOVERY: SimDuration = SimDuration::from_secs(22);
-/// The operator's rounds after the repairs, each (rescue, acknowledge, reset) after the
-/// repairs. A rescue does something only to a cabin beyond an end floor with K1 open; its
-/// crank back to the end floor's level takes up to about 7 s, before the acknowledge and the
-/// reset. The first round finds a cabin that a run before the repairs left on an overtravel
-/// sensor; the second one a cabin that ran there after them (a restart from a vane sensor
-/// reading taken before its repair reached the PLC, campaign 12 run 3764), which the first
-/// rescue, coming while K1 was still closed, could not help.
-const ROUNDS: [(SimDuration, SimDuration, SimDuration); 2] = [
-    (
-        SimDuration::from_secs(2),
-        SimDuration::from_secs(8),
-        SimDuration::from_secs(9),
-    ),
-    (
-        SimDuration::from_secs(12),
-        SimDuration::from_secs(20),
-        SimDuration::from_secs(21),
-    ),
-];
 
 /// The probe: the cabin call whose service says the lift is in service at the end.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -414,14 +398,11 @@ pub fn generate(campaign_seed: u64, index: u64, profile: &Profile) -> Generated 
     if b.touched.door {
         tail.push((recovery, Action::Door { closed: true }));
     }
-    // The operator rescues a cabin left on an overtravel sensor (a vane sensor fault can take
-    // it there), acknowledges and resets, twice (`ROUNDS`); a rescue does nothing to a cabin
-    // inside the shaft's floors.
-    for (rescue, ack, reset) in ROUNDS {
-        tail.push((recovery + dur_ms(rescue), Action::Rescue));
-        tail.push((recovery + dur_ms(ack), Action::Ack));
-        tail.push((recovery + dur_ms(reset), Action::Reset));
-    }
+    // The attendant answers every safety stop from the repairs on: a cabin left on an
+    // overtravel sensor (a vane sensor fault can take it there, or a restart from a vane
+    // reading taken before its repair reached the PLC, campaign 12 run 3764), a group error,
+    // a Safety-at-Work monitor trip by line noise that stays on (campaign 12 run 6768).
+    tail.push((recovery, Action::Attend));
     let probe_floor = b.rng.random_range(1..=floors);
     tail.push((
         probe_at,
@@ -546,7 +527,7 @@ mod tests {
             let mut vanes = [SensorFault::None; 2];
             let mut load = sc.load;
             let mut door_closed = sc.door_closed;
-            let mut acked_then_reset = (false, false);
+            let mut attended = false;
             for (e, tail) in sc.events.iter().zip(&g.tail) {
                 if !tail {
                     let busy = match e.action {
@@ -556,10 +537,12 @@ mod tests {
                         _ => SimDuration::ZERO,
                     };
                     assert!(e.at + busy < recovery, "{ctx}");
-                } else if e.action == Action::Ack {
-                    acked_then_reset.0 = true;
-                } else if e.action == Action::Reset {
-                    acked_then_reset.1 = acked_then_reset.0;
+                } else if e.action == Action::Attend {
+                    assert_eq!(
+                        e.at, recovery,
+                        "the attendant comes with the repairs: {ctx}"
+                    );
+                    attended = true;
                 }
                 match e.action {
                     Action::Crank { mm } if !tail => crank += mm,
@@ -581,7 +564,7 @@ mod tests {
             }
             assert!(offline.is_empty(), "{ctx}");
             assert!(load != LoadLevel::Overloaded && door_closed, "{ctx}");
-            assert_eq!(acked_then_reset, (true, true), "{ctx}");
+            assert!(attended, "{ctx}");
             let broken = vanes.iter().filter(|f| **f != SensorFault::None).count();
             assert_eq!(broken, usize::from(!probe.judged), "{ctx}");
         }
@@ -624,6 +607,7 @@ mod tests {
                     Action::Reset => "reset".into(),
                     Action::Rescue => "rescue".into(),
                     Action::Ack => "ack".into(),
+                    Action::Attend => "attend".into(),
                     Action::Fault(Fault::SlaveOffline { slave }) => format!("offline {slave}"),
                     Action::Fault(Fault::SlaveOnline { slave }) => format!("online {slave}"),
                     Action::Fault(Fault::PowerFail { .. }) => "power-fail".into(),
@@ -669,6 +653,7 @@ mod tests {
             "reset",
             "rescue",
             "ack",
+            "attend",
             "power-fail",
             "safe-link-drop",
             "vane Left StuckOn",

@@ -223,6 +223,10 @@ pub struct RunLine {
     pub waits_s: Vec<f64>,
     /// Safety trips and errors.
     pub safety_trips: usize,
+    /// Rounds of the attendant (rescue, acknowledge, reset) after the repairs (0 in the
+    /// lines of campaigns before the attendant).
+    #[serde(default)]
+    pub attendant_rounds: u32,
     /// Bus figures.
     pub bus: LineBus,
     /// In service at the end: the probe was served and the controller ended in a service
@@ -323,6 +327,7 @@ pub fn line(ctx: LineContext<'_>, exec: &Execution, verdict: &RunVerdict) -> Run
         },
         waits_s: Vec::new(),
         safety_trips: 0,
+        attendant_rounds: 0,
         bus: LineBus {
             transactions: 0,
             repeats: 0,
@@ -361,6 +366,7 @@ pub fn line(ctx: LineContext<'_>, exec: &Execution, verdict: &RunVerdict) -> Run
                 };
             }
             l.safety_trips = r.safety.trips.len();
+            l.attendant_rounds = r.safety.attendant_rounds;
             l.bus = LineBus {
                 transactions: r.bus.transactions,
                 repeats: r.bus.repeats,

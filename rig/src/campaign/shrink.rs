@@ -150,7 +150,7 @@ impl Shrinker<'_> {
 
     fn drop_events(&mut self) {
         let keep_tail = self.target.0 == RunOutcome::OutOfService;
-        // An out-of-service run keeps its acknowledge, reset and probe; a repair of the
+        // An out-of-service run keeps its acknowledge, reset, attendant and probe; a repair of the
         // recovery may go once nothing needs it ([`repaired`]).
         let droppable = |c: &Case| -> Vec<usize> {
             (0..c.scenario.events.len())
@@ -162,6 +162,7 @@ impl Shrinker<'_> {
                             Action::Ack
                                 | Action::Reset
                                 | Action::Rescue
+                                | Action::Attend
                                 | Action::Press { .. }
                                 | Action::Crank { .. }
                         ))

@@ -39,6 +39,10 @@ pub struct Summary {
     pub waits: MergedWaits,
     /// Safety trips.
     pub safety_trips: u64,
+    /// The attendant's rounds after the repairs.
+    pub attendant_rounds: u64,
+    /// Runs in which the attendant made a round.
+    pub attended_runs: u64,
     /// Bus transactions.
     pub transactions: u64,
     /// Immediate repeats.
@@ -162,6 +166,8 @@ pub fn summarize(files: &[(String, String)]) -> Result<Summary, String> {
             max_s: None,
         },
         safety_trips: 0,
+        attendant_rounds: 0,
+        attended_runs: 0,
         transactions: 0,
         repeats: 0,
         repeats_per_transaction: 0.0,
@@ -189,6 +195,8 @@ pub fn summarize(files: &[(String, String)]) -> Result<Summary, String> {
         s.served += l.served as u64;
         waits.extend(&l.waits_s);
         s.safety_trips += l.safety_trips as u64;
+        s.attendant_rounds += u64::from(l.attendant_rounds);
+        s.attended_runs += u64::from(l.attendant_rounds > 0);
         s.transactions += l.bus.transactions;
         s.repeats += l.bus.repeats;
         s.simulated_s += l.simulated_s;
@@ -297,6 +305,11 @@ impl Summary {
             ),
         );
         row(&mut t, "safety trips", self.safety_trips.to_string());
+        row(
+            &mut t,
+            "attendant rounds",
+            format!("{} in {} runs", self.attendant_rounds, self.attended_runs),
+        );
         row(
             &mut t,
             "bus repeats",

@@ -38,7 +38,10 @@ use lab::address::{SAFETY_BOTTOM, SAFETY_TOP};
 use lab::setpoint::STANDSTILL_UA;
 use las::LasWatch;
 use lift_model::{Lift, LiftConfig, LoadLevel, PlantEventKind as Plant};
-use operator::{describe, Rescue, OPERATOR_PULSE};
+use operator::{
+    describe, Attendant, Rescue, ATTENDANT_ACK_AFTER, ATTENDANT_NOTICE, ATTENDANT_RESET_AFTER,
+    OPERATOR_PULSE,
+};
 use outputs::Outputs;
 use passengers::Passengers;
 use safety::{LiftSafety, LiftSafetyConfig, LiftSafetyInputs, SafeLink, SAFETY_SCAN_PERIOD};
@@ -76,6 +79,15 @@ enum Timer {
     OperatorReset(bool),
     ErrAck(bool),
     PowerBack,
+    /// The attendant's acknowledge or reset of a round.
+    Attendant(Round),
+}
+
+/// The later steps of the attendant's round.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Round {
+    Ack,
+    Reset,
 }
 
 /// The whole rig.
@@ -99,6 +111,8 @@ pub struct Rig {
     k1: bool,
     operator_reset: bool,
     err_ack: bool,
+    /// The lift attendant, once a scenario's `attend` has started it.
+    attendant: Attendant,
     /// Every press of a call button, for the passengers' waits and the served calls' requests.
     passengers: Passengers,
     watch: InvariantWatch,
@@ -161,6 +175,7 @@ impl Rig {
             k1: false,
             operator_reset: false,
             err_ack: false,
+            attendant: Attendant::default(),
             passengers: Passengers::default(),
             watch: InvariantWatch::default(),
             report,
@@ -444,9 +459,13 @@ impl Rig {
     }
 
     fn apply(&mut self, t: SimTime, ev: &ScenarioEvent) {
-        let what = describe(&ev.action);
-        self.log("scenario", what);
-        let result = match &ev.action {
+        self.act(t, "scenario", &ev.action);
+    }
+
+    /// `who` (the scenario or the attendant) does `action` at `t`.
+    fn act(&mut self, t: SimTime, who: &'static str, action: &Action) {
+        self.log(who, describe(action));
+        let result = match action {
             Action::Press { button, hold } => {
                 self.passengers.press(t, *button);
                 self.lift.press(t, *button, *hold)
@@ -460,7 +479,11 @@ impl Rig {
                     .push((t + OPERATOR_PULSE, Timer::OperatorReset(false)));
                 Ok(())
             }
-            Action::Rescue => self.rescue(t),
+            Action::Rescue => self.rescue(t, who),
+            Action::Attend => {
+                self.attendant.start(t);
+                Ok(())
+            }
             Action::Ack => {
                 self.err_ack = true;
                 self.timers.push((t + OPERATOR_PULSE, Timer::ErrAck(false)));
@@ -472,24 +495,24 @@ impl Rig {
             }
         };
         if let Err(e) = result {
-            self.log("scenario", format!("refused by the plant: {e}"));
+            self.log(who, format!("refused by the plant: {e}"));
         }
         self.plant_dirty = true;
     }
 
     /// The operator's overtravel rescue ([`operator::rescue`]).
-    fn rescue(&mut self, t: SimTime) -> Result<(), lift_model::PlantError> {
+    fn rescue(&mut self, t: SimTime, who: &'static str) -> Result<(), lift_model::PlantError> {
         match operator::rescue(&self.lift, self.sc.floors) {
             Rescue::NotNeeded => {
-                self.log("scenario", "the cabin needs no rescue".into());
+                self.log(who, "the cabin needs no rescue".into());
                 Ok(())
             }
             Rescue::K1Closed => {
-                self.log("scenario", "K1 is closed: no rescue by hand".into());
+                self.log(who, "K1 is closed: no rescue by hand".into());
                 Ok(())
             }
             Rescue::Crank(mm) => {
-                self.log("scenario", format!("hand crank {mm:+.1} mm"));
+                self.log(who, format!("hand crank {mm:+.1} mm"));
                 self.lift.crank(t, mm)
             }
         }
@@ -552,6 +575,8 @@ impl Rig {
                     }
                 }
                 Timer::ErrAck(on) => self.err_ack = on,
+                Timer::Attendant(Round::Ack) => self.act(t, "attendant", &Action::Ack),
+                Timer::Attendant(Round::Reset) => self.act(t, "attendant", &Action::Reset),
                 Timer::PowerBack => {
                     self.lab.bus.set_supply_voltage(NOMINAL_VOLTS);
                     self.log("rig", "AS-i power back".into());
@@ -647,6 +672,22 @@ impl Rig {
         self.from_safety = FromSafety {
             estop_out: out.estop_out,
         };
+        if self.attendant.watch(t, out.diag.k1_open_cause.as_ref()) {
+            let cause = out.diag.k1_open_cause.map(|c| c.to_string());
+            self.log(
+                "attendant",
+                format!(
+                    "K1 open for {ATTENDANT_NOTICE} ({}): rescue, acknowledge and reset",
+                    cause.unwrap_or_default()
+                ),
+            );
+            self.report.safety.attendant_rounds += 1;
+            self.act(t, "attendant", &Action::Rescue);
+            let ack = t + ATTENDANT_ACK_AFTER;
+            self.timers.push((ack, Timer::Attendant(Round::Ack)));
+            let reset = ack + ATTENDANT_RESET_AFTER;
+            self.timers.push((reset, Timer::Attendant(Round::Reset)));
+        }
         self.safety_out = Some(out.diag);
         if out.k1 != self.k1 {
             self.k1 = out.k1;

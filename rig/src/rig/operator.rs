@@ -3,6 +3,7 @@
 
 use crate::scenario::{needs_rescue, Action, Fault};
 use lift_model::{Lift, SensorFault};
+use safety::lift::K1Cause;
 
 /// How long an operator holds the reset or acknowledge button.
 pub(super) const OPERATOR_PULSE: asi_phy::SimDuration = asi_phy::SimDuration::from_millis(100);
@@ -17,6 +18,7 @@ pub(super) fn describe(a: &Action) -> String {
         Action::Reset => "operator presses the safety reset".into(),
         Action::Rescue => "operator's overtravel rescue".into(),
         Action::Ack => "operator acknowledges the safety group error".into(),
+        Action::Attend => "an attendant answers safety stops from now on".into(),
         Action::Fault(f) => match f {
             Fault::SlaveOffline { slave } => format!("fault: slave {slave} taken off the bus"),
             Fault::SlaveOnline { slave } => format!("fault cleared: slave {slave} back on the bus"),
@@ -60,4 +62,108 @@ pub(super) fn rescue(lift: &Lift, floors: u8) -> Rescue {
         return Rescue::K1Closed;
     }
     Rescue::Crank(to - x)
+}
+
+/// How long K1 stays open for a cause the attendant answers before a round begins.
+pub(super) const ATTENDANT_NOTICE: asi_phy::SimDuration = asi_phy::SimDuration::from_secs(2);
+/// From a round's rescue to its acknowledge: a cabin that halted on an overtravel sensor's trip
+/// point (60 mm beyond the end floor, docs/lift-plant.md) is cranked back at 10 mm/s in 6 s; one
+/// that stopped further out is not yet off the sensor, and the next round's rescue goes on.
+pub(super) const ATTENDANT_ACK_AFTER: asi_phy::SimDuration = asi_phy::SimDuration::from_secs(6);
+/// From a round's acknowledge to its safety reset.
+pub(super) const ATTENDANT_RESET_AFTER: asi_phy::SimDuration = asi_phy::SimDuration::from_secs(1);
+
+/// The lift attendant of [`Action::Attend`]: watches K1 and, once it has been open for
+/// [`ATTENDANT_NOTICE`] for a cause an operator answers, begins a round (the rig does the
+/// rescue now, the acknowledge and the reset later). The next round comes no earlier than
+/// [`ATTENDANT_NOTICE`] after the last one's reset.
+#[derive(Clone, Debug, Default)]
+pub(super) struct Attendant {
+    on: bool,
+    /// Since when K1 has been open for a cause the attendant answers.
+    open_since: Option<asi_phy::SimTime>,
+    /// No round before this.
+    next_round: asi_phy::SimTime,
+}
+
+impl Attendant {
+    /// From `t` on, the attendant watches.
+    pub(super) fn start(&mut self, t: asi_phy::SimTime) {
+        if !self.on {
+            self.on = true;
+            self.open_since = None;
+            self.next_round = t;
+        }
+    }
+
+    /// After a safety scan at `t` whose K1 is open for `cause` (`None`: closed): `true` when
+    /// a round begins now.
+    pub(super) fn watch(&mut self, t: asi_phy::SimTime, cause: Option<&K1Cause>) -> bool {
+        if !self.on {
+            return false;
+        }
+        if !cause.is_some_and(answers) {
+            self.open_since = None;
+            return false;
+        }
+        let since = *self.open_since.get_or_insert(t);
+        if t < since + ATTENDANT_NOTICE || t < self.next_round {
+            return false;
+        }
+        self.next_round = t + ATTENDANT_ACK_AFTER + ATTENDANT_RESET_AFTER + ATTENDANT_NOTICE;
+        true
+    }
+}
+
+/// Whether an operator's round answers K1 open for `cause`: an overtravel (rescue and reset),
+/// a group error (acknowledge), a monitor waiting for its reset. Not a STOP pressed, a STOP
+/// waiting for the controller's restart, an overloaded cabin or a stopped logic: no round
+/// helps those.
+fn answers(cause: &K1Cause) -> bool {
+    matches!(
+        cause,
+        K1Cause::Overtravel { .. } | K1Cause::GroupError(_) | K1Cause::OvertravelResetPending
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use asi_phy::SimTime;
+
+    fn at(ms: u64) -> SimTime {
+        SimTime::from_millis(ms)
+    }
+
+    const TRIP: K1Cause = K1Cause::OvertravelResetPending;
+
+    #[test]
+    fn an_attendant_answers_a_trip_after_the_notice_and_again_while_k1_stays_open() {
+        let mut a = Attendant::default();
+        assert!(
+            !a.watch(at(0), Some(&TRIP)),
+            "not on before it is told to attend"
+        );
+        a.start(at(1_000));
+        assert!(!a.watch(at(1_000), Some(&TRIP)));
+        assert!(!a.watch(at(2_999), Some(&TRIP)));
+        assert!(a.watch(at(3_000), Some(&TRIP)), "2 s of K1 open");
+        // The round: ack at 9 s, reset at 10 s; the next one no earlier than 12 s.
+        assert!(!a.watch(at(11_999), Some(&TRIP)));
+        assert!(a.watch(at(12_000), Some(&TRIP)));
+    }
+
+    #[test]
+    fn a_closed_k1_or_a_cause_no_round_helps_restarts_the_notice() {
+        let mut a = Attendant::default();
+        a.start(at(0));
+        assert!(!a.watch(at(0), Some(&TRIP)));
+        assert!(!a.watch(at(1_500), None));
+        assert!(!a.watch(at(2_500), Some(&TRIP)));
+        assert!(!a.watch(at(4_000), Some(&K1Cause::StopPressed)));
+        assert!(!a.watch(at(4_100), Some(&K1Cause::Overloaded)));
+        assert!(!a.watch(at(5_000), Some(&TRIP)));
+        assert!(!a.watch(at(6_999), Some(&TRIP)));
+        assert!(a.watch(at(7_000), Some(&TRIP)));
+    }
 }

@@ -90,6 +90,11 @@ pub enum Action {
     Rescue,
     /// The operator's acknowledge of a safety group error (ERR_ACK).
     Ack,
+    /// From now on a lift attendant answers every safety stop that an operator can answer
+    /// (README, "The attendant"): once K1 has been open for such a cause for a while, a round
+    /// of the overtravel rescue, the acknowledge and the safety reset, repeated while K1 stays
+    /// open. The safety logic alone decides whether a reset is taken.
+    Attend,
     /// A fault is injected.
     Fault(Fault),
 }

@@ -68,6 +68,7 @@ struct RawEvent {
     reset: Option<Spanned<bool>>,
     rescue: Option<Spanned<bool>>,
     ack: Option<Spanned<bool>>,
+    attend: Option<Spanned<bool>>,
     fault: Option<Spanned<RawFault>>,
 }
 
@@ -502,6 +503,7 @@ fn read_event(
         (&e.reset, "reset", Action::Reset),
         (&e.rescue, "rescue", Action::Rescue),
         (&e.ack, "ack", Action::Ack),
+        (&e.attend, "attend", Action::Attend),
     ] {
         if let Some(v) = flag {
             if !*v.get_ref() {
@@ -519,13 +521,11 @@ fn read_event(
     }
     let action = match actions.len() {
         1 => actions.remove(0),
-        0 => {
-            return Err(loc.error(
-                Some(span),
-                format!("event[{n}]"),
-                "no action: give one of press, load, door, crank_mm, reset, rescue, ack, fault",
-            ))
-        }
+        0 => return Err(loc.error(
+            Some(span),
+            format!("event[{n}]"),
+            "no action: give one of press, load, door, crank_mm, reset, rescue, ack, attend, fault",
+        )),
         _ => {
             return Err(loc.error(
                 Some(span),

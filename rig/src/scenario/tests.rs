@@ -162,6 +162,7 @@ mod round_trip {
             Just(Action::Reset),
             Just(Action::Rescue),
             Just(Action::Ack),
+            Just(Action::Attend),
             (1..=31u8).prop_map(|slave| Action::Fault(Fault::SlaveOffline { slave })),
             (1..=31u8).prop_map(|slave| Action::Fault(Fault::SlaveOnline { slave })),
             duration_ns(60_000_000_000)

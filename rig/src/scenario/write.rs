@@ -66,6 +66,7 @@ impl Scenario {
                 Action::Reset => writeln!(s, "reset = true"),
                 Action::Rescue => writeln!(s, "rescue = true"),
                 Action::Ack => writeln!(s, "ack = true"),
+                Action::Attend => writeln!(s, "attend = true"),
                 Action::Fault(f) => writeln!(s, "fault = {}", fault_text(f)),
             };
         }
