@@ -5,6 +5,7 @@
 
 use asi_lift_tests::*;
 use rig::report::Report;
+use rig::scenario::Action;
 
 /// The times the safety logic closed K1.
 fn k1_closed_at(r: &Report) -> Vec<f64> {
@@ -499,4 +500,52 @@ fn a_monitor_trip_from_line_noise_halts_safely_until_the_operator_resets() {
     let last = r.served.last().expect("a call served");
     assert!(last.served_at_s > reset, "{last:?}");
     assert_eq!(r.final_state.state, controller::State::AtFloor);
+}
+
+#[test]
+fn an_attendant_answers_a_monitor_trip_from_line_noise_after_the_repairs() {
+    // The same run as the campaign generates it now: with the repairs at 93 s an attendant
+    // takes over (`attend`) in place of the operator's fixed rounds and late reset. The monitor
+    // trip after the probe is answered 2 s later: a round of rescue (none needed), acknowledge
+    // 6 s and reset 7 s after it; the lift is back in service and serves the last hall call.
+    let mut sc = rig::scenario::Scenario::from_toml(
+        "noise trip, attended",
+        include_str!("data/noise-trip-after-recovery.toml"),
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    let repairs = asi_phy::SimTime::from_millis(93_000);
+    sc.events.retain(|e| {
+        e.at < repairs || !matches!(e.action, Action::Rescue | Action::Ack | Action::Reset)
+    });
+    sc.events.push(rig::scenario::ScenarioEvent {
+        at: repairs,
+        action: Action::Attend,
+        line: 0,
+    });
+    sc.events.sort_by_key(|e| e.at);
+    let r = run(sc);
+    assert_no_violations(&r);
+    let dropped = logged_at(&r, "monitor", "safety sensor 12 not released").expect("drop");
+    let opened = logged_after(&r, "safety", "K1 opened", dropped).expect("K1 opens");
+    let round = logged_after(&r, "attendant", "rescue, acknowledge and reset", opened)
+        .expect("the attendant's round");
+    assert!((round - opened - 2.0).abs() < 0.02, "{}", r.to_text());
+    let reset = logged_after(
+        &r,
+        "safety",
+        "overtravel monitor reset by the operator",
+        round,
+    )
+    .expect("the attendant's reset");
+    // The reset is pressed 7 s after the round begins and taken on its release, 100 ms on.
+    assert!((reset - round - 7.1).abs() < 0.02, "{}", r.to_text());
+    assert!(logged_after(&r, "safety", "K1 closed", reset - 0.001).is_some());
+    // The first round answered the group error of the safe-link drop at 84 s.
+    assert_eq!(r.safety.attendant_rounds, 2);
+    assert_eq!(r.final_state.state, controller::State::AtFloor);
+    assert!(
+        r.passengers.iter().all(|p| p.served_at_s.is_some()),
+        "{}",
+        r.to_text()
+    );
 }
