@@ -1,6 +1,7 @@
 //! `asi-lift encode`: a master call or slave response on its way to the line.
 
-use super::{print_out, write_output};
+use super::output::Outputs;
+use super::print_out;
 use asi_phy::waveform::WaveformConfig;
 use asi_trace::encode::{describe, parse_call, waveform_csv};
 use std::path::{Path, PathBuf};
@@ -48,8 +49,11 @@ pub fn run(args: EncodeArgs) -> Result<u8, String> {
                 seed,
                 ..WaveformConfig::default()
             };
+            let mut outs = Outputs::new(force);
+            let sink = outs.add("--csv", &path)?;
             let text = waveform_csv(t, &cfg).map_err(|e| e.to_string())?;
-            write_output(&path, &text, force)?;
+            outs.write_all(&sink, &text)?;
+            outs.commit()?;
             if path != Path::new("-") {
                 print_out(&format!("{}wrote       {}\n", describe(t), path.display()))?;
             }

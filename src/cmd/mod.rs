@@ -1,10 +1,11 @@
 //! The subcommands of `asi-lift`, one module each, and the file handling they share: inputs
 //! from a file or standard input, outputs that never replace a user's file unless `--force`
-//! is given.
+//! is given ([`output`]).
 
 pub mod campaign;
 pub mod decode;
 pub mod encode;
+pub mod output;
 pub mod run;
 pub mod timing;
 
@@ -46,16 +47,9 @@ pub fn read_input(path: &Path) -> Result<String, String> {
     std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))
 }
 
-/// Writes `text` to `path`, never replacing a file the user has unless `force` is given.
-pub fn write_output(path: &Path, text: &str, force: bool) -> Result<(), String> {
-    let mut out = open_output(path, force)?;
-    out.write_all(text.as_bytes())
-        .and_then(|()| out.flush())
-        .map_err(|e| format!("{}: {e}", path.display()))
-}
-
 /// Opens `path` for writing (`-` = standard output), never replacing a file the user has
-/// unless `force` is given.
+/// unless `force` is given. For a stream written as it goes (a campaign's lines, which are
+/// worth keeping when the campaign is stopped); whole outputs go through [`output::Outputs`].
 pub fn open_output(path: &Path, force: bool) -> Result<Box<dyn Write>, String> {
     if path == Path::new("-") {
         return Ok(Box::new(std::io::BufWriter::new(std::io::stdout())));

@@ -1,12 +1,14 @@
 //! `asi-lift run`: a scenario on the whole rig, its report, trace and waveforms.
 
-use super::{open_output, print_out, read_input, write_output, EXIT_VIOLATIONS};
+use super::output::Outputs;
+use super::{print_out, read_input, EXIT_VIOLATIONS};
 use asi_phy::{SimDuration, SimTime};
 use asi_trace::trace::TraceFormat;
 use clap::ValueEnum;
 use rig::waves::WaveOutputs;
 use rig::{Rig, Scenario};
 use std::io::IsTerminal;
+use std::ops::ControlFlow;
 use std::path::{Path, PathBuf};
 
 /// The arguments of `asi-lift run`.
@@ -101,57 +103,51 @@ pub fn run(args: RunArgs) -> Result<u8, String> {
         ),
     };
     let window = parse_window(&waveform_window)?;
-    let outputs: Vec<(&str, &PathBuf)> = [
-        ("--report", Some(&report)),
-        ("--trace", trace.as_ref()),
-        ("--vcd", vcd.as_ref()),
-        ("--csv", csv.as_ref()),
-    ]
-    .into_iter()
-    .filter_map(|(k, p)| p.map(|p| (k, p)))
-    .collect();
-    for (i, (a, pa)) in outputs.iter().enumerate() {
-        for (b, pb) in &outputs[i + 1..] {
-            if pa == pb {
-                return Err(if *pa == Path::new("-") {
-                    format!("{a} and {b} both want standard output: give one a file")
-                } else {
-                    format!("{a} and {b} both name {}", pa.display())
-                });
-            }
-        }
+    // Every output is checked, and its temporary file made, before the simulation.
+    let mut outs = Outputs::new(force);
+    if let Some(path) = &scenario {
+        outs.input("the scenario", path)?;
     }
+    let report_sink = outs.add("--report", &report)?;
+    let trace_sink = trace
+        .as_deref()
+        .map(|p| outs.add("--trace", p))
+        .transpose()?;
+    let vcd_sink = vcd.as_deref().map(|p| outs.add("--vcd", p)).transpose()?;
+    let csv_sink = csv.as_deref().map(|p| outs.add("--csv", p)).transpose()?;
     let mut rig = Rig::new(sc).map_err(|e| e.to_string())?;
-    if let Some(path) = &trace {
+    if let (Some(path), Some(sink)) = (&trace, &trace_sink) {
         let form = match trace_format {
             Some(TraceForm::Text) => TraceFormat::Text,
             Some(TraceForm::Jsonl) => TraceFormat::Jsonl,
             None => TraceFormat::for_path(path),
         };
-        rig.trace_to(open_output(path, force)?, form);
+        rig.trace_to(outs.writer(sink)?, form);
     }
-    if vcd.is_some() || csv.is_some() {
-        let vcd = vcd.as_deref().map(|p| open_output(p, force)).transpose()?;
-        let csv = csv.as_deref().map(|p| open_output(p, force)).transpose()?;
+    if vcd_sink.is_some() || csv_sink.is_some() {
+        let vcd = vcd_sink.as_ref().map(|s| outs.writer(s)).transpose()?;
+        let csv = csv_sink.as_ref().map(|s| outs.writer(s)).transpose()?;
         rig.waves_to(WaveOutputs { vcd, csv, window });
     }
+    let bar = progress_bar();
     let wall = std::time::Instant::now();
-    let show = std::io::stderr().is_terminal();
-    let mut shown = false;
+    let terminal = std::io::stderr().is_terminal();
     let mut progress = |t: SimTime, end: SimTime| {
-        if show && wall.elapsed().as_secs_f64() > 1.0 {
-            shown = true;
-            let pct = t.as_secs_f64() / end.as_secs_f64().max(1e-9) * 100.0;
-            eprint!(
-                "\r  simulated {:.1} s of {:.1} s ({pct:.0} %)",
-                t.as_secs_f64(),
-                end.as_secs_f64()
-            );
+        show_after(&bar, wall, terminal);
+        bar.set_length(end.as_nanos() / 1_000_000);
+        bar.set_position(t.as_nanos() / 1_000_000);
+        if outs.stdout_gone() {
+            ControlFlow::Break(())
+        } else {
+            ControlFlow::Continue(())
         }
     };
     let rep = rig.run_observed(until, &mut progress);
-    if shown {
-        eprint!("\r{:60}\r", "");
+    bar.finish_and_clear();
+    if outs.stdout_gone() {
+        // The reader of standard output has gone (`| head`): the run ends quietly, and its
+        // other outputs, cut short, are not put in place.
+        return Ok(0);
     }
     let body = match format {
         Format::Text => rep.to_text(),
@@ -161,7 +157,8 @@ pub fn run(args: RunArgs) -> Result<u8, String> {
                 + "\n"
         }
     };
-    write_output(&report, &body, force)?;
+    outs.write_all(&report_sink, &body)?;
+    outs.commit()?;
     if report != Path::new("-") {
         let summary = format!(
             "{}report written to {}\n",
@@ -181,6 +178,42 @@ pub fn run(args: RunArgs) -> Result<u8, String> {
     } else {
         EXIT_VIOLATIONS
     })
+}
+
+/// The progress of a run on a terminal (standard error): simulated seconds, the rate in
+/// simulated seconds per second, the time left. Positions are simulated milliseconds;
+/// indicatif limits the redraws. It starts hidden; the caller shows it ([`show_after`]).
+fn progress_bar() -> indicatif::ProgressBar {
+    let bar = indicatif::ProgressBar::hidden();
+    let secs = |state: &indicatif::ProgressState, w: &mut dyn std::fmt::Write| {
+        let _ = write!(w, "{:.1}", state.pos() as f64 / 1000.0);
+    };
+    let len = |state: &indicatif::ProgressState, w: &mut dyn std::fmt::Write| {
+        let _ = write!(w, "{:.1}", state.len().unwrap_or(0) as f64 / 1000.0);
+    };
+    let rate = |state: &indicatif::ProgressState, w: &mut dyn std::fmt::Write| {
+        let _ = write!(w, "{:.1}", state.per_sec() / 1000.0);
+    };
+    if let Ok(style) = indicatif::ProgressStyle::with_template(
+        "[{bar:30}] simulated {sim} s of {end} s, {rate} s per s, {eta} left",
+    ) {
+        bar.set_style(
+            style
+                .with_key("sim", secs)
+                .with_key("end", len)
+                .with_key("rate", rate)
+                .progress_chars("=> "),
+        );
+    }
+    bar
+}
+
+/// Shows `bar` on a terminal once the run has taken a second of wall time (a short run shows
+/// none); on standard error, never in a data stream.
+fn show_after(bar: &indicatif::ProgressBar, wall: std::time::Instant, terminal: bool) {
+    if terminal && bar.is_hidden() && wall.elapsed() > std::time::Duration::from_secs(1) {
+        bar.set_draw_target(indicatif::ProgressDrawTarget::stderr());
+    }
 }
 
 /// Parses `START..END` in simulated time.

@@ -1,11 +1,11 @@
 //! `asi-lift timing`: the bus and reaction times, computed and simulated side by side.
 
-use super::{open_output, print_out};
+use super::output::Outputs;
+use super::print_out;
 use asi_phy::SimDuration;
 use rig::timing::{
     analysable_error_rate, analyse, BusChoice, TimingOptions, MAX_DURATION, MAX_SAMPLES,
 };
-use std::io::Write;
 use std::path::PathBuf;
 
 /// The arguments of `asi-lift timing`.
@@ -75,8 +75,9 @@ pub fn run(args: TimingArgs) -> Result<u8, String> {
     } = args;
     let opts = timing_options(bus, extra_slaves, error_rate, seed, &duration, samples)?;
     // Refuse an existing SVG before spending the simulation on it.
-    let mut svg_out = match &svg {
-        Some(path) => Some((path, open_output(path, force)?)),
+    let mut outs = Outputs::new(force);
+    let svg_out = match &svg {
+        Some(path) => Some((path, outs.add("--svg", path)?)),
         None => None,
     };
     let rep = analyse(&opts).map_err(|e| e.to_string())?;
@@ -88,10 +89,9 @@ pub fn run(args: TimingArgs) -> Result<u8, String> {
     } else {
         print_out(&rep.to_text())?;
     }
-    if let Some((path, out)) = &mut svg_out {
-        out.write_all(rep.to_svg().as_bytes())
-            .and_then(|()| out.flush())
-            .map_err(|e| format!("{}: {e}", path.display()))?;
+    if let Some((path, sink)) = &svg_out {
+        outs.write_all(sink, &rep.to_svg())?;
+        outs.commit()?;
         if !json {
             print_out(&format!("SVG written to {}\n", path.display()))?;
         }

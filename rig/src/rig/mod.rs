@@ -290,15 +290,17 @@ impl Rig {
 
     /// Runs until `until` (at most the scenario's duration) and returns the report.
     pub fn run(self, until: Option<SimDuration>) -> Report {
-        self.run_observed(until, &mut |_, _| {})
+        self.run_observed(until, &mut |_, _| std::ops::ControlFlow::Continue(()))
     }
 
     /// As [`Rig::run`], telling `progress` the simulated time and the end after every PLC
-    /// scan (for a progress indicator; the simulation does not depend on it).
+    /// scan (for a progress indicator; the simulation does not depend on it). A
+    /// `ControlFlow::Break` ends the run there (the caller's reader has gone, say); the report
+    /// then covers the run up to that moment.
     pub fn run_observed(
         mut self,
         until: Option<SimDuration>,
-        progress: &mut dyn FnMut(SimTime, SimTime),
+        progress: &mut dyn FnMut(SimTime, SimTime) -> std::ops::ControlFlow<()>,
     ) -> Report {
         if let Some(u) = until {
             self.end = self.end.min(SimTime::ZERO + u);
@@ -307,7 +309,10 @@ impl Rig {
         while let Some(t) = self.advance(self.end) {
             if self.next_plc != scans {
                 scans = self.next_plc;
-                progress(t, self.end);
+                if progress(t, self.end).is_break() {
+                    self.log("rig", "the run was stopped early by its caller".into());
+                    break;
+                }
             }
             if t == self.end {
                 break;

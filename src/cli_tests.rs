@@ -1,0 +1,111 @@
+//! The `asi-lift` command as a user runs it: the built binary, real files and a real pipe
+//! (README.md, "Outputs").
+
+use std::io::{BufRead, BufReader};
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+
+fn asi_lift() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_asi-lift"))
+}
+
+fn files_in(dir: &Path) -> Vec<String> {
+    let mut v: Vec<String> = std::fs::read_dir(dir)
+        .expect("list")
+        .map(|e| e.expect("entry").file_name().to_string_lossy().into_owned())
+        .collect();
+    v.sort();
+    v
+}
+
+fn temp() -> tempfile::TempDir {
+    tempfile::tempdir().expect("a temporary directory")
+}
+
+fn fails(cmd: &mut Command) -> String {
+    let out = cmd.output().expect("asi-lift runs");
+    assert!(!out.status.success(), "{cmd:?} was accepted");
+    let err = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert!(!err.contains("panicked"), "{err}");
+    err
+}
+
+#[test]
+fn two_spellings_of_one_file_are_refused_and_leave_nothing_behind() {
+    let d = temp();
+    let dotted: PathBuf = d.path().join(".").join("a.out");
+    let plain = d.path().join("a.out");
+    let err = fails(
+        asi_lift()
+            .args(["run", "--until", "1s", "--report"])
+            .arg(d.path().join("r.txt"))
+            .arg("--vcd")
+            .arg(&dotted)
+            .arg("--csv")
+            .arg(&plain),
+    );
+    assert!(err.contains("--vcd") && err.contains("--csv"), "{err}");
+    assert!(files_in(d.path()).is_empty(), "{:?}", files_in(d.path()));
+}
+
+#[test]
+fn the_scenario_file_is_no_output() {
+    let d = temp();
+    let sc = d.path().join("s.toml");
+    std::fs::write(&sc, "duration = \"1s\"\n").expect("write");
+    let link = d.path().join("link.toml");
+    std::os::unix::fs::symlink(&sc, &link).expect("symlink");
+    let err = fails(
+        asi_lift()
+            .arg("run")
+            .arg(&sc)
+            .arg("--report")
+            .arg(&link)
+            .arg("--force"),
+    );
+    assert!(err.contains("same file"), "{err}");
+    assert_eq!(
+        std::fs::read_to_string(&sc).expect("read"),
+        "duration = \"1s\"\n"
+    );
+}
+
+#[test]
+fn an_unwritable_or_existing_report_is_refused_and_the_users_file_kept() {
+    let d = temp();
+    let missing = d.path().join("no-such-dir").join("r.json");
+    let err = fails(asi_lift().args(["run", "--report"]).arg(&missing));
+    assert!(err.contains("no-such-dir"), "{err}");
+    let mine = d.path().join("r.json");
+    std::fs::write(&mine, "mine").expect("write");
+    let err = fails(asi_lift().args(["run", "--report"]).arg(&mine));
+    assert!(err.contains("--force"), "{err}");
+    assert_eq!(std::fs::read_to_string(&mine).expect("read"), "mine");
+    assert_eq!(files_in(d.path()), ["r.json"]);
+}
+
+#[test]
+fn a_reader_that_goes_ends_the_run_quietly() {
+    let d = temp();
+    let report = d.path().join("r.json");
+    let mut child = asi_lift()
+        .args(["run", "--trace", "-", "--report"])
+        .arg(&report)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("asi-lift starts");
+    let stdout = child.stdout.take().expect("stdout");
+    let mut first = String::new();
+    BufReader::new(stdout)
+        .read_line(&mut first)
+        .expect("one trace line");
+    assert!(!first.is_empty());
+    // The reader goes, as `| head -1` does.
+    let out = child.wait_with_output().expect("asi-lift ends");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{:?}: {err}", out.status);
+    assert!(!err.contains("panicked"), "{err}");
+    // The run was cut short: its report is not put in place as if it were whole.
+    assert!(files_in(d.path()).is_empty(), "{:?}", files_in(d.path()));
+}

@@ -1,0 +1,414 @@
+//! A command's outputs, checked before any work: every file is opened as a temporary file
+//! beside its place at once (so a missing directory or a read-only one is reported before a
+//! minute of simulation), and renamed into place only when the command has written it all.
+//! A refused or failed command leaves no empty or half-written file behind, and never replaces
+//! a user's file unless `--force` is given.
+//!
+//! Two outputs (or an output and an input) that name one file through different spellings
+//! (`a.out` and `./a.out`, an absolute path, a symbolic or a hard link) are the same file: the
+//! check compares the file's identity (device and inode of an existing file; the canonical
+//! directory and name of a new one), not the strings.
+
+use std::fs::File;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use tempfile::NamedTempFile;
+
+/// Standard output as an output stream: once its reader has gone, it takes everything quietly
+/// and says so through the flag, so that the command stops instead of failing on every write.
+struct StdoutSink {
+    out: std::io::BufWriter<std::io::Stdout>,
+    gone: Arc<AtomicBool>,
+}
+
+impl StdoutSink {
+    fn check(&self, r: std::io::Result<()>) -> std::io::Result<()> {
+        match r {
+            Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => {
+                self.gone.store(true, Ordering::Relaxed);
+                Ok(())
+            }
+            r => r,
+        }
+    }
+}
+
+impl Write for StdoutSink {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        if self.gone.load(Ordering::Relaxed) {
+            return Ok(buf.len());
+        }
+        let r = self.out.write_all(buf);
+        self.check(r).map(|()| buf.len())
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        if self.gone.load(Ordering::Relaxed) {
+            return Ok(());
+        }
+        let r = self.out.flush();
+        self.check(r)
+    }
+}
+
+/// What names a file, whatever the spelling.
+#[derive(Clone, Debug, PartialEq, Eq)]
+enum Identity {
+    /// Standard output (or input): `-`.
+    Std,
+    /// An existing file: device and inode (links followed).
+    Inode(u64, u64),
+    /// A file to be made: its canonical directory and its name.
+    New(PathBuf),
+}
+
+fn identity(path: &Path) -> Result<Identity, String> {
+    if path == Path::new("-") {
+        return Ok(Identity::Std);
+    }
+    if let Ok(m) = std::fs::metadata(path) {
+        use std::os::unix::fs::MetadataExt;
+        return Ok(Identity::Inode(m.dev(), m.ino()));
+    }
+    let (dir, name) = split(path)?;
+    let dir = dir
+        .canonicalize()
+        .map_err(|e| format!("{}: the directory {}: {e}", path.display(), dir.display()))?;
+    Ok(Identity::New(dir.join(name)))
+}
+
+/// The directory (`.` for a bare name) and the file name of `path`.
+fn split(path: &Path) -> Result<(PathBuf, &std::ffi::OsStr), String> {
+    let name = path
+        .file_name()
+        .ok_or_else(|| format!("{}: not a file name", path.display()))?;
+    let dir = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    Ok((dir, name))
+}
+
+/// One output being written.
+struct Pending {
+    flag: &'static str,
+    /// Where it goes in the end (symbolic links resolved, so a link keeps pointing at it).
+    place: PathBuf,
+    /// As the user wrote it, for messages.
+    shown: PathBuf,
+    target: Target,
+}
+
+/// How an output file is written.
+enum Target {
+    /// A temporary file beside the place, renamed into place at the commit.
+    Temp(NamedTempFile),
+    /// A device or a pipe (`/dev/null`, a FIFO): written directly, it holds no file to lose.
+    Stream(File),
+}
+
+/// The outputs of one command: add them all, then write, then [`Outputs::commit`].
+pub struct Outputs {
+    force: bool,
+    /// Set once standard output's reader has gone.
+    stdout_gone: Arc<AtomicBool>,
+    seen: Vec<(&'static str, PathBuf, Identity)>,
+    pending: Vec<Pending>,
+}
+
+/// Where an added output goes.
+pub enum Sink {
+    /// Standard output.
+    Stdout,
+    /// The index of a file among the pending ones.
+    File(usize),
+}
+
+impl Outputs {
+    /// No outputs yet; `force` lets a file that exists be replaced.
+    pub fn new(force: bool) -> Outputs {
+        Outputs {
+            force,
+            stdout_gone: Arc::default(),
+            seen: Vec::new(),
+            pending: Vec::new(),
+        }
+    }
+
+    /// An input that no output may name (the scenario file, the capture).
+    pub fn input(&mut self, flag: &'static str, path: &Path) -> Result<(), String> {
+        if path == Path::new("-") {
+            return Ok(());
+        }
+        let id = identity(path)?;
+        self.seen.push((flag, path.to_path_buf(), id));
+        Ok(())
+    }
+
+    /// Checks the output `flag` at `path` (`-` = standard output) and, for a file, opens its
+    /// temporary file beside it now. Refused: a second output to standard output, a file that
+    /// another output or an input names, a file that exists without `force`, a place that
+    /// cannot be written.
+    pub fn add(&mut self, flag: &'static str, path: &Path) -> Result<Sink, String> {
+        let id = identity(path)?;
+        if let Some((other, other_path, _)) = self.seen.iter().find(|(_, _, i)| *i == id) {
+            return Err(if id == Identity::Std {
+                format!("{other} and {flag} both want standard output: give one a file")
+            } else if other_path.as_os_str() == path.as_os_str() {
+                format!("{other} and {flag} both name {}", path.display())
+            } else {
+                format!(
+                    "{other} {} and {flag} {} are the same file",
+                    other_path.display(),
+                    path.display()
+                )
+            });
+        }
+        self.seen.push((flag, path.to_path_buf(), id.clone()));
+        if id == Identity::Std {
+            return Ok(Sink::Stdout);
+        }
+        let place = match id {
+            Identity::Inode(..) if !std::fs::metadata(path).is_ok_and(|m| m.is_file()) => {
+                if std::fs::metadata(path).is_ok_and(|m| m.is_dir()) {
+                    return Err(format!("{flag} {}: a directory", path.display()));
+                }
+                let f = std::fs::OpenOptions::new()
+                    .write(true)
+                    .open(path)
+                    .map_err(|e| format!("{flag} {}: {e}", path.display()))?;
+                self.pending.push(Pending {
+                    flag,
+                    place: path.to_path_buf(),
+                    shown: path.to_path_buf(),
+                    target: Target::Stream(f),
+                });
+                return Ok(Sink::File(self.pending.len() - 1));
+            }
+            Identity::Inode(..) => {
+                if !self.force {
+                    return Err(format!(
+                        "{flag} {} exists; pass --force to overwrite it",
+                        path.display()
+                    ));
+                }
+                path.canonicalize()
+                    .map_err(|e| format!("{flag} {}: {e}", path.display()))?
+            }
+            Identity::New(place) => place,
+            Identity::Std => unreachable!("standard output returned above"),
+        };
+        let (dir, _) = split(&place)?;
+        let temp = tempfile::Builder::new()
+            .prefix(".asi-lift-")
+            .suffix(".part")
+            .tempfile_in(&dir)
+            .map_err(|e| format!("{flag} {}: cannot write there: {e}", path.display()))?;
+        self.pending.push(Pending {
+            flag,
+            place,
+            shown: path.to_path_buf(),
+            target: Target::Temp(temp),
+        });
+        Ok(Sink::File(self.pending.len() - 1))
+    }
+
+    /// A writer for `sink`, buffered.
+    pub fn writer(&self, sink: &Sink) -> Result<Box<dyn Write>, String> {
+        match sink {
+            Sink::Stdout => Ok(Box::new(StdoutSink {
+                out: std::io::BufWriter::new(std::io::stdout()),
+                gone: Arc::clone(&self.stdout_gone),
+            })),
+            Sink::File(i) => {
+                let p = &self.pending[*i];
+                let file = match &p.target {
+                    Target::Temp(t) => t.as_file(),
+                    Target::Stream(f) => f,
+                };
+                let f: File = file
+                    .try_clone()
+                    .map_err(|e| format!("{} {}: {e}", p.flag, p.shown.display()))?;
+                Ok(Box::new(std::io::BufWriter::new(f)))
+            }
+        }
+    }
+
+    /// `true` once the reader of standard output has gone (`| head`): a command should stop
+    /// and end quietly.
+    pub fn stdout_gone(&self) -> bool {
+        self.stdout_gone.load(Ordering::Relaxed)
+    }
+
+    /// Writes all of `text` to `sink` (standard output: a reader that has gone is no error).
+    pub fn write_all(&self, sink: &Sink, text: &str) -> Result<(), String> {
+        match sink {
+            Sink::Stdout => super::print_out(text),
+            Sink::File(i) => {
+                let p = &self.pending[*i];
+                let mut w = self.writer(sink)?;
+                w.write_all(text.as_bytes())
+                    .and_then(|()| w.flush())
+                    .map_err(|e| format!("{} {}: {e}", p.flag, p.shown.display()))
+            }
+        }
+    }
+
+    /// Moves every file into place. Without `force`, a file that appeared at a place while the
+    /// command ran is kept, and this output is reported instead of replacing it.
+    pub fn commit(self) -> Result<(), String> {
+        for p in self.pending {
+            let Target::Temp(temp) = p.target else {
+                continue;
+            };
+            temp.as_file()
+                .sync_data()
+                .map_err(|e| format!("{} {}: {e}", p.flag, p.shown.display()))?;
+            let result = if self.force {
+                temp.persist(&p.place).map(|_| ())
+            } else {
+                temp.persist_noclobber(&p.place).map(|_| ())
+            };
+            result.map_err(|e| {
+                format!(
+                    "{} {}: {}; the output is lost",
+                    p.flag,
+                    p.shown.display(),
+                    e.error
+                )
+            })?;
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn dir() -> tempfile::TempDir {
+        tempfile::tempdir().expect("a temporary directory")
+    }
+
+    fn names(d: &Path) -> Vec<String> {
+        let mut v: Vec<String> = std::fs::read_dir(d)
+            .expect("list")
+            .map(|e| e.expect("entry").file_name().to_string_lossy().into_owned())
+            .collect();
+        v.sort();
+        v
+    }
+
+    #[test]
+    fn one_file_through_two_spellings_is_refused() {
+        let d = dir();
+        let a = d.path().join("a.out");
+        let dotted = d.path().join(".").join("a.out");
+        let mut o = Outputs::new(false);
+        o.add("--vcd", &a).expect("first");
+        let e = o.add("--csv", &dotted).err().expect("the same file");
+        assert!(e.contains("same file"), "{e}");
+        // Nothing is written: the temporary file goes with the refused command.
+        drop(o);
+        assert!(names(d.path()).is_empty(), "{:?}", names(d.path()));
+    }
+
+    #[test]
+    fn links_name_the_file_they_point_at() {
+        let d = dir();
+        let a = d.path().join("a.json");
+        std::fs::write(&a, "mine").expect("write");
+        let sym = d.path().join("sym.json");
+        std::os::unix::fs::symlink(&a, &sym).expect("symlink");
+        let hard = d.path().join("hard.json");
+        std::fs::hard_link(&a, &hard).expect("hard link");
+        let mut o = Outputs::new(true);
+        o.add("--report", &a).expect("first");
+        for other in [&sym, &hard] {
+            let e = o.add("--trace", other).err().expect("the same file");
+            assert!(e.contains("same file"), "{e}");
+        }
+        let mut o = Outputs::new(false);
+        o.input("the scenario", &sym).expect("input");
+        let e = o.add("--report", &hard).err().expect("the input");
+        assert!(e.contains("same file"), "{e}");
+    }
+
+    #[test]
+    fn an_existing_file_is_refused_without_force_before_anything_is_written() {
+        let d = dir();
+        let a = d.path().join("r.json");
+        std::fs::write(&a, "mine").expect("write");
+        let e = Outputs::new(false)
+            .add("--report", &a)
+            .err()
+            .expect("exists");
+        assert!(e.contains("--force"), "{e}");
+        assert_eq!(std::fs::read_to_string(&a).expect("read"), "mine");
+    }
+
+    #[test]
+    fn a_missing_directory_is_reported_when_the_output_is_added() {
+        let d = dir();
+        let e = Outputs::new(false)
+            .add("--report", &d.path().join("no/such/r.json"))
+            .err()
+            .expect("no directory");
+        assert!(e.contains("no/such"), "{e}");
+    }
+
+    #[test]
+    fn files_appear_only_at_the_commit_and_replace_through_a_link_with_force() {
+        let d = dir();
+        let a = d.path().join("a.txt");
+        let mut o = Outputs::new(false);
+        let s = o.add("--report", &a).expect("add");
+        o.write_all(&s, "first").expect("write");
+        assert!(!a.exists(), "not before the commit");
+        o.commit().expect("commit");
+        assert_eq!(std::fs::read_to_string(&a).expect("read"), "first");
+        // With --force through a symbolic link: the link stays, the file it names changes.
+        let sym = d.path().join("sym.txt");
+        std::os::unix::fs::symlink(&a, &sym).expect("symlink");
+        let mut o = Outputs::new(true);
+        let s = o.add("--report", &sym).expect("add");
+        o.write_all(&s, "second").expect("write");
+        o.commit().expect("commit");
+        assert!(std::fs::symlink_metadata(&sym)
+            .expect("meta")
+            .file_type()
+            .is_symlink());
+        assert_eq!(std::fs::read_to_string(&a).expect("read"), "second");
+        assert_eq!(names(d.path()), ["a.txt", "sym.txt"]);
+    }
+
+    #[test]
+    fn a_device_is_written_directly_and_a_directory_refused() {
+        let mut o = Outputs::new(false);
+        let s = o.add("--trace", Path::new("/dev/null")).expect("/dev/null");
+        o.write_all(&s, "gone").expect("write");
+        o.commit().expect("commit");
+        let d = dir();
+        let e = Outputs::new(true)
+            .add("--report", d.path())
+            .err()
+            .expect("dir");
+        assert!(e.contains("directory"), "{e}");
+    }
+
+    #[test]
+    fn a_file_made_meanwhile_is_kept_without_force() {
+        let d = dir();
+        let a = d.path().join("a.txt");
+        let mut o = Outputs::new(false);
+        let s = o.add("--report", &a).expect("add");
+        o.write_all(&s, "ours").expect("write");
+        std::fs::write(&a, "theirs").expect("write");
+        let e = o.commit().expect_err("kept");
+        assert!(e.contains("a.txt"), "{e}");
+        assert_eq!(std::fs::read_to_string(&a).expect("read"), "theirs");
+        assert_eq!(names(d.path()), ["a.txt"]);
+    }
+}
