@@ -109,3 +109,67 @@ fn a_reader_that_goes_ends_the_run_quietly() {
     // The run was cut short: its report is not put in place as if it were whole.
     assert!(files_in(d.path()).is_empty(), "{:?}", files_in(d.path()));
 }
+
+#[test]
+fn built_in_scenarios_are_listed_shown_and_run_by_name() {
+    let out = asi_lift().arg("scenarios").output().expect("runs");
+    let list = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success());
+    for name in ["demo", "door", "overtravel", "noise-1e-2"] {
+        assert!(
+            list.lines().any(|l| l.starts_with(&format!("{name} "))),
+            "{list}"
+        );
+    }
+    let out = asi_lift()
+        .args(["scenarios", "show", "door"])
+        .output()
+        .expect("runs");
+    let repo = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let file = std::fs::read_to_string(repo.join("scenarios/door.toml")).expect("door.toml");
+    assert_eq!(String::from_utf8_lossy(&out.stdout), file);
+    // By name, with the algorithm from the command line.
+    let out = asi_lift()
+        .args(["run", "door", "--until", "1s", "--algorithm", "collective"])
+        .output()
+        .expect("runs");
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{text}");
+    assert!(text.contains("scenario \"door open\""), "{text}");
+    assert!(text.contains("collective control"), "{text}");
+    let err = fails(asi_lift().args(["run", "dooor"]));
+    assert!(
+        err.contains("no built-in scenario") && err.contains("door"),
+        "{err}"
+    );
+}
+
+#[test]
+fn events_after_the_end_are_warned_of() {
+    let d = temp();
+    let sc = d.path().join("late.toml");
+    std::fs::write(
+        &sc,
+        "duration = \"1s\"\n\n[[event]]\nat = \"5s\"\npress = \"cabin:2\"\n",
+    )
+    .expect("write");
+    let out = asi_lift().arg("run").arg(&sc).output().expect("runs");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(
+        err.contains("late.toml:3: the event at 5 s comes at or after the scenario's end (1 s)"),
+        "{err}"
+    );
+}
+
+#[test]
+fn a_file_that_is_not_utf8_is_refused_at_its_place() {
+    let d = temp();
+    let sc = d.path().join("bad.toml");
+    std::fs::write(&sc, b"name = \"ok\"\nseed = 1 # caf\xe9\n").expect("write");
+    let err = fails(asi_lift().arg("run").arg(&sc));
+    assert!(
+        err.contains("bad.toml:2:15: not UTF-8 text (byte 0xE9)"),
+        "{err}"
+    );
+}

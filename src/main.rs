@@ -19,6 +19,11 @@ enum Command {
     /// Run the lab lift: the AS-i bus, the lift, the PLC program and the safety logic on one
     /// simulated clock, driven by a scenario file (the built-in demo without one).
     Run(cmd::run::RunArgs),
+    /// List the built-in scenarios (one line each), or print one as TOML to copy and edit.
+    Scenarios {
+        #[command(subcommand)]
+        action: Option<cmd::scenarios::ScenariosAction>,
+    },
     /// Show how a master call or slave response travels on the line: bits, Manchester levels,
     /// APM pulses; optionally write its line voltage as CSV.
     ///
@@ -66,6 +71,7 @@ fn main() -> ExitCode {
 fn run(cli: Cli) -> Result<u8, String> {
     match cli.command {
         Command::Run(args) => cmd::run::run(args),
+        Command::Scenarios { action } => cmd::scenarios::run(action),
         Command::Encode(args) => cmd::encode::run(args),
         Command::Decode(args) => cmd::decode::run(args),
         Command::Timing(args) => cmd::timing::run(args),

@@ -7,6 +7,7 @@ pub mod decode;
 pub mod encode;
 pub mod output;
 pub mod run;
+pub mod scenarios;
 pub mod timing;
 
 use std::io::{BufRead, Read, Write};
@@ -36,15 +37,30 @@ pub fn open_input(path: &Path) -> Result<(String, Box<dyn BufRead>), String> {
     Ok((name, Box::new(std::io::BufReader::new(f))))
 }
 
+/// The whole of a text file (`-` = standard input); text that is not UTF-8 is refused at the
+/// line and column of its first bad byte.
 pub fn read_input(path: &Path) -> Result<String, String> {
-    if path == Path::new("-") {
-        let mut s = String::new();
+    let (name, bytes) = if path == Path::new("-") {
+        let mut b = Vec::new();
         std::io::stdin()
-            .read_to_string(&mut s)
+            .read_to_end(&mut b)
             .map_err(|e| format!("standard input: {e}"))?;
-        return Ok(s);
-    }
-    std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))
+        ("standard input".to_owned(), b)
+    } else {
+        let name = path.display().to_string();
+        let b = std::fs::read(path).map_err(|e| format!("{name}: {e}"))?;
+        (name, b)
+    };
+    String::from_utf8(bytes).map_err(|e| {
+        let good = &e.as_bytes()[..e.utf8_error().valid_up_to()];
+        let line = good.iter().filter(|b| **b == b'\n').count() + 1;
+        let line_start = good.iter().rposition(|b| *b == b'\n').map_or(0, |i| i + 1);
+        let column = String::from_utf8_lossy(&good[line_start..]).chars().count() + 1;
+        let byte = e.as_bytes()[good.len()];
+        format!(
+            "{name}:{line}:{column}: not UTF-8 text (byte 0x{byte:02X}); the file must be UTF-8"
+        )
+    })
 }
 
 /// Opens `path` for writing (`-` = standard output), never replacing a file the user has

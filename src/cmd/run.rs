@@ -1,6 +1,7 @@
 //! `asi-lift run`: a scenario on the whole rig, its report, trace and waveforms.
 
 use super::output::Outputs;
+use super::scenarios::find;
 use super::{print_out, read_input, EXIT_VIOLATIONS};
 use asi_phy::{SimDuration, SimTime};
 use asi_trace::trace::TraceFormat;
@@ -14,8 +15,12 @@ use std::path::{Path, PathBuf};
 /// The arguments of `asi-lift run`.
 #[derive(clap::Args)]
 pub struct RunArgs {
-    /// The scenario file (TOML). Without it, the built-in demo runs.
+    /// The scenario: a file (TOML, `-` for standard input) or the name of a built-in one
+    /// (`asi-lift scenarios` lists them). Without it, the built-in demo runs.
     pub scenario: Option<PathBuf>,
+    /// The control algorithm, overriding the scenario's.
+    #[arg(long, value_enum)]
+    pub algorithm: Option<AlgorithmArg>,
     /// Use this seed instead of the scenario's.
     #[arg(long)]
     pub seed: Option<u64>,
@@ -54,6 +59,15 @@ pub struct RunArgs {
     pub force: bool,
 }
 
+/// The control algorithms of `--algorithm`.
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum AlgorithmArg {
+    /// Cabin calls first, in the order pressed, then hall calls (the thesis's program).
+    Fifo,
+    /// Collective control: every call on the way, in the direction of travel.
+    Collective,
+}
+
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum Format {
     /// The readable log of the run and a summary.
@@ -74,6 +88,7 @@ pub enum TraceForm {
 pub fn run(args: RunArgs) -> Result<u8, String> {
     let RunArgs {
         scenario,
+        algorithm,
         seed,
         until,
         report,
@@ -85,15 +100,39 @@ pub fn run(args: RunArgs) -> Result<u8, String> {
         waveform_window,
         force,
     } = args;
-    let mut sc = match &scenario {
-        None => Scenario::demo().map_err(|e| e.to_string())?,
-        Some(path) => {
+    // A file if there is one by that name, else a built-in scenario.
+    let is_file = |p: &Path| p == Path::new("-") || p.exists() || p.components().count() > 1;
+    let file = scenario.as_deref().filter(|p| is_file(p));
+    let mut sc = match (&scenario, file) {
+        (None, _) => Scenario::demo().map_err(|e| e.to_string())?,
+        (Some(_), Some(path)) => {
             let text = read_input(path)?;
             Scenario::from_toml(&path.display().to_string(), &text).map_err(|e| e.to_string())?
         }
+        (Some(name), None) => find(&name.to_string_lossy())
+            .map_err(|e| format!("{e} (and no file {} here)", name.display()))?
+            .scenario()
+            .map_err(|e| e.to_string())?,
     };
+    for e in sc.late_events() {
+        let place = file.map_or_else(
+            || sc.name.clone(),
+            |p| format!("{}:{}", p.display(), e.line),
+        );
+        eprintln!(
+            "asi-lift: warning: {place}: the event at {} comes at or after the scenario's end ({}) and never happens",
+            e.at.saturating_duration_since(SimTime::ZERO),
+            sc.duration
+        );
+    }
     if let Some(s) = seed {
         sc.seed = s;
+    }
+    if let Some(a) = algorithm {
+        sc.algorithm = match a {
+            AlgorithmArg::Fifo => controller::Algorithm::Fifo,
+            AlgorithmArg::Collective => controller::Algorithm::Collective,
+        };
     }
     let until = match until {
         None => None,
@@ -105,7 +144,7 @@ pub fn run(args: RunArgs) -> Result<u8, String> {
     let window = parse_window(&waveform_window)?;
     // Every output is checked, and its temporary file made, before the simulation.
     let mut outs = Outputs::new(force);
-    if let Some(path) = &scenario {
+    if let Some(path) = file {
         outs.input("the scenario", path)?;
     }
     let report_sink = outs.add("--report", &report)?;

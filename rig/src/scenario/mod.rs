@@ -4,6 +4,7 @@
 //! error that names the file, the line and the field at fault; unknown keys are errors, not
 //! silently ignored), `write` writes one back.
 
+pub mod builtin;
 mod read;
 #[cfg(test)]
 mod tests;
@@ -226,9 +227,12 @@ impl Scenario {
     /// The built-in demo: power-on between floors 2 and 3, initialisation, a cabin call, a
     /// hall call stored meanwhile, and one more cabin call.
     pub fn demo() -> Result<Scenario, ScenarioError> {
-        Scenario::from_toml(
-            "<built-in demo>",
-            include_str!("../../../scenarios/demo.toml"),
-        )
+        builtin::BUILTINS[0].scenario()
+    }
+
+    /// The events at or after the scenario's end: they never happen (a file's reader warns).
+    pub fn late_events(&self) -> impl Iterator<Item = &ScenarioEvent> {
+        let end = SimTime::ZERO + self.duration;
+        self.events.iter().filter(move |e| e.at >= end)
     }
 }

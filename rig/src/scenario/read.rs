@@ -85,13 +85,33 @@ struct RawFault {
 struct Locator<'a> {
     file: &'a str,
     text: &'a str,
+    /// The byte offset where each line begins, so that a place is found by a binary search
+    /// (a file of 100,000 events loads in linear time).
+    line_starts: Vec<usize>,
 }
 
-impl Locator<'_> {
+impl<'a> Locator<'a> {
+    fn new(file: &'a str, text: &'a str) -> Locator<'a> {
+        let line_starts = std::iter::once(0)
+            .chain(text.match_indices('\n').map(|(i, _)| i + 1))
+            .collect();
+        Locator {
+            file,
+            text,
+            line_starts,
+        }
+    }
+
+    /// Line and column (both from 1; the column in characters) of a byte offset.
     fn position(&self, offset: usize) -> (usize, usize) {
-        let upto = &self.text[..offset.min(self.text.len())];
-        let line = upto.matches('\n').count() + 1;
-        let column = upto.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
+        let offset = offset.min(self.text.len());
+        let line = self.line_starts.partition_point(|&s| s <= offset);
+        let start = self.line_starts[line.saturating_sub(1)];
+        let column = self
+            .text
+            .get(start..offset)
+            .map_or(0, |l| l.chars().count())
+            + 1;
         (line, column)
     }
 
@@ -107,21 +127,72 @@ impl Locator<'_> {
             line,
             column,
             field: field.into(),
-            message: message.into(),
+            message: shorten_quotes(&message.into()),
         }
     }
 
-    /// The key written on the line of `offset`, for errors the TOML reader reports without it.
+    /// The key written on the line of `offset`, with its table (`lift.floors`,
+    /// `event[3].press`), for errors the TOML reader reports without it.
     fn key_at(&self, offset: usize) -> String {
-        let start = self.text[..offset.min(self.text.len())]
-            .rfind('\n')
-            .map_or(0, |i| i + 1);
-        let line = self.text[start..].lines().next().unwrap_or("");
-        match line.split_once('=') {
+        let (line_no, _) = self.position(offset);
+        let line_text = |n: usize| -> &str {
+            let start = self.line_starts[n - 1];
+            self.text[start..].lines().next().unwrap_or("")
+        };
+        let line = line_text(line_no);
+        let key = match line.split_once('=') {
             Some((k, _)) if !line.trim_start().starts_with('[') => k.trim().to_owned(),
-            _ => String::new(),
+            _ => return String::new(),
+        };
+        // The table it is in: the nearest header above it.
+        let mut events = 0;
+        let mut table = None;
+        for n in (1..line_no).rev() {
+            let l = line_text(n).trim_start();
+            if l.starts_with("[[event]]") {
+                events += 1;
+                table.get_or_insert("event");
+            } else if let Some(h) = l.strip_prefix('[') {
+                if table.is_none() {
+                    let name = h.split(']').next().unwrap_or("").trim();
+                    return format!("{name}.{key}");
+                }
+            }
+        }
+        match table {
+            Some(_) => format!("event[{events}].{key}"),
+            None => key,
         }
     }
+}
+
+/// A message with every quoted excerpt of the user's text (between backticks or double
+/// quotes) cut to a short one: a value of thousands of characters is named, not repeated.
+fn shorten_quotes(message: &str) -> String {
+    const KEEP: usize = 40;
+    let mut out = String::with_capacity(message.len().min(400));
+    let mut rest = message;
+    while let Some(open) = rest.find(['`', '"']) {
+        let q = rest[open..].chars().next().unwrap_or('`');
+        out.push_str(&rest[..=open]);
+        let inner = &rest[open + 1..];
+        let Some(close) = inner.find(q) else {
+            rest = inner;
+            break;
+        };
+        let quoted = &inner[..close];
+        let n = quoted.chars().count();
+        if n > KEEP {
+            let head: String = quoted.chars().take(KEEP).collect();
+            out.push_str(&format!("{head}… ({n} characters)"));
+        } else {
+            out.push_str(quoted);
+        }
+        out.push(q);
+        rest = &inner[close + 1..];
+    }
+    out.push_str(rest);
+    out
 }
 
 fn duration(
@@ -304,7 +375,7 @@ fn fault(loc: &Locator<'_>, field: &str, f: &Spanned<RawFault>) -> Result<Fault,
 impl Scenario {
     /// Reads a scenario from TOML `text`; `file` names it in errors.
     pub fn from_toml(file: &str, text: &str) -> Result<Scenario, ScenarioError> {
-        let loc = Locator { file, text };
+        let loc = Locator::new(file, text);
         let raw = parse(&loc)?;
         let mut sc = Scenario::defaults();
         read_top(&loc, &raw, &mut sc)?;

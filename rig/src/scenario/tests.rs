@@ -90,10 +90,39 @@ fn errors_name_the_file_the_line_and_the_field() {
 }
 
 #[test]
+fn errors_of_the_toml_reader_name_the_table_and_quote_little() {
+    // A value the TOML reader refuses is named with its table, not only its key.
+    let e = err("[bus]\nextra_slaves = 1\n[lift]\nfloors = 99999999999999999999\n");
+    assert!(e.starts_with("t.toml:4:10: lift.floors: "), "{e}");
+    let e = err("[lift]\nstart_mm = \"high\"\n");
+    assert!(e.starts_with("t.toml:2:12: lift.start_mm: "), "{e}");
+    let e =
+        err("[[event]]\nat = \"1s\"\npress = \"cabin:1\"\n\n[[event]]\nat = \"2s\"\npress = 5\n");
+    assert!(e.starts_with("t.toml:7:9: event[2].press: "), "{e}");
+    // Deep nesting is refused at its place.
+    let e = err(&format!("x = {}{}\n", "[".repeat(5000), "]".repeat(5000)));
+    assert!(e.starts_with("t.toml:1:"), "{e}");
+    // A long bad value is quoted in part.
+    let e = err(&format!("duration = \"{}\"\n", "y".repeat(3000)));
+    assert!(e.len() < 300 && e.contains("(3000 characters)"), "{e}");
+}
+
+#[test]
+fn events_after_the_end_are_found_for_a_warning() {
+    let sc = Scenario::from_toml(
+        "t.toml",
+        "duration = \"10s\"\n[[event]]\nat = \"5s\"\nreset = true\n[[event]]\nat = \"10s\"\nack = true\n",
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    let late: Vec<usize> = sc.late_events().map(|e| e.line).collect();
+    assert_eq!(late, [5]);
+}
+
+#[test]
 fn unknown_keys_are_errors() {
     let e = err("name = \"x\"\n[lift]\nfloor = 4\n");
     assert!(
-        e.starts_with("t.toml:3:1: floor: unknown field `floor`"),
+        e.starts_with("t.toml:3:1: lift.floor: unknown field `floor`"),
         "{e}"
     );
     let e = err("speed = 3\n");
@@ -103,12 +132,6 @@ fn unknown_keys_are_errors() {
     );
     let e = err("[[event]]\nat = \"1s\"\npress = \"stop\"\nduration = \"2s\"\n");
     assert!(e.contains("unknown field `duration`"), "{e}");
-}
-
-#[test]
-fn a_wrong_type_names_its_key() {
-    let e = err("[lift]\nstart_mm = \"high\"\n");
-    assert!(e.starts_with("t.toml:2:12: start_mm:"), "{e}");
 }
 
 mod round_trip {
