@@ -5,6 +5,7 @@
 pub mod campaign;
 pub mod decode;
 pub mod encode;
+pub mod plot;
 pub mod run;
 pub mod timing;
 

@@ -1,12 +1,12 @@
 //! `asi-lift run`: a scenario on the whole rig, its report, trace and waveforms.
 
-use super::{open_output, print_out, read_input, write_output, EXIT_VIOLATIONS};
+use super::{open_output, plot, print_out, read_input, write_output, EXIT_VIOLATIONS};
 use asi_phy::{SimDuration, SimTime};
 use asi_trace::trace::TraceFormat;
 use clap::ValueEnum;
 use rig::waves::WaveOutputs;
 use rig::{Rig, Scenario};
-use std::io::IsTerminal;
+use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
 
 /// The arguments of `asi-lift run`.
@@ -47,7 +47,12 @@ pub struct RunArgs {
     /// (e.g. 5s..5.01s).
     #[arg(long, value_name = "START..END", default_value = "0ms..10ms")]
     pub waveform_window: String,
-    /// Overwrite the report, trace, VCD and CSV files if they exist.
+    /// Draw the run as SVG: cabin position and velocity over time with the floors, vanes and
+    /// overtravel trip points, the calls pressed and served, K1, the safety trips and the
+    /// bus's repeats per transaction.
+    #[arg(long, value_name = "FILE.svg")]
+    pub plot: Option<PathBuf>,
+    /// Overwrite the report, trace, VCD, CSV and plot files if they exist.
     #[arg(long)]
     pub force: bool,
 }
@@ -81,6 +86,7 @@ pub fn run(args: RunArgs) -> Result<u8, String> {
         vcd,
         csv,
         waveform_window,
+        plot,
         force,
     } = args;
     let mut sc = match &scenario {
@@ -106,6 +112,7 @@ pub fn run(args: RunArgs) -> Result<u8, String> {
         ("--trace", trace.as_ref()),
         ("--vcd", vcd.as_ref()),
         ("--csv", csv.as_ref()),
+        ("--plot", plot.as_ref()),
     ]
     .into_iter()
     .filter_map(|(k, p)| p.map(|p| (k, p)))
@@ -121,6 +128,7 @@ pub fn run(args: RunArgs) -> Result<u8, String> {
             }
         }
     }
+    let end = SimTime::ZERO + until.map_or(sc.duration, |u| u.min(sc.duration));
     let mut rig = Rig::new(sc).map_err(|e| e.to_string())?;
     if let Some(path) = &trace {
         let form = match trace_format {
@@ -135,6 +143,11 @@ pub fn run(args: RunArgs) -> Result<u8, String> {
         let csv = csv.as_deref().map(|p| open_output(p, force)).transpose()?;
         rig.waves_to(WaveOutputs { vcd, csv, window });
     }
+    // Opened before the run, like the others, so that a bad path costs no simulation.
+    let plot_out = plot
+        .as_deref()
+        .map(|p| open_output(p, force).map(|out| (p, out)))
+        .transpose()?;
     let wall = std::time::Instant::now();
     let show = std::io::stderr().is_terminal();
     let mut shown = false;
@@ -149,6 +162,9 @@ pub fn run(args: RunArgs) -> Result<u8, String> {
             );
         }
     };
+    let samples = plot_out
+        .is_some()
+        .then(|| plot::record(&mut rig, end, &mut progress));
     let rep = rig.run_observed(until, &mut progress);
     if shown {
         eprint!("\r{:60}\r", "");
@@ -162,6 +178,13 @@ pub fn run(args: RunArgs) -> Result<u8, String> {
         }
     };
     write_output(&report, &body, force)?;
+    if let (Some((path, mut out)), Some(mut samples)) = (plot_out, samples) {
+        samples.finish(&rep);
+        let svg = plot::draw(&samples, &rep)?;
+        out.write_all(svg.as_bytes())
+            .and_then(|()| out.flush())
+            .map_err(|e| format!("{}: {e}", path.display()))?;
+    }
     if report != Path::new("-") {
         let summary = format!(
             "{}report written to {}\n",
