@@ -71,11 +71,7 @@ pub fn sample_step(length: SimDuration) -> SimDuration {
 /// Steps `rig` up to (not including) `end`, sampling it every [`sample_step`] and telling
 /// `progress` the time reached; the caller finishes the run with [`Rig::run_observed`], which
 /// runs the moment at `end` and writes the report.
-pub fn record(
-    rig: &mut Rig,
-    end: SimTime,
-    progress: &mut dyn FnMut(SimTime, SimTime),
-) -> Samples {
+pub fn record(rig: &mut Rig, end: SimTime, progress: &mut dyn FnMut(SimTime, SimTime)) -> Samples {
     let step = sample_step(end - SimTime::ZERO);
     let mut samples = vec![Sample::of(rig)];
     let mut next = SimTime::ZERO + step;
@@ -172,32 +168,125 @@ const VELOCITY: RGBColor = RGBColor(0, 120, 60);
 const K1: RGBColor = RGBColor(200, 120, 0);
 const TRIP: RGBColor = RGBColor(210, 20, 20);
 const PRESSED: RGBColor = RGBColor(150, 0, 150);
+const WAIT: RGBColor = RGBColor(220, 170, 220);
 const SERVED: RGBColor = RGBColor(0, 150, 150);
 const BUS: RGBColor = RGBColor(100, 60, 20);
 
-fn draw_on(root: &DrawingArea<SVGBackend<'_>, Shift>, s: &Samples, rep: &Report) -> DrawResult {
+type Area<'a> = DrawingArea<SVGBackend<'a>, Shift>;
+
+/// How a legend entry shows its series.
+enum Swatch {
+    /// A line of this width.
+    Line(RGBColor, u32),
+    /// A dashed line.
+    Dashed(RGBColor),
+    /// A filled band.
+    Band(RGBColor),
+    /// A vertical line (an instant).
+    Mark(RGBColor),
+    /// A filled triangle.
+    Triangle(RGBColor),
+    /// A ring.
+    Ring(RGBColor),
+    /// Nothing: a line of text.
+    None,
+}
+
+/// Draws a legend in its own column next to a panel, so that it never hides the data.
+fn legend(area: &Area<'_>, entries: &[(Swatch, String)]) -> DrawResult {
+    // The panels' captions take the first ~35 px.
+    let mut y = 52;
+    for (swatch, text) in entries {
+        let (x0, x1) = (10, 36);
+        match *swatch {
+            Swatch::Line(c, w) => {
+                area.draw(&PathElement::new([(x0, y), (x1, y)], c.stroke_width(w)))?;
+            }
+            Swatch::Dashed(c) => {
+                for x in (x0..x1).step_by(10) {
+                    area.draw(&PathElement::new(
+                        [(x, y), ((x + 6).min(x1), y)],
+                        c.stroke_width(2),
+                    ))?;
+                }
+            }
+            Swatch::Band(c) => {
+                area.draw(&Rectangle::new(
+                    [(x0, y - 6), (x1, y + 6)],
+                    c.mix(0.25).filled(),
+                ))?;
+            }
+            Swatch::Mark(c) => {
+                area.draw(&PathElement::new(
+                    [((x0 + x1) / 2, y - 8), ((x0 + x1) / 2, y + 8)],
+                    c.stroke_width(2),
+                ))?;
+            }
+            Swatch::Triangle(c) => {
+                area.draw(&TriangleMarker::new(((x0 + x1) / 2, y), 7, c.filled()))?;
+            }
+            Swatch::Ring(c) => {
+                area.draw(&Circle::new(((x0 + x1) / 2, y), 6, c.stroke_width(2)))?;
+            }
+            Swatch::None => {}
+        }
+        area.draw(&Text::new(
+            text.as_str(),
+            (x1 + 8, y - 7),
+            ("sans-serif", 13).into_font(),
+        ))?;
+        y += 22;
+    }
+    Ok(())
+}
+
+/// The width of the legend column, pixels.
+const LEGEND_W: u32 = 300;
+
+fn draw_on(root: &Area<'_>, s: &Samples, rep: &Report) -> DrawResult {
     root.fill(&WHITE)?;
     let title = format!(
         "asi-lift run: scenario \"{}\", seed {}, {:.1} s simulated",
         rep.scenario, rep.seed, rep.simulated_s
     );
     let root = root.titled(&title, ("sans-serif", 22))?;
-    let h = i32::try_from(root.dim_in_pixel().1)?;
-    let panels = root.split_by_breakpoints::<i32, i32, _, _>([], [h * 46 / 100, h * 77 / 100]);
+    let (w, h) = root.dim_in_pixel();
+    let (w, h) = (i32::try_from(w)?, i32::try_from(h)?);
+    let areas =
+        root.split_by_breakpoints([w - i32::try_from(LEGEND_W)?], [h * 46 / 100, h * 77 / 100]);
     let t_end = s
         .samples
         .last()
         .map_or(rep.simulated_s, |l| l.t_s)
         .max(1e-3);
-    position_panel(&panels[0], s, rep, t_end)?;
-    velocity_panel(&panels[1], s, rep, t_end)?;
-    bus_panel(&panels[2], s, rep, t_end)?;
+    position_panel(&areas[0], &areas[1], s, rep, t_end)?;
+    velocity_panel(&areas[2], &areas[3], s, rep, t_end)?;
+    bus_panel(&areas[4], &areas[5], s, rep, t_end)?;
     Ok(())
+}
+
+/// A tick label: 10 rather than 10.0, 0.25 as it is.
+fn tick(v: &f64) -> String {
+    let r = (v * 1000.0).round() / 1000.0;
+    format!("{}", if r == 0.0 { 0.0 } else { r })
+}
+
+/// A panel's chart with the common time axis: the same label areas in every panel, so that
+/// their time axes line up.
+fn panel<'a, 'b>(area: &'a Area<'b>, caption: &str) -> ChartBuilder<'a, 'b, SVGBackend<'b>> {
+    let mut b = ChartBuilder::on(area);
+    b.margin(10)
+        .caption(caption, ("sans-serif", 18))
+        .x_label_area_size(35)
+        .y_label_area_size(70)
+        .right_y_label_area_size(60);
+    b
 }
 
 /// Panel 1: cabin position, floors, vanes, overtravel, calls.
 fn position_panel(
-    area: &DrawingArea<SVGBackend<'_>, Shift>,
+    area: &Area<'_>,
+    key: &Area<'_>,
     s: &Samples,
     rep: &Report,
     t_end: f64,
@@ -206,79 +295,51 @@ fn position_panel(
     let top_level = f64::from(cfg.floors - 1) * cfg.floor_pitch_mm;
     let trip_bottom = -cfg.trip_beyond_floor_mm;
     let trip_top = top_level + cfg.trip_beyond_floor_mm;
-    let (lo, hi) = s.samples.iter().fold((trip_bottom, trip_top), |(lo, hi), p| {
-        (lo.min(p.position_mm), hi.max(p.position_mm))
-    });
+    let (lo, hi) = s
+        .samples
+        .iter()
+        .fold((trip_bottom, trip_top), |(lo, hi), p| {
+            (lo.min(p.position_mm), hi.max(p.position_mm))
+        });
     let (lo, hi) = (lo - 60.0, hi + 60.0);
-    let mut chart = ChartBuilder::on(area)
-        .margin(10)
-        .margin_right(30)
-        .caption(
-            "Cabin position, floors, vanes and calls",
-            ("sans-serif", 18),
-        )
-        .x_label_area_size(35)
-        .y_label_area_size(70)
+    let mut chart = panel(area, "Cabin position, floors, vanes and calls")
         .build_cartesian_2d(0.0..t_end, lo..hi)?;
     chart
         .configure_mesh()
         .disable_y_mesh()
         .x_desc("time (s)")
-        .y_desc("cabin position above floor 1 (mm)")
+        .x_label_formatter(&tick)
+        .y_desc("cabin above floor 1 (mm)")
+        .y_label_formatter(&tick)
         .label_style(("sans-serif", 13))
         .draw()?;
+    let half = cfg.long_track_half_mm;
     for floor in 1..=cfg.floors {
         let Some(level) = cfg.floor_level_mm(floor) else {
             continue;
         };
-        let half = cfg.long_track_half_mm;
-        let band = chart.draw_series([Rectangle::new(
+        chart.draw_series([Rectangle::new(
             [(0.0, level - half), (t_end, level + half)],
             VANE.mix(0.25).filled(),
         )])?;
-        if floor == 1 {
-            band.label(format!("vane long sensor track (±{half:.0} mm)"))
-                .legend(|(x, y)| {
-                    Rectangle::new([(x, y - 5), (x + 20, y + 5)], VANE.mix(0.25).filled())
-                });
-        }
-        let line = chart.draw_series(LineSeries::new(
+        chart.draw_series(LineSeries::new(
             [(0.0, level), (t_end, level)],
             FLOOR.stroke_width(1),
         ))?;
-        if floor == 1 {
-            line.label("floor level")
-                .legend(|(x, y)| PathElement::new([(x, y), (x + 20, y)], FLOOR));
-        }
         chart.draw_series([Text::new(
             format!("floor {floor}"),
             (t_end * 0.005, level + half + 8.0),
             ("sans-serif", 13).into_font().color(&FLOOR),
         )])?;
     }
-    for (i, trip) in [trip_bottom, trip_top].into_iter().enumerate() {
-        let series = chart.draw_series(DashedLineSeries::new(
+    for trip in [trip_bottom, trip_top] {
+        chart.draw_series(DashedLineSeries::new(
             [(0.0, trip), (t_end, trip)],
             8,
             5,
             TRIP.stroke_width(2),
         ))?;
-        if i == 0 {
-            series
-                .label(format!(
-                    "overtravel trip ({:.0} mm beyond the end floors)",
-                    cfg.trip_beyond_floor_mm
-                ))
-                .legend(|(x, y)| PathElement::new([(x, y), (x + 20, y)], TRIP.stroke_width(2)));
-        }
     }
-    chart
-        .draw_series(LineSeries::new(
-            s.samples.iter().map(|p| (p.t_s, p.position_mm)),
-            POSITION.stroke_width(2),
-        ))?
-        .label("cabin position")
-        .legend(|(x, y)| PathElement::new([(x, y), (x + 20, y)], POSITION.stroke_width(2)));
     let calls: Vec<(f64, Option<f64>, f64)> = rep
         .passengers
         .iter()
@@ -287,33 +348,67 @@ fn position_panel(
             Some((p.pressed_at_s, p.served_at_s, level))
         })
         .collect();
-    chart
-        .draw_series(calls.iter().filter_map(|&(_, served, level)| {
-            served.map(|t| Circle::new((t, level), 7, SERVED.stroke_width(2)))
-        }))?
-        .label("call served (cabin stopped for it)")
-        .legend(|(x, y)| Circle::new((x + 10, y), 6, SERVED.stroke_width(2)));
-    chart
-        .draw_series(
-            calls
-                .iter()
-                .map(|&(t, _, level)| TriangleMarker::new((t, level), 8, PRESSED.filled())),
-        )?
-        .label("call pressed (at the called floor)")
-        .legend(|(x, y)| TriangleMarker::new((x + 10, y), 7, PRESSED.filled()));
-    chart
-        .configure_series_labels()
-        .position(SeriesLabelPosition::UpperRight)
-        .label_font(("sans-serif", 13))
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .draw()?;
-    Ok(())
+    // The wait: from the press to the cabin's stop (or the end of the run), along the floor.
+    chart.draw_series(calls.iter().map(|&(t, served, level)| {
+        PathElement::new(
+            [(t, level), (served.unwrap_or(t_end), level)],
+            WAIT.stroke_width(3),
+        )
+    }))?;
+    chart.draw_series(LineSeries::new(
+        s.samples.iter().map(|p| (p.t_s, p.position_mm)),
+        POSITION.stroke_width(2),
+    ))?;
+    chart.draw_series(calls.iter().filter_map(|&(_, served, level)| {
+        served.map(|t| Circle::new((t, level), 7, SERVED.stroke_width(2)))
+    }))?;
+    chart.draw_series(
+        calls
+            .iter()
+            .map(|&(t, _, level)| TriangleMarker::new((t, level), 8, PRESSED.filled())),
+    )?;
+    let unserved = calls.iter().filter(|c| c.1.is_none()).count();
+    legend(
+        key,
+        &[
+            (Swatch::Line(POSITION, 2), "cabin position".into()),
+            (Swatch::Line(FLOOR, 1), "floor level".into()),
+            (
+                Swatch::Band(VANE),
+                format!("vane, long sensor track (±{half:.0} mm)"),
+            ),
+            (
+                Swatch::Dashed(TRIP),
+                format!(
+                    "overtravel trip ({:.0} mm past end floor)",
+                    cfg.trip_beyond_floor_mm
+                ),
+            ),
+            (
+                Swatch::Triangle(PRESSED),
+                format!("call pressed, at its floor ({})", calls.len()),
+            ),
+            (Swatch::Line(WAIT, 3), "waiting for the cabin".into()),
+            (
+                Swatch::Ring(SERVED),
+                if unserved == 0 {
+                    "call served (cabin stopped)".into()
+                } else {
+                    format!(
+                        "call served ({} of {})",
+                        calls.len() - unserved,
+                        calls.len()
+                    )
+                },
+            ),
+        ],
+    )
 }
 
 /// Panel 2: velocity, K1, safety trips.
 fn velocity_panel(
-    area: &DrawingArea<SVGBackend<'_>, Shift>,
+    area: &Area<'_>,
+    key: &Area<'_>,
     s: &Samples,
     rep: &Report,
     t_end: f64,
@@ -323,27 +418,20 @@ fn velocity_panel(
         .iter()
         .fold(50.0_f64, |m, p| m.max(p.velocity_mm_s.abs()))
         * 1.15;
-    let mut chart = ChartBuilder::on(area)
-        .margin(10)
-        .margin_right(30)
-        .caption(
-            "Cabin velocity, contactor K1 and safety trips",
-            ("sans-serif", 18),
-        )
-        .x_label_area_size(35)
-        .y_label_area_size(70)
-        .right_y_label_area_size(60)
+    let mut chart = panel(area, "Cabin velocity, contactor K1 and safety trips")
         .build_cartesian_2d(0.0..t_end, -vmax..vmax)?
         .set_secondary_coord(0.0..t_end, -0.25..1.6);
     chart
         .configure_mesh()
         .x_desc("time (s)")
+        .x_label_formatter(&tick)
         .y_desc("velocity, up positive (mm/s)")
+        .y_label_formatter(&tick)
         .label_style(("sans-serif", 13))
         .draw()?;
     chart
         .configure_secondary_axes()
-        .y_desc("K1")
+        .y_desc("contactor K1")
         .y_labels(3)
         .y_label_formatter(&|v: &f64| {
             if v.abs() < 1e-9 {
@@ -365,66 +453,46 @@ fn velocity_panel(
         steps.push((p.t_s, k1(p.k1)));
     }
     steps.dedup();
-    chart
-        .draw_secondary_series(LineSeries::new(steps, K1.stroke_width(2)))?
-        .label("K1 (right axis)")
-        .legend(|(x, y)| PathElement::new([(x, y), (x + 20, y)], K1.stroke_width(2)));
-    chart
-        .draw_series(LineSeries::new(
-            s.samples.iter().map(|p| (p.t_s, p.velocity_mm_s)),
-            VELOCITY.stroke_width(2),
-        ))?
-        .label("cabin velocity")
-        .legend(|(x, y)| PathElement::new([(x, y), (x + 20, y)], VELOCITY.stroke_width(2)));
-    let trips = chart.draw_series(rep.safety.trips.iter().map(|trip| {
+    chart.draw_secondary_series(LineSeries::new(steps, K1.stroke_width(2)))?;
+    chart.draw_series(LineSeries::new(
+        s.samples.iter().map(|p| (p.t_s, p.velocity_mm_s)),
+        VELOCITY.stroke_width(2),
+    ))?;
+    chart.draw_series(rep.safety.trips.iter().map(|trip| {
         PathElement::new(
             [(trip.at_s, -vmax), (trip.at_s, vmax)],
             TRIP.stroke_width(2),
         )
     }))?;
-    if !rep.safety.trips.is_empty() {
-        trips
-            .label(format!("safety trip ({})", rep.safety.trips.len()))
-            .legend(|(x, y)| PathElement::new([(x + 10, y - 6), (x + 10, y + 6)], TRIP.stroke_width(2)));
-    }
-    chart
-        .configure_series_labels()
-        .position(SeriesLabelPosition::UpperRight)
-        .label_font(("sans-serif", 13))
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .draw()?;
-    Ok(())
+    legend(
+        key,
+        &[
+            (Swatch::Line(VELOCITY, 2), "cabin velocity".into()),
+            (Swatch::Line(K1, 2), "K1, drive power (right axis)".into()),
+            (
+                Swatch::Mark(TRIP),
+                match rep.safety.trips.len() {
+                    0 => "safety trip (none)".into(),
+                    n => format!("safety trip ({n})"),
+                },
+            ),
+        ],
+    )
 }
 
 /// Panel 3: repeats per transaction.
-fn bus_panel(
-    area: &DrawingArea<SVGBackend<'_>, Shift>,
-    s: &Samples,
-    rep: &Report,
-    t_end: f64,
-) -> DrawResult {
+fn bus_panel(area: &Area<'_>, key: &Area<'_>, s: &Samples, rep: &Report, t_end: f64) -> DrawResult {
     let rate = s.bus_rate();
     let max = rate.iter().fold(0.0_f64, |m, r| m.max(r.2));
     let ymax = if max > 0.0 { max * 1.2 } else { 1.0 };
-    let mut chart = ChartBuilder::on(area)
-        .margin(10)
-        .margin_right(30)
-        .caption(
-            format!(
-                "Bus repeats per transaction, per {BUS_WINDOW_S:.0} s window ({} repeats in {} transactions)",
-                rep.bus.repeats, rep.bus.transactions
-            ),
-            ("sans-serif", 18),
-        )
-        .x_label_area_size(35)
-        .y_label_area_size(70)
-        .right_y_label_area_size(60)
+    let mut chart = panel(area, "AS-i bus: repeats per transaction")
         .build_cartesian_2d(0.0..t_end, 0.0..ymax)?;
     chart
         .configure_mesh()
         .x_desc("time (s)")
-        .y_desc("repeats (%)")
+        .x_label_formatter(&tick)
+        .y_desc("repeats (% of transactions)")
+        .y_label_formatter(&tick)
         .y_labels(5)
         .label_style(("sans-serif", 13))
         .draw()?;
@@ -441,7 +509,20 @@ fn bus_panel(
             ("sans-serif", 14).into_font().color(&BUS),
         )])?;
     }
-    Ok(())
+    legend(
+        key,
+        &[
+            (
+                Swatch::Line(BUS, 2),
+                format!("repeats per {BUS_WINDOW_S:.0} s window"),
+            ),
+            (Swatch::None, format!("in all: {} repeats", rep.bus.repeats)),
+            (
+                Swatch::None,
+                format!("in {} transactions", rep.bus.transactions),
+            ),
+        ],
+    )
 }
 
 #[cfg(test)]
