@@ -180,7 +180,7 @@ pub fn run(args: RunArgs) -> Result<u8, String> {
     write_output(&report, &body, force)?;
     if let (Some((path, mut out)), Some(mut samples)) = (plot_out, samples) {
         samples.finish(&rep);
-        let svg = plot::draw(&samples, &rep)?;
+        let svg = plot::draw(&samples, &rep).map_err(|e| format!("{}: {e}", path.display()))?;
         out.write_all(svg.as_bytes())
             .and_then(|()| out.flush())
             .map_err(|e| format!("{}: {e}", path.display()))?;
@@ -191,9 +191,10 @@ pub fn run(args: RunArgs) -> Result<u8, String> {
             rep.summary_text(),
             report.display()
         );
-        // Human text goes to standard error when a data stream (the trace) is on standard
-        // output; a reader that has gone (`| head`) is no error.
-        if trace.as_deref() == Some(Path::new("-")) {
+        // Human text goes to standard error when a data stream (the trace, the plot) is on
+        // standard output; a reader that has gone (`| head`) is no error.
+        let stdout = Some(Path::new("-"));
+        if trace.as_deref() == stdout || plot.as_deref() == stdout {
             eprint!("{summary}");
         } else {
             print_out(&summary)?;
