@@ -289,6 +289,69 @@ mod tests {
         let _ = std::fs::remove_dir_all(&dir);
     }
 
+    fn run_cli(args: &[&str]) -> Result<u8, String> {
+        let cli = Cli::try_parse_from(["asi-lift", "run"].iter().chain(args))
+            .map_err(|e| e.to_string())?;
+        run(cli)
+    }
+
+    #[test]
+    fn the_plot_of_a_run_is_deterministic_and_leaves_the_run_alone() {
+        let dir = temp("plot");
+        let path = |n: &str| dir.join(n).to_string_lossy().to_string();
+        let (a, b) = (path("a.svg"), path("b.svg"));
+        let (ra, rb, plain) = (path("a.json"), path("b.json"), path("plain.json"));
+        let common = ["--until", "20s", "--format", "json"];
+        for (svg, report) in [(&a, &ra), (&b, &rb)] {
+            let args = [&common[..], &["--plot", svg, "--report", report]].concat();
+            assert_eq!(run_cli(&args), Ok(0));
+        }
+        assert_eq!(
+            run_cli(&[&common[..], &["--report", &plain]].concat()),
+            Ok(0)
+        );
+        let read = |f: &str| std::fs::read_to_string(f).expect("output");
+        let svg = read(&a);
+        assert!(svg.starts_with("<svg"), "{}", &svg[..svg.len().min(200)]);
+        assert!(svg.trim_end().ends_with("</svg>"));
+        for label in ["floor 1", "floor 2", "floor 3", "floor 4", "time (s)"] {
+            assert!(svg.contains(label), "no {label:?} in the plot");
+        }
+        assert_eq!(svg, read(&b), "two runs of one scenario, two plots");
+        // Sampling for the plot only pauses the simulation between moments.
+        assert_eq!(read(&ra), read(&plain));
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn a_plot_never_replaces_a_file_and_a_bad_path_is_named_before_the_run() {
+        let dir = temp("plot-refused");
+        let plot = dir.join("plot.svg");
+        std::fs::write(&plot, "keep").expect("temp file");
+        let p = plot.to_string_lossy().to_string();
+        let report = dir.join("report.txt");
+        let r = report.to_string_lossy().to_string();
+        let e = run_cli(&["--until", "1s", "--plot", &p, "--report", &r]).expect_err("refused");
+        assert!(e.contains(&p) && e.contains("--force"), "{e}");
+        assert_eq!(std::fs::read_to_string(&plot).ok().as_deref(), Some("keep"));
+        // Refused before the run: the report, written after it, is not there.
+        assert!(!report.exists());
+        let bad = dir.join("no-such-dir").join("plot.svg");
+        let b = bad.to_string_lossy().to_string();
+        let e = run_cli(&["--until", "1s", "--plot", &b, "--report", &r]).expect_err("bad path");
+        assert!(e.contains(&b), "{e}");
+        assert!(!report.exists());
+        let e = run_cli(&["--until", "1s", "--plot", "-"]).expect_err("two on stdout");
+        assert!(e.contains("--plot"), "{e}");
+        assert_eq!(
+            run_cli(&["--until", "1s", "--plot", &p, "--report", &r, "--force"]),
+            Ok(0)
+        );
+        let svg = std::fs::read_to_string(&plot).unwrap_or_default();
+        assert!(svg.starts_with("<svg"), "{svg}");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
     #[test]
     fn the_timing_svg_is_not_overwritten_without_force() {
         let path = std::env::temp_dir().join(format!("asi-lift-timing-{}.svg", std::process::id()));

@@ -6,6 +6,7 @@ pub mod campaign;
 pub mod decode;
 pub mod encode;
 pub mod output;
+pub mod plot;
 pub mod run;
 pub mod scenarios;
 pub mod timing;

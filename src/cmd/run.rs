@@ -2,7 +2,7 @@
 
 use super::output::Outputs;
 use super::scenarios::find;
-use super::{print_out, read_input, EXIT_VIOLATIONS};
+use super::{plot, print_out, read_input, EXIT_VIOLATIONS};
 use asi_phy::{SimDuration, SimTime};
 use asi_trace::trace::TraceFormat;
 use clap::ValueEnum;
@@ -54,7 +54,12 @@ pub struct RunArgs {
     /// (e.g. 5s..5.01s).
     #[arg(long, value_name = "START..END", default_value = "0ms..10ms")]
     pub waveform_window: String,
-    /// Overwrite the report, trace, VCD and CSV files if they exist.
+    /// Draw the run as SVG: cabin position and velocity over time with the floors, vanes and
+    /// overtravel trip points, the calls pressed and served, K1, the safety trips and the
+    /// bus's repeats per transaction.
+    #[arg(long, value_name = "FILE.svg")]
+    pub plot: Option<PathBuf>,
+    /// Overwrite the report, trace, VCD, CSV and plot files if they exist.
     #[arg(long)]
     pub force: bool,
 }
@@ -98,6 +103,7 @@ pub fn run(args: RunArgs) -> Result<u8, String> {
         vcd,
         csv,
         waveform_window,
+        plot,
         force,
     } = args;
     // A file if there is one by that name, else a built-in scenario.
@@ -154,6 +160,8 @@ pub fn run(args: RunArgs) -> Result<u8, String> {
         .transpose()?;
     let vcd_sink = vcd.as_deref().map(|p| outs.add("--vcd", p)).transpose()?;
     let csv_sink = csv.as_deref().map(|p| outs.add("--csv", p)).transpose()?;
+    let plot_sink = plot.as_deref().map(|p| outs.add("--plot", p)).transpose()?;
+    let end = SimTime::ZERO + until.map_or(sc.duration, |u| u.min(sc.duration));
     let mut rig = Rig::new(sc).map_err(|e| e.to_string())?;
     if let (Some(path), Some(sink)) = (&trace, &trace_sink) {
         let form = match trace_format {
@@ -181,6 +189,9 @@ pub fn run(args: RunArgs) -> Result<u8, String> {
             ControlFlow::Continue(())
         }
     };
+    let samples = plot_sink
+        .is_some()
+        .then(|| plot::record(&mut rig, end, &mut progress));
     let rep = rig.run_observed(until, &mut progress);
     bar.finish_and_clear();
     if outs.stdout_gone() {
@@ -197,6 +208,16 @@ pub fn run(args: RunArgs) -> Result<u8, String> {
         }
     };
     outs.write_all(&report_sink, &body)?;
+    if let (Some(sink), Some(mut samples)) = (&plot_sink, samples) {
+        samples.finish(&rep);
+        let svg = plot::draw(&samples, &rep).map_err(|e| {
+            format!(
+                "--plot {}: {e}",
+                plot.as_deref().unwrap_or(Path::new("")).display()
+            )
+        })?;
+        outs.write_all(sink, &svg)?;
+    }
     outs.commit()?;
     if report != Path::new("-") {
         let summary = format!(
@@ -204,9 +225,10 @@ pub fn run(args: RunArgs) -> Result<u8, String> {
             rep.summary_text(),
             report.display()
         );
-        // Human text goes to standard error when a data stream (the trace) is on standard
-        // output; a reader that has gone (`| head`) is no error.
-        if trace.as_deref() == Some(Path::new("-")) {
+        // Human text goes to standard error when a data stream (the trace, the plot) is on
+        // standard output; a reader that has gone (`| head`) is no error.
+        let stdout = Some(Path::new("-"));
+        if trace.as_deref() == stdout || plot.as_deref() == stdout {
             eprint!("{summary}");
         } else {
             print_out(&summary)?;

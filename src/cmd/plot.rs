@@ -1,0 +1,554 @@
+//! `asi-lift run --plot FILE.svg`: a picture of the run drawn with `plotters`.
+//!
+//! Three panels on one time axis:
+//! 1. the cabin position with the floor levels, the vanes' long sensor tracks, the overtravel
+//!    trip points, and the passengers' calls: pressed (triangle) and served (circle);
+//! 2. the cabin velocity, contactor K1 (closed/open) and the safety trips;
+//! 3. the bus's repeats per transaction, in windows of one second.
+//!
+//! The series are sampled by stepping the rig through its public [`Rig::step_until`] at a
+//! fixed simulated step ([`sample_step`]) and reading the plant and the bus between moments;
+//! the stepping only pauses the simulation, so the run (and its report) is the same as
+//! without `--plot`. The drawing depends on nothing but the samples and the report, so the
+//! same scenario gives a byte-identical SVG.
+
+use asi_phy::{SimDuration, SimTime};
+use lift_model::LiftConfig;
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use rig::{Report, Rig};
+
+/// The width and height of the picture, pixels.
+const SIZE: (u32, u32) = (1400, 1000);
+/// The window of the bus error rate.
+const BUS_WINDOW_S: f64 = 1.0;
+/// The finest sampling step; longer runs get a coarser one (see [`sample_step`]).
+const MIN_STEP: SimDuration = SimDuration::from_millis(20);
+/// At most about this many samples per run, so that the SVG stays small.
+const MAX_SAMPLES: u64 = 5_000;
+
+/// The rig's state at one moment, as the plot shows it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Sample {
+    t_s: f64,
+    position_mm: f64,
+    velocity_mm_s: f64,
+    k1: bool,
+    /// Bus transactions so far, repeats included.
+    transactions: u64,
+    /// Repeats so far.
+    repeats: u64,
+}
+
+impl Sample {
+    fn of(rig: &Rig) -> Sample {
+        let lift = rig.lift();
+        let stats = rig.lab().bus.stats();
+        Sample {
+            t_s: rig.now().as_secs_f64(),
+            position_mm: lift.position_mm(),
+            velocity_mm_s: lift.velocity_mm_s(),
+            k1: lift.k1_closed(),
+            transactions: stats.transactions,
+            repeats: stats.repeats,
+        }
+    }
+}
+
+/// The time series of a run, recorded while it runs.
+pub struct Samples {
+    samples: Vec<Sample>,
+    config: LiftConfig,
+}
+
+/// The sampling step for a run of `length`: 20 ms, or coarser (whole milliseconds) so that
+/// a long run has at most about 5,000 samples.
+pub fn sample_step(length: SimDuration) -> SimDuration {
+    let ms = length.as_nanos().div_ceil(MAX_SAMPLES * 1_000_000);
+    SimDuration::from_millis(ms).max(MIN_STEP)
+}
+
+/// Steps `rig` up to (not including) `end`, sampling it every [`sample_step`] and telling
+/// `progress` the time reached (a `Break` stops the sampling); the caller finishes the run with [`Rig::run_observed`], which
+/// runs the moment at `end` and writes the report.
+pub fn record(
+    rig: &mut Rig,
+    end: SimTime,
+    progress: &mut dyn FnMut(SimTime, SimTime) -> std::ops::ControlFlow<()>,
+) -> Samples {
+    let step = sample_step(end - SimTime::ZERO);
+    let mut samples = vec![Sample::of(rig)];
+    let mut next = SimTime::ZERO + step;
+    while next < end {
+        while rig.step_until(next).is_some() {}
+        let s = Sample::of(rig);
+        if samples.last().is_none_or(|l| s.t_s > l.t_s) {
+            samples.push(s);
+        }
+        if progress(rig.now(), end).is_break() {
+            break;
+        }
+        next += step;
+    }
+    Samples {
+        samples,
+        config: rig.lift().config().clone(),
+    }
+}
+
+impl Samples {
+    /// Adds the state at the end of the run from its report (the rig is gone by then).
+    pub fn finish(&mut self, rep: &Report) {
+        let Some(last) = self.samples.last().copied() else {
+            return;
+        };
+        if rep.simulated_s > last.t_s {
+            self.samples.push(Sample {
+                t_s: rep.simulated_s,
+                position_mm: rep.final_state.position_mm,
+                velocity_mm_s: if rep.final_state.moving {
+                    last.velocity_mm_s
+                } else {
+                    0.0
+                },
+                k1: rep.final_state.contactor_closed,
+                transactions: rep.bus.transactions,
+                repeats: rep.bus.repeats,
+            });
+        }
+    }
+
+    /// Repeats per transaction (in %) in consecutive windows of [`BUS_WINDOW_S`], as
+    /// `(window start, window end, rate)`; a window without transactions has rate 0.
+    fn bus_rate(&self) -> Vec<(f64, f64, f64)> {
+        let mut out = Vec::new();
+        let Some(first) = self.samples.first() else {
+            return out;
+        };
+        let mut start = *first;
+        let mut boundary = first.t_s + BUS_WINDOW_S;
+        for (i, s) in self.samples.iter().enumerate() {
+            let last = i + 1 == self.samples.len();
+            if s.t_s >= boundary || (last && s.t_s > start.t_s) {
+                let tx = s.transactions - start.transactions;
+                let rep = s.repeats - start.repeats;
+                let rate = if tx == 0 {
+                    0.0
+                } else {
+                    rep as f64 / tx as f64 * 100.0
+                };
+                out.push((start.t_s, s.t_s, rate));
+                start = *s;
+                while boundary <= s.t_s {
+                    boundary += BUS_WINDOW_S;
+                }
+            }
+        }
+        out
+    }
+}
+
+/// A call button's floor: `cabin:3`, `hall-up:2` → 3, 2.
+fn button_floor(button: &str) -> Option<u8> {
+    button.rsplit_once(':')?.1.parse().ok()
+}
+
+/// Draws the run as SVG.
+pub fn draw(samples: &Samples, rep: &Report) -> Result<String, String> {
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, SIZE).into_drawing_area();
+        draw_on(&root, samples, rep).map_err(|e| format!("drawing the plot: {e}"))?;
+        root.present()
+            .map_err(|e| format!("drawing the plot: {e}"))?;
+    }
+    Ok(svg)
+}
+
+type DrawResult = Result<(), Box<dyn std::error::Error>>;
+
+const FLOOR: RGBColor = RGBColor(90, 90, 90);
+const VANE: RGBColor = RGBColor(120, 170, 230);
+const POSITION: RGBColor = RGBColor(20, 60, 160);
+const VELOCITY: RGBColor = RGBColor(0, 120, 60);
+const K1: RGBColor = RGBColor(200, 120, 0);
+const TRIP: RGBColor = RGBColor(210, 20, 20);
+const PRESSED: RGBColor = RGBColor(150, 0, 150);
+const WAIT: RGBColor = RGBColor(220, 170, 220);
+const SERVED: RGBColor = RGBColor(0, 150, 150);
+const BUS: RGBColor = RGBColor(100, 60, 20);
+
+type Area<'a> = DrawingArea<SVGBackend<'a>, Shift>;
+
+/// How a legend entry shows its series.
+enum Swatch {
+    /// A line of this width.
+    Line(RGBColor, u32),
+    /// A dashed line.
+    Dashed(RGBColor),
+    /// A filled band.
+    Band(RGBColor),
+    /// A vertical line (an instant).
+    Mark(RGBColor),
+    /// A filled triangle.
+    Triangle(RGBColor),
+    /// A ring.
+    Ring(RGBColor),
+    /// Nothing: a line of text.
+    None,
+}
+
+/// Draws a legend in its own column next to a panel, so that it never hides the data.
+fn legend(area: &Area<'_>, entries: &[(Swatch, String)]) -> DrawResult {
+    // The panels' captions take the first ~35 px.
+    let mut y = 52;
+    for (swatch, text) in entries {
+        let (x0, x1) = (10, 36);
+        match *swatch {
+            Swatch::Line(c, w) => {
+                area.draw(&PathElement::new([(x0, y), (x1, y)], c.stroke_width(w)))?;
+            }
+            Swatch::Dashed(c) => {
+                for x in (x0..x1).step_by(10) {
+                    area.draw(&PathElement::new(
+                        [(x, y), ((x + 6).min(x1), y)],
+                        c.stroke_width(2),
+                    ))?;
+                }
+            }
+            Swatch::Band(c) => {
+                area.draw(&Rectangle::new(
+                    [(x0, y - 6), (x1, y + 6)],
+                    c.mix(0.25).filled(),
+                ))?;
+            }
+            Swatch::Mark(c) => {
+                area.draw(&PathElement::new(
+                    [((x0 + x1) / 2, y - 8), ((x0 + x1) / 2, y + 8)],
+                    c.stroke_width(2),
+                ))?;
+            }
+            Swatch::Triangle(c) => {
+                area.draw(&TriangleMarker::new(((x0 + x1) / 2, y), 7, c.filled()))?;
+            }
+            Swatch::Ring(c) => {
+                area.draw(&Circle::new(((x0 + x1) / 2, y), 6, c.stroke_width(2)))?;
+            }
+            Swatch::None => {}
+        }
+        area.draw(&Text::new(
+            text.as_str(),
+            (x1 + 8, y - 7),
+            ("sans-serif", 13).into_font(),
+        ))?;
+        y += 22;
+    }
+    Ok(())
+}
+
+/// The width of the legend column, pixels.
+const LEGEND_W: u32 = 300;
+
+fn draw_on(root: &Area<'_>, s: &Samples, rep: &Report) -> DrawResult {
+    root.fill(&WHITE)?;
+    let title = format!(
+        "asi-lift run: scenario \"{}\", seed {}, {:.1} s simulated",
+        rep.scenario, rep.seed, rep.simulated_s
+    );
+    let root = root.titled(&title, ("sans-serif", 22))?;
+    let (w, h) = root.dim_in_pixel();
+    let (w, h) = (i32::try_from(w)?, i32::try_from(h)?);
+    let areas =
+        root.split_by_breakpoints([w - i32::try_from(LEGEND_W)?], [h * 46 / 100, h * 77 / 100]);
+    let t_end = s
+        .samples
+        .last()
+        .map_or(rep.simulated_s, |l| l.t_s)
+        .max(1e-3);
+    position_panel(&areas[0], &areas[1], s, rep, t_end)?;
+    velocity_panel(&areas[2], &areas[3], s, rep, t_end)?;
+    bus_panel(&areas[4], &areas[5], s, rep, t_end)?;
+    Ok(())
+}
+
+/// A tick label: 10 rather than 10.0, 0.25 as it is.
+fn tick(v: &f64) -> String {
+    let r = (v * 1000.0).round() / 1000.0;
+    format!("{}", if r == 0.0 { 0.0 } else { r })
+}
+
+/// A panel's chart with the common time axis: the same label areas in every panel, so that
+/// their time axes line up.
+fn panel<'a, 'b>(area: &'a Area<'b>, caption: &str) -> ChartBuilder<'a, 'b, SVGBackend<'b>> {
+    let mut b = ChartBuilder::on(area);
+    b.margin(10)
+        .caption(caption, ("sans-serif", 18))
+        .x_label_area_size(35)
+        .y_label_area_size(70)
+        .right_y_label_area_size(60);
+    b
+}
+
+/// Panel 1: cabin position, floors, vanes, overtravel, calls.
+fn position_panel(
+    area: &Area<'_>,
+    key: &Area<'_>,
+    s: &Samples,
+    rep: &Report,
+    t_end: f64,
+) -> DrawResult {
+    let cfg = &s.config;
+    let top_level = f64::from(cfg.floors - 1) * cfg.floor_pitch_mm;
+    let trip_bottom = -cfg.trip_beyond_floor_mm;
+    let trip_top = top_level + cfg.trip_beyond_floor_mm;
+    let (lo, hi) = s
+        .samples
+        .iter()
+        .fold((trip_bottom, trip_top), |(lo, hi), p| {
+            (lo.min(p.position_mm), hi.max(p.position_mm))
+        });
+    let (lo, hi) = (lo - 60.0, hi + 60.0);
+    let mut chart = panel(area, "Cabin position, floors, vanes and calls")
+        .build_cartesian_2d(0.0..t_end, lo..hi)?;
+    chart
+        .configure_mesh()
+        .disable_y_mesh()
+        .x_desc("time (s)")
+        .x_label_formatter(&tick)
+        .y_desc("cabin above floor 1 (mm)")
+        .y_label_formatter(&tick)
+        .label_style(("sans-serif", 13))
+        .draw()?;
+    let half = cfg.long_track_half_mm;
+    for floor in 1..=cfg.floors {
+        let Some(level) = cfg.floor_level_mm(floor) else {
+            continue;
+        };
+        chart.draw_series([Rectangle::new(
+            [(0.0, level - half), (t_end, level + half)],
+            VANE.mix(0.25).filled(),
+        )])?;
+        chart.draw_series(LineSeries::new(
+            [(0.0, level), (t_end, level)],
+            FLOOR.stroke_width(1),
+        ))?;
+        chart.draw_series([Text::new(
+            format!("floor {floor}"),
+            (t_end * 0.005, level + half + 8.0),
+            ("sans-serif", 13).into_font().color(&FLOOR),
+        )])?;
+    }
+    for trip in [trip_bottom, trip_top] {
+        chart.draw_series(DashedLineSeries::new(
+            [(0.0, trip), (t_end, trip)],
+            8,
+            5,
+            TRIP.stroke_width(2),
+        ))?;
+    }
+    let calls: Vec<(f64, Option<f64>, f64)> = rep
+        .passengers
+        .iter()
+        .filter_map(|p| {
+            let level = cfg.floor_level_mm(button_floor(&p.button)?)?;
+            Some((p.pressed_at_s, p.served_at_s, level))
+        })
+        .collect();
+    // The wait: from the press to the cabin's stop (or the end of the run), along the floor.
+    chart.draw_series(calls.iter().map(|&(t, served, level)| {
+        PathElement::new(
+            [(t, level), (served.unwrap_or(t_end), level)],
+            WAIT.stroke_width(3),
+        )
+    }))?;
+    chart.draw_series(LineSeries::new(
+        s.samples.iter().map(|p| (p.t_s, p.position_mm)),
+        POSITION.stroke_width(2),
+    ))?;
+    chart.draw_series(calls.iter().filter_map(|&(_, served, level)| {
+        served.map(|t| Circle::new((t, level), 7, SERVED.stroke_width(2)))
+    }))?;
+    chart.draw_series(
+        calls
+            .iter()
+            .map(|&(t, _, level)| TriangleMarker::new((t, level), 8, PRESSED.filled())),
+    )?;
+    let unserved = calls.iter().filter(|c| c.1.is_none()).count();
+    legend(
+        key,
+        &[
+            (Swatch::Line(POSITION, 2), "cabin position".into()),
+            (Swatch::Line(FLOOR, 1), "floor level".into()),
+            (
+                Swatch::Band(VANE),
+                format!("vane, long sensor track (±{half:.0} mm)"),
+            ),
+            (
+                Swatch::Dashed(TRIP),
+                format!(
+                    "overtravel trip ({:.0} mm past end floor)",
+                    cfg.trip_beyond_floor_mm
+                ),
+            ),
+            (
+                Swatch::Triangle(PRESSED),
+                format!("call pressed, at its floor ({})", calls.len()),
+            ),
+            (Swatch::Line(WAIT, 3), "waiting for the cabin".into()),
+            (
+                Swatch::Ring(SERVED),
+                if unserved == 0 {
+                    "call served (cabin stopped)".into()
+                } else {
+                    format!(
+                        "call served ({} of {})",
+                        calls.len() - unserved,
+                        calls.len()
+                    )
+                },
+            ),
+        ],
+    )
+}
+
+/// Panel 2: velocity, K1, safety trips.
+fn velocity_panel(
+    area: &Area<'_>,
+    key: &Area<'_>,
+    s: &Samples,
+    rep: &Report,
+    t_end: f64,
+) -> DrawResult {
+    let vmax = s
+        .samples
+        .iter()
+        .fold(50.0_f64, |m, p| m.max(p.velocity_mm_s.abs()))
+        * 1.15;
+    let mut chart = panel(area, "Cabin velocity, contactor K1 and safety trips")
+        .build_cartesian_2d(0.0..t_end, -vmax..vmax)?
+        .set_secondary_coord(0.0..t_end, -0.25..1.6);
+    chart
+        .configure_mesh()
+        .x_desc("time (s)")
+        .x_label_formatter(&tick)
+        .y_desc("velocity, up positive (mm/s)")
+        .y_label_formatter(&tick)
+        .label_style(("sans-serif", 13))
+        .draw()?;
+    chart
+        .configure_secondary_axes()
+        .y_desc("contactor K1")
+        .y_labels(3)
+        .y_label_formatter(&|v: &f64| {
+            if v.abs() < 1e-9 {
+                "open".to_string()
+            } else if (v - 1.0).abs() < 1e-9 {
+                "closed".to_string()
+            } else {
+                String::new()
+            }
+        })
+        .label_style(("sans-serif", 13))
+        .draw()?;
+    let k1 = |b: bool| if b { 1.0 } else { 0.0 };
+    let mut steps = Vec::with_capacity(s.samples.len() * 2);
+    for (i, p) in s.samples.iter().enumerate() {
+        if i > 0 {
+            steps.push((p.t_s, k1(s.samples[i - 1].k1)));
+        }
+        steps.push((p.t_s, k1(p.k1)));
+    }
+    steps.dedup();
+    chart.draw_secondary_series(LineSeries::new(steps, K1.stroke_width(2)))?;
+    chart.draw_series(LineSeries::new(
+        s.samples.iter().map(|p| (p.t_s, p.velocity_mm_s)),
+        VELOCITY.stroke_width(2),
+    ))?;
+    chart.draw_series(rep.safety.trips.iter().map(|trip| {
+        PathElement::new(
+            [(trip.at_s, -vmax), (trip.at_s, vmax)],
+            TRIP.stroke_width(2),
+        )
+    }))?;
+    legend(
+        key,
+        &[
+            (Swatch::Line(VELOCITY, 2), "cabin velocity".into()),
+            (Swatch::Line(K1, 2), "K1, drive power (right axis)".into()),
+            (
+                Swatch::Mark(TRIP),
+                match rep.safety.trips.len() {
+                    0 => "safety trip (none)".into(),
+                    n => format!("safety trip ({n})"),
+                },
+            ),
+        ],
+    )
+}
+
+/// Panel 3: repeats per transaction.
+fn bus_panel(area: &Area<'_>, key: &Area<'_>, s: &Samples, rep: &Report, t_end: f64) -> DrawResult {
+    let rate = s.bus_rate();
+    let max = rate.iter().fold(0.0_f64, |m, r| m.max(r.2));
+    let ymax = if max > 0.0 { max * 1.2 } else { 1.0 };
+    let mut chart = panel(area, "AS-i bus: repeats per transaction")
+        .build_cartesian_2d(0.0..t_end, 0.0..ymax)?;
+    chart
+        .configure_mesh()
+        .x_desc("time (s)")
+        .x_label_formatter(&tick)
+        .y_desc("repeats (% of transactions)")
+        .y_label_formatter(&tick)
+        .y_labels(5)
+        .label_style(("sans-serif", 13))
+        .draw()?;
+    let mut steps = Vec::with_capacity(rate.len() * 2);
+    for &(a, b, r) in &rate {
+        steps.push((a, r));
+        steps.push((b, r));
+    }
+    chart.draw_series(LineSeries::new(steps, BUS.stroke_width(2)))?;
+    if max == 0.0 {
+        chart.draw_series([Text::new(
+            "no repeats: every transaction succeeded at the first try",
+            (t_end * 0.01, ymax * 0.5),
+            ("sans-serif", 14).into_font().color(&BUS),
+        )])?;
+    }
+    legend(
+        key,
+        &[
+            (
+                Swatch::Line(BUS, 2),
+                format!("repeats per {BUS_WINDOW_S:.0} s window"),
+            ),
+            (Swatch::None, format!("in all: {} repeats", rep.bus.repeats)),
+            (
+                Swatch::None,
+                format!("in {} transactions", rep.bus.transactions),
+            ),
+        ],
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_sampling_step_keeps_long_runs_small() {
+        assert_eq!(sample_step(SimDuration::from_secs(80)), MIN_STEP);
+        assert_eq!(sample_step(SimDuration::from_secs(100)), MIN_STEP);
+        assert_eq!(
+            sample_step(SimDuration::from_secs(600)),
+            SimDuration::from_millis(120)
+        );
+    }
+
+    #[test]
+    fn a_button_names_its_floor() {
+        assert_eq!(button_floor("cabin:3"), Some(3));
+        assert_eq!(button_floor("hall-down:4"), Some(4));
+        assert_eq!(button_floor("cabin"), None);
+    }
+}
