@@ -44,7 +44,7 @@ enum Command {
     Decode(cmd::decode::DecodeArgs),
     /// Timing analysis (docs/timing.md): transaction and cycle time, per-slave update period,
     /// repeats, handshake word times and end-to-end latencies, analytic and simulated side by
-    /// side, compared with the seed's T = (n + 2) · 154 µs.
+    /// side, compared with the textbook cycle time T = (n + 2) · 154 µs.
     Timing(cmd::timing::TimingArgs),
     /// Run many random valid scenarios on the whole rig (README.md, "Campaigns"): one JSON
     /// line per run, every failure shrunk to a scenario file that reproduces it; or merge

@@ -106,7 +106,7 @@ pub enum LiftConfigError {
         slip: f64,
     },
     /// The short track is not shorter than the long one.
-    #[error("short_track_half_mm = {short_mm:?} must be less than long_track_half_mm = {long_mm:?}: floor 1 is recognised by its long track rising first (seed 003 §6.4)")]
+    #[error("short_track_half_mm = {short_mm:?} must be less than long_track_half_mm = {long_mm:?}: floor 1 is recognised by its long track rising first (docs/lift-plant.md)")]
     TrackLengths {
         /// The short half length given.
         short_mm: f64,
@@ -114,7 +114,7 @@ pub enum LiftConfigError {
         long_mm: f64,
     },
     /// Two tracks of one sensor touch or overlap, so the sensor would not drop between floors.
-    #[error("vanes overlap: the {sensor} tracks of floors {lower_floor} and {upper_floor} touch or overlap (floor {lower_floor} ends at {lower_top_mm:?} mm, floor {upper_floor} starts at {upper_bottom_mm:?} mm); the sensor must drop between floors or the controller's floor counting (seed 003 tables 6.4, 6.5) misses one: raise floor_pitch_mm or shorten the tracks")]
+    #[error("vanes overlap: the {sensor} tracks of floors {lower_floor} and {upper_floor} touch or overlap (floor {lower_floor} ends at {lower_top_mm:?} mm, floor {upper_floor} starts at {upper_bottom_mm:?} mm); the sensor must drop between floors or the controller's floor counting (docs/controller.md) misses one: raise floor_pitch_mm or shorten the tracks")]
     VanesOverlap {
         /// The sensor whose tracks collide.
         sensor: VaneSensor,

@@ -100,6 +100,8 @@ pub struct FinalState {
     pub floor: u8,
     /// The cabin height, mm.
     pub position_mm: f64,
+    /// Where the cabin stands, from its height.
+    pub cabin_at: CabinAt,
     /// The controller's state.
     pub state: controller::State,
     /// The cabin moves.
@@ -221,13 +223,69 @@ pub struct MonitorTrip {
     pub cause: String,
 }
 
-/// One safety trip.
+/// One safety trip, error, or output the safety logic switched off.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Trip {
     /// When, seconds.
     pub at_s: f64,
+    /// What it is.
+    pub kind: TripKind,
     /// Why, in words.
     pub cause: String,
+}
+
+/// What a [`Trip`] record is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum TripKind {
+    /// A safety function or the group tripped: the cause of a safety stop.
+    Trip,
+    /// An error was detected (FB_ERR, COM_ERR, OUT_ERR, a logic fault): also a cause.
+    Error,
+    /// An output went off because of a trip or an error: K1 opened, the STOP delay elapsed.
+    PowerOff,
+}
+
+/// Where the cabin stands, as an operator says it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum CabinAt {
+    /// Level with a floor (within the level window).
+    Floor(u8),
+    /// Between two floors.
+    Between(u8, u8),
+    /// Below floor 1's level window.
+    BelowFloor1,
+    /// Above the top floor's level window.
+    AboveTop,
+}
+
+impl CabinAt {
+    /// Where a cabin at `position_mm` stands in the lift `config`.
+    pub fn of(config: &lift_model::LiftConfig, position_mm: f64) -> CabinAt {
+        if let Some(f) = config.level_floor(position_mm) {
+            return CabinAt::Floor(f);
+        }
+        let below = (position_mm / config.floor_pitch_mm).floor() as i64 + 1;
+        if below < 1 {
+            CabinAt::BelowFloor1
+        } else if below >= i64::from(config.floors) {
+            CabinAt::AboveTop
+        } else {
+            CabinAt::Between(below as u8, below as u8 + 1)
+        }
+    }
+}
+
+impl std::fmt::Display for CabinAt {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            CabinAt::Floor(n) => write!(f, "at floor {n}"),
+            CabinAt::Between(a, b) => write!(f, "between floors {a} and {b}"),
+            CabinAt::BelowFloor1 => f.write_str("below floor 1"),
+            CabinAt::AboveTop => f.write_str("above the top floor"),
+        }
+    }
 }
 
 /// A safety invariant broken.
@@ -347,6 +405,8 @@ impl Report {
             final_state: FinalState {
                 floor: 1,
                 position_mm: start_mm,
+                // Replaced by the run's end state, as every field here.
+                cabin_at: CabinAt::Floor(1),
                 state: controller::State::WaitingForInputs,
                 moving: false,
                 contactor_closed: false,
@@ -427,17 +487,30 @@ impl Report {
                 let _ = writeln!(s, "  initialised at     never");
             }
         }
-        let stops: Vec<String> = self.arrivals.iter().map(|a| a.floor.to_string()).collect();
+        // The floors the cabin came to rest at, a floor it rested at again (a re-initialisation,
+        // a halt after STOP) once.
+        let mut stops: Vec<String> = Vec::new();
+        for a in &self.arrivals {
+            let f = a.floor.to_string();
+            if stops.last() != Some(&f) {
+                stops.push(f);
+            }
+        }
         let _ = writeln!(
             s,
-            "  stops at floors    {}",
+            "  came to rest at    {}",
             if stops.is_empty() {
-                "none".into()
+                "no floor".into()
             } else {
-                stops.join(", ")
+                format!("floor {}", stops.join(", then "))
             }
         );
-        let _ = writeln!(s, "  calls served       {}", self.served.len());
+        let _ = writeln!(
+            s,
+            "  calls served       {} (of {} presses of call buttons)",
+            self.served.len(),
+            self.passengers.len()
+        );
         if !self.passengers.is_empty() {
             let w = self.waits();
             let show = |m: Option<f64>| m.map_or("none".to_string(), |v| format!("{v:.1} s"));
@@ -454,12 +527,13 @@ impl Report {
         let f = &self.final_state;
         let _ = writeln!(
             s,
-            "  final              floor {} at {:.1} mm, {}, {}, K1 {}",
-            f.floor,
+            "  at the end         cabin {} ({:.1} mm), {}, K1 {}; controller: {}, floor count {}",
+            f.cabin_at,
             f.position_mm,
-            f.state,
             if f.moving { "moving" } else { "at rest" },
-            if f.contactor_closed { "closed" } else { "open" }
+            if f.contactor_closed { "closed" } else { "open" },
+            f.state,
+            f.floor,
         );
         if let Some(c) = &f.k1_open_cause {
             let _ = writeln!(s, "  K1 open because    {c}");
@@ -488,7 +562,33 @@ impl Report {
                 d.address, d.count, d.out_of_las_s
             );
         }
-        let _ = writeln!(s, "  safety trips       {}", self.safety.trips.len());
+        // A safety stop as the operator sees it: what tripped; K1 opening and the STOP delay
+        // running out are its consequences, counted apart.
+        let causes: Vec<&Trip> = self
+            .safety
+            .trips
+            .iter()
+            .filter(|t| t.kind != TripKind::PowerOff)
+            .collect();
+        let power_off = self
+            .safety
+            .trips
+            .iter()
+            .filter(|t| t.kind == TripKind::PowerOff && t.cause.starts_with("K1 opened"))
+            .count();
+        let _ = writeln!(
+            s,
+            "  safety trips       {} (K1 opened {power_off} {})",
+            causes.len(),
+            if power_off == 1 { "time" } else { "times" }
+        );
+        const SHOWN: usize = 5;
+        for t in causes.iter().take(SHOWN) {
+            let _ = writeln!(s, "    {:>10.3} s  {}", t.at_s, t.cause);
+        }
+        if causes.len() > SHOWN {
+            let _ = writeln!(s, "    … and {} more", causes.len() - SHOWN);
+        }
         if self.safety.attendant_rounds > 0 {
             let _ = writeln!(s, "  attendant rounds   {}", self.safety.attendant_rounds);
         }

@@ -297,8 +297,10 @@ impl fmt::Display for K1Cause {
 /// The kind of a [`LiftSafetyEvent`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum LiftEventKind {
-    /// Power or enable was taken away: a safety function tripped, K1 opened, a group tripped.
+    /// A safety function tripped or a group tripped: the cause of a safety stop.
     Trip,
+    /// An output went off as a trip's consequence: K1 opened, the STOP delay elapsed.
+    PowerOff,
     /// An error was detected (FB_ERR, COM_ERR, OUT_ERR, logic fault).
     Error,
     /// A safety function was reset, K1 closed.
@@ -326,9 +328,12 @@ impl LiftSafetyEvent {
         self.at.as_secs_f64()
     }
 
-    /// `true` for trips and errors.
+    /// `true` for trips, errors and the outputs they switch off.
     pub fn is_trip(&self) -> bool {
-        matches!(self.kind, LiftEventKind::Trip | LiftEventKind::Error)
+        matches!(
+            self.kind,
+            LiftEventKind::Trip | LiftEventKind::Error | LiftEventKind::PowerOff
+        )
     }
 }
 
@@ -531,7 +536,7 @@ impl LiftSafety {
                     LiftEventKind::Release,
                     "K1 closed: drive power on".to_owned(),
                 ),
-                Some(c) => (LiftEventKind::Trip, format!("K1 opened: {c}")),
+                Some(c) => (LiftEventKind::PowerOff, format!("K1 opened: {c}")),
             };
             events.push(LiftSafetyEvent {
                 at: now,
@@ -598,7 +603,7 @@ fn describe(e: &LogicEvent, config: &LiftSafetyConfig) -> LiftSafetyEvent {
                 )
             }
             FbEvent::DelayedOutputOff => (
-                Trip,
+                PowerOff,
                 format!(
                     "STOP delay of {} elapsed: EStopDelOut off",
                     config.estop_delay

@@ -179,6 +179,11 @@ fn stop_drops_estop_out_at_once_and_k1_after_the_delay_then_the_controller_resta
             "K1 opened: STOP circuit waiting for the controller's restart"
         ]
     );
+    // Both are the trip's consequences, not trips of their own.
+    assert!(out
+        .events
+        .iter()
+        .all(|e| e.kind == LiftEventKind::PowerOff && e.is_trip()));
     sim.run_k1_open(2_000, "no restart yet");
     sim.pulse(|i, v| i.controller_restart = v);
     assert!(

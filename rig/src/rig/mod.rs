@@ -21,8 +21,8 @@ mod words;
 pub use outputs::TransactionObserver;
 
 use crate::report::{
-    round3, Arrival, FinalState, LogLine, MonitorTrip, Report, SlaveDropouts, Trip, Violation,
-    ViolationKind,
+    round3, Arrival, CabinAt, FinalState, LogLine, MonitorTrip, Report, SlaveDropouts, Trip,
+    TripKind, Violation, ViolationKind,
 };
 use crate::scenario::{Action, Fault, Scenario, ScenarioEvent};
 use crate::waves::{RigSample, WaveOutputs, Waves};
@@ -44,6 +44,7 @@ use operator::{
 };
 use outputs::Outputs;
 use passengers::Passengers;
+use safety::lift::LiftEventKind;
 use safety::{LiftSafety, LiftSafetyConfig, LiftSafetyInputs, SafeLink, SAFETY_SCAN_PERIOD};
 use wiring::Applied;
 
@@ -662,9 +663,16 @@ impl Rig {
         };
         let out = self.safety.scan(t, &inputs);
         for e in &out.events {
-            if e.is_trip() {
+            let kind = match e.kind {
+                LiftEventKind::Trip => Some(TripKind::Trip),
+                LiftEventKind::Error => Some(TripKind::Error),
+                LiftEventKind::PowerOff => Some(TripKind::PowerOff),
+                LiftEventKind::Release | LiftEventKind::Acknowledge | LiftEventKind::Info => None,
+            };
+            if let Some(kind) = kind {
                 self.report.safety.trips.push(Trip {
                     at_s: e.at_s(),
+                    kind,
                     cause: e.cause.clone(),
                 });
             }
@@ -802,6 +810,7 @@ impl Rig {
         self.report.final_state = FinalState {
             floor: p.current_floor(),
             position_mm: round3(self.lift.position_mm()),
+            cabin_at: CabinAt::of(self.lift.config(), self.lift.position_mm()),
             state: p.state(),
             moving: self.lift.velocity_mm_s() != 0.0,
             contactor_closed: self.lift.k1_closed(),

@@ -142,7 +142,7 @@ impl<'p> Verifier<'p> {
                     self.err(
                         Rule::Dangling,
                         Item::Group { index, name: g.name.clone() },
-                        "ERR_ACK is not connected; acknowledgement is never automatic, so it must be (seed 004 §3.1)".into(),
+                        "ERR_ACK is not connected; acknowledgement is never automatic, so it must be (docs/safety-logic.md)".into(),
                     );
                     None
                 }
@@ -293,7 +293,7 @@ impl<'p> Verifier<'p> {
                 self.err(
                     Rule::SignalKind,
                     item.clone(),
-                    format!("a Local-Out takes a module output, not the group output `{}` (seed 004 table 3-2)", o.source),
+                    format!("a Local-Out takes a module output, not the group output `{}` (docs/safety-logic.md)", o.source),
                 );
                 continue;
             }
