@@ -173,3 +173,37 @@ fn a_file_that_is_not_utf8_is_refused_at_its_place() {
         "{err}"
     );
 }
+
+#[test]
+fn a_campaign_whose_reader_goes_ends_quietly() {
+    let d = temp();
+    let mut child = asi_lift()
+        .args([
+            "campaign",
+            "--runs",
+            "3",
+            "--jobs",
+            "1",
+            "--profile",
+            "smoke",
+        ])
+        .arg("--failures")
+        .arg(d.path().join("failures"))
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("asi-lift starts");
+    let stdout = child.stdout.take().expect("stdout");
+    let mut first = String::new();
+    BufReader::new(stdout)
+        .read_line(&mut first)
+        .expect("one line");
+    assert!(first.starts_with("{\"index\":0"), "{first}");
+    let out = child.wait_with_output().expect("asi-lift ends");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{:?}: {err}", out.status);
+    assert!(
+        !err.contains("Broken pipe") && !err.contains("panicked"),
+        "{err}"
+    );
+}

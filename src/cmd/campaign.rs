@@ -137,6 +137,8 @@ pub fn run(args: CampaignArgs) -> Result<u8, String> {
     let mut failures_seen = 0u64;
     let mut written: Vec<PathBuf> = Vec::new();
     let failures_dir = args.failures.clone();
+    // Set when standard output's reader has gone (`| head`): the campaign stops quietly.
+    let reader_gone = std::cell::Cell::new(false);
     let mut sink = |mut f: Finished| -> Result<(), String> {
         if let Some(r) = &f.reproducer {
             let path = write_reproducer(&failures_dir, &r.file_name, &r.text)?;
@@ -152,7 +154,12 @@ pub fn run(args: CampaignArgs) -> Result<u8, String> {
             .map_err(|e| format!("run {}: its line as JSON: {e}", f.line.index))?;
         writeln!(out, "{line}")
             .and_then(|()| out.flush())
-            .map_err(|e| format!("{out_name}: {e}"))
+            .map_err(|e| {
+                if e.kind() == std::io::ErrorKind::BrokenPipe {
+                    reader_gone.set(true);
+                }
+                format!("{out_name}: {e}")
+            })
     };
     let mut progress = |f: &Finished| {
         if f.reproducer.is_some() {
@@ -164,6 +171,9 @@ pub fn run(args: CampaignArgs) -> Result<u8, String> {
     let result = run_campaign(&plan, jobs, &mut sink, &mut progress);
     bar.finish_and_clear();
     let _ = std::panic::take_hook();
+    if reader_gone.get() {
+        return Ok(0);
+    }
     result.map_err(|e| e.0)?;
     let failing = count - outcomes.get("ok").copied().unwrap_or(0);
     let by: Vec<String> = outcomes.iter().map(|(k, v)| format!("{v} {k}")).collect();
