@@ -5,6 +5,7 @@ use super::*;
 use crate::telegrams::TelegramType;
 use asi_phy::waveform::{render, WaveformConfig};
 use asi_phy::{Address, Nibble, PulseTrain, Request, Response};
+use core::ops::ControlFlow;
 use proptest::prelude::*;
 use std::fmt::Write as _;
 
@@ -526,4 +527,143 @@ proptest! {
         }
         prop_assert_eq!(telegrams(&wire_vcd(&pulses, "1 ns", 1.0)), want);
     }
+}
+
+/// The three kinds of capture of the spec vectors: a wire VCD, a real VCD, a CSV.
+fn spec_captures() -> Vec<(String, DecodeOptions)> {
+    let wf = render(
+        spec_line(),
+        SimTime::ZERO,
+        SimTime::from_micros(170),
+        &WaveformConfig::default(),
+    )
+    .expect("render");
+    let mut csv = String::new();
+    let mut real = String::from(
+        "$timescale 1 ns $end\n$var real 64 % v $end\n$enddefinitions $end\n#0\n$dumpvars r0 % $end\n",
+    );
+    for (i, v) in wf.samples.iter().enumerate() {
+        let _ = writeln!(csv, "{:.9},{v}", i as f64 * 1e-7);
+        let _ = writeln!(real, "#{}\nr{v} %", 100 * i);
+    }
+    vec![
+        (SPEC_WIRE_VCD.to_owned(), DecodeOptions::default()),
+        (real, DecodeOptions::default()),
+        (csv, DecodeOptions::default()),
+    ]
+}
+
+#[test]
+fn a_stream_hands_over_the_telegrams_in_order_as_the_whole_decode_has_them() {
+    for (text, opts) in spec_captures() {
+        let whole = decode(&text, &opts).expect("whole");
+        assert_eq!(whole.telegrams, spec_records(), "{text:.40}");
+        let mut got = Vec::new();
+        let s = decode_stream(text.as_bytes(), &opts, |t| {
+            got.push(t);
+            ControlFlow::Continue(())
+        })
+        .expect("stream");
+        assert_eq!(got, whole.telegrams);
+        assert_eq!(s, whole.summary());
+        // A sink that stops ends the decode after its telegram.
+        let mut seen = 0;
+        let s = decode_stream(text.as_bytes(), &opts, |_| {
+            seen += 1;
+            ControlFlow::Break(())
+        })
+        .expect("stopped");
+        assert_eq!((seen, s.telegrams), (1, 1));
+    }
+}
+
+/// A CSV capture made on the fly: `reps` repetitions of the spec vectors' 170 µs, one
+/// sample every 100 ns, counting the bytes handed out.
+struct Generated {
+    window: Vec<f32>,
+    reps: usize,
+    /// The next sample's index over all repetitions.
+    next: usize,
+    line: Vec<u8>,
+    pos: usize,
+    produced: std::rc::Rc<std::cell::Cell<usize>>,
+}
+
+impl std::io::Read for Generated {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        if self.pos == self.line.len() {
+            if self.next == self.window.len() * self.reps {
+                return Ok(0);
+            }
+            self.line.clear();
+            let v = self.window[self.next % self.window.len()];
+            let _ = std::io::Write::write_fmt(
+                &mut self.line,
+                format_args!("{:.9},{v}\n", self.next as f64 * 1e-7),
+            );
+            self.next += 1;
+            self.pos = 0;
+        }
+        let n = buf.len().min(self.line.len() - self.pos);
+        buf[..n].copy_from_slice(&self.line[self.pos..self.pos + n]);
+        self.pos += n;
+        self.produced.set(self.produced.get() + n);
+        Ok(n)
+    }
+}
+
+#[test]
+fn a_capture_longer_than_the_prefix_streams_through_bounded_state() {
+    let wf = render(
+        spec_line(),
+        SimTime::ZERO,
+        SimTime::from_micros(170),
+        &WaveformConfig::default(),
+    )
+    .expect("render");
+    let window = wf.samples[..1700].to_vec();
+    // Past the prefix, so most of the capture goes through without being held.
+    let reps = PREFIX_SAMPLES / window.len() * 3 / 2;
+    let produced = std::rc::Rc::new(std::cell::Cell::new(0));
+    let input = std::io::BufReader::new(Generated {
+        window,
+        reps,
+        next: 0,
+        line: Vec::new(),
+        pos: 0,
+        produced: produced.clone(),
+    });
+    let want = spec_records();
+    let mut n = 0usize;
+    let mut first_at = None;
+    // The sink checks each telegram as it comes and keeps nothing.
+    let s = decode_stream(input, &DecodeOptions::default(), |t| {
+        first_at.get_or_insert(produced.get());
+        let w = &want[n % 2];
+        let shift = (n / 2) as i64 * 170_000;
+        assert_eq!(
+            t,
+            TelegramRecord {
+                t_ns: w.t_ns + shift,
+                ..w.clone()
+            },
+            "telegram {n}"
+        );
+        n += 1;
+        ControlFlow::Continue(())
+    })
+    .expect("decodes");
+    assert_eq!((n, s.telegrams, s.valid), (2 * reps, 2 * reps, 2 * reps));
+    let CaptureSource::Voltage { samples, .. } = s.source else {
+        panic!("{:?}", s.source)
+    };
+    assert_eq!(samples, 1700 * reps);
+    // Telegrams came out while most of the input was still to be read: after the prefix,
+    // not at the end.
+    let first_at = first_at.expect("a telegram");
+    assert!(
+        first_at < produced.get() * 3 / 4,
+        "first telegram after {first_at} of {} bytes",
+        produced.get()
+    );
 }
