@@ -26,7 +26,7 @@ pub struct DecodeArgs {
     /// data, errors) and nothing else; the summary goes to standard error.
     #[arg(long)]
     pub json: bool,
-    /// Nominal pulse amplitude in volts (estimated from the capture if not given).
+    /// Nominal pulse amplitude in volts [default: estimated from the first 2^20 samples].
     #[arg(long, value_name = "V")]
     pub nominal: Option<f32>,
     /// What the receiver listens for.
