@@ -65,12 +65,13 @@ pub struct DecodeOptions {
     /// The VCD signal to decode: its reference name, full dotted path or trailing scopes.
     /// `None` takes the only variable of the file.
     pub signal: Option<String>,
-    /// Nominal pulse amplitude in volts; `None` estimates it from the capture.
+    /// Nominal pulse amplitude in volts; `None` estimates it from the capture's first
+    /// [`PREFIX_SAMPLES`] samples.
     pub nominal: Option<f32>,
     /// What the receiver listens for.
     pub expect: Expect,
     /// The sampling grid for a VCD real signal; `None` takes the smallest spacing between
-    /// its changes, at most 100 ns.
+    /// its first [`PREFIX_SAMPLES`] changes, at most 100 ns.
     pub sample_period: Option<SimDuration>,
 }
 
