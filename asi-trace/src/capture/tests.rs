@@ -667,3 +667,52 @@ fn a_capture_longer_than_the_prefix_streams_through_bounded_state() {
         produced.get()
     );
 }
+
+#[test]
+fn a_real_vcd_longer_than_the_prefix_is_gridded_as_it_comes() {
+    let wf = render(
+        spec_line(),
+        SimTime::ZERO,
+        SimTime::from_micros(170),
+        &WaveformConfig::default(),
+    )
+    .expect("render");
+    let window = &wf.samples[..1700];
+    let reps = PREFIX_SAMPLES / window.len() * 2;
+    // Written on change, so the grid's period comes from the prefix's smallest spacing and
+    // the values are held between changes past it.
+    let mut s = String::from(
+        "$timescale 1 ns $end\n$var real 64 % v $end\n$enddefinitions $end\n#0\n$dumpvars r0 % $end\n",
+    );
+    let mut last = 0.0;
+    let mut changes = 0;
+    for i in 0..window.len() * reps {
+        let v = window[i % window.len()];
+        if v != last {
+            let _ = writeln!(s, "#{}\nr{v} %", 100 * i);
+            last = v;
+            changes += 1;
+        }
+    }
+    let _ = writeln!(s, "#{}\nr0 %", 100 * (window.len() * reps - 1));
+    assert!(changes > PREFIX_SAMPLES, "{changes}");
+    let mut n = 0;
+    let want = spec_records();
+    let sum = decode_stream(s.as_bytes(), &DecodeOptions::default(), |t| {
+        let w = &want[n % 2];
+        let shift = (n / 2) as i64 * 170_000;
+        assert_eq!(t.t_ns, w.t_ns + shift, "telegram {n}");
+        assert_eq!(t.bits, w.bits, "telegram {n}");
+        n += 1;
+        ControlFlow::Continue(())
+    })
+    .expect("decodes");
+    assert_eq!((n, sum.valid), (2 * reps, 2 * reps));
+    let CaptureSource::Voltage {
+        samples, period_ns, ..
+    } = sum.source
+    else {
+        panic!("{:?}", sum.source)
+    };
+    assert_eq!((samples, period_ns), (1700 * reps, 100.0));
+}
