@@ -697,13 +697,18 @@ impl Running {
 
 /// Sampled voltage through the comparator into the receiver. The first [`PREFIX_SAMPLES`]
 /// samples are held to estimate the nominal amplitude (unless it is given) and to start the
-/// comparator's baseline; the rest go straight through.
+/// comparator's baseline; the rest go straight through. A flat block (no amplitude to
+/// estimate: a line not yet powered, a bus not yet started) is kept as runs of equal samples,
+/// which a flat line makes few, and the estimate is tried on the next block; the first block
+/// that is not flat sets the amplitude, and the runs go through the comparator before it.
 struct Comparator {
     start: SimTime,
     period_ns: f64,
     /// The amplitude given, then the one used (`None`: a flat line).
     nominal: Option<f32>,
     held: Vec<f32>,
+    /// The flat blocks before `held`: (value, count) runs.
+    quiet: Vec<(f32, u32)>,
     state: CompState,
     samples: u64,
 }
@@ -711,7 +716,7 @@ struct Comparator {
 enum CompState {
     Holding,
     Running(Demodulator),
-    /// A flat line: no pulses.
+    /// A flat line to its end: no pulses.
     Flat,
 }
 
@@ -722,6 +727,7 @@ impl Comparator {
             period_ns,
             nominal,
             held: Vec::new(),
+            quiet: Vec::new(),
             state: CompState::Holding,
             samples: 0,
         }
@@ -735,29 +741,51 @@ impl Comparator {
             CompState::Holding => {
                 self.held.extend_from_slice(samples);
                 if self.held.len() >= PREFIX_SAMPLES {
-                    self.start(out)?;
+                    self.judge(false, out)?;
                 }
             }
         }
         Ok(())
     }
 
-    fn start(&mut self, out: &mut Telegrams<'_>) -> Result<(), DecodeError> {
+    /// Estimates the amplitude on the held block and starts the comparator, or keeps the
+    /// block as quiet line; at the `end`, a line quiet throughout is flat.
+    fn judge(&mut self, end: bool, out: &mut Telegrams<'_>) -> Result<(), DecodeError> {
         let held = core::mem::take(&mut self.held);
-        self.nominal = self.nominal.or_else(|| amplitude_of(&held));
-        self.state = match self.nominal {
-            // A flat line carries no pulses.
-            None => CompState::Flat,
-            Some(nominal_amplitude) => {
-                let cfg = DemodConfig {
-                    nominal_amplitude,
-                    ..DemodConfig::default()
-                };
-                let mut d = Demodulator::new(cfg, self.start, self.period_ns)?;
-                d.push(&held, |p| out.pulse(p));
-                CompState::Running(d)
+        let Some(nominal_amplitude) = self.nominal.or_else(|| amplitude_of(&held)) else {
+            for &v in &held {
+                match self.quiet.last_mut() {
+                    Some((w, n)) if w.to_bits() == v.to_bits() && *n < u32::MAX => *n += 1,
+                    _ => self.quiet.push((v, 1)),
+                }
             }
+            if end {
+                self.state = CompState::Flat;
+            }
+            return Ok(());
         };
+        self.nominal = Some(nominal_amplitude);
+        let cfg = DemodConfig {
+            nominal_amplitude,
+            ..DemodConfig::default()
+        };
+        let mut d = Demodulator::new(cfg, self.start, self.period_ns)?;
+        let mut buf = Vec::new();
+        for (v, n) in core::mem::take(&mut self.quiet) {
+            for _ in 0..n {
+                buf.push(v);
+                if buf.len() == CHUNK {
+                    d.push(&buf, |p| out.pulse(p));
+                    buf.clear();
+                }
+            }
+        }
+        // An empty push would fix the baseline at 0 V before the first samples are seen.
+        if !buf.is_empty() {
+            d.push(&buf, |p| out.pulse(p));
+        }
+        d.push(&held, |p| out.pulse(p));
+        self.state = CompState::Running(d);
         Ok(())
     }
 
@@ -768,7 +796,7 @@ impl Comparator {
         out: &mut Telegrams<'_>,
     ) -> Result<CaptureSource, DecodeError> {
         if matches!(self.state, CompState::Holding) {
-            self.start(out)?;
+            self.judge(true, out)?;
         }
         if let CompState::Running(d) = &mut self.state {
             d.finish(|p| out.pulse(p));

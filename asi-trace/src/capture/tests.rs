@@ -1,6 +1,6 @@
 //! Tests of capture decoding: worked captures, every receiver error class, and property tests.
 
-use super::render::{seconds, to_json_lines, to_text};
+use super::render::{seconds, summary, to_json_lines, to_text};
 use super::*;
 use crate::telegrams::TelegramType;
 use asi_phy::waveform::{render, WaveformConfig};
@@ -715,4 +715,59 @@ fn a_real_vcd_longer_than_the_prefix_is_gridded_as_it_comes() {
         panic!("{:?}", sum.source)
     };
     assert_eq!((samples, period_ns), (1700 * reps, 100.0));
+}
+
+#[test]
+fn a_quiet_start_longer_than_the_prefix_waits_for_the_first_pulses() {
+    // A line at 0 V for 0.15 s (more than the prefix), then the spec vectors every 170 µs
+    // for 3.4 ms (pulses in more than 0.5 % of the samples after the prefix, as the estimate
+    // needs).
+    let wf = render(
+        spec_line(),
+        SimTime::ZERO,
+        SimTime::from_micros(170),
+        &WaveformConfig::default(),
+    )
+    .expect("render");
+    let quiet = PREFIX_SAMPLES * 3 / 2;
+    let mut s = String::new();
+    for i in 0..quiet {
+        let _ = writeln!(s, "{:.9},0", i as f64 * 1e-7);
+    }
+    let busy = 1700 * 20;
+    for k in 0..busy {
+        let v = wf.samples[k % 1700];
+        let _ = writeln!(s, "{:.9},{v}", (quiet + k) as f64 * 1e-7);
+    }
+    let d = decode(&s, &DecodeOptions::default()).expect("decodes");
+    let shift = (quiet as f64 * 100.0).round() as i64;
+    let want: Vec<TelegramRecord> = (0..20)
+        .flat_map(|k| {
+            spec_records().into_iter().map(move |t| TelegramRecord {
+                t_ns: t.t_ns + shift + k * 170_000,
+                ..t
+            })
+        })
+        .collect();
+    assert_eq!(d.telegrams, want);
+    let CaptureSource::Voltage {
+        samples, nominal, ..
+    } = d.source
+    else {
+        panic!("{:?}", d.source)
+    };
+    assert_eq!(samples, quiet + busy);
+    assert!(
+        nominal.is_some_and(|a| (a - 2.5).abs() < 0.25),
+        "{nominal:?}"
+    );
+    // A line quiet to its end is flat.
+    let quiet_only = s.lines().take(quiet).collect::<Vec<_>>().join("\n");
+    let flat = decode(&quiet_only, &DecodeOptions::default()).expect("flat");
+    assert!(flat.telegrams.is_empty());
+    assert!(
+        summary(&flat).ends_with("a flat line"),
+        "{}",
+        summary(&flat)
+    );
 }
