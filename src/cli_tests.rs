@@ -111,6 +111,48 @@ fn a_reader_that_goes_ends_the_run_quietly() {
 }
 
 #[test]
+fn decode_prints_as_it_goes_and_a_reader_that_goes_ends_it_quietly() {
+    let d = temp();
+    let vcd = d.path().join("run.vcd");
+    let run = asi_lift()
+        .args(["run", "--until", "2s", "--report", "-", "--vcd"])
+        .arg(&vcd)
+        .output()
+        .expect("asi-lift run");
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    for json in [false, true] {
+        let mut cmd = asi_lift();
+        cmd.args(["decode", "--signal", "manchester"]).arg(&vcd);
+        if json {
+            cmd.arg("--json");
+        }
+        let mut child = cmd
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("asi-lift starts");
+        let stdout = child.stdout.take().expect("stdout");
+        let mut first = String::new();
+        BufReader::new(stdout)
+            .read_line(&mut first)
+            .expect("one line");
+        assert!(
+            first.contains(if json { "\"t_ns\"" } else { "time_s" }),
+            "{first}"
+        );
+        // The reader goes, as `| head -1` does, with thousands of telegrams still to come.
+        let out = child.wait_with_output().expect("asi-lift ends");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success(), "{:?}: {err}", out.status);
+        assert!(err.is_empty(), "{err}");
+    }
+}
+
+#[test]
 fn built_in_scenarios_are_listed_shown_and_run_by_name() {
     let out = asi_lift().arg("scenarios").output().expect("runs");
     let list = String::from_utf8_lossy(&out.stdout);

@@ -6,7 +6,10 @@
 //! telegram fields of every transaction, and the rig's state: the plant, the controller, the
 //! safety logic. The line voltage itself (`line_voltage`, the sampled sin² pulses as they are
 //! on the line, faults included) is written only for a window, default the first 10 ms, so a
-//! long run stays small; the CSV holds the same window as `time_s,voltage_v`.
+//! long run stays small; the CSV holds the same window as `time_s,voltage_v`. The pulse wire
+//! is the bulk of a long run's VCD (about [`VCD_PULSE_BYTES_PER_S`] per simulated second), so
+//! it too can be bounded by a window ([`WaveOutputs::pulse_window`]); [`estimate_vcd_bytes`]
+//! tells before the run how large the VCD will be.
 
 use crate::report::round3;
 use asi_master::record::{describe_request, TransactionRecord};
@@ -24,10 +27,36 @@ pub struct WaveOutputs {
     pub csv: Option<Box<dyn Write>>,
     /// The window of line voltage, `[start, end)`.
     pub window: (SimTime, SimTime),
+    /// The window of the VCD's pulse wire (`rig.bus.manchester`), `[start, end)`; `None`
+    /// for the whole run. The rest of the VCD (telegram fields, plant, controller, safety)
+    /// always covers the whole run.
+    pub pulse_window: Option<(SimTime, SimTime)>,
 }
 
 /// The default window of line voltage: the first 10 ms.
 pub const DEFAULT_WINDOW: (SimTime, SimTime) = (SimTime::ZERO, SimTime::from_millis(10));
+
+/// Bytes of VCD per simulated second of pulse wire: 3.3 MB measured on the demo's bus (a 4 s
+/// run, 16.3 MB with the whole pulse wire, 3.2 MB with 1 ms of it), rounded up for the
+/// longer time stamps of a long run.
+pub const VCD_PULSE_BYTES_PER_S: u64 = 3_400_000;
+/// Bytes of VCD per simulated second of line voltage while the bus is busy (10 MS/s, written
+/// on change): 142 MB measured (a 2 s run with 100 ms of voltage against one with 10 ms).
+pub const VCD_VOLTAGE_BYTES_PER_S: u64 = 145_000_000;
+/// Bytes of VCD per simulated second of the rest: telegram fields, plant, controller, safety
+/// (0.64 MB measured: a 4 s run against a 2 s one, both with 1 ms of pulse wire).
+pub const VCD_REST_BYTES_PER_S: u64 = 650_000;
+
+/// The VCD's size, roughly, for a run of `run` whose pulse wire covers `pulses` and line
+/// voltage `voltage` (each the part of its window inside the run).
+pub fn estimate_vcd_bytes(run: SimDuration, pulses: SimDuration, voltage: SimDuration) -> u64 {
+    let bytes = |d: SimDuration, per_s: u64| {
+        u64::try_from(d.as_nanos() as u128 * per_s as u128 / 1_000_000_000).unwrap_or(u64::MAX)
+    };
+    bytes(run, VCD_REST_BYTES_PER_S)
+        .saturating_add(bytes(pulses, VCD_PULSE_BYTES_PER_S))
+        .saturating_add(bytes(voltage, VCD_VOLTAGE_BYTES_PER_S))
+}
 
 /// How far behind the bus the VCD is written: a transaction is recorded when it ends, up to
 /// a few hundred µs after its request started.
@@ -165,6 +194,7 @@ pub struct Waves {
     vcd: Option<(VcdWriter<Box<dyn Write>>, Ids)>,
     csv: Option<Box<dyn Write>>,
     window: (SimTime, SimTime),
+    pulse_window: (SimTime, SimTime),
     window_pulses: Vec<Pulse>,
     /// The line voltage is written up to here.
     rendered_to: SimTime,
@@ -187,6 +217,9 @@ impl Waves {
             vcd,
             csv: out.csv,
             window: out.window,
+            pulse_window: out
+                .pulse_window
+                .unwrap_or((SimTime::ZERO, SimTime::from_nanos(u64::MAX))),
             window_pulses: Vec::new(),
             rendered_to: out.window.0,
             csv_header: false,
@@ -210,7 +243,10 @@ impl Waves {
             if p.at + margin > from.max(self.rendered_to) && p.at < until + margin {
                 self.window_pulses.push(*p);
             }
-            if let Some((w, ids)) = &mut self.vcd {
+            let (pulses_from, pulses_until) = self.pulse_window;
+            if let (Some((w, ids)), true) =
+                (&mut self.vcd, pulses_from <= p.at && p.at < pulses_until)
+            {
                 let level = matches!(p.polarity, Polarity::Positive);
                 w.change(p.at.as_nanos(), ids.manchester, level.into());
             }
@@ -400,4 +436,77 @@ impl Waves {
 
 fn round5(x: f32) -> f64 {
     (x as f64 * 1e5).round() / 1e5
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::cell::RefCell;
+    use std::rc::Rc;
+
+    #[derive(Clone, Default)]
+    struct Shared(Rc<RefCell<Vec<u8>>>);
+
+    impl Write for Shared {
+        fn write(&mut self, b: &[u8]) -> io::Result<usize> {
+            self.0.borrow_mut().extend_from_slice(b);
+            Ok(b.len())
+        }
+        fn flush(&mut self) -> io::Result<()> {
+            Ok(())
+        }
+    }
+
+    /// The times of the pulse wire's records in a VCD written with `pulse_window`.
+    fn pulse_records(pulse_window: Option<(SimTime, SimTime)>) -> Vec<u64> {
+        let vcd = Shared::default();
+        let mut w = Waves::new(
+            WaveOutputs {
+                vcd: Some(Box::new(vcd.clone())),
+                csv: None,
+                window: (SimTime::ZERO, SimTime::from_micros(1)),
+                pulse_window,
+            },
+            &BusTiming::default(),
+        );
+        let pulses: Vec<Pulse> = [1, 5, 9]
+            .iter()
+            .map(|&ms| Pulse::new(SimTime::from_millis(ms), Polarity::Negative))
+            .collect();
+        w.pulses(&pulses);
+        w.finish(SimTime::from_millis(10));
+        assert_eq!(w.error(), None);
+        let text = String::from_utf8(vcd.0.borrow().clone()).expect("text");
+        let body = &text[text.find("$enddefinitions").expect("header")..];
+        let mut t = 0;
+        let mut got = Vec::new();
+        for tok in body.split_whitespace() {
+            if let Some(n) = tok.strip_prefix('#') {
+                t = n.parse().expect("time");
+            } else if tok == "0!" {
+                got.push(t);
+            }
+        }
+        got
+    }
+
+    #[test]
+    fn the_pulse_wire_keeps_to_its_window() {
+        assert_eq!(pulse_records(None), [1_000_000, 5_000_000, 9_000_000]);
+        let window = (SimTime::from_millis(2), SimTime::from_millis(9));
+        assert_eq!(pulse_records(Some(window)), [5_000_000]);
+    }
+
+    #[test]
+    fn the_vcd_size_is_estimated_from_its_windows() {
+        let s = |ms: u64| SimDuration::from_millis(ms);
+        assert_eq!(estimate_vcd_bytes(s(0), s(0), s(0)), 0);
+        assert_eq!(
+            estimate_vcd_bytes(s(1000), s(1000), s(10)),
+            VCD_REST_BYTES_PER_S + VCD_PULSE_BYTES_PER_S + VCD_VOLTAGE_BYTES_PER_S / 100
+        );
+        // 12 minutes of everything but the voltage: about 3 GB, as issue 14 found.
+        let twelve = estimate_vcd_bytes(s(720_000), s(720_000), s(0));
+        assert!((2_500_000_000..3_500_000_000).contains(&twelve), "{twelve}");
+    }
 }

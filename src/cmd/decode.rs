@@ -2,9 +2,11 @@
 
 use super::{open_input, print_out};
 use asi_phy::{Expect, SimDuration};
-use asi_trace::capture::render::{summary, to_json_lines, to_text};
-use asi_trace::capture::{decode_capture, CaptureFormat, DecodeOptions};
+use asi_trace::capture::render::{json_line, stream_summary, text_header, text_line};
+use asi_trace::capture::{decode_stream, CaptureFormat, DecodeOptions};
 use clap::ValueEnum;
+use std::io::Write as _;
+use std::ops::ControlFlow;
 use std::path::PathBuf;
 
 /// The arguments of `asi-lift decode`.
@@ -24,7 +26,7 @@ pub struct DecodeArgs {
     /// data, errors) and nothing else; the summary goes to standard error.
     #[arg(long)]
     pub json: bool,
-    /// Nominal pulse amplitude in volts (estimated from the capture if not given).
+    /// Nominal pulse amplitude in volts [default: estimated from the first 2^20 samples].
     #[arg(long, value_name = "V")]
     pub nominal: Option<f32>,
     /// What the receiver listens for.
@@ -89,14 +91,52 @@ pub fn run(args: DecodeArgs) -> Result<u8, String> {
         sample_period,
     };
     let (name, input) = open_input(&file)?;
-    let decoded = decode_capture(input, &opts).map_err(|e| format!("{name}: {e}"))?;
+    // Each telegram is printed as it is found; a reader that has gone ends the decode.
+    let mut out = std::io::stdout().lock();
+    let mut failed = None;
+    let mut gone = false;
+    let mut header = !json;
+    let result = decode_stream(input, &opts, |t| {
+        let line = if json {
+            match json_line(&t) {
+                Ok(l) => l,
+                Err(e) => {
+                    failed = Some(format!("{name}: the telegrams as JSON: {e}"));
+                    return ControlFlow::Break(());
+                }
+            }
+        } else if std::mem::take(&mut header) {
+            text_header() + &text_line(&t)
+        } else {
+            text_line(&t)
+        };
+        match out.write_all(line.as_bytes()) {
+            Ok(()) => ControlFlow::Continue(()),
+            Err(e) => {
+                if e.kind() == std::io::ErrorKind::BrokenPipe {
+                    gone = true;
+                } else {
+                    failed = Some(format!("standard output: {e}"));
+                }
+                ControlFlow::Break(())
+            }
+        }
+    });
+    if let Some(e) = failed {
+        return Err(e);
+    }
+    match out.flush() {
+        _ if gone => return Ok(0),
+        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => return Ok(0),
+        Err(e) => return Err(format!("standard output: {e}")),
+        Ok(()) => {}
+    }
+    drop(out);
+    let summary = result.map_err(|e| format!("{name}: {e}"))?;
     if json {
-        print_out(
-            &to_json_lines(&decoded).map_err(|e| format!("{name}: the telegrams as JSON: {e}"))?,
-        )?;
-        eprintln!("{}", summary(&decoded));
+        eprintln!("{}", stream_summary(&summary));
     } else {
-        print_out(&to_text(&decoded))?;
+        print_out(&format!("{}\n", stream_summary(&summary)))?;
     }
     Ok(0)
 }

@@ -41,9 +41,9 @@ pub struct RunArgs {
     /// The trace's form, overriding the file name's.
     #[arg(long, value_enum)]
     pub trace_format: Option<TraceForm>,
-    /// Write a Value Change Dump (GTKWave, Surfer) of the whole run: the line's pulses,
-    /// the telegram fields, the plant, the controller and the safety logic; the line
-    /// voltage for the waveform window.
+    /// Write a Value Change Dump (GTKWave, Surfer) of the whole run: the line's pulses
+    /// (for the pulse window), the telegram fields, the plant, the controller and the safety
+    /// logic; the line voltage for the waveform window.
     #[arg(long, value_name = "FILE")]
     pub vcd: Option<PathBuf>,
     /// Write the line voltage of the waveform window as `time_s,voltage_v` CSV, as an
@@ -54,6 +54,11 @@ pub struct RunArgs {
     /// (e.g. 5s..5.01s).
     #[arg(long, value_name = "START..END", default_value = "0ms..10ms")]
     pub waveform_window: String,
+    /// The window of the VCD's pulse wire (rig.bus.manchester), START..END in simulated
+    /// time [default: the whole run]. The pulse wire is most of a long run's VCD (about 4 MB
+    /// per simulated second); the other signals always cover the whole run.
+    #[arg(long, value_name = "START..END")]
+    pub pulse_window: Option<String>,
     /// Draw the run as SVG: cabin position and velocity over time with the floors, vanes and
     /// overtravel trip points, the calls pressed and served, K1, the safety trips and the
     /// bus's repeats per transaction.
@@ -103,6 +108,7 @@ pub fn run(args: RunArgs) -> Result<u8, String> {
         vcd,
         csv,
         waveform_window,
+        pulse_window,
         plot,
         force,
     } = args;
@@ -147,7 +153,10 @@ pub fn run(args: RunArgs) -> Result<u8, String> {
                 .map_err(|e| format!("--until: {e}"))?,
         ),
     };
-    let window = parse_window(&waveform_window)?;
+    let window = parse_window("--waveform-window", &waveform_window)?;
+    let pulse_window = pulse_window
+        .map(|w| parse_window("--pulse-window", &w))
+        .transpose()?;
     // Every output is checked, and its temporary file made, before the simulation.
     let mut outs = Outputs::new(force);
     if let Some(path) = file {
@@ -162,6 +171,11 @@ pub fn run(args: RunArgs) -> Result<u8, String> {
     let csv_sink = csv.as_deref().map(|p| outs.add("--csv", p)).transpose()?;
     let plot_sink = plot.as_deref().map(|p| outs.add("--plot", p)).transpose()?;
     let end = SimTime::ZERO + until.map_or(sc.duration, |u| u.min(sc.duration));
+    if vcd.is_some() {
+        if let Some(w) = vcd_size_warning(end, pulse_window, window) {
+            eprintln!("asi-lift: warning: {w}");
+        }
+    }
     let mut rig = Rig::new(sc).map_err(|e| e.to_string())?;
     if let (Some(path), Some(sink)) = (&trace, &trace_sink) {
         let form = match trace_format {
@@ -174,7 +188,12 @@ pub fn run(args: RunArgs) -> Result<u8, String> {
     if vcd_sink.is_some() || csv_sink.is_some() {
         let vcd = vcd_sink.as_ref().map(|s| outs.writer(s)).transpose()?;
         let csv = csv_sink.as_ref().map(|s| outs.writer(s)).transpose()?;
-        rig.waves_to(WaveOutputs { vcd, csv, window });
+        rig.waves_to(WaveOutputs {
+            vcd,
+            csv,
+            window,
+            pulse_window,
+        });
     }
     let bar = progress_bar();
     let wall = std::time::Instant::now();
@@ -277,9 +296,40 @@ fn show_after(bar: &indicatif::ProgressBar, wall: std::time::Instant, terminal: 
     }
 }
 
+/// The VCD size above which `run` warns before the run.
+const VCD_WARN_BYTES: u64 = 1_000_000_000;
+
+/// A warning if the VCD of a run ending at `end` will be larger than [`VCD_WARN_BYTES`]: its
+/// estimated size and the option that bounds it.
+fn vcd_size_warning(
+    end: SimTime,
+    pulse_window: Option<(SimTime, SimTime)>,
+    voltage_window: (SimTime, SimTime),
+) -> Option<String> {
+    // The part of a window inside the run.
+    let inside = |(a, b): (SimTime, SimTime)| b.min(end).saturating_duration_since(a.min(end));
+    let run = end.saturating_duration_since(SimTime::ZERO);
+    let pulses = inside(pulse_window.unwrap_or((SimTime::ZERO, end)));
+    let voltage = inside(voltage_window);
+    let bytes = rig::waves::estimate_vcd_bytes(run, pulses, voltage);
+    if bytes <= VCD_WARN_BYTES {
+        return None;
+    }
+    let pulse_bytes = rig::waves::estimate_vcd_bytes(SimDuration::ZERO, pulses, SimDuration::ZERO);
+    let (what, option) = if pulse_bytes * 2 >= bytes {
+        (format!("{pulses} of pulse wire"), "--pulse-window")
+    } else {
+        (format!("{voltage} of line voltage"), "--waveform-window")
+    };
+    Some(format!(
+        "the VCD will be about {:.1} GB, mostly {what}: bound it with {option} START..END",
+        bytes as f64 / 1e9
+    ))
+}
+
 /// Parses `START..END` in simulated time.
-fn parse_window(s: &str) -> Result<(SimTime, SimTime), String> {
-    let err = |why: String| format!("--waveform-window {s}: {why}");
+fn parse_window(option: &str, s: &str) -> Result<(SimTime, SimTime), String> {
+    let err = |why: String| format!("{option} {s}: {why}");
     let (a, b) = s
         .split_once("..")
         .ok_or_else(|| err("expected START..END, e.g. 0ms..10ms".into()))?;
@@ -289,4 +339,34 @@ fn parse_window(s: &str) -> Result<(SimTime, SimTime), String> {
         return Err(err("END must be after START".into()));
     }
     Ok((SimTime::ZERO + a, SimTime::ZERO + b))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const MIN: u64 = 60;
+
+    fn secs(s: u64) -> SimTime {
+        SimTime::from_millis(s * 1000)
+    }
+
+    #[test]
+    fn a_long_vcd_is_warned_of_naming_the_option_that_bounds_it() {
+        let ten_ms = (SimTime::ZERO, SimTime::from_millis(10));
+        // 12 minutes of pulse wire and the rest: about 2.9 GB.
+        let w = vcd_size_warning(secs(12 * MIN), None, ten_ms).expect("12 minutes");
+        assert!(w.contains("about 2.9 GB"), "{w}");
+        assert!(w.contains("--pulse-window"), "{w}");
+        // A minute, or 12 minutes with a bounded pulse wire, stays below 1 GB.
+        assert_eq!(vcd_size_warning(secs(MIN), None, ten_ms), None);
+        let bounded = Some((secs(60), secs(120)));
+        assert_eq!(vcd_size_warning(secs(12 * MIN), bounded, ten_ms), None);
+        // A pulse window past the end of the run counts for nothing.
+        let late = Some((secs(13 * MIN), secs(20 * MIN)));
+        assert_eq!(vcd_size_warning(secs(12 * MIN), late, ten_ms), None);
+        // 10 s of line voltage is the bulk of a short run's VCD.
+        let w = vcd_size_warning(secs(20), None, (SimTime::ZERO, secs(10))).expect("voltage");
+        assert!(w.contains("--waveform-window"), "{w}");
+    }
 }

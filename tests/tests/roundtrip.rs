@@ -45,6 +45,7 @@ fn decode_returns_the_telegrams_of_the_trace() {
         vcd: Some(Box::new(vcd.clone())),
         csv: Some(Box::new(csv.clone())),
         window,
+        pulse_window: None,
     });
     let report = rig.run(Some(SimDuration::from_millis(300)));
     assert_eq!(rig_errors(&report), None);

@@ -1,7 +1,9 @@
-//! Captures read from text files of `time,voltage` lines (an oscilloscope's export).
+//! Captures read from text files of `time,voltage` lines (an oscilloscope's export), whole
+//! ([`read_capture`]) or as a stream ([`CaptureReader`]), which holds only a bounded prefix.
 
 use super::render::Waveform;
 use crate::time::SimTime;
+use std::io::BufRead;
 
 /// A capture read from a text file of `time,voltage` lines.
 #[derive(Clone, Debug, PartialEq)]
@@ -25,102 +27,219 @@ pub struct CaptureError {
 /// Reads an oscilloscope export: one sample per line, `time,voltage` (seconds, volts),
 /// separated by a comma, semicolon, tab or spaces. Blank lines and lines starting with `#` are
 /// skipped, and so are non-numeric lines before the first sample (headers). Sample spacing must
-/// be even (within 1 % of the mean), as an oscilloscope's is.
+/// be even (within 1 % of the median), as an oscilloscope's is.
 pub fn read_capture(text: &str) -> Result<Capture, CaptureError> {
-    let mut times: Vec<(usize, f64)> = Vec::new();
-    let mut samples = Vec::new();
-    // The header lines before the first sample: the first one and how many.
-    let mut header: Option<(usize, &str)> = None;
-    let mut header_lines = 0;
-    for (n, line) in text.lines().enumerate() {
-        let line_no = n + 1;
-        let l = line.trim();
-        if l.is_empty() || l.starts_with('#') {
-            continue;
+    let (_, cap) = CaptureReader::open(text.as_bytes(), usize::MAX)?;
+    Ok(cap)
+}
+
+/// A capture read as it goes: [`CaptureReader::open`] reads a prefix of the file (the
+/// samples that fix the period and the spacing rule), [`CaptureReader::read`] the rest a
+/// buffer at a time. Memory is bounded by the prefix, whatever the file's length.
+///
+/// The rules are [`read_capture`]'s, judged on the prefix: the period is the prefix's mean
+/// spacing, and every later step must lie within 1 % of the prefix's median step. A file that
+/// fits in the prefix reads exactly as [`read_capture`] reads it.
+#[derive(Debug)]
+pub struct CaptureReader<R> {
+    input: R,
+    line: Vec<u8>,
+    line_no: usize,
+    /// Time and line of the last sample.
+    last: (f64, usize),
+    /// The prefix's median step, seconds.
+    median: f64,
+}
+
+/// One parsed line of a capture.
+enum Parsed {
+    /// Blank or a comment.
+    Skip,
+    /// Not a sample: a header before the first sample, an error after it.
+    NotSample { two_fields: bool },
+    /// A sample.
+    Sample(f64, f32),
+}
+
+fn parse(l: &str) -> Parsed {
+    if l.is_empty() || l.starts_with('#') {
+        return Parsed::Skip;
+    }
+    let mut fields = l.split([',', ';', '\t', ' ']).filter(|f| !f.is_empty());
+    let (Some(t), Some(v)) = (fields.next(), fields.next()) else {
+        return Parsed::NotSample { two_fields: false };
+    };
+    match (t.parse::<f64>(), v.parse::<f32>()) {
+        (Ok(t), Ok(v)) if t.is_finite() && v.is_finite() => Parsed::Sample(t, v),
+        _ => Parsed::NotSample { two_fields: true },
+    }
+}
+
+impl<R: BufRead> CaptureReader<R> {
+    /// Reads the header and the first `prefix` samples (all of them if the file is shorter):
+    /// they are returned as a [`Capture`], and the reader continues after them.
+    pub fn open(input: R, prefix: usize) -> Result<(CaptureReader<R>, Capture), CaptureError> {
+        let mut r = CaptureReader {
+            input,
+            line: Vec::new(),
+            line_no: 0,
+            last: (0.0, 0),
+            median: 0.0,
+        };
+        let prefix = prefix.max(2);
+        let mut times: Vec<(usize, f64)> = Vec::new();
+        let mut samples = Vec::new();
+        // The header lines before the first sample: the first one and how many.
+        let mut header: Option<(usize, String)> = None;
+        let mut header_lines = 0;
+        // Whether the input holds nothing but whitespace so far.
+        let mut blank = true;
+        while samples.len() < prefix {
+            let Some((line_no, l)) = r.next_line()? else {
+                break;
+            };
+            blank &= l.is_empty();
+            let (t, v) = match parse(l) {
+                Parsed::Skip => continue,
+                Parsed::Sample(t, v) => (t, v),
+                Parsed::NotSample { .. } if samples.is_empty() => {
+                    header.get_or_insert_with(|| (line_no, l.to_owned()));
+                    header_lines += 1;
+                    continue;
+                }
+                Parsed::NotSample { two_fields } => return Err(not_sample(line_no, l, two_fields)),
+            };
+            if let Some(&(_, last)) = times.last() {
+                if t <= last {
+                    return Err(not_increasing(line_no, t, last));
+                }
+            }
+            times.push((line_no, t));
+            samples.push(v);
         }
-        let mut fields = l.split([',', ';', '\t', ' ']).filter(|f| !f.is_empty());
-        let (Some(t), Some(v)) = (fields.next(), fields.next()) else {
-            if samples.is_empty() {
-                header.get_or_insert((line_no, l));
-                header_lines += 1;
-                continue;
-            }
-            return Err(CaptureError {
-                line: line_no,
-                cause: format!("expected `time,voltage`, found `{l}`"),
-            });
-        };
-        let (t, v) = match (t.parse::<f64>(), v.parse::<f32>()) {
-            (Ok(t), Ok(v)) if t.is_finite() && v.is_finite() => (t, v),
-            _ if samples.is_empty() => {
-                header.get_or_insert((line_no, l));
-                header_lines += 1;
-                continue;
-            }
-            _ => {
-                return Err(CaptureError {
-                    line: line_no,
-                    cause: format!("`{l}` is not two numbers (seconds, volts)"),
-                })
-            }
-        };
-        if let Some(&(_, last)) = times.last() {
+        if samples.len() < 2 {
+            let last = r.line_no.max(1);
+            let (line, cause) = match (times.first(), header) {
+                (Some(&(line, _)), _) => {
+                    (line, "only one sample: a capture needs two or more".into())
+                }
+                (None, Some((line, l))) if header_lines == 1 => (
+                    line,
+                    format!("`{l}` is a header and no `time,voltage` sample follows"),
+                ),
+                (None, Some((line, l))) => (
+                    line,
+                    format!(
+                        "no samples: `{l}` and the {} lines after it are not `time,voltage` \
+                         (seconds, volts)",
+                        header_lines - 1
+                    ),
+                ),
+                (None, None) if blank => (last, "the file is empty".into()),
+                (None, None) => (last, "no samples: the file holds only comments".into()),
+            };
+            return Err(CaptureError { line, cause });
+        }
+        let (first, last) = (times[0].1, times[times.len() - 1].1);
+        let period_s = (last - first) / (times.len() - 1) as f64;
+        // Judge each step against the median step, so one bad step is named where it is.
+        let mut steps: Vec<f64> = times.windows(2).map(|w| w[1].1 - w[0].1).collect();
+        steps.sort_by(f64::total_cmp);
+        let median = steps[steps.len() / 2];
+        drop(steps);
+        for w in times.windows(2) {
+            check_step(w[1].0, w[1].1 - w[0].1, median)?;
+        }
+        r.median = median;
+        r.last = (last, times[times.len() - 1].0);
+        Ok((
+            r,
+            Capture {
+                first_time_s: first,
+                waveform: Waveform {
+                    start: SimTime::ZERO,
+                    period_ns: period_s * 1e9,
+                    samples,
+                },
+            },
+        ))
+    }
+
+    /// Reads the samples that follow, at most `max` of them (at least one), into `out` (which
+    /// is cleared first). An empty `out` is the end of the file.
+    pub fn read(&mut self, out: &mut Vec<f32>, max: usize) -> Result<(), CaptureError> {
+        out.clear();
+        while out.len() < max.max(1) {
+            let Some((line_no, l)) = self.next_line()? else {
+                break;
+            };
+            let (t, v) = match parse(l) {
+                Parsed::Skip => continue,
+                Parsed::Sample(t, v) => (t, v),
+                Parsed::NotSample { two_fields } => return Err(not_sample(line_no, l, two_fields)),
+            };
+            let last = self.last.0;
             if t <= last {
-                return Err(CaptureError {
-                    line: line_no,
-                    cause: format!("time {t} s does not increase (previous sample {last} s)"),
-                });
+                return Err(not_increasing(line_no, t, last));
             }
+            check_step(line_no, t - last, self.median)?;
+            self.last = (t, line_no);
+            out.push(v);
         }
-        times.push((line_no, t));
-        samples.push(v);
+        Ok(())
     }
-    if samples.len() < 2 {
-        let last = text.lines().count().max(1);
-        let (line, cause) = match (times.first(), header) {
-            (Some(&(line, _)), _) => (line, "only one sample: a capture needs two or more".into()),
-            (None, Some((line, l))) if header_lines == 1 => (
-                line,
-                format!("`{l}` is a header and no `time,voltage` sample follows"),
-            ),
-            (None, Some((line, l))) => (
-                line,
-                format!(
-                    "no samples: `{l}` and the {} lines after it are not `time,voltage` \
-                     (seconds, volts)",
-                    header_lines - 1
-                ),
-            ),
-            (None, None) if text.trim().is_empty() => (last, "the file is empty".into()),
-            (None, None) => (last, "no samples: the file holds only comments".into()),
-        };
-        return Err(CaptureError { line, cause });
-    }
-    let (first, last) = (times[0].1, times[times.len() - 1].1);
-    let period_s = (last - first) / (times.len() - 1) as f64;
-    // Judge each step against the median step, so one bad step is named where it is.
-    let mut steps: Vec<f64> = times.windows(2).map(|w| w[1].1 - w[0].1).collect();
-    steps.sort_by(f64::total_cmp);
-    let median = steps[steps.len() / 2];
-    for w in times.windows(2) {
-        let dt = w[1].1 - w[0].1;
-        if (dt - median).abs() > 0.01 * median {
-            return Err(CaptureError {
-                line: w[1].0,
-                cause: format!(
-                    "uneven sample spacing: {:.3} ns here, {:.3} ns elsewhere",
-                    dt * 1e9,
-                    median * 1e9
-                ),
-            });
+
+    /// The next line, trimmed, and its number; `None` at the end of the input.
+    fn next_line(&mut self) -> Result<Option<(usize, &str)>, CaptureError> {
+        self.line.clear();
+        let n = self.line_no + 1;
+        let got = self
+            .input
+            .read_until(b'\n', &mut self.line)
+            .map_err(|e| CaptureError {
+                line: n,
+                cause: e.to_string(),
+            })?;
+        if got == 0 {
+            return Ok(None);
         }
+        self.line_no = n;
+        let l = core::str::from_utf8(&self.line).map_err(|_| CaptureError {
+            line: n,
+            cause: "not text (invalid UTF-8)".into(),
+        })?;
+        Ok(Some((n, l.trim())))
     }
-    Ok(Capture {
-        first_time_s: first,
-        waveform: Waveform {
-            start: SimTime::ZERO,
-            period_ns: period_s * 1e9,
-            samples,
+}
+
+fn not_sample(line: usize, l: &str, two_fields: bool) -> CaptureError {
+    CaptureError {
+        line,
+        cause: if two_fields {
+            format!("`{l}` is not two numbers (seconds, volts)")
+        } else {
+            format!("expected `time,voltage`, found `{l}`")
         },
-    })
+    }
+}
+
+fn not_increasing(line: usize, t: f64, last: f64) -> CaptureError {
+    CaptureError {
+        line,
+        cause: format!("time {t} s does not increase (previous sample {last} s)"),
+    }
+}
+
+fn check_step(line: usize, dt: f64, median: f64) -> Result<(), CaptureError> {
+    if (dt - median).abs() > 0.01 * median {
+        return Err(CaptureError {
+            line,
+            cause: format!(
+                "uneven sample spacing: {:.3} ns here, {:.3} ns elsewhere",
+                dt * 1e9,
+                median * 1e9
+            ),
+        });
+    }
+    Ok(())
 }

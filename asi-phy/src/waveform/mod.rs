@@ -10,7 +10,7 @@
 //!
 //! - `render`: the settings, [`render`] and the [`Waveform`] with its noise bursts;
 //! - `demod`: the comparator, [`Demodulator`] and [`DemodConfig`];
-//! - `capture`: [`read_capture`], captures from text files.
+//! - `capture`: [`read_capture`] and [`CaptureReader`], captures from text files.
 
 mod capture;
 mod demod;
@@ -18,6 +18,6 @@ mod render;
 #[cfg(test)]
 mod tests;
 
-pub use capture::{read_capture, Capture, CaptureError};
+pub use capture::{read_capture, Capture, CaptureError, CaptureReader};
 pub use demod::{DemodConfig, Demodulator};
 pub use render::{render, NoiseBurst, Waveform, WaveformConfig, WaveformError};

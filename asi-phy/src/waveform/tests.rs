@@ -228,3 +228,36 @@ fn a_capture_without_samples_says_why() {
         assert_eq!((e.line, e.cause.as_str()), (line, cause), "{text:?}");
     }
 }
+
+#[test]
+fn a_capture_read_as_a_stream_holds_a_prefix_and_reads_like_the_whole() {
+    use super::CaptureReader;
+    let mut text = String::from("time,volts\n");
+    for i in 0..1000 {
+        let _ = std::fmt::Write::write_fmt(
+            &mut text,
+            format_args!("{:.9},{}\n", i as f64 * 1e-7, (i % 7) as f32),
+        );
+    }
+    let whole = read_capture(&text).expect("whole");
+    let (mut r, head) = CaptureReader::open(text.as_bytes(), 10).expect("prefix");
+    assert_eq!(head.waveform.samples.len(), 10);
+    assert_eq!(head.first_time_s, whole.first_time_s);
+    assert!((head.waveform.period_ns - whole.waveform.period_ns).abs() < 1e-6);
+    let mut all = head.waveform.samples;
+    let mut buf = Vec::new();
+    loop {
+        r.read(&mut buf, 64).expect("rest");
+        assert!(buf.len() <= 64);
+        if buf.is_empty() {
+            break;
+        }
+        all.extend_from_slice(&buf);
+    }
+    assert_eq!(all, whole.waveform.samples);
+    // A step after the prefix is judged against the prefix's median step.
+    let bad = "0,1\n1e-7,1\n2e-7,1\n3e-7,1\n5e-7,1\n";
+    let (mut r, _) = CaptureReader::open(bad.as_bytes(), 3).expect("prefix");
+    let e = r.read(&mut buf, 64).expect_err("uneven");
+    assert_eq!(e.line, 5);
+}

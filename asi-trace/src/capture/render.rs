@@ -1,9 +1,10 @@
 //! A decoded capture for people and machines: one line per telegram and a summary, or JSON
 //! lines.
 
-use super::{CaptureSource, Decoded};
+use super::{CaptureSource, DecodeSummary, Decoded};
+use crate::telegrams::TelegramRecord;
 use core::fmt;
-use std::fmt::Write as _;
+
 /// `t_ns` as seconds with nine decimals: `0.000112000`, `-0.000001500`.
 pub fn seconds(t_ns: i64) -> String {
     let sign = if t_ns < 0 { "-" } else { "" };
@@ -39,15 +40,49 @@ impl fmt::Display for CaptureSource {
 /// The closing line: `2 telegrams, 2 valid; 32 pulses from wire rig.bus.line`, or
 /// `no telegrams found; …`.
 pub fn summary(d: &Decoded) -> String {
-    let head = match d.telegrams.len() {
+    stream_summary(&d.summary())
+}
+
+/// The closing line of a decode that streamed its telegrams ([`summary`]).
+pub fn stream_summary(d: &DecodeSummary) -> String {
+    let head = match d.telegrams {
         0 => "no telegrams found".to_owned(),
-        1 => format!("1 telegram, {} valid", d.valid()),
-        n => format!("{n} telegrams, {} valid", d.valid()),
+        1 => format!("1 telegram, {} valid", d.valid),
+        n => format!("{n} telegrams, {} valid", d.valid),
     };
     format!("{head}; {} pulses from {}", d.pulses, d.source)
 }
 
-/// One line per telegram under a header row, and the [`summary`] as the last line.
+/// The header row of the text rendering, with its newline.
+pub fn text_header() -> String {
+    format!(
+        "{:>14}  {:<8}  {:<14}  {:<21}  {:<7}  {:<5}  {:<4}  errors\n",
+        "time_s", "type", "bits", "call", "address", "info", "data"
+    )
+}
+
+/// One telegram's line of the text rendering, with its newline.
+pub fn text_line(t: &TelegramRecord) -> String {
+    let dash = |o: Option<&str>| o.unwrap_or("-").to_owned();
+    let errors = if t.errors.is_empty() {
+        "ok".to_owned()
+    } else {
+        t.errors.join(",")
+    };
+    format!(
+        "{:>14}  {:<8}  {:<14}  {:<21}  {:<7}  {:<5}  {:<4}  {errors}\n",
+        seconds(t.t_ns),
+        t.kind.name(),
+        t.bits,
+        dash(t.call),
+        t.address.map_or("-".into(), |a| a.to_string()),
+        dash(t.info.as_deref()),
+        dash(t.data.as_deref()),
+    )
+}
+
+/// One line per telegram under a header row ([`text_header`], [`text_line`]), and the
+/// [`summary`] as the last line.
 ///
 /// ```text
 ///         time_s  type      bits            call                   address  info   data  errors
@@ -55,43 +90,29 @@ pub fn summary(d: &Decoded) -> String {
 /// ```
 pub fn to_text(d: &Decoded) -> String {
     let mut s = String::new();
-    let dash = |o: Option<&str>| o.unwrap_or("-").to_owned();
     if !d.telegrams.is_empty() {
-        let _ = writeln!(
-            s,
-            "{:>14}  {:<8}  {:<14}  {:<21}  {:<7}  {:<5}  {:<4}  errors",
-            "time_s", "type", "bits", "call", "address", "info", "data"
-        );
+        s.push_str(&text_header());
     }
     for t in &d.telegrams {
-        let errors = if t.errors.is_empty() {
-            "ok".to_owned()
-        } else {
-            t.errors.join(",")
-        };
-        let _ = writeln!(
-            s,
-            "{:>14}  {:<8}  {:<14}  {:<21}  {:<7}  {:<5}  {:<4}  {errors}",
-            seconds(t.t_ns),
-            t.kind.name(),
-            t.bits,
-            dash(t.call),
-            t.address.map_or("-".into(), |a| a.to_string()),
-            dash(t.info.as_deref()),
-            dash(t.data.as_deref()),
-        );
+        s.push_str(&text_line(t));
     }
     s.push_str(&summary(d));
     s.push('\n');
     s
 }
 
-/// One JSON object per telegram and line, the fields of [`TelegramRecord`](crate::telegrams::TelegramRecord).
+/// One telegram as a JSON object on a line, with its newline.
+pub fn json_line(t: &TelegramRecord) -> Result<String, serde_json::Error> {
+    let mut s = serde_json::to_string(t)?;
+    s.push('\n');
+    Ok(s)
+}
+
+/// One JSON object per telegram and line, the fields of [`TelegramRecord`].
 pub fn to_json_lines(d: &Decoded) -> Result<String, serde_json::Error> {
     let mut s = String::new();
     for t in &d.telegrams {
-        s.push_str(&serde_json::to_string(t)?);
-        s.push('\n');
+        s.push_str(&json_line(t)?);
     }
     Ok(s)
 }

@@ -1,10 +1,11 @@
 //! Tests of capture decoding: worked captures, every receiver error class, and property tests.
 
-use super::render::{seconds, to_json_lines, to_text};
+use super::render::{seconds, summary, to_json_lines, to_text};
 use super::*;
 use crate::telegrams::TelegramType;
 use asi_phy::waveform::{render, WaveformConfig};
 use asi_phy::{Address, Nibble, PulseTrain, Request, Response};
+use core::ops::ControlFlow;
 use proptest::prelude::*;
 use std::fmt::Write as _;
 
@@ -526,4 +527,247 @@ proptest! {
         }
         prop_assert_eq!(telegrams(&wire_vcd(&pulses, "1 ns", 1.0)), want);
     }
+}
+
+/// The three kinds of capture of the spec vectors: a wire VCD, a real VCD, a CSV.
+fn spec_captures() -> Vec<(String, DecodeOptions)> {
+    let wf = render(
+        spec_line(),
+        SimTime::ZERO,
+        SimTime::from_micros(170),
+        &WaveformConfig::default(),
+    )
+    .expect("render");
+    let mut csv = String::new();
+    let mut real = String::from(
+        "$timescale 1 ns $end\n$var real 64 % v $end\n$enddefinitions $end\n#0\n$dumpvars r0 % $end\n",
+    );
+    for (i, v) in wf.samples.iter().enumerate() {
+        let _ = writeln!(csv, "{:.9},{v}", i as f64 * 1e-7);
+        let _ = writeln!(real, "#{}\nr{v} %", 100 * i);
+    }
+    vec![
+        (SPEC_WIRE_VCD.to_owned(), DecodeOptions::default()),
+        (real, DecodeOptions::default()),
+        (csv, DecodeOptions::default()),
+    ]
+}
+
+#[test]
+fn a_stream_hands_over_the_telegrams_in_order_as_the_whole_decode_has_them() {
+    for (text, opts) in spec_captures() {
+        let whole = decode(&text, &opts).expect("whole");
+        assert_eq!(whole.telegrams, spec_records(), "{text:.40}");
+        let mut got = Vec::new();
+        let s = decode_stream(text.as_bytes(), &opts, |t| {
+            got.push(t);
+            ControlFlow::Continue(())
+        })
+        .expect("stream");
+        assert_eq!(got, whole.telegrams);
+        assert_eq!(s, whole.summary());
+        // A sink that stops ends the decode after its telegram.
+        let mut seen = 0;
+        let s = decode_stream(text.as_bytes(), &opts, |_| {
+            seen += 1;
+            ControlFlow::Break(())
+        })
+        .expect("stopped");
+        assert_eq!((seen, s.telegrams), (1, 1));
+    }
+}
+
+/// A CSV capture made on the fly: `reps` repetitions of the spec vectors' 170 µs, one
+/// sample every 100 ns, counting the bytes handed out.
+struct Generated {
+    window: Vec<f32>,
+    reps: usize,
+    /// The next sample's index over all repetitions.
+    next: usize,
+    line: Vec<u8>,
+    pos: usize,
+    produced: std::rc::Rc<std::cell::Cell<usize>>,
+}
+
+impl std::io::Read for Generated {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        if self.pos == self.line.len() {
+            if self.next == self.window.len() * self.reps {
+                return Ok(0);
+            }
+            self.line.clear();
+            let v = self.window[self.next % self.window.len()];
+            let _ = std::io::Write::write_fmt(
+                &mut self.line,
+                format_args!("{:.9},{v}\n", self.next as f64 * 1e-7),
+            );
+            self.next += 1;
+            self.pos = 0;
+        }
+        let n = buf.len().min(self.line.len() - self.pos);
+        buf[..n].copy_from_slice(&self.line[self.pos..self.pos + n]);
+        self.pos += n;
+        self.produced.set(self.produced.get() + n);
+        Ok(n)
+    }
+}
+
+#[test]
+fn a_capture_longer_than_the_prefix_streams_through_bounded_state() {
+    let wf = render(
+        spec_line(),
+        SimTime::ZERO,
+        SimTime::from_micros(170),
+        &WaveformConfig::default(),
+    )
+    .expect("render");
+    let window = wf.samples[..1700].to_vec();
+    // Past the prefix, so most of the capture goes through without being held.
+    let reps = PREFIX_SAMPLES / window.len() * 3 / 2;
+    let produced = std::rc::Rc::new(std::cell::Cell::new(0));
+    let input = std::io::BufReader::new(Generated {
+        window,
+        reps,
+        next: 0,
+        line: Vec::new(),
+        pos: 0,
+        produced: produced.clone(),
+    });
+    let want = spec_records();
+    let mut n = 0usize;
+    let mut first_at = None;
+    // The sink checks each telegram as it comes and keeps nothing.
+    let s = decode_stream(input, &DecodeOptions::default(), |t| {
+        first_at.get_or_insert(produced.get());
+        let w = &want[n % 2];
+        let shift = (n / 2) as i64 * 170_000;
+        assert_eq!(
+            t,
+            TelegramRecord {
+                t_ns: w.t_ns + shift,
+                ..w.clone()
+            },
+            "telegram {n}"
+        );
+        n += 1;
+        ControlFlow::Continue(())
+    })
+    .expect("decodes");
+    assert_eq!((n, s.telegrams, s.valid), (2 * reps, 2 * reps, 2 * reps));
+    let CaptureSource::Voltage { samples, .. } = s.source else {
+        panic!("{:?}", s.source)
+    };
+    assert_eq!(samples, 1700 * reps);
+    // Telegrams came out while most of the input was still to be read: after the prefix,
+    // not at the end.
+    let first_at = first_at.expect("a telegram");
+    assert!(
+        first_at < produced.get() * 3 / 4,
+        "first telegram after {first_at} of {} bytes",
+        produced.get()
+    );
+}
+
+#[test]
+fn a_real_vcd_longer_than_the_prefix_is_gridded_as_it_comes() {
+    let wf = render(
+        spec_line(),
+        SimTime::ZERO,
+        SimTime::from_micros(170),
+        &WaveformConfig::default(),
+    )
+    .expect("render");
+    let window = &wf.samples[..1700];
+    let reps = PREFIX_SAMPLES / window.len() * 2;
+    // Written on change, so the grid's period comes from the prefix's smallest spacing and
+    // the values are held between changes past it.
+    let mut s = String::from(
+        "$timescale 1 ns $end\n$var real 64 % v $end\n$enddefinitions $end\n#0\n$dumpvars r0 % $end\n",
+    );
+    let mut last = 0.0;
+    let mut changes = 0;
+    for i in 0..window.len() * reps {
+        let v = window[i % window.len()];
+        if v != last {
+            let _ = writeln!(s, "#{}\nr{v} %", 100 * i);
+            last = v;
+            changes += 1;
+        }
+    }
+    let _ = writeln!(s, "#{}\nr0 %", 100 * (window.len() * reps - 1));
+    assert!(changes > PREFIX_SAMPLES, "{changes}");
+    let mut n = 0;
+    let want = spec_records();
+    let sum = decode_stream(s.as_bytes(), &DecodeOptions::default(), |t| {
+        let w = &want[n % 2];
+        let shift = (n / 2) as i64 * 170_000;
+        assert_eq!(t.t_ns, w.t_ns + shift, "telegram {n}");
+        assert_eq!(t.bits, w.bits, "telegram {n}");
+        n += 1;
+        ControlFlow::Continue(())
+    })
+    .expect("decodes");
+    assert_eq!((n, sum.valid), (2 * reps, 2 * reps));
+    let CaptureSource::Voltage {
+        samples, period_ns, ..
+    } = sum.source
+    else {
+        panic!("{:?}", sum.source)
+    };
+    assert_eq!((samples, period_ns), (1700 * reps, 100.0));
+}
+
+#[test]
+fn a_quiet_start_longer_than_the_prefix_waits_for_the_first_pulses() {
+    // A line at 0 V for 0.15 s (more than the prefix), then the spec vectors every 170 µs
+    // for 3.4 ms (pulses in more than 0.5 % of the samples after the prefix, as the estimate
+    // needs).
+    let wf = render(
+        spec_line(),
+        SimTime::ZERO,
+        SimTime::from_micros(170),
+        &WaveformConfig::default(),
+    )
+    .expect("render");
+    let quiet = PREFIX_SAMPLES * 3 / 2;
+    let mut s = String::new();
+    for i in 0..quiet {
+        let _ = writeln!(s, "{:.9},0", i as f64 * 1e-7);
+    }
+    let busy = 1700 * 20;
+    for k in 0..busy {
+        let v = wf.samples[k % 1700];
+        let _ = writeln!(s, "{:.9},{v}", (quiet + k) as f64 * 1e-7);
+    }
+    let d = decode(&s, &DecodeOptions::default()).expect("decodes");
+    let shift = (quiet as f64 * 100.0).round() as i64;
+    let want: Vec<TelegramRecord> = (0..20)
+        .flat_map(|k| {
+            spec_records().into_iter().map(move |t| TelegramRecord {
+                t_ns: t.t_ns + shift + k * 170_000,
+                ..t
+            })
+        })
+        .collect();
+    assert_eq!(d.telegrams, want);
+    let CaptureSource::Voltage {
+        samples, nominal, ..
+    } = d.source
+    else {
+        panic!("{:?}", d.source)
+    };
+    assert_eq!(samples, quiet + busy);
+    assert!(
+        nominal.is_some_and(|a| (a - 2.5).abs() < 0.25),
+        "{nominal:?}"
+    );
+    // A line quiet to its end is flat.
+    let quiet_only = s.lines().take(quiet).collect::<Vec<_>>().join("\n");
+    let flat = decode(&quiet_only, &DecodeOptions::default()).expect("flat");
+    assert!(flat.telegrams.is_empty());
+    assert!(
+        summary(&flat).ends_with("a flat line"),
+        "{}",
+        summary(&flat)
+    );
 }
