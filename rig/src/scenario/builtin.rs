@@ -42,6 +42,14 @@ builtins!(
     "vane-sensor-broken",
 );
 
+impl Scenario {
+    /// The built-in demo: power-on between floors 2 and 3, initialisation, a cabin call, a
+    /// hall call stored meanwhile, and one more cabin call.
+    pub fn demo() -> Result<Scenario, ScenarioError> {
+        BUILTINS[0].scenario()
+    }
+}
+
 impl Builtin {
     /// The built-in scenario called `name`.
     pub fn find(name: &str) -> Option<&'static Builtin> {

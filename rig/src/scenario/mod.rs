@@ -224,12 +224,6 @@ impl Scenario {
         }
     }
 
-    /// The built-in demo: power-on between floors 2 and 3, initialisation, a cabin call, a
-    /// hall call stored meanwhile, and one more cabin call.
-    pub fn demo() -> Result<Scenario, ScenarioError> {
-        builtin::BUILTINS[0].scenario()
-    }
-
     /// The events at or after the scenario's end: they never happen (a file's reader warns).
     pub fn late_events(&self) -> impl Iterator<Item = &ScenarioEvent> {
         let end = SimTime::ZERO + self.duration;
