@@ -22,6 +22,23 @@ fn temp() -> tempfile::TempDir {
     tempfile::tempdir().expect("a temporary directory")
 }
 
+/// Runs `cmd` with its standard output read as `| head -1` does: the first line, then the
+/// reader goes. Returns that line and how the command ended.
+fn head_1(cmd: &mut Command) -> (String, std::process::Output) {
+    let mut child = cmd
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("asi-lift starts");
+    let stdout = child.stdout.take().expect("stdout");
+    let mut first = String::new();
+    BufReader::new(stdout)
+        .read_line(&mut first)
+        .expect("one line");
+    let out = child.wait_with_output().expect("asi-lift ends");
+    (first, out)
+}
+
 fn fails(cmd: &mut Command) -> String {
     let out = cmd.output().expect("asi-lift runs");
     assert!(!out.status.success(), "{cmd:?} was accepted");
@@ -88,21 +105,13 @@ fn an_unwritable_or_existing_report_is_refused_and_the_users_file_kept() {
 fn a_reader_that_goes_ends_the_run_quietly() {
     let d = temp();
     let report = d.path().join("r.json");
-    let mut child = asi_lift()
-        .args(["run", "--trace", "-", "--report"])
-        .arg(&report)
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("asi-lift starts");
-    let stdout = child.stdout.take().expect("stdout");
-    let mut first = String::new();
-    BufReader::new(stdout)
-        .read_line(&mut first)
-        .expect("one trace line");
+    // The reader goes after the first trace line, as `| head -1` does.
+    let (first, out) = head_1(
+        asi_lift()
+            .args(["run", "--trace", "-", "--report"])
+            .arg(&report),
+    );
     assert!(!first.is_empty());
-    // The reader goes, as `| head -1` does.
-    let out = child.wait_with_output().expect("asi-lift ends");
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "{:?}: {err}", out.status);
     assert!(!err.contains("panicked"), "{err}");
@@ -130,22 +139,12 @@ fn decode_prints_as_it_goes_and_a_reader_that_goes_ends_it_quietly() {
         if json {
             cmd.arg("--json");
         }
-        let mut child = cmd
-            .stdout(Stdio::piped())
-            .stderr(Stdio::piped())
-            .spawn()
-            .expect("asi-lift starts");
-        let stdout = child.stdout.take().expect("stdout");
-        let mut first = String::new();
-        BufReader::new(stdout)
-            .read_line(&mut first)
-            .expect("one line");
+        let (first, out) = head_1(&mut cmd);
         assert!(
             first.contains(if json { "\"t_ns\"" } else { "time_s" }),
             "{first}"
         );
-        // The reader goes, as `| head -1` does, with thousands of telegrams still to come.
-        let out = child.wait_with_output().expect("asi-lift ends");
+        // The reader went, as `| head -1` does, with thousands of telegrams still to come.
         let err = String::from_utf8_lossy(&out.stderr);
         assert!(out.status.success(), "{:?}: {err}", out.status);
         assert!(err.is_empty(), "{err}");
@@ -219,29 +218,21 @@ fn a_file_that_is_not_utf8_is_refused_at_its_place() {
 #[test]
 fn a_campaign_whose_reader_goes_ends_quietly() {
     let d = temp();
-    let mut child = asi_lift()
-        .args([
-            "campaign",
-            "--runs",
-            "3",
-            "--jobs",
-            "1",
-            "--profile",
-            "smoke",
-        ])
-        .arg("--failures")
-        .arg(d.path().join("failures"))
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("asi-lift starts");
-    let stdout = child.stdout.take().expect("stdout");
-    let mut first = String::new();
-    BufReader::new(stdout)
-        .read_line(&mut first)
-        .expect("one line");
+    let (first, out) = head_1(
+        asi_lift()
+            .args([
+                "campaign",
+                "--runs",
+                "3",
+                "--jobs",
+                "1",
+                "--profile",
+                "smoke",
+            ])
+            .arg("--failures")
+            .arg(d.path().join("failures")),
+    );
     assert!(first.starts_with("{\"index\":0"), "{first}");
-    let out = child.wait_with_output().expect("asi-lift ends");
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "{:?}: {err}", out.status);
     assert!(

@@ -53,13 +53,24 @@ impl Write for StdoutSink {
     }
 }
 
+/// What an existing file is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Kind {
+    /// A regular file.
+    File,
+    /// A directory.
+    Dir,
+    /// A device or a pipe.
+    Stream,
+}
+
 /// What names a file, whatever the spelling.
 #[derive(Clone, Debug, PartialEq, Eq)]
 enum Identity {
     /// Standard output (or input): `-`.
     Std,
-    /// An existing file: device and inode (links followed).
-    Inode(u64, u64),
+    /// An existing file: device and inode (links followed), and what it is.
+    Inode(u64, u64, Kind),
     /// A file to be made: its canonical directory and its name.
     New(PathBuf),
 }
@@ -70,7 +81,14 @@ fn identity(path: &Path) -> Result<Identity, String> {
     }
     if let Ok(m) = std::fs::metadata(path) {
         use std::os::unix::fs::MetadataExt;
-        return Ok(Identity::Inode(m.dev(), m.ino()));
+        let kind = if m.is_file() {
+            Kind::File
+        } else if m.is_dir() {
+            Kind::Dir
+        } else {
+            Kind::Stream
+        };
+        return Ok(Identity::Inode(m.dev(), m.ino(), kind));
     }
     let (dir, name) = split(path)?;
     let dir = dir
@@ -167,14 +185,12 @@ impl Outputs {
             });
         }
         self.seen.push((flag, path.to_path_buf(), id.clone()));
-        if id == Identity::Std {
-            return Ok(Sink::Stdout);
-        }
         let place = match id {
-            Identity::Inode(..) if !std::fs::metadata(path).is_ok_and(|m| m.is_file()) => {
-                if std::fs::metadata(path).is_ok_and(|m| m.is_dir()) {
-                    return Err(format!("{flag} {}: a directory", path.display()));
-                }
+            Identity::Std => return Ok(Sink::Stdout),
+            Identity::Inode(.., Kind::Dir) => {
+                return Err(format!("{flag} {}: a directory", path.display()));
+            }
+            Identity::Inode(.., Kind::Stream) => {
                 let f = std::fs::OpenOptions::new()
                     .write(true)
                     .open(path)
@@ -187,7 +203,7 @@ impl Outputs {
                 });
                 return Ok(Sink::File(self.pending.len() - 1));
             }
-            Identity::Inode(..) => {
+            Identity::Inode(.., Kind::File) => {
                 if !self.force {
                     return Err(format!(
                         "{flag} {} exists; pass --force to overwrite it",
@@ -198,7 +214,6 @@ impl Outputs {
                     .map_err(|e| format!("{flag} {}: {e}", path.display()))?
             }
             Identity::New(place) => place,
-            Identity::Std => unreachable!("standard output returned above"),
         };
         let (dir, _) = split(&place)?;
         let temp = tempfile::Builder::new()

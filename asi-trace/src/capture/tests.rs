@@ -52,6 +52,17 @@ fn spec_pulses(spec: &str, start_us: u64) -> Vec<Pulse> {
         .collect()
 }
 
+/// The line voltage of [`spec_line`]'s two telegrams, 170 µs, default waveform.
+fn spec_waveform() -> Waveform {
+    render(
+        spec_line(),
+        SimTime::ZERO,
+        SimTime::from_micros(170),
+        &WaveformConfig::default(),
+    )
+    .expect("render")
+}
+
 fn spec_line() -> Vec<Pulse> {
     let mut p = spec_pulses(
         "0- 1+ 2- 3+ 4- 5+ 6- 7+ 9- 11+ 13- 15+ 17- 19+ 21- 23+ 24- 25+ 27- 28+",
@@ -176,13 +187,7 @@ fn the_timescale_gives_the_time_base() {
 
 #[test]
 fn a_real_vcd_rendered_from_the_pulses_decodes_the_same() {
-    let wf = render(
-        spec_line(),
-        SimTime::ZERO,
-        SimTime::from_micros(170),
-        &WaveformConfig::default(),
-    )
-    .expect("render");
+    let wf = spec_waveform();
     // The voltage is written on change only; the wire rides along in the same file.
     let mut s = String::from(
         "$timescale 1 ns $end\n$scope module rig $end\n$scope module bus $end\n\
@@ -531,13 +536,7 @@ proptest! {
 
 /// The three kinds of capture of the spec vectors: a wire VCD, a real VCD, a CSV.
 fn spec_captures() -> Vec<(String, DecodeOptions)> {
-    let wf = render(
-        spec_line(),
-        SimTime::ZERO,
-        SimTime::from_micros(170),
-        &WaveformConfig::default(),
-    )
-    .expect("render");
+    let wf = spec_waveform();
     let mut csv = String::new();
     let mut real = String::from(
         "$timescale 1 ns $end\n$var real 64 % v $end\n$enddefinitions $end\n#0\n$dumpvars r0 % $end\n",
@@ -614,13 +613,7 @@ impl std::io::Read for Generated {
 
 #[test]
 fn a_capture_longer_than_the_prefix_streams_through_bounded_state() {
-    let wf = render(
-        spec_line(),
-        SimTime::ZERO,
-        SimTime::from_micros(170),
-        &WaveformConfig::default(),
-    )
-    .expect("render");
+    let wf = spec_waveform();
     let window = wf.samples[..1700].to_vec();
     // Past the prefix, so most of the capture goes through without being held.
     let reps = PREFIX_SAMPLES / window.len() * 3 / 2;
@@ -670,13 +663,7 @@ fn a_capture_longer_than_the_prefix_streams_through_bounded_state() {
 
 #[test]
 fn a_real_vcd_longer_than_the_prefix_is_gridded_as_it_comes() {
-    let wf = render(
-        spec_line(),
-        SimTime::ZERO,
-        SimTime::from_micros(170),
-        &WaveformConfig::default(),
-    )
-    .expect("render");
+    let wf = spec_waveform();
     let window = &wf.samples[..1700];
     let reps = PREFIX_SAMPLES / window.len() * 2;
     // Written on change, so the grid's period comes from the prefix's smallest spacing and
@@ -722,13 +709,7 @@ fn a_quiet_start_longer_than_the_prefix_waits_for_the_first_pulses() {
     // A line at 0 V for 0.15 s (more than the prefix), then the spec vectors every 170 µs
     // for 3.4 ms (pulses in more than 0.5 % of the samples after the prefix, as the estimate
     // needs).
-    let wf = render(
-        spec_line(),
-        SimTime::ZERO,
-        SimTime::from_micros(170),
-        &WaveformConfig::default(),
-    )
-    .expect("render");
+    let wf = spec_waveform();
     let quiet = PREFIX_SAMPLES * 3 / 2;
     let mut s = String::new();
     for i in 0..quiet {
