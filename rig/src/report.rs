@@ -36,9 +36,32 @@ pub struct Report {
     /// `bus.dropouts` and `safety.monitor` say what the bus and the safety monitor did.
     #[serde(skip_serializing_if = "Availability::is_clear")]
     pub availability: Availability,
+    /// A live run's figures (`asi-lift serve`; absent in a batch run).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub live: Option<LiveReport>,
     /// The readable log of the run, one line per event.
     #[serde(skip)]
     pub log: Vec<LogLine>,
+}
+
+/// What a live run (`asi-lift serve`) adds to the report: who controlled the lift and how the
+/// gateway and the wall clock fared.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct LiveReport {
+    /// `builtin` or `external`.
+    pub controller: String,
+    /// Simulated seconds per wall second asked for, or `max`.
+    pub speed: String,
+    /// Modbus and TTK4145 requests served.
+    pub requests: u64,
+    /// Requests answered with an exception.
+    pub exceptions: u64,
+    /// Client connections accepted.
+    pub connections: u64,
+    /// Times the gateway's watchdog zeroed the output image.
+    pub watchdog_trips: u64,
+    /// The most the simulation fell behind the wall clock, ms (0 at `max`).
+    pub max_lag_ms: f64,
 }
 
 /// The cabin came to rest level at a floor.
@@ -96,14 +119,16 @@ pub struct Waits {
 /// The state at the end of the run.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct FinalState {
-    /// The controller's current floor (Aktualni_Patro).
-    pub floor: u8,
+    /// The controller's current floor (Aktualni_Patro); absent under an outside controller.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub floor: Option<u8>,
     /// The cabin height, mm.
     pub position_mm: f64,
     /// Where the cabin stands, from its height.
     pub cabin_at: CabinAt,
-    /// The controller's state.
-    pub state: controller::State,
+    /// The built-in controller's state; absent under an outside controller.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub state: Option<controller::State>,
     /// The cabin moves.
     pub moving: bool,
     /// K1's main contacts are closed.
@@ -111,10 +136,14 @@ pub struct FinalState {
     /// Why the safety logic keeps K1 open (absent while it is closed).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub k1_open_cause: Option<String>,
-    /// FIFO_Kabina (collective: pending cabin calls ascending).
-    pub fifo_cabin: Vec<u8>,
-    /// FIFO_Patra (collective: pending hall calls ascending).
-    pub fifo_hall: Vec<u8>,
+    /// FIFO_Kabina (collective: pending cabin calls ascending); absent under an outside
+    /// controller.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub fifo_cabin: Option<Vec<u8>>,
+    /// FIFO_Patra (collective: pending hall calls ascending); absent under an outside
+    /// controller.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub fifo_hall: Option<Vec<u8>>,
 }
 
 /// Bus figures.
@@ -403,16 +432,16 @@ impl Report {
             served: Vec::new(),
             passengers: Vec::new(),
             final_state: FinalState {
-                floor: 1,
+                floor: Some(1),
                 position_mm: start_mm,
                 // Replaced by the run's end state, as every field here.
                 cabin_at: CabinAt::Floor(1),
-                state: controller::State::WaitingForInputs,
+                state: Some(controller::State::WaitingForInputs),
                 moving: false,
                 contactor_closed: false,
                 k1_open_cause: None,
-                fifo_cabin: Vec::new(),
-                fifo_hall: Vec::new(),
+                fifo_cabin: Some(Vec::new()),
+                fifo_hall: Some(Vec::new()),
             },
             bus: BusReport {
                 transactions: 0,
@@ -432,6 +461,7 @@ impl Report {
             },
             violations: Vec::new(),
             availability: Availability::default(),
+            live: None,
             log: Vec::new(),
         }
     }
@@ -525,24 +555,31 @@ impl Report {
             );
         }
         let f = &self.final_state;
+        let controller = match (f.state, f.floor) {
+            (Some(state), Some(floor)) => format!("controller: {state}, floor count {floor}"),
+            _ => "controller: external".to_string(),
+        };
         let _ = writeln!(
             s,
-            "  at the end         cabin {} ({:.1} mm), {}, K1 {}; controller: {}, floor count {}",
+            "  at the end         cabin {} ({:.1} mm), {}, K1 {}; {controller}",
             f.cabin_at,
             f.position_mm,
             if f.moving { "moving" } else { "at rest" },
             if f.contactor_closed { "closed" } else { "open" },
-            f.state,
-            f.floor,
         );
         if let Some(c) = &f.k1_open_cause {
             let _ = writeln!(s, "  K1 open because    {c}");
         }
-        let _ = writeln!(
-            s,
-            "  pending calls      cabin {:?}, hall {:?}",
-            f.fifo_cabin, f.fifo_hall
-        );
+        if let (Some(cabin), Some(hall)) = (&f.fifo_cabin, &f.fifo_hall) {
+            let _ = writeln!(s, "  pending calls      cabin {cabin:?}, hall {hall:?}");
+        }
+        if let Some(l) = &self.live {
+            let _ = writeln!(
+                s,
+                "  live               {} controller at speed {}; {} requests from {} connections, {} exceptions, {} watchdog trips; lag max {:.1} ms",
+                l.controller, l.speed, l.requests, l.connections, l.exceptions, l.watchdog_trips, l.max_lag_ms
+            );
+        }
         let b = &self.bus;
         let e = &b.errors;
         let _ = writeln!(

@@ -48,7 +48,7 @@ fn initialises_from_several_heights_including_floor_1() {
             "from {start} mm: {} mm off level",
             first.position_mm
         );
-        assert_eq!(r.final_state.state, controller::State::AtFloor);
+        assert_eq!(r.final_state.state, Some(controller::State::AtFloor));
         assert!(
             r.safety.trips.is_empty(),
             "from {start} mm: {:?}",
@@ -499,6 +499,6 @@ fn the_readme_example_scenario_runs_clean_and_ends_in_service() {
     let last = r.served.last().expect("a call served");
     assert_eq!(last.floor, 1);
     assert!(last.served_at_s > 120.0, "{}", r.to_text());
-    assert_eq!(r.final_state.state, controller::State::AtFloor);
+    assert_eq!(r.final_state.state, Some(controller::State::AtFloor));
     assert!(r.final_state.contactor_closed);
 }

@@ -499,7 +499,7 @@ fn a_monitor_trip_from_line_noise_halts_safely_until_the_operator_resets() {
     assert!(logged_after(&r, "safety", "K1 closed", reset - 0.001).is_some());
     let last = r.served.last().expect("a call served");
     assert!(last.served_at_s > reset, "{last:?}");
-    assert_eq!(r.final_state.state, controller::State::AtFloor);
+    assert_eq!(r.final_state.state, Some(controller::State::AtFloor));
 }
 
 #[test]
@@ -542,7 +542,7 @@ fn an_attendant_answers_a_monitor_trip_from_line_noise_after_the_repairs() {
     assert!(logged_after(&r, "safety", "K1 closed", reset - 0.001).is_some());
     // The first round answered the group error of the safe-link drop at 84 s.
     assert_eq!(r.safety.attendant_rounds, 2);
-    assert_eq!(r.final_state.state, controller::State::AtFloor);
+    assert_eq!(r.final_state.state, Some(controller::State::AtFloor));
     assert!(
         r.passengers.iter().all(|p| p.served_at_s.is_some()),
         "{}",

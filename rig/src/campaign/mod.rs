@@ -162,8 +162,9 @@ pub fn judge(exec: &Execution, probe: Option<&Probe>) -> RunVerdict {
             let in_service = probe.filter(|p| p.judged).map(|p| {
                 let state = r.final_state.state;
                 let working = r.served.iter().any(|s| s.served_at_s >= p.at.as_secs_f64())
-                    || (r.final_state.moving && state != State::AtFloor);
-                (probe_served(r, p) || working) && SERVICE_STATES.contains(&state)
+                    || (r.final_state.moving && state != Some(State::AtFloor));
+                (probe_served(r, p) || working)
+                    && state.is_some_and(|s| SERVICE_STATES.contains(&s))
             });
             let first_violation = r.violations.first().map(|v| v.kind);
             let outcome = if first_violation.is_some() {
@@ -372,7 +373,7 @@ pub fn line(ctx: LineContext<'_>, exec: &Execution, verdict: &RunVerdict) -> Run
                 repeats: r.bus.repeats,
             };
             l.simulated_s = r.simulated_s;
-            l.final_state = Some(r.final_state.state);
+            l.final_state = r.final_state.state;
         }
     }
     l

@@ -186,7 +186,9 @@ fn reproducer_text(
                     } else {
                         "is never served"
                     },
-                    r.final_state.state
+                    r.final_state
+                        .state
+                        .map_or_else(|| "external".to_string(), |s| s.to_string())
                 ),
                 None => "out of service".into(),
             },

@@ -126,6 +126,9 @@ pub struct Rig {
     las_watch: LasWatch,
     /// Since when the controller holds the cabin for a bus fault.
     bus_fault_since: Option<SimTime>,
+    /// An outside controller is the PLC ([`Rig::with_external_controller`]): the built-in
+    /// program is off, and these are the standard signals it last gave the safety logic.
+    external: Option<ToSafety>,
 }
 
 impl Rig {
@@ -184,6 +187,7 @@ impl Rig {
             safety_out: None,
             las_watch: LasWatch::default(),
             bus_fault_since: None,
+            external: None,
             sc,
         };
         rig.lift.set_load(SimTime::ZERO, rig.sc.load)?;
@@ -275,7 +279,11 @@ impl Rig {
             converter_run: self.applied.run,
             converter_up: self.applied.up,
             setpoint_ua: self.applied.setpoint_ua,
-            controller_state: p.state().name(),
+            controller_state: if self.external.is_some() {
+                "external"
+            } else {
+                p.state().name()
+            },
             floor: p.current_floor(),
             target_floor: p.target(),
             fifo_cabin: p.fifo_cabin().len() as u8,
@@ -462,6 +470,12 @@ impl Rig {
                 position_mm - level
             ),
         );
+        if self.external.is_some() {
+            // No program tells which call a stop serves: a stop at a floor answers every
+            // call waiting there.
+            let served = self.passengers.arrived(floor, at);
+            self.report.served.extend(served);
+        }
     }
 
     fn apply(&mut self, t: SimTime, ev: &ScenarioEvent) {
@@ -712,6 +726,11 @@ impl Rig {
     }
 
     fn plc_scan(&mut self, t: SimTime) {
+        if let Some(signals) = self.external {
+            // The outside controller writes the output image itself, between moments.
+            self.to_safety = signals;
+            return;
+        }
         self.to_safety = self.plc.scan(t, self.lab.bus.image_mut(), self.from_safety);
         let held = self.plc.program().state() == controller::State::BusFault;
         match (self.bus_fault_since, held) {
@@ -781,7 +800,9 @@ impl Rig {
         });
     }
 
-    fn finish(mut self) -> Report {
+    /// Ends the run at the moment reached and returns its report (what [`Rig::run`] does at
+    /// the end; for callers that step the rig themselves).
+    pub fn finish(mut self) -> Report {
         self.flush_trace();
         self.outputs.finish(self.now);
         if let Some(e) = self.trace_error().map(str::to_owned) {
@@ -805,13 +826,14 @@ impl Rig {
             })
             .collect();
         let p = self.plc.program();
+        let builtin = self.external.is_none();
         let stats = self.lab.bus.stats();
         self.report.simulated_s = self.now.as_secs_f64();
         self.report.final_state = FinalState {
-            floor: p.current_floor(),
+            floor: builtin.then(|| p.current_floor()),
             position_mm: round3(self.lift.position_mm()),
             cabin_at: CabinAt::of(self.lift.config(), self.lift.position_mm()),
-            state: p.state(),
+            state: builtin.then(|| p.state()),
             moving: self.lift.velocity_mm_s() != 0.0,
             contactor_closed: self.lift.k1_closed(),
             k1_open_cause: self
@@ -820,8 +842,8 @@ impl Rig {
                 .and_then(|d| d.k1_open_cause)
                 .filter(|_| !self.lift.k1_closed())
                 .map(|c| words::k1_open_cause(c, self.lab.monitor())),
-            fifo_cabin: p.fifo_cabin(),
-            fifo_hall: p.fifo_hall(),
+            fifo_cabin: builtin.then(|| p.fifo_cabin()),
+            fifo_hall: builtin.then(|| p.fifo_hall()),
         };
         self.report.bus = words::bus_report(stats, dropouts);
         self.report.passengers = self.passengers.report();
@@ -855,6 +877,65 @@ impl Rig {
                 line: 0,
             },
         );
+    }
+
+    /// Turns the built-in PLC program off: an outside controller (`asi-lift serve
+    /// --controller external`) writes the output image between moments through
+    /// [`Rig::lab_mut`] and gives the safety logic its standard signals through
+    /// [`Rig::set_plc_signals`]. Bus, slaves, plant, safety logic and invariant watch run as
+    /// before; a stop level at a floor counts as serving every call waiting there.
+    pub fn with_external_controller(mut self) -> Rig {
+        self.external = Some(ToSafety::default());
+        self.log(
+            "rig",
+            "controller: external (the built-in PLC program is off)".into(),
+        );
+        self
+    }
+
+    /// The standard signals an outside controller gives the safety logic (the STOP
+    /// circuit's restart, the overload); taken at the next PLC scan moment. Ignored while
+    /// the built-in program runs.
+    pub fn set_plc_signals(&mut self, signals: ToSafety) {
+        if self.external.is_some() {
+            self.external = Some(signals);
+        }
+    }
+
+    /// Whether an outside controller is the PLC.
+    pub fn external_controller(&self) -> bool {
+        self.external.is_some()
+    }
+
+    /// Does `action` now, as a scenario event would; `who` names the actor in the log.
+    pub fn act_now(&mut self, who: &'static str, action: &Action) {
+        self.act(self.now, who, action);
+    }
+
+    /// Adds a line to the run's log at the moment reached.
+    pub fn log_now(&mut self, who: &'static str, text: String) {
+        self.log(who, text);
+    }
+
+    /// When the run ends (the scenario's duration, or the `until` of [`Rig::set_end`]).
+    pub fn end(&self) -> SimTime {
+        self.end
+    }
+
+    /// Moves the end of the run (to run open-ended, or to stop early); never before the
+    /// moment reached.
+    pub fn set_end(&mut self, end: SimTime) {
+        self.end = end.max(self.now);
+    }
+
+    /// The safety logic's last outputs (absent before its first scan).
+    pub fn safety_diag(&self) -> Option<&safety::lift::LiftSafetyDiag> {
+        self.safety_out.as_ref()
+    }
+
+    /// The violations found so far.
+    pub fn violations(&self) -> &[Violation] {
+        &self.report.violations
     }
 
     /// The simulated time reached.

@@ -86,6 +86,38 @@ impl Passengers {
         }
     }
 
+    /// The cabin stopped level at `floor` at `at` under an outside controller: every call
+    /// waiting there is answered, one served call per button with its earliest press as the
+    /// request, cabin calls first, then up, then down.
+    pub(super) fn arrived(&mut self, floor: u8, at: SimTime) -> Vec<Served> {
+        let mut served = Vec::new();
+        for kind in [Button::Cabin(floor), Button::HallUp(floor), Button::HallDown(floor)] {
+            let waiting = |p: &Press| p.button == kind && p.served.is_none() && p.at <= at;
+            let Some(requested) = self.presses.iter().filter(|p| waiting(p)).map(|p| p.at).min()
+            else {
+                continue;
+            };
+            for p in self.presses.iter_mut().filter(|p| waiting(p)) {
+                p.served = Some(at);
+            }
+            served.push(Served {
+                floor,
+                source: match kind {
+                    Button::Cabin(_) => CallSource::Cabin,
+                    _ => CallSource::Hall,
+                },
+                direction: match kind {
+                    Button::HallUp(_) => Some(HallDirection::Up),
+                    Button::HallDown(_) => Some(HallDirection::Down),
+                    _ => None,
+                },
+                requested_at_s: requested.as_secs_f64(),
+                served_at_s: at.as_secs_f64(),
+            });
+        }
+        served
+    }
+
     /// The presses for the report, in the order they came.
     pub(super) fn report(&self) -> Vec<Passenger> {
         self.presses
