@@ -42,6 +42,11 @@ enum Command {
     /// the failed checks; then a summary. A capture without telegrams says "no telegrams
     /// found" and exits with 0.
     Decode(cmd::decode::DecodeArgs),
+    /// Run the lab lift live, on the wall clock, behind a virtual AS-i gateway that speaks
+    /// Modbus TCP (README.md, "Live mode"): a client watches the built-in controller, or with
+    /// `--controller external` is the PLC itself. Ctrl-C or `--until` ends the run and writes
+    /// the report.
+    Serve(cmd::serve::ServeArgs),
     /// Timing analysis (docs/timing.md): transaction and cycle time, per-slave update period,
     /// repeats, handshake word times and end-to-end latencies, analytic and simulated side by
     /// side, compared with the textbook cycle time T = (n + 2) · 154 µs.
@@ -75,6 +80,7 @@ fn run(cli: Cli) -> Result<u8, String> {
         Command::Encode(args) => cmd::encode::run(args),
         Command::Decode(args) => cmd::decode::run(args),
         Command::Timing(args) => cmd::timing::run(args),
+        Command::Serve(args) => cmd::serve::run(args),
         Command::Campaign { action, args } => match action {
             None => cmd::campaign::run(args),
             Some(cmd::campaign::CampaignAction::Summarize { files, json }) => {

@@ -9,6 +9,7 @@ pub mod output;
 pub mod plot;
 pub mod run;
 pub mod scenarios;
+pub mod serve;
 pub mod timing;
 
 use std::io::{BufRead, Read, Write};

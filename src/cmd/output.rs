@@ -231,7 +231,7 @@ impl Outputs {
     }
 
     /// A writer for `sink`, buffered.
-    pub fn writer(&self, sink: &Sink) -> Result<Box<dyn Write>, String> {
+    pub fn writer(&self, sink: &Sink) -> Result<Box<dyn Write + Send>, String> {
         match sink {
             Sink::Stdout => Ok(Box::new(StdoutSink {
                 out: std::io::BufWriter::new(std::io::stdout()),

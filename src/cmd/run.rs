@@ -112,31 +112,7 @@ pub fn run(args: RunArgs) -> Result<u8, String> {
         plot,
         force,
     } = args;
-    // A file if there is one by that name, else a built-in scenario.
-    let is_file = |p: &Path| p == Path::new("-") || p.exists() || p.components().count() > 1;
-    let file = scenario.as_deref().filter(|p| is_file(p));
-    let mut sc = match (&scenario, file) {
-        (None, _) => Scenario::demo().map_err(|e| e.to_string())?,
-        (Some(_), Some(path)) => {
-            let text = read_input(path)?;
-            Scenario::from_toml(&path.display().to_string(), &text).map_err(|e| e.to_string())?
-        }
-        (Some(name), None) => find(&name.to_string_lossy())
-            .map_err(|e| format!("{e} (and no file {} here)", name.display()))?
-            .scenario()
-            .map_err(|e| e.to_string())?,
-    };
-    for e in sc.late_events() {
-        let place = file.map_or_else(
-            || sc.name.clone(),
-            |p| format!("{}:{}", p.display(), e.line),
-        );
-        eprintln!(
-            "asi-lift: warning: {place}: the event at {} comes at or after the scenario's end ({}) and never happens",
-            e.at.saturating_duration_since(SimTime::ZERO),
-            sc.duration
-        );
-    }
+    let (mut sc, file) = load_scenario(scenario.as_deref())?;
     if let Some(s) = seed {
         sc.seed = s;
     }
@@ -186,8 +162,9 @@ pub fn run(args: RunArgs) -> Result<u8, String> {
         rig.trace_to(outs.writer(sink)?, form);
     }
     if vcd_sink.is_some() || csv_sink.is_some() {
-        let vcd = vcd_sink.as_ref().map(|s| outs.writer(s)).transpose()?;
-        let csv = csv_sink.as_ref().map(|s| outs.writer(s)).transpose()?;
+        let writer = |s: &_| outs.writer(s).map(|w| w as Box<dyn std::io::Write>);
+        let vcd = vcd_sink.as_ref().map(writer).transpose()?;
+        let csv = csv_sink.as_ref().map(writer).transpose()?;
         rig.waves_to(WaveOutputs {
             vcd,
             csv,
@@ -258,6 +235,38 @@ pub fn run(args: RunArgs) -> Result<u8, String> {
     } else {
         EXIT_VIOLATIONS
     })
+}
+
+/// The scenario named on the command line: a file if there is one by that name (`-` for
+/// standard input), else a built-in scenario, else the demo; with the file's path. Warns of
+/// events at or after the scenario's end.
+pub fn load_scenario(scenario: Option<&Path>) -> Result<(Scenario, Option<&Path>), String> {
+    // A file if there is one by that name, else a built-in scenario.
+    let is_file = |p: &Path| p == Path::new("-") || p.exists() || p.components().count() > 1;
+    let file = scenario.filter(|p| is_file(p));
+    let sc = match (scenario, file) {
+        (None, _) => Scenario::demo().map_err(|e| e.to_string())?,
+        (Some(_), Some(path)) => {
+            let text = read_input(path)?;
+            Scenario::from_toml(&path.display().to_string(), &text).map_err(|e| e.to_string())?
+        }
+        (Some(name), None) => find(&name.to_string_lossy())
+            .map_err(|e| format!("{e} (and no file {} here)", name.display()))?
+            .scenario()
+            .map_err(|e| e.to_string())?,
+    };
+    for e in sc.late_events() {
+        let place = file.map_or_else(
+            || sc.name.clone(),
+            |p| format!("{}:{}", p.display(), e.line),
+        );
+        eprintln!(
+            "asi-lift: warning: {place}: the event at {} comes at or after the scenario's end ({}) and never happens",
+            e.at.saturating_duration_since(SimTime::ZERO),
+            sc.duration
+        );
+    }
+    Ok((sc, file))
 }
 
 /// The progress of a run on a terminal (standard error): simulated seconds, the rate in

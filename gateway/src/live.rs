@@ -1,0 +1,252 @@
+//! The rig on the wall clock: its own thread, commands in and state out over
+//! crossbeam-channel (README, "Live mode").
+//!
+//! The rig thread owns the rig and the gateway's state. Every request from a client reaches it
+//! as a message and is served between two moments of the simulation, at the simulated time
+//! reached; nothing else touches the rig. At a speed factor the simulation follows the wall
+//! clock times the factor and counts how far it falls behind; at `max` with the built-in
+//! controller it runs free, and with an outside controller it stands still between requests:
+//! each request is served, then the simulation advances by the step (1 ms by default), so a
+//! client's program and the simulation run in lockstep and the same requests give the same
+//! run.
+
+use crate::map::{Gateway, Owner};
+use asi_phy::{SimDuration, SimTime};
+use crossbeam_channel::{Receiver, RecvTimeoutError, Sender, TryRecvError};
+use rig::report::LiveReport;
+use rig::{Report, Rig};
+use std::time::{Duration, Instant};
+use tokio_modbus::{ExceptionCode, Request, Response};
+
+/// How fast simulated time runs.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Speed {
+    /// Simulated seconds per wall second.
+    Factor(f64),
+    /// As fast as the machine can (builtin), or paced by the client's requests (external).
+    Max,
+}
+
+impl std::fmt::Display for Speed {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Speed::Factor(x) => write!(f, "{x}"),
+            Speed::Max => f.write_str("max"),
+        }
+    }
+}
+
+/// How a live run goes.
+#[derive(Clone, Copy, Debug)]
+pub struct LiveConfig {
+    /// How fast.
+    pub speed: Speed,
+    /// Who owns the output image.
+    pub owner: Owner,
+    /// The gateway's watchdog time (zero = off).
+    pub watchdog: SimDuration,
+    /// At `max` with an outside controller: how far each request advances the simulation.
+    pub step: SimDuration,
+}
+
+/// A request from a client, with where its answer goes.
+pub struct Call {
+    /// The Modbus request.
+    pub request: Request<'static>,
+    /// Where the answer goes (a client that left drops it).
+    pub reply: tokio::sync::oneshot::Sender<Result<Response, ExceptionCode>>,
+}
+
+/// What reaches the rig thread.
+pub enum ToRig {
+    /// A client's request.
+    Call(Call),
+    /// A client connected.
+    Connected,
+    /// End the run now (Ctrl-C).
+    Stop,
+}
+
+/// What the rig thread tells the outside, about once per wall second and at the end.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Status {
+    /// Simulated time reached, s.
+    pub simulated_s: f64,
+    /// How far the simulation is behind the wall clock now, ms.
+    pub lag_ms: f64,
+    /// Requests served so far.
+    pub requests: u64,
+    /// Violations of the safety invariants so far.
+    pub violations: usize,
+    /// The gateway's watchdog has zeroed the outputs.
+    pub watchdog_tripped: bool,
+    /// The run has ended (this is the last status).
+    pub ended: bool,
+}
+
+/// Lag below this is the granularity of the pacing, not falling behind.
+const LAG_REPORTED: Duration = Duration::from_millis(2);
+/// At `max` with the built-in controller: simulated time between looks at the channel.
+const FREE_RUN_SLICE: SimDuration = SimDuration::from_millis(10);
+/// How often a status goes out, wall time.
+const STATUS_EVERY: Duration = Duration::from_secs(1);
+
+/// The rig thread's loop: runs `rig` until its end or a [`ToRig::Stop`], serving requests
+/// from `rx` and sending a [`Status`] to `status` every wall second; returns the report.
+pub fn run(
+    mut rig: Rig,
+    cfg: LiveConfig,
+    rx: &Receiver<ToRig>,
+    status: &Sender<Status>,
+) -> Report {
+    let mut gw = Gateway::new(cfg.owner, cfg.watchdog);
+    let mut connections = 0u64;
+    let mut max_lag = Duration::ZERO;
+    let mut lag_warned = false;
+    let start = Instant::now();
+    let sim0 = rig.now();
+    let mut at = rig.now();
+    let mut last_status = Instant::now();
+    let mut stopped = false;
+    'run: while !stopped && at < rig.end() {
+        match cfg.speed {
+            Speed::Factor(x) => {
+                let wall = start.elapsed();
+                let target = sim0 + sim_of(wall.mul_f64(x));
+                let target = target.min(rig.end());
+                at = advance(&mut rig, &mut gw, at, target);
+                let lag = behind(start, sim0, at, x);
+                if lag > LAG_REPORTED {
+                    max_lag = max_lag.max(lag);
+                    if !lag_warned && lag > Duration::from_millis(100) {
+                        lag_warned = true;
+                        rig.log_now(
+                            "live",
+                            format!(
+                                "the machine cannot keep up at speed {x}: {:.0} ms behind the wall clock",
+                                lag.as_secs_f64() * 1e3
+                            ),
+                        );
+                    }
+                }
+                // Wait for a request until the next millisecond of simulated time is due.
+                let next = Duration::from_secs_f64(1e-3 / x).min(Duration::from_millis(1));
+                match rx.recv_timeout(next) {
+                    Ok(m) => stopped |= handle(m, &mut rig, &mut gw, at, &mut connections),
+                    Err(RecvTimeoutError::Timeout) => {}
+                    Err(RecvTimeoutError::Disconnected) => break 'run,
+                }
+            }
+            Speed::Max if cfg.owner == Owner::Builtin => {
+                let target = (at + FREE_RUN_SLICE).min(rig.end());
+                at = advance(&mut rig, &mut gw, at, target);
+            }
+            Speed::Max => match rx.recv_timeout(STATUS_EVERY) {
+                Ok(m) => {
+                    let call = matches!(m, ToRig::Call(_));
+                    stopped |= handle(m, &mut rig, &mut gw, at, &mut connections);
+                    if call {
+                        let target = (at + cfg.step).min(rig.end());
+                        at = advance(&mut rig, &mut gw, at, target);
+                    }
+                }
+                Err(RecvTimeoutError::Timeout) => {}
+                Err(RecvTimeoutError::Disconnected) => break 'run,
+            },
+        }
+        // Everything else waiting is served at the same moment.
+        loop {
+            match rx.try_recv() {
+                Ok(m) => stopped |= handle(m, &mut rig, &mut gw, at, &mut connections),
+                Err(TryRecvError::Empty) => break,
+                Err(TryRecvError::Disconnected) => break 'run,
+            }
+        }
+        if last_status.elapsed() >= STATUS_EVERY {
+            last_status = Instant::now();
+            let _ = status.try_send(status_of(&rig, &gw, at, start, sim0, cfg.speed, false));
+        }
+    }
+    if stopped {
+        rig.log_now("live", "stopped by the operator (Ctrl-C)".into());
+    }
+    let _ = status.try_send(status_of(&rig, &gw, at, start, sim0, cfg.speed, true));
+    let mut report = rig.finish();
+    report.live = Some(LiveReport {
+        controller: match cfg.owner {
+            Owner::Builtin => "builtin".into(),
+            Owner::External => "external".into(),
+        },
+        speed: cfg.speed.to_string(),
+        requests: gw.requests,
+        exceptions: gw.exceptions,
+        connections,
+        watchdog_trips: gw.watchdog_trips,
+        max_lag_ms: (max_lag.as_secs_f64() * 1e4).round() / 10.0,
+    });
+    report
+}
+
+/// Runs the rig's moments up to `target` and the watchdog after them; returns `target`.
+fn advance(rig: &mut Rig, gw: &mut Gateway, at: SimTime, target: SimTime) -> SimTime {
+    if target <= at {
+        return at;
+    }
+    while rig.step_until(target).is_some() {}
+    gw.watch(rig, target);
+    target
+}
+
+/// Serves one message at `at`; `true` if it ends the run.
+fn handle(m: ToRig, rig: &mut Rig, gw: &mut Gateway, at: SimTime, connections: &mut u64) -> bool {
+    match m {
+        ToRig::Call(c) => {
+            let answer = gw.serve(rig, at, &c.request);
+            // A client that has gone no longer waits for its answer.
+            let _ = c.reply.send(answer);
+            false
+        }
+        ToRig::Connected => {
+            *connections += 1;
+            false
+        }
+        ToRig::Stop => true,
+    }
+}
+
+fn status_of(
+    rig: &Rig,
+    gw: &Gateway,
+    at: SimTime,
+    start: Instant,
+    sim0: SimTime,
+    speed: Speed,
+    ended: bool,
+) -> Status {
+    let lag_ms = match speed {
+        Speed::Factor(x) => behind(start, sim0, at, x).as_secs_f64() * 1e3,
+        Speed::Max => 0.0,
+    };
+    Status {
+        simulated_s: at.as_secs_f64(),
+        lag_ms: if ended { 0.0 } else { lag_ms },
+        requests: gw.requests,
+        violations: rig.violations().len(),
+        watchdog_tripped: gw.watchdog_tripped(),
+        ended,
+    }
+}
+
+/// How far simulated time `at` is behind the wall clock at speed `x`, in wall time.
+fn behind(start: Instant, sim0: SimTime, at: SimTime, x: f64) -> Duration {
+    let due = sim0 + sim_of(start.elapsed().mul_f64(x));
+    wall_of(due.saturating_duration_since(at)).div_f64(x)
+}
+
+fn sim_of(d: Duration) -> SimDuration {
+    SimDuration::from_nanos(u64::try_from(d.as_nanos()).unwrap_or(u64::MAX))
+}
+
+fn wall_of(d: SimDuration) -> Duration {
+    Duration::from_nanos(d.as_nanos())
+}

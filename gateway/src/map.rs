@@ -1,0 +1,687 @@
+//! The gateway's Modbus register map: the AS-i master's process image, lists, flags and
+//! diagnostics, the safety logic's signals to and from the PLC, and the simulator's command
+//! registers (README, "The gateway's register map").
+//!
+//! The map follows the Bihl+Wiedemann AS-i/Modbus gateways: the images word for word in the
+//! layout of seed 003 table 4.1 (four slaves per register, the lowest address in the highest
+//! bits), one coil or discrete input per data bit, the lists as bit lists. Every request is
+//! checked whole before anything is written: a request is served completely or answered with
+//! an exception and changes nothing.
+//!
+//! | table | addresses | content | access |
+//! |---|---|---|---|
+//! | coils | 0..255 | output image bits: coil 4·s + k is D_k of slot s (slot = address for A slaves, 32 + address for B; slot 0 the host flags, slot 32 reserved) | read/write |
+//! | coils | 1000, 1001 | to the safety logic: restart of the STOP circuit, cabin overloaded | read/write |
+//! | discrete inputs | 0..255 | input image bits, same order (slot 0 = flags F0..F3) | read |
+//! | discrete inputs | 256..511 | LAS, LDS, LPS, LPF: 64 bits each, bit n = slave n (A), 32 + n (B) | read |
+//! | discrete inputs | 512..520 | Config_OK, LDS.0, Auto_Address_Assign, Auto_Address_Available, Configuration_Active, Normal_Operation_Active, APF, Offline_Ready, Periphery_OK | read |
+//! | discrete inputs | 1000..1004 | EStopOut, K1 commanded, K1 aux closed, safety group in RUN, gateway watchdog tripped | read |
+//! | input registers | 0..243 | the input data image (table 4.1): flags and slaves 0..15, mailbox 32..49, analog inputs 68..155 | read |
+//! | input registers | 1000..1015 | LAS, LDS, LPS, LPF, four registers each (bits 0..15 of the first = slaves 0..15 A) | read |
+//! | input registers | 1016, 1017 | execution-control flags (bits as discrete inputs 512..520); configuration error (1 = LDS ≠ LPS) | read |
+//! | input registers | 1020..1035 | receiver errors per check (start, alternation, pause, information, parity, end, length) and no response: 32-bit, high word first | read |
+//! | input registers | 1040..1042 | AS-i cycle time µs: last mean, minimum, maximum | read |
+//! | input registers | 1050..1053 | simulated time, ms, 64-bit, high word first | read |
+//! | input registers | 1060 | safety bits: as discrete inputs 1000..1004 in bits 0..4 | read |
+//! | holding registers | 0..243 | the output data image (table 4.1): host flags and slaves, mailbox 32..49, analog outputs 68..155 (S-7.3 set-point: word 68) | read/write |
+//! | holding registers | 1000 | to the safety logic: bit 0 restart, bit 1 overloaded (as coils 1000, 1001) | read/write |
+//! | holding registers | 1008 | watchdog time, ms (0 = off) | read/write |
+//! | holding registers | 2000..2009 | simulator commands (write only, read as 0): press a button, slave off/on line, load, door, reset, acknowledge, power fail, safe-link drop, rescue | write |
+//! | holding registers | 3000..3243 | the input data image again, for clients that read holding registers only | read |
+
+use asi_master::image::{F0_CONFIG_ERROR, IMAGE_WORDS};
+use asi_master::{EcFlags, SlaveList};
+use asi_phy::{SimDuration, SimTime};
+use bitvec::prelude::*;
+use controller::plc::ToSafety;
+use lift_model::{Button, LoadLevel};
+use rig::scenario::{Action, Fault, DEFAULT_HOLD};
+use rig::Rig;
+use tokio_modbus::{ExceptionCode, Request, Response};
+
+/// Coils and discrete inputs of the image bits: 16 words × 16 bits.
+pub const IMAGE_BITS: u16 = 256;
+/// First coil and discrete input of the safety signals.
+pub const SAFETY_BITS: u16 = 1000;
+/// First discrete input of the lists (LAS, LDS, LPS, LPF).
+pub const LIST_BITS: u16 = 256;
+/// First discrete input of the execution-control flags.
+pub const FLAG_BITS: u16 = 512;
+/// The execution-control flags in the order of their bits.
+pub const EC_FLAGS: [u16; 9] = [
+    EcFlags::CONFIG_OK,
+    EcFlags::LDS0,
+    EcFlags::AUTO_ADDRESS_ASSIGN,
+    EcFlags::AUTO_ADDRESS_AVAILABLE,
+    EcFlags::CONFIGURATION_ACTIVE,
+    EcFlags::NORMAL_OPERATION_ACTIVE,
+    EcFlags::APF,
+    EcFlags::OFFLINE_READY,
+    EcFlags::PERIPHERY_OK,
+];
+/// First input register of the lists.
+pub const LIST_REGISTERS: u16 = 1000;
+/// Input register of the execution-control flags.
+pub const FLAGS_REGISTER: u16 = 1016;
+/// Input register of the configuration error.
+pub const CONFIG_ERROR_REGISTER: u16 = 1017;
+/// First input register of the error counters.
+pub const ERROR_REGISTERS: u16 = 1020;
+/// First input register of the cycle times.
+pub const CYCLE_REGISTERS: u16 = 1040;
+/// First input register of the simulated time.
+pub const TIME_REGISTERS: u16 = 1050;
+/// Input register of the safety bits.
+pub const SAFETY_REGISTER: u16 = 1060;
+/// Holding register of the signals to the safety logic.
+pub const PLC_SIGNALS_REGISTER: u16 = 1000;
+/// Holding register of the watchdog time.
+pub const WATCHDOG_REGISTER: u16 = 1008;
+/// First holding register of the simulator commands.
+pub const COMMAND_REGISTERS: u16 = 2000;
+/// The simulator commands, in register order.
+pub const COMMANDS: [&str; 10] = [
+    "press", "offline", "online", "load", "door", "reset", "ack", "power-fail", "link-drop",
+    "rescue",
+];
+/// First holding register of the input image's mirror.
+pub const INPUT_MIRROR: u16 = 3000;
+/// The input registers and holding registers of the images.
+const IMAGE_REGISTERS: u16 = IMAGE_WORDS as u16;
+
+/// Modbus limits of one request (Modbus application protocol v1.1b3, §6).
+const MAX_READ_BITS: u16 = 2000;
+const MAX_READ_REGISTERS: u16 = 125;
+const MAX_WRITE_BITS: u16 = 1968;
+const MAX_WRITE_REGISTERS: u16 = 123;
+const MAX_READ_WRITE_REGISTERS: u16 = 121;
+
+/// The default watchdog: outputs not written for this long go to zero.
+pub const DEFAULT_WATCHDOG: SimDuration = SimDuration::from_millis(1000);
+
+/// Who owns the output image.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Owner {
+    /// The built-in PLC program: the gateway only watches.
+    Builtin,
+    /// The Modbus client is the PLC.
+    External,
+}
+
+/// The gateway's own state beside the rig: who writes the outputs, the watchdog, counters.
+#[derive(Clone, Debug)]
+pub struct Gateway {
+    owner: Owner,
+    signals: ToSafety,
+    watchdog: SimDuration,
+    last_write: Option<SimTime>,
+    tripped: bool,
+    /// Requests served.
+    pub requests: u64,
+    /// Requests answered with an exception.
+    pub exceptions: u64,
+    /// Watchdog trips.
+    pub watchdog_trips: u64,
+}
+
+/// A check of one address of a write, before anything is written.
+type Checked = Result<(), ExceptionCode>;
+
+impl Gateway {
+    /// A gateway for `owner` with the watchdog time `watchdog` (zero = off).
+    pub fn new(owner: Owner, watchdog: SimDuration) -> Gateway {
+        Gateway {
+            owner,
+            signals: ToSafety::default(),
+            watchdog,
+            last_write: None,
+            tripped: false,
+            requests: 0,
+            exceptions: 0,
+            watchdog_trips: 0,
+        }
+    }
+
+    /// Who owns the output image.
+    pub fn owner(&self) -> Owner {
+        self.owner
+    }
+
+    /// Whether the watchdog has zeroed the outputs and no write has come since.
+    pub fn watchdog_tripped(&self) -> bool {
+        self.tripped
+    }
+
+    /// Serves one request at simulated time `now` (the time the simulation has reached).
+    pub fn serve(
+        &mut self,
+        rig: &mut Rig,
+        now: SimTime,
+        req: &Request<'_>,
+    ) -> Result<Response, ExceptionCode> {
+        self.requests += 1;
+        let r = self.dispatch(rig, now, req);
+        if r.is_err() {
+            self.exceptions += 1;
+        }
+        r
+    }
+
+    fn dispatch(
+        &mut self,
+        rig: &mut Rig,
+        now: SimTime,
+        req: &Request<'_>,
+    ) -> Result<Response, ExceptionCode> {
+        match req {
+            Request::ReadCoils(a, n) => {
+                let bits = read(*a, *n, MAX_READ_BITS, |i| self.coil(rig, i))?;
+                Ok(Response::ReadCoils(bits))
+            }
+            Request::ReadDiscreteInputs(a, n) => {
+                let bits = read(*a, *n, MAX_READ_BITS, |i| self.discrete_input(rig, i))?;
+                Ok(Response::ReadDiscreteInputs(bits))
+            }
+            Request::ReadInputRegisters(a, n) => {
+                let words = read(*a, *n, MAX_READ_REGISTERS, |i| {
+                    self.input_register(rig, now, i)
+                })?;
+                Ok(Response::ReadInputRegisters(words))
+            }
+            Request::ReadHoldingRegisters(a, n) => {
+                let words = read(*a, *n, MAX_READ_REGISTERS, |i| self.holding(rig, i))?;
+                Ok(Response::ReadHoldingRegisters(words))
+            }
+            Request::WriteSingleCoil(a, v) => {
+                self.write_coils(rig, now, *a, &[*v])?;
+                Ok(Response::WriteSingleCoil(*a, *v))
+            }
+            Request::WriteMultipleCoils(a, vs) => {
+                if vs.is_empty() || vs.len() > MAX_WRITE_BITS as usize {
+                    return Err(ExceptionCode::IllegalDataValue);
+                }
+                self.write_coils(rig, now, *a, vs)?;
+                Ok(Response::WriteMultipleCoils(*a, vs.len() as u16))
+            }
+            Request::WriteSingleRegister(a, v) => {
+                self.write_registers(rig, now, *a, &[*v])?;
+                Ok(Response::WriteSingleRegister(*a, *v))
+            }
+            Request::WriteMultipleRegisters(a, vs) => {
+                if vs.is_empty() || vs.len() > MAX_WRITE_REGISTERS as usize {
+                    return Err(ExceptionCode::IllegalDataValue);
+                }
+                self.write_registers(rig, now, *a, vs)?;
+                Ok(Response::WriteMultipleRegisters(*a, vs.len() as u16))
+            }
+            Request::ReadWriteMultipleRegisters(ra, rn, wa, vs) => {
+                if vs.is_empty() || vs.len() > MAX_READ_WRITE_REGISTERS as usize {
+                    return Err(ExceptionCode::IllegalDataValue);
+                }
+                // Both halves are checked before the write; the read comes after it.
+                read(*ra, *rn, MAX_READ_REGISTERS, |i| self.holding(rig, i))?;
+                self.write_registers(rig, now, *wa, vs)?;
+                let words = read(*ra, *rn, MAX_READ_REGISTERS, |i| self.holding(rig, i))?;
+                Ok(Response::ReadWriteMultipleRegisters(words))
+            }
+            _ => Err(ExceptionCode::IllegalFunction),
+        }
+    }
+
+    // ----- reads -------------------------------------------------------------------------
+
+    fn coil(&self, rig: &Rig, i: u16) -> Option<bool> {
+        if i < IMAGE_BITS {
+            return Some(image_bit(rig.lab().bus.image().output.words(), i));
+        }
+        match i.checked_sub(SAFETY_BITS)? {
+            0 => Some(self.signals.restart),
+            1 => Some(self.signals.overloaded),
+            _ => None,
+        }
+    }
+
+    fn discrete_input(&self, rig: &Rig, i: u16) -> Option<bool> {
+        if i < IMAGE_BITS {
+            return Some(image_bit(rig.lab().bus.image().input.words(), i));
+        }
+        if (LIST_BITS..FLAG_BITS).contains(&i) {
+            let k = i - LIST_BITS;
+            let list = lists(rig)[usize::from(k / 64)];
+            return Some(list_bits(list)[usize::from(k % 64)]);
+        }
+        if (FLAG_BITS..FLAG_BITS + EC_FLAGS.len() as u16).contains(&i) {
+            let flags = rig.lab().bus.master().flags();
+            return Some(flags.has(EC_FLAGS[usize::from(i - FLAG_BITS)]));
+        }
+        let k = i.checked_sub(SAFETY_BITS)?;
+        (k < 5).then(|| self.safety_bits(rig) & (1 << k) != 0)
+    }
+
+    /// EStopOut, K1 commanded, K1 aux closed, group in RUN, watchdog tripped.
+    fn safety_bits(&self, rig: &Rig) -> u16 {
+        let diag = rig.safety_diag();
+        let k1_commanded = diag.is_some_and(|d| d.k1_open_cause.is_none());
+        let run = diag.is_some_and(|d| d.group.state.name() == "RUN");
+        u16::from(rig.estop_out())
+            | u16::from(k1_commanded) << 1
+            | u16::from(rig.lift().k1_aux_closed()) << 2
+            | u16::from(run) << 3
+            | u16::from(self.tripped) << 4
+    }
+
+    fn input_register(&self, rig: &Rig, now: SimTime, i: u16) -> Option<u16> {
+        if i < IMAGE_REGISTERS {
+            return Some(rig.lab().bus.image().input.word(usize::from(i)));
+        }
+        let master = rig.lab().bus.master();
+        if (LIST_REGISTERS..FLAGS_REGISTER).contains(&i) {
+            let k = i - LIST_REGISTERS;
+            let list = lists(rig)[usize::from(k / 4)];
+            return Some(list_words(list)[usize::from(k % 4)]);
+        }
+        match i {
+            FLAGS_REGISTER => {
+                let flags = master.flags();
+                return Some(
+                    EC_FLAGS
+                        .iter()
+                        .enumerate()
+                        .fold(0, |w, (b, &f)| w | u16::from(flags.has(f)) << b),
+                );
+            }
+            CONFIG_ERROR_REGISTER => {
+                let config_error = rig.lab().bus.image().input.word(0) & F0_CONFIG_ERROR != 0;
+                return Some(u16::from(config_error));
+            }
+            SAFETY_REGISTER => return Some(self.safety_bits(rig)),
+            _ => {}
+        }
+        if (ERROR_REGISTERS..ERROR_REGISTERS + 16).contains(&i) {
+            let stats = rig.lab().bus.stats();
+            let k = usize::from(i - ERROR_REGISTERS);
+            let count = if k / 2 < 7 {
+                stats.response_errors[k / 2] + stats.request_errors[k / 2]
+            } else {
+                stats.no_response
+            };
+            return Some(word_of(count, 2, k % 2));
+        }
+        if (CYCLE_REGISTERS..CYCLE_REGISTERS + 3).contains(&i) {
+            let stats = rig.lab().bus.stats();
+            let us = |d: SimDuration| (d.as_nanos() / 1000).min(u64::from(u16::MAX)) as u16;
+            let mean = if stats.cycles == 0 {
+                SimDuration::ZERO
+            } else {
+                SimDuration::from_nanos(stats.cycle_total.as_nanos() / stats.cycles)
+            };
+            return Some(match i - CYCLE_REGISTERS {
+                0 => us(mean),
+                1 => us(stats.cycle_min),
+                _ => us(stats.cycle_max),
+            });
+        }
+        if (TIME_REGISTERS..TIME_REGISTERS + 4).contains(&i) {
+            let ms = now.as_nanos() / 1_000_000;
+            return Some(word_of(ms, 4, usize::from(i - TIME_REGISTERS)));
+        }
+        None
+    }
+
+    fn holding(&self, rig: &Rig, i: u16) -> Option<u16> {
+        if i < IMAGE_REGISTERS {
+            return Some(rig.lab().bus.image().output.word(usize::from(i)));
+        }
+        if (INPUT_MIRROR..INPUT_MIRROR + IMAGE_REGISTERS).contains(&i) {
+            return Some(rig.lab().bus.image().input.word(usize::from(i - INPUT_MIRROR)));
+        }
+        if (COMMAND_REGISTERS..COMMAND_REGISTERS + COMMANDS.len() as u16).contains(&i) {
+            return Some(0);
+        }
+        match i {
+            PLC_SIGNALS_REGISTER => Some(signals_word(self.signals)),
+            WATCHDOG_REGISTER => Some((self.watchdog.as_nanos() / 1_000_000) as u16),
+            _ => None,
+        }
+    }
+
+    // ----- writes ------------------------------------------------------------------------
+
+    fn write_coils(&mut self, rig: &mut Rig, now: SimTime, a: u16, vs: &[bool]) -> Checked {
+        let addrs = span(a, vs.len())?;
+        for (i, &v) in addrs.clone().zip(vs) {
+            self.check_coil(i, v)?;
+        }
+        for (i, &v) in addrs.zip(vs) {
+            if i < IMAGE_BITS {
+                let image = &mut rig.lab_mut().bus.image_mut().output;
+                let (w, bit) = image_bit_position(i);
+                let word = image.word(w);
+                image.set_word(w, if v { word | 1 << bit } else { word & !(1 << bit) });
+            } else if i == SAFETY_BITS {
+                self.signals.restart = v;
+            } else {
+                self.signals.overloaded = v;
+            }
+        }
+        self.wrote(rig, now);
+        Ok(())
+    }
+
+    fn check_coil(&self, i: u16, v: bool) -> Checked {
+        let known = i < IMAGE_BITS || (SAFETY_BITS..SAFETY_BITS + 2).contains(&i);
+        if !known {
+            return Err(ExceptionCode::IllegalDataAddress);
+        }
+        self.check_owner()?;
+        // Slot 32 (0B) is reserved and stays 0 (table 4.1).
+        if (128..132).contains(&i) && v {
+            return Err(ExceptionCode::IllegalDataValue);
+        }
+        Ok(())
+    }
+
+    fn check_owner(&self) -> Checked {
+        match self.owner {
+            Owner::External => Ok(()),
+            // The built-in program owns the outputs: a watching client may not write them.
+            Owner::Builtin => Err(ExceptionCode::IllegalDataAddress),
+        }
+    }
+
+    fn write_registers(&mut self, rig: &mut Rig, now: SimTime, a: u16, vs: &[u16]) -> Checked {
+        let addrs = span(a, vs.len())?;
+        for (i, &v) in addrs.clone().zip(vs) {
+            self.check_register(rig, i, v)?;
+        }
+        let mut outputs = false;
+        for (i, &v) in addrs.zip(vs) {
+            if i < IMAGE_REGISTERS {
+                rig.lab_mut()
+                    .bus
+                    .image_mut()
+                    .output
+                    .set_word(usize::from(i), v);
+                outputs = true;
+            } else if i == PLC_SIGNALS_REGISTER {
+                self.signals = ToSafety {
+                    restart: v & 1 != 0,
+                    overloaded: v & 2 != 0,
+                };
+                outputs = true;
+            } else if i == WATCHDOG_REGISTER {
+                self.watchdog = SimDuration::from_millis(u64::from(v));
+            } else {
+                let (who, action) = command(i - COMMAND_REGISTERS, v)
+                    .map_err(|_| ExceptionCode::IllegalDataValue)?;
+                rig.act_now(who, &action);
+            }
+        }
+        if outputs {
+            self.wrote(rig, now);
+        }
+        Ok(())
+    }
+
+    fn check_register(&self, rig: &Rig, i: u16, v: u16) -> Checked {
+        if i < IMAGE_REGISTERS || i == PLC_SIGNALS_REGISTER {
+            self.check_owner()?;
+            if i == 8 && v & 0xF000 != 0 {
+                // Slot 0B of the output image is reserved (table 4.1).
+                return Err(ExceptionCode::IllegalDataValue);
+            }
+            if i == PLC_SIGNALS_REGISTER && v > 3 {
+                return Err(ExceptionCode::IllegalDataValue);
+            }
+            return Ok(());
+        }
+        if i == WATCHDOG_REGISTER {
+            return Ok(());
+        }
+        if (COMMAND_REGISTERS..COMMAND_REGISTERS + COMMANDS.len() as u16).contains(&i) {
+            let floors = rig.lift().config().floors;
+            return match command(i - COMMAND_REGISTERS, v) {
+                Ok((_, Action::Press { button, .. })) => match button.floor() {
+                    Some(f) if f > floors => Err(ExceptionCode::IllegalDataValue),
+                    _ => Ok(()),
+                },
+                Ok(_) => Ok(()),
+                Err(()) => Err(ExceptionCode::IllegalDataValue),
+            };
+        }
+        Err(ExceptionCode::IllegalDataAddress)
+    }
+
+    /// The client wrote the outputs at `now`: the watchdog starts again.
+    fn wrote(&mut self, rig: &mut Rig, now: SimTime) {
+        self.last_write = Some(now);
+        if self.tripped {
+            self.tripped = false;
+            rig.log_now("gateway", "outputs written again: the watchdog is clear".into());
+        }
+        rig.set_plc_signals(self.signals);
+    }
+
+    /// Zeroes the output image if the outside controller has not written it for the
+    /// watchdog time by `now`.
+    pub fn watch(&mut self, rig: &mut Rig, now: SimTime) {
+        let Some(last) = self.last_write else {
+            return;
+        };
+        if self.owner != Owner::External || self.tripped || self.watchdog.is_zero() {
+            return;
+        }
+        if now.saturating_duration_since(last) < self.watchdog {
+            return;
+        }
+        self.tripped = true;
+        self.watchdog_trips += 1;
+        let image = &mut rig.lab_mut().bus.image_mut().output;
+        for w in 0..IMAGE_WORDS {
+            image.set_word(w, 0);
+        }
+        self.signals = ToSafety::default();
+        rig.set_plc_signals(self.signals);
+        rig.log_now(
+            "gateway",
+            format!(
+                "watchdog: no output write for {} ms: the output image is zero",
+                self.watchdog.as_nanos() / 1_000_000
+            ),
+        );
+    }
+}
+
+/// The register or bit addresses `a .. a + n`, or exception 02 past the 16-bit space.
+fn span(a: u16, n: usize) -> Result<std::ops::Range<u16>, ExceptionCode> {
+    let end = usize::from(a) + n;
+    if end > 1 << 16 {
+        return Err(ExceptionCode::IllegalDataAddress);
+    }
+    Ok(a..end as u16)
+}
+
+/// Reads `n` items from `a` with `get`; exception 03 for a count outside 1..=`max`, 02 if an
+/// address is outside the map.
+fn read<T>(
+    a: u16,
+    n: u16,
+    max: u16,
+    mut get: impl FnMut(u16) -> Option<T>,
+) -> Result<Vec<T>, ExceptionCode> {
+    if n == 0 || n > max {
+        return Err(ExceptionCode::IllegalDataValue);
+    }
+    span(a, usize::from(n))?
+        .map(&mut get)
+        .collect::<Option<Vec<T>>>()
+        .ok_or(ExceptionCode::IllegalDataAddress)
+}
+
+/// Where image bit `i` (coil or discrete input 0..255) sits: D_k of slot i / 4, in word
+/// i / 16, the lowest slot in the highest bits (table 4.1).
+pub fn image_bit_position(i: u16) -> (usize, u32) {
+    let slot = u32::from(i / 4) % 4;
+    let k = u32::from(i % 4);
+    (usize::from(i / 16), 12 - 4 * slot + k)
+}
+
+fn image_bit(words: &[u16; IMAGE_WORDS], i: u16) -> bool {
+    let (w, bit) = image_bit_position(i);
+    words[w] >> bit & 1 != 0
+}
+
+/// LAS, LDS, LPS and LPF.
+fn lists(rig: &Rig) -> [SlaveList; 4] {
+    let m = rig.lab().bus.master();
+    [m.las(), m.lds(), m.lps(), m.lpf()]
+}
+
+/// A list as bits: bit n = list bit n (A slaves 0..31, B slaves 32..63).
+fn list_bits(list: SlaveList) -> BitArray<[u64; 1], Lsb0> {
+    BitArray::new([list.bits()])
+}
+
+/// A list as four registers: the same bits, 16 per register, lowest first.
+fn list_words(list: SlaveList) -> [u16; 4] {
+    let bits = list_bits(list);
+    let mut words = BitArray::<[u16; 4], Lsb0>::ZERO;
+    words.clone_from_bitslice(&bits);
+    words.into_inner()
+}
+
+/// Word `k` of `words` 16-bit words of `v`, the high word first.
+fn word_of(v: u64, words: usize, k: usize) -> u16 {
+    (v >> (16 * (words - 1 - k))) as u16
+}
+
+fn signals_word(s: ToSafety) -> u16 {
+    u16::from(s.restart) | u16::from(s.overloaded) << 1
+}
+
+/// The simulator command of register `2000 + k` with value `v`.
+pub fn command(k: u16, v: u16) -> Result<(&'static str, Action), ()> {
+    let ms = |v: u16| SimDuration::from_millis(u64::from(v));
+    let action = match k {
+        0 => Action::Press {
+            button: button(v).ok_or(())?,
+            hold: DEFAULT_HOLD,
+        },
+        1 | 2 => {
+            let slave = u8::try_from(v).ok().filter(|a| (1..=31).contains(a)).ok_or(())?;
+            Action::Fault(if k == 1 {
+                Fault::SlaveOffline { slave }
+            } else {
+                Fault::SlaveOnline { slave }
+            })
+        }
+        3 => Action::Load(match v {
+            0 => LoadLevel::Empty,
+            1 => LoadLevel::Loaded,
+            2 => LoadLevel::Full,
+            3 => LoadLevel::Overloaded,
+            _ => return Err(()),
+        }),
+        4 if v <= 1 => Action::Door { closed: v == 1 },
+        5 if v == 1 => Action::Reset,
+        6 if v == 1 => Action::Ack,
+        7 if v > 0 => Action::Fault(Fault::PowerFail { duration: ms(v) }),
+        8 if v > 0 => Action::Fault(Fault::SafeLinkDrop { duration: ms(v) }),
+        9 if v == 1 => Action::Rescue,
+        _ => return Err(()),
+    };
+    Ok(("client", action))
+}
+
+/// The button of a press command: 0x01ff cabin f, 0x02ff hall up at f, 0x03ff hall down at
+/// f, 0x0400 STOP, 0x0500 the bell.
+pub fn button(v: u16) -> Option<Button> {
+    let f = (v & 0xff) as u8;
+    let floor = (1..=24).contains(&f);
+    match v >> 8 {
+        1 if floor => Some(Button::Cabin(f)),
+        2 if floor => Some(Button::HallUp(f)),
+        3 if floor => Some(Button::HallDown(f)),
+        4 if f == 0 => Some(Button::Stop),
+        5 if f == 0 => Some(Button::Bell),
+        _ => None,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn image_bits_follow_table_4_1() {
+        // Coil 4 is D0 of slave 1: word 0, bits 8..11 (slot 1).
+        assert_eq!(image_bit_position(4), (0, 8));
+        // Coil 7 is D3 of slave 1.
+        assert_eq!(image_bit_position(7), (0, 11));
+        // Coil 0 is D0 of slot 0 (the flags), bit 12.
+        assert_eq!(image_bit_position(0), (0, 12));
+        // Slave 7 (converter): word 1, slot 3, bits 0..3.
+        assert_eq!(image_bit_position(28), (1, 0));
+        // Slave 31B: slot 63, word 15, bits 0..3.
+        assert_eq!(image_bit_position(255), (15, 3));
+        // The same position as the master's own nibble position.
+        for n in 1..32u8 {
+            let a = asi_phy::SlaveAddr::a(n).expect("an address");
+            let (w, shift) = asi_master::image::nibble_position(a).expect("a nibble");
+            assert_eq!(image_bit_position(u16::from(n) * 4), (w, shift));
+            let b = asi_phy::SlaveAddr::b(n).expect("a B address");
+            let (w, shift) = asi_master::image::nibble_position(b).expect("a nibble");
+            assert_eq!(image_bit_position((32 + u16::from(n)) * 4), (w, shift));
+        }
+    }
+
+    #[test]
+    fn lists_are_the_same_bits_as_bits_and_as_registers() {
+        let mut l = SlaveList::EMPTY;
+        for n in [1u8, 6, 12, 17, 31] {
+            l.set(asi_phy::SlaveAddr::a(n).expect("an address"), true);
+        }
+        l.set(asi_phy::SlaveAddr::b(3).expect("a B address"), true);
+        assert_eq!(
+            list_words(l),
+            [0b0001_0000_0100_0010, 0b1000_0000_0000_0010, 0b1000, 0]
+        );
+        let bits = list_bits(l);
+        assert!(bits[6] && bits[35] && !bits[0]);
+    }
+
+    #[test]
+    fn wide_values_go_high_word_first() {
+        assert_eq!(word_of(0x0001_0002, 2, 0), 1);
+        assert_eq!(word_of(0x0001_0002, 2, 1), 2);
+        assert_eq!(word_of(0x0123_4567_89ab_cdef, 4, 3), 0xcdef);
+    }
+
+    #[test]
+    fn press_codes_name_the_buttons() {
+        assert_eq!(button(0x0103), Some(Button::Cabin(3)));
+        assert_eq!(button(0x0201), Some(Button::HallUp(1)));
+        assert_eq!(button(0x0304), Some(Button::HallDown(4)));
+        assert_eq!(button(0x0400), Some(Button::Stop));
+        assert_eq!(button(0x0500), Some(Button::Bell));
+        assert_eq!(button(0x0100), None);
+        assert_eq!(button(0x0401), None);
+        assert_eq!(button(0x0600), None);
+        assert!(command(3, 4).is_err());
+        assert!(command(1, 32).is_err());
+        assert!(command(10, 1).is_err());
+    }
+
+    #[test]
+    fn reads_check_count_and_addresses() {
+        let get = |i: u16| (i < 10).then_some(i);
+        assert_eq!(read(0, 3, 125, get), Ok(vec![0, 1, 2]));
+        assert_eq!(read(8, 3, 125, get), Err(ExceptionCode::IllegalDataAddress));
+        assert_eq!(read(0, 0, 125, get), Err(ExceptionCode::IllegalDataValue));
+        assert_eq!(read(0, 126, 125, get), Err(ExceptionCode::IllegalDataValue));
+        assert_eq!(
+            read(65535, 2, 125, get),
+            Err(ExceptionCode::IllegalDataAddress)
+        );
+    }
+}

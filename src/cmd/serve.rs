@@ -1,0 +1,230 @@
+//! `asi-lift serve`: the rig on the wall clock with a virtual AS-i/Modbus TCP gateway, for
+//! an outside controller or a client that watches the built-in one (README, "Live mode").
+
+use super::output::Outputs;
+use super::run::{load_scenario, Format, TraceForm};
+use super::{print_out, EXIT_VIOLATIONS};
+use asi_phy::SimDuration;
+use asi_trace::trace::TraceFormat;
+use clap::ValueEnum;
+use gateway::live::LiveConfig;
+use gateway::{Owner, Speed};
+use rig::Rig;
+use std::io::{IsTerminal, Write};
+use std::net::SocketAddr;
+use std::path::{Path, PathBuf};
+
+/// The arguments of `asi-lift serve`.
+#[derive(clap::Args)]
+pub struct ServeArgs {
+    /// The scenario: a file (TOML, `-` for standard input) or the name of a built-in one. Its
+    /// events (presses, faults) happen at their times as in `asi-lift run`. Without it, the
+    /// built-in demo.
+    pub scenario: Option<PathBuf>,
+    /// Where the Modbus TCP server listens. Only loopback unless an address is given here.
+    #[arg(long, value_name = "ADDR", default_value = "127.0.0.1:5020")]
+    pub listen: String,
+    /// Simulated seconds per wall second (e.g. 1, 0.5, 10), or `max`: as fast as the machine
+    /// can with the built-in controller; with an outside controller, paced by its requests
+    /// (each advances the simulation by `--step`).
+    #[arg(long, value_name = "X|max", default_value = "1")]
+    pub speed: String,
+    /// Who runs the lift: the built-in PLC program (clients may watch), or the Modbus client
+    /// (the built-in program is off; the client writes the output image).
+    #[arg(long, value_enum, default_value_t = ControllerArg::Builtin)]
+    pub controller: ControllerArg,
+    /// With an outside controller: the output image goes to zero when no client has written
+    /// it for this long (simulated time; 0 = off).
+    #[arg(long, value_name = "DURATION", default_value = "1s")]
+    pub watchdog: String,
+    /// At `--speed max` with an outside controller: how far each request advances the
+    /// simulation.
+    #[arg(long, value_name = "DURATION", default_value = "1ms")]
+    pub step: String,
+    /// End the run at this simulated time (e.g. 60s, 10min) [default: Ctrl-C ends it].
+    #[arg(long, value_name = "DURATION")]
+    pub until: Option<String>,
+    /// Use this seed instead of the scenario's.
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// Where the report goes at the end: a file, or `-` for standard output.
+    #[arg(long, value_name = "FILE|-", default_value = "-")]
+    pub report: PathBuf,
+    /// The report's format.
+    #[arg(long, value_enum, default_value_t = Format::Text)]
+    pub format: Format,
+    /// Write every bus transaction, one line each, to this file: JSON lines for a `.jsonl`
+    /// or `.json` file, readable text otherwise.
+    #[arg(long, value_name = "FILE")]
+    pub trace: Option<PathBuf>,
+    /// The trace's form, overriding the file name's.
+    #[arg(long, value_enum)]
+    pub trace_format: Option<TraceForm>,
+    /// Overwrite the report and trace files if they exist.
+    #[arg(long)]
+    pub force: bool,
+}
+
+/// Who runs the lift in a live run.
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum ControllerArg {
+    /// The built-in PLC program; the gateway's outputs are read-only.
+    Builtin,
+    /// The Modbus client is the PLC.
+    External,
+}
+
+/// How long a live run lasts without `--until`: until Ctrl-C, in practice.
+const OPEN_END: SimDuration = SimDuration::from_secs(365 * 24 * 3600);
+
+/// Serves the rig until `--until` or Ctrl-C and writes the report.
+pub fn run(args: ServeArgs) -> Result<u8, String> {
+    let ServeArgs {
+        scenario,
+        listen,
+        speed,
+        controller,
+        watchdog,
+        step,
+        until,
+        seed,
+        report,
+        format,
+        trace,
+        trace_format,
+        force,
+    } = args;
+    let listen: SocketAddr = listen
+        .parse()
+        .map_err(|e| format!("--listen {listen}: {e} (expected an address such as 127.0.0.1:5020)"))?;
+    let speed = parse_speed(&speed)?;
+    let duration = |flag: &str, s: &str| {
+        s.parse::<SimDuration>()
+            .map_err(|e| format!("{flag}: {e}"))
+    };
+    let watchdog = duration("--watchdog", &watchdog)?;
+    let step = duration("--step", &step)?;
+    if step.is_zero() {
+        return Err("--step: must be longer than 0 (each request advances the simulation by it)".into());
+    }
+    let until = until.map(|u| duration("--until", &u)).transpose()?;
+    let (mut sc, file) = load_scenario(scenario.as_deref())?;
+    if let Some(s) = seed {
+        sc.seed = s;
+    }
+    sc.duration = until.unwrap_or(OPEN_END);
+    let owner = match controller {
+        ControllerArg::Builtin => Owner::Builtin,
+        ControllerArg::External => Owner::External,
+    };
+
+    let mut outs = Outputs::new(force);
+    if let Some(path) = file {
+        outs.input("the scenario", path)?;
+    }
+    let report_sink = outs.add("--report", &report)?;
+    if trace.as_deref() == Some(Path::new("-")) {
+        return Err("--trace: a live run's trace goes to a file, not to standard output".into());
+    }
+    let trace_out = match &trace {
+        None => None,
+        Some(path) => {
+            let sink = outs.add("--trace", path)?;
+            let form = match trace_format {
+                Some(TraceForm::Text) => TraceFormat::Text,
+                Some(TraceForm::Jsonl) => TraceFormat::Jsonl,
+                None => TraceFormat::for_path(path),
+            };
+            Some((outs.writer(&sink)?, form))
+        }
+    };
+
+    let make_rig = move || {
+        let mut rig = Rig::new(sc).map_err(|e| e.to_string())?;
+        if owner == Owner::External {
+            rig = rig.with_external_controller();
+        }
+        if let Some((out, form)) = trace_out {
+            rig.trace_to(out, form);
+        }
+        Ok(rig)
+    };
+    let cfg = LiveConfig {
+        speed,
+        owner,
+        watchdog,
+        step,
+    };
+    let running = gateway::start(make_rig, cfg, listen).map_err(|e| format!("--listen: {e}"))?;
+    running.stop_on_ctrl_c();
+    let addr = running.local_addr();
+    if !addr.ip().is_loopback() {
+        eprintln!(
+            "asi-lift: warning: listening on {addr}, not loopback: anyone who reaches this machine can drive the lift"
+        );
+    }
+    eprintln!(
+        "asi-lift: Modbus TCP gateway on {addr}, {} controller, speed {speed}{}; Ctrl-C ends the run",
+        match owner {
+            Owner::Builtin => "built-in",
+            Owner::External => "external",
+        },
+        until.map_or(String::new(), |u| format!(", until {u}"))
+    );
+    let terminal = std::io::stderr().is_terminal();
+    for s in running.status().iter() {
+        if terminal {
+            eprint!(
+                "\r  simulated {:.1} s, {} requests, lag {:.1} ms, {} violations{}   ",
+                s.simulated_s,
+                s.requests,
+                s.lag_ms,
+                s.violations,
+                if s.watchdog_tripped { ", WATCHDOG: outputs zero" } else { "" }
+            );
+            let _ = std::io::stderr().flush();
+        }
+        if s.ended {
+            break;
+        }
+    }
+    if terminal {
+        eprintln!();
+    }
+    let rep = running.wait();
+    let body = match format {
+        Format::Text => rep.to_text(),
+        Format::Json => {
+            rep.to_json()
+                .map_err(|e| format!("the report as JSON: {e}"))?
+                + "\n"
+        }
+    };
+    outs.write_all(&report_sink, &body)?;
+    outs.commit()?;
+    if report != Path::new("-") {
+        print_out(&format!(
+            "{}report written to {}\n",
+            rep.summary_text(),
+            report.display()
+        ))?;
+    }
+    Ok(if rep.violations.is_empty() {
+        0
+    } else {
+        EXIT_VIOLATIONS
+    })
+}
+
+/// `--speed`: a positive factor or `max`.
+fn parse_speed(s: &str) -> Result<Speed, String> {
+    if s == "max" {
+        return Ok(Speed::Max);
+    }
+    match s.parse::<f64>() {
+        Ok(x) if x.is_finite() && x > 0.0 && x <= 1000.0 => Ok(Speed::Factor(x)),
+        _ => Err(format!(
+            "--speed {s}: expected a factor above 0 and at most 1000 (simulated seconds per wall second) or `max`"
+        )),
+    }
+}
