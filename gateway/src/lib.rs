@@ -110,10 +110,12 @@ where
             addr: listen,
             source,
         })?;
-    let addr = listener.local_addr().map_err(|source| GatewayError::Listen {
-        addr: listen,
-        source,
-    })?;
+    let addr = listener
+        .local_addr()
+        .map_err(|source| GatewayError::Listen {
+            addr: listen,
+            source,
+        })?;
     let listener = {
         let _guard = runtime.enter();
         tokio::net::TcpListener::from_std(listener)
@@ -139,7 +141,11 @@ where
     match ready.recv() {
         Ok(Ok(())) => {}
         Ok(Err(e)) => return Err(GatewayError::Rig(e)),
-        Err(_) => return Err(GatewayError::Rig("the rig thread ended at its start".into())),
+        Err(_) => {
+            return Err(GatewayError::Rig(
+                "the rig thread ended at its start".into(),
+            ))
+        }
     }
 
     let to_rig = tx.clone();

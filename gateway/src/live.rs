@@ -93,12 +93,7 @@ const STATUS_EVERY: Duration = Duration::from_secs(1);
 
 /// The rig thread's loop: runs `rig` until its end or a [`ToRig::Stop`], serving requests
 /// from `rx` and sending a [`Status`] to `status` every wall second; returns the report.
-pub fn run(
-    mut rig: Rig,
-    cfg: LiveConfig,
-    rx: &Receiver<ToRig>,
-    status: &Sender<Status>,
-) -> Report {
+pub fn run(mut rig: Rig, cfg: LiveConfig, rx: &Receiver<ToRig>, status: &Sender<Status>) -> Report {
     let mut gw = Gateway::new(cfg.owner, cfg.watchdog);
     let mut connections = 0u64;
     let mut max_lag = Duration::ZERO;

@@ -22,7 +22,7 @@
 //! | input registers | 1020..1035 | receiver errors per check (start, alternation, pause, information, parity, end, length) and no response: 32-bit, high word first | read |
 //! | input registers | 1040..1042 | AS-i cycle time µs: last mean, minimum, maximum | read |
 //! | input registers | 1050..1053 | simulated time, ms, 64-bit, high word first | read |
-//! | input registers | 1060 | safety bits: as discrete inputs 1000..1004 in bits 0..4 | read |
+//! | input registers | 1054 | safety bits: as discrete inputs 1000..1004 in bits 0..4 | read |
 //! | holding registers | 0..243 | the output data image (table 4.1): host flags and slaves, mailbox 32..49, analog outputs 68..155 (S-7.3 set-point: word 68) | read/write |
 //! | holding registers | 1000 | to the safety logic: bit 0 restart, bit 1 overloaded (as coils 1000, 1001) | read/write |
 //! | holding registers | 1008 | watchdog time, ms (0 = off) | read/write |
@@ -72,7 +72,7 @@ pub const CYCLE_REGISTERS: u16 = 1040;
 /// First input register of the simulated time.
 pub const TIME_REGISTERS: u16 = 1050;
 /// Input register of the safety bits.
-pub const SAFETY_REGISTER: u16 = 1060;
+pub const SAFETY_REGISTER: u16 = 1054;
 /// Holding register of the signals to the safety logic.
 pub const PLC_SIGNALS_REGISTER: u16 = 1000;
 /// Holding register of the watchdog time.
@@ -81,7 +81,15 @@ pub const WATCHDOG_REGISTER: u16 = 1008;
 pub const COMMAND_REGISTERS: u16 = 2000;
 /// The simulator commands, in register order.
 pub const COMMANDS: [&str; 10] = [
-    "press", "offline", "online", "load", "door", "reset", "ack", "power-fail", "link-drop",
+    "press",
+    "offline",
+    "online",
+    "load",
+    "door",
+    "reset",
+    "ack",
+    "power-fail",
+    "link-drop",
     "rescue",
 ];
 /// First holding register of the input image's mirror.
@@ -333,7 +341,13 @@ impl Gateway {
             return Some(rig.lab().bus.image().output.word(usize::from(i)));
         }
         if (INPUT_MIRROR..INPUT_MIRROR + IMAGE_REGISTERS).contains(&i) {
-            return Some(rig.lab().bus.image().input.word(usize::from(i - INPUT_MIRROR)));
+            return Some(
+                rig.lab()
+                    .bus
+                    .image()
+                    .input
+                    .word(usize::from(i - INPUT_MIRROR)),
+            );
         }
         if (COMMAND_REGISTERS..COMMAND_REGISTERS + COMMANDS.len() as u16).contains(&i) {
             return Some(0);
@@ -357,7 +371,14 @@ impl Gateway {
                 let image = &mut rig.lab_mut().bus.image_mut().output;
                 let (w, bit) = image_bit_position(i);
                 let word = image.word(w);
-                image.set_word(w, if v { word | 1 << bit } else { word & !(1 << bit) });
+                image.set_word(
+                    w,
+                    if v {
+                        word | 1 << bit
+                    } else {
+                        word & !(1 << bit)
+                    },
+                );
             } else if i == SAFETY_BITS {
                 self.signals.restart = v;
             } else {
@@ -457,7 +478,10 @@ impl Gateway {
         self.last_write = Some(now);
         if self.tripped {
             self.tripped = false;
-            rig.log_now("gateway", "outputs written again: the watchdog is clear".into());
+            rig.log_now(
+                "gateway",
+                "outputs written again: the watchdog is clear".into(),
+            );
         }
         rig.set_plc_signals(self.signals);
     }
@@ -568,7 +592,10 @@ pub fn command(k: u16, v: u16) -> Result<(&'static str, Action), ()> {
             hold: DEFAULT_HOLD,
         },
         1 | 2 => {
-            let slave = u8::try_from(v).ok().filter(|a| (1..=31).contains(a)).ok_or(())?;
+            let slave = u8::try_from(v)
+                .ok()
+                .filter(|a| (1..=31).contains(a))
+                .ok_or(())?;
             Action::Fault(if k == 1 {
                 Fault::SlaveOffline { slave }
             } else {

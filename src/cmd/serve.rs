@@ -94,18 +94,18 @@ pub fn run(args: ServeArgs) -> Result<u8, String> {
         trace_format,
         force,
     } = args;
-    let listen: SocketAddr = listen
-        .parse()
-        .map_err(|e| format!("--listen {listen}: {e} (expected an address such as 127.0.0.1:5020)"))?;
+    let listen: SocketAddr = listen.parse().map_err(|e| {
+        format!("--listen {listen}: {e} (expected an address such as 127.0.0.1:5020)")
+    })?;
     let speed = parse_speed(&speed)?;
-    let duration = |flag: &str, s: &str| {
-        s.parse::<SimDuration>()
-            .map_err(|e| format!("{flag}: {e}"))
-    };
+    let duration =
+        |flag: &str, s: &str| s.parse::<SimDuration>().map_err(|e| format!("{flag}: {e}"));
     let watchdog = duration("--watchdog", &watchdog)?;
     let step = duration("--step", &step)?;
     if step.is_zero() {
-        return Err("--step: must be longer than 0 (each request advances the simulation by it)".into());
+        return Err(
+            "--step: must be longer than 0 (each request advances the simulation by it)".into(),
+        );
     }
     let until = until.map(|u| duration("--until", &u)).transpose()?;
     let (mut sc, file) = load_scenario(scenario.as_deref())?;
@@ -180,7 +180,11 @@ pub fn run(args: ServeArgs) -> Result<u8, String> {
                 s.requests,
                 s.lag_ms,
                 s.violations,
-                if s.watchdog_tripped { ", WATCHDOG: outputs zero" } else { "" }
+                if s.watchdog_tripped {
+                    ", WATCHDOG: outputs zero"
+                } else {
+                    ""
+                }
             );
             let _ = std::io::stderr().flush();
         }

@@ -91,9 +91,18 @@ impl Passengers {
     /// request, cabin calls first, then up, then down.
     pub(super) fn arrived(&mut self, floor: u8, at: SimTime) -> Vec<Served> {
         let mut served = Vec::new();
-        for kind in [Button::Cabin(floor), Button::HallUp(floor), Button::HallDown(floor)] {
+        for kind in [
+            Button::Cabin(floor),
+            Button::HallUp(floor),
+            Button::HallDown(floor),
+        ] {
             let waiting = |p: &Press| p.button == kind && p.served.is_none() && p.at <= at;
-            let Some(requested) = self.presses.iter().filter(|p| waiting(p)).map(|p| p.at).min()
+            let Some(requested) = self
+                .presses
+                .iter()
+                .filter(|p| waiting(p))
+                .map(|p| p.at)
+                .min()
             else {
                 continue;
             };
