@@ -1,8 +1,7 @@
 //! Trace records go to `tracing` (target `asi_master::trace`, level TRACE), to the ring and to
 //! the callback, one per transaction.
 
-mod common;
-use common::*;
+use crate::common::*;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 use tracing::span::{Attributes, Id, Record};
