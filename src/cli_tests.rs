@@ -1,5 +1,7 @@
 //! The `asi-lift` command as a user runs it: the built binary, real files and a real pipe
-//! (README.md, "Outputs").
+//! (README.md, "Outputs"); then its parts in this process, through the library (modules
+//! `command`, `output`, `plot`, `run`). These are all of the command's tests: the library and
+//! the binary have no unit-test builds of their own (Cargo.toml).
 
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
@@ -239,4 +241,474 @@ fn a_campaign_whose_reader_goes_ends_quietly() {
         !err.contains("Broken pipe") && !err.contains("panicked"),
         "{err}"
     );
+}
+
+/// The command in this process: [`asi_lift::run`] on parsed arguments, and the campaign's
+/// files.
+mod command {
+    use asi_lift::cmd::campaign::{summarize_files as campaign_summary, write_reproducer};
+    use asi_lift::cmd::EXIT_VIOLATIONS;
+    use asi_lift::{run, Cli};
+    use clap::Parser;
+    use rig::campaign::summary::summarize;
+    use rig::Scenario;
+    use std::path::PathBuf;
+
+    fn timing(args: &[&str]) -> Result<u8, String> {
+        let cli = Cli::try_parse_from(["asi-lift", "timing"].iter().chain(args))
+            .map_err(|e| e.to_string())?;
+        run(cli)
+    }
+
+    fn fails_naming(args: &[&str], what: &str) {
+        match timing(args) {
+            Ok(_) => panic!("{args:?} was accepted"),
+            Err(e) => assert!(e.contains(what), "{args:?}: {e}"),
+        }
+    }
+
+    #[test]
+    fn bad_timing_arguments_are_named() {
+        fails_naming(&["--bus", "lift"], "--bus");
+        fails_naming(&["--bus", "lift"], "expected lab");
+        fails_naming(&["--bus", "0"], "1..31");
+        fails_naming(&["--bus", "32"], "1..31");
+        fails_naming(&["--bus", "62"], "62ab");
+        fails_naming(&["--error-rate", "1.5"], "--error-rate");
+        fails_naming(&["--error-rate", "1"], "--error-rate");
+        fails_naming(&["--error-rate", "-0.1"], "--error-rate");
+        fails_naming(&["--error-rate", "NaN"], "--error-rate");
+        fails_naming(&["--error-rate", "often"], "--error-rate");
+        fails_naming(&["--extra-slaves", "21"], "--extra-slaves");
+        fails_naming(&["--bus", "31", "--extra-slaves", "1"], "--extra-slaves");
+        fails_naming(&["--duration", "0s"], "--duration");
+        fails_naming(&["--duration", "soon"], "--duration");
+        fails_naming(&["--duration", "2h"], "--duration");
+        fails_naming(&["--samples", "20000"], "--samples");
+        fails_naming(&["--seed", "-1"], "--seed");
+        fails_naming(&["--samples", "-3"], "--samples");
+        fails_naming(&["--extra-slaves", "-3"], "--extra-slaves");
+        fails_naming(&["--duration", "-3s"], "--duration");
+    }
+
+    fn campaign_cli(args: &[&str]) -> Result<u8, String> {
+        let cli = Cli::try_parse_from(["asi-lift", "campaign"].iter().chain(args))
+            .map_err(|e| e.to_string())?;
+        run(cli)
+    }
+
+    fn campaign_fails_naming(args: &[&str], what: &str) {
+        match campaign_cli(args) {
+            Ok(_) => panic!("{args:?} was accepted"),
+            Err(e) => assert!(e.contains(what), "{args:?}: {e}"),
+        }
+    }
+
+    fn temp(name: &str) -> PathBuf {
+        let dir = std::env::temp_dir().join(format!("asi-lift-cli-{}-{name}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).expect("temp dir");
+        dir
+    }
+
+    #[test]
+    fn bad_campaign_arguments_are_named() {
+        campaign_fails_naming(&["--shard", "0/3"], "--shard");
+        campaign_fails_naming(&["--shard", "0/3"], "numbered from 1");
+        campaign_fails_naming(&["--shard", "4/3"], "1..=3");
+        campaign_fails_naming(&["--shard", "3"], "K/N");
+        campaign_fails_naming(&["--runs", "abc"], "--runs");
+        campaign_fails_naming(&["--runs", "0"], "--runs");
+        campaign_fails_naming(&["--runs", "-5"], "--runs");
+        campaign_fails_naming(&["--jobs", "0"], "--jobs");
+        campaign_fails_naming(&["--jobs", "-2"], "--jobs");
+        campaign_fails_naming(&["--shrink-budget", "-1"], "--shrink-budget");
+        campaign_fails_naming(&["--seed", "x"], "--seed");
+        // An empty shard (more shards than runs) is no error: it has nothing to do.
+        let dir = temp("empty-shard");
+        let out = dir.join("empty.jsonl").to_string_lossy().to_string();
+        assert_eq!(
+            campaign_cli(&["--runs", "2", "--shard", "3/3", "--out", &out]),
+            Ok(0)
+        );
+        assert_eq!(std::fs::read_to_string(&out).ok().as_deref(), Some(""));
+        let _ = std::fs::remove_dir_all(&dir);
+        campaign_fails_naming(&["--profile", "loud"], "--profile loud: no such built-in");
+        let dir = temp("bad-profile");
+        let bad = dir.join("bad.toml");
+        std::fs::write(&bad, "[event]\nmeteor = 3\n").expect("write");
+        let bad = bad.to_string_lossy().to_string();
+        campaign_fails_naming(&["--profile", &bad], "unknown event kind");
+        campaign_fails_naming(&["--profile", &dir.to_string_lossy()], "--profile");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn a_campaign_refuses_to_overwrite_and_its_shards_summarize_to_the_whole() {
+        let dir = temp("shards");
+        let profile = dir.join("short.toml");
+        std::fs::write(
+            &profile,
+            "base = \"smoke\"\nduration = [\"70s\", \"75s\"]\nprobe_lead = \"10s\"\nevents = [1, 4]\n",
+        )
+        .expect("profile");
+        let p = profile.to_string_lossy().to_string();
+        let path = |n: &str| dir.join(n).to_string_lossy().to_string();
+        let failures = path("failures");
+        let common = ["--runs", "6", "--seed", "3", "--profile", &p, "--jobs", "2"];
+        let go = |extra: &[&str]| {
+            let mut a: Vec<&str> = common.to_vec();
+            a.extend_from_slice(extra);
+            a.extend_from_slice(&["--failures", &failures, "--shrink-budget", "2"]);
+            campaign_cli(&a)
+        };
+        let whole = path("whole.jsonl");
+        let code = go(&["--out", &whole]).expect("campaign");
+        assert!(code == 0 || code == EXIT_VIOLATIONS);
+        // Not again without --force, and the file stays as it was.
+        let before = std::fs::read_to_string(&whole).expect("lines");
+        let again = go(&["--out", &whole]).expect_err("refused");
+        assert!(again.contains("--force"), "{again}");
+        assert_eq!(std::fs::read_to_string(&whole).ok(), Some(before.clone()));
+        assert_eq!(go(&["--out", &whole, "--force"]), Ok(code));
+        assert_eq!(std::fs::read_to_string(&whole).ok(), Some(before.clone()));
+        let (a, b) = (path("a.jsonl"), path("b.jsonl"));
+        go(&["--out", &a, "--shard", "1/2"]).expect("shard 1");
+        go(&["--out", &b, "--shard", "2/2"]).expect("shard 2");
+        let read = |f: &str| std::fs::read_to_string(f).expect("read");
+        let mut union: Vec<String> = [read(&a), read(&b)]
+            .iter()
+            .flat_map(|t| t.lines().map(String::from).collect::<Vec<_>>())
+            .collect();
+        let index = |l: &String| -> u64 {
+            let v: serde_json::Value = serde_json::from_str(l).expect("json");
+            v["index"].as_u64().expect("index")
+        };
+        union.sort_by_key(index);
+        let whole_lines: Vec<String> = before.lines().map(String::from).collect();
+        assert_eq!(union, whole_lines);
+        // Every failing run has its reproducer, which `asi-lift run` reads.
+        for l in &whole_lines {
+            let v: serde_json::Value = serde_json::from_str(l).expect("json");
+            match v["reproducer"].as_str() {
+                Some(name) => {
+                    assert_ne!(v["outcome"], "ok");
+                    let file = dir.join("failures").join(name);
+                    let text = std::fs::read_to_string(&file).expect("reproducer");
+                    assert!(text.contains("# reproduce: asi-lift run"), "{text}");
+                    Scenario::from_toml(name, &text).expect("a valid scenario");
+                }
+                None => assert_eq!(v["outcome"], "ok"),
+            }
+        }
+        // The summary of the shards is the summary of the whole.
+        let files = |f: &[&str]| f.iter().map(PathBuf::from).collect::<Vec<_>>();
+        let merged = summarize(&[("a".into(), read(&a)), ("b".into(), read(&b))]).expect("merge");
+        let single = summarize(&[("w".into(), read(&whole))]).expect("whole");
+        assert_eq!(merged, single);
+        assert_eq!(merged.runs, 6);
+        assert_eq!(merged.missing, 0);
+        assert_eq!(campaign_summary(&files(&[&a, &b]), false), Ok(0));
+        // Overlapping shards and malformed lines are named by file and line.
+        let e = campaign_summary(&files(&[&a, &whole]), true).expect_err("duplicate");
+        assert!(
+            e.contains(&format!("{whole}:1: run 0 is also at {a}:1")),
+            "{e}"
+        );
+        let junk = path("junk.jsonl");
+        std::fs::write(
+            &junk,
+            format!(
+                "{}\n{{\"index\": 1}}\n",
+                read(&b).lines().next().unwrap_or("")
+            ),
+        )
+        .expect("junk");
+        let e = campaign_summary(&files(&[&junk]), false).expect_err("malformed");
+        assert!(
+            e.starts_with(&format!("{junk}:2: not a campaign line")),
+            "{e}"
+        );
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn a_reproducer_never_replaces_another_file() {
+        let dir = temp("repro");
+        let first = write_reproducer(&dir, "run-000001-ab.toml", "one").expect("write");
+        assert_eq!(
+            write_reproducer(&dir, "run-000001-ab.toml", "one"),
+            Ok(first.clone())
+        );
+        let second = write_reproducer(&dir, "run-000001-ab.toml", "two").expect("write");
+        assert_eq!(second, dir.join("run-000001-ab-2.toml"));
+        assert_eq!(std::fs::read_to_string(&first).ok().as_deref(), Some("one"));
+        assert_eq!(
+            std::fs::read_to_string(&second).ok().as_deref(),
+            Some("two")
+        );
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    fn run_cli(args: &[&str]) -> Result<u8, String> {
+        let cli = Cli::try_parse_from(["asi-lift", "run"].iter().chain(args))
+            .map_err(|e| e.to_string())?;
+        run(cli)
+    }
+
+    #[test]
+    fn the_plot_of_a_run_is_deterministic_and_leaves_the_run_alone() {
+        let dir = temp("plot");
+        let path = |n: &str| dir.join(n).to_string_lossy().to_string();
+        let (a, b) = (path("a.svg"), path("b.svg"));
+        let (ra, rb, plain) = (path("a.json"), path("b.json"), path("plain.json"));
+        let common = ["--until", "20s", "--format", "json"];
+        for (svg, report) in [(&a, &ra), (&b, &rb)] {
+            let args = [&common[..], &["--plot", svg, "--report", report]].concat();
+            assert_eq!(run_cli(&args), Ok(0));
+        }
+        assert_eq!(
+            run_cli(&[&common[..], &["--report", &plain]].concat()),
+            Ok(0)
+        );
+        let read = |f: &str| std::fs::read_to_string(f).expect("output");
+        let svg = read(&a);
+        assert!(svg.starts_with("<svg"), "{}", &svg[..svg.len().min(200)]);
+        assert!(svg.trim_end().ends_with("</svg>"));
+        for label in ["floor 1", "floor 2", "floor 3", "floor 4", "time (s)"] {
+            assert!(svg.contains(label), "no {label:?} in the plot");
+        }
+        assert_eq!(svg, read(&b), "two runs of one scenario, two plots");
+        // Sampling for the plot only pauses the simulation between moments.
+        assert_eq!(read(&ra), read(&plain));
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn a_plot_never_replaces_a_file_and_a_bad_path_is_named_before_the_run() {
+        let dir = temp("plot-refused");
+        let plot = dir.join("plot.svg");
+        std::fs::write(&plot, "keep").expect("temp file");
+        let p = plot.to_string_lossy().to_string();
+        let report = dir.join("report.txt");
+        let r = report.to_string_lossy().to_string();
+        let e = run_cli(&["--until", "1s", "--plot", &p, "--report", &r]).expect_err("refused");
+        assert!(e.contains(&p) && e.contains("--force"), "{e}");
+        assert_eq!(std::fs::read_to_string(&plot).ok().as_deref(), Some("keep"));
+        // Refused before the run: the report, written after it, is not there.
+        assert!(!report.exists());
+        let bad = dir.join("no-such-dir").join("plot.svg");
+        let b = bad.to_string_lossy().to_string();
+        let e = run_cli(&["--until", "1s", "--plot", &b, "--report", &r]).expect_err("bad path");
+        assert!(e.contains(&b), "{e}");
+        assert!(!report.exists());
+        let e = run_cli(&["--until", "1s", "--plot", "-"]).expect_err("two on stdout");
+        assert!(e.contains("--plot"), "{e}");
+        assert_eq!(
+            run_cli(&["--until", "1s", "--plot", &p, "--report", &r, "--force"]),
+            Ok(0)
+        );
+        let svg = std::fs::read_to_string(&plot).unwrap_or_default();
+        assert!(svg.starts_with("<svg"), "{svg}");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn the_timing_svg_is_not_overwritten_without_force() {
+        let path = std::env::temp_dir().join(format!("asi-lift-timing-{}.svg", std::process::id()));
+        let p = path.to_string_lossy().to_string();
+        std::fs::write(&path, "keep").expect("temp file");
+        let args = ["--bus", "2", "--duration", "50ms", "--svg", p.as_str()];
+        fails_naming(&args, "--force");
+        assert_eq!(std::fs::read_to_string(&path).ok().as_deref(), Some("keep"));
+        let forced = [&args[..], &["--force", "--json"]].concat();
+        assert_eq!(timing(&forced), Ok(0));
+        let svg = std::fs::read_to_string(&path).unwrap_or_default();
+        assert!(svg.starts_with("<svg"), "{svg}");
+        let _ = std::fs::remove_file(&path);
+    }
+}
+
+/// The outputs' checks ([`asi_lift::cmd::output`]), with files made between the steps.
+mod output {
+    use asi_lift::cmd::output::Outputs;
+    use std::path::Path;
+
+    fn dir() -> tempfile::TempDir {
+        tempfile::tempdir().expect("a temporary directory")
+    }
+
+    fn names(d: &Path) -> Vec<String> {
+        let mut v: Vec<String> = std::fs::read_dir(d)
+            .expect("list")
+            .map(|e| e.expect("entry").file_name().to_string_lossy().into_owned())
+            .collect();
+        v.sort();
+        v
+    }
+
+    #[test]
+    fn one_file_through_two_spellings_is_refused() {
+        let d = dir();
+        let a = d.path().join("a.out");
+        let dotted = d.path().join(".").join("a.out");
+        let mut o = Outputs::new(false);
+        o.add("--vcd", &a).expect("first");
+        let e = o.add("--csv", &dotted).err().expect("the same file");
+        assert!(e.contains("same file"), "{e}");
+        // Nothing is written: the temporary file goes with the refused command.
+        drop(o);
+        assert!(names(d.path()).is_empty(), "{:?}", names(d.path()));
+    }
+
+    #[test]
+    fn links_name_the_file_they_point_at() {
+        let d = dir();
+        let a = d.path().join("a.json");
+        std::fs::write(&a, "mine").expect("write");
+        let sym = d.path().join("sym.json");
+        std::os::unix::fs::symlink(&a, &sym).expect("symlink");
+        let hard = d.path().join("hard.json");
+        std::fs::hard_link(&a, &hard).expect("hard link");
+        let mut o = Outputs::new(true);
+        o.add("--report", &a).expect("first");
+        for other in [&sym, &hard] {
+            let e = o.add("--trace", other).err().expect("the same file");
+            assert!(e.contains("same file"), "{e}");
+        }
+        let mut o = Outputs::new(false);
+        o.input("the scenario", &sym).expect("input");
+        let e = o.add("--report", &hard).err().expect("the input");
+        assert!(e.contains("same file"), "{e}");
+    }
+
+    #[test]
+    fn an_existing_file_is_refused_without_force_before_anything_is_written() {
+        let d = dir();
+        let a = d.path().join("r.json");
+        std::fs::write(&a, "mine").expect("write");
+        let e = Outputs::new(false)
+            .add("--report", &a)
+            .err()
+            .expect("exists");
+        assert!(e.contains("--force"), "{e}");
+        assert_eq!(std::fs::read_to_string(&a).expect("read"), "mine");
+    }
+
+    #[test]
+    fn a_missing_directory_is_reported_when_the_output_is_added() {
+        let d = dir();
+        let e = Outputs::new(false)
+            .add("--report", &d.path().join("no/such/r.json"))
+            .err()
+            .expect("no directory");
+        assert!(e.contains("no/such"), "{e}");
+    }
+
+    #[test]
+    fn files_appear_only_at_the_commit_and_replace_through_a_link_with_force() {
+        let d = dir();
+        let a = d.path().join("a.txt");
+        let mut o = Outputs::new(false);
+        let s = o.add("--report", &a).expect("add");
+        o.write_all(&s, "first").expect("write");
+        assert!(!a.exists(), "not before the commit");
+        o.commit().expect("commit");
+        assert_eq!(std::fs::read_to_string(&a).expect("read"), "first");
+        // With --force through a symbolic link: the link stays, the file it names changes.
+        let sym = d.path().join("sym.txt");
+        std::os::unix::fs::symlink(&a, &sym).expect("symlink");
+        let mut o = Outputs::new(true);
+        let s = o.add("--report", &sym).expect("add");
+        o.write_all(&s, "second").expect("write");
+        o.commit().expect("commit");
+        assert!(std::fs::symlink_metadata(&sym)
+            .expect("meta")
+            .file_type()
+            .is_symlink());
+        assert_eq!(std::fs::read_to_string(&a).expect("read"), "second");
+        assert_eq!(names(d.path()), ["a.txt", "sym.txt"]);
+    }
+
+    #[test]
+    fn a_device_is_written_directly_and_a_directory_refused() {
+        let mut o = Outputs::new(false);
+        let s = o.add("--trace", Path::new("/dev/null")).expect("/dev/null");
+        o.write_all(&s, "gone").expect("write");
+        o.commit().expect("commit");
+        let d = dir();
+        let e = Outputs::new(true)
+            .add("--report", d.path())
+            .err()
+            .expect("dir");
+        assert!(e.contains("directory"), "{e}");
+    }
+
+    #[test]
+    fn a_file_made_meanwhile_is_kept_without_force() {
+        let d = dir();
+        let a = d.path().join("a.txt");
+        let mut o = Outputs::new(false);
+        let s = o.add("--report", &a).expect("add");
+        o.write_all(&s, "ours").expect("write");
+        std::fs::write(&a, "theirs").expect("write");
+        let e = o.commit().expect_err("kept");
+        assert!(e.contains("a.txt"), "{e}");
+        assert_eq!(std::fs::read_to_string(&a).expect("read"), "theirs");
+        assert_eq!(names(d.path()), ["a.txt"]);
+    }
+}
+
+/// The plot's sampling ([`asi_lift::cmd::plot`]).
+mod plot {
+    use asi_lift::cmd::plot::{button_floor, sample_step, MIN_STEP};
+    use asi_phy::SimDuration;
+
+    #[test]
+    fn the_sampling_step_keeps_long_runs_small() {
+        assert_eq!(sample_step(SimDuration::from_secs(80)), MIN_STEP);
+        assert_eq!(sample_step(SimDuration::from_secs(100)), MIN_STEP);
+        assert_eq!(
+            sample_step(SimDuration::from_secs(600)),
+            SimDuration::from_millis(120)
+        );
+    }
+
+    #[test]
+    fn a_button_names_its_floor() {
+        assert_eq!(button_floor("cabin:3"), Some(3));
+        assert_eq!(button_floor("hall-down:4"), Some(4));
+        assert_eq!(button_floor("cabin"), None);
+    }
+}
+
+/// The warnings of `run` before a run ([`asi_lift::cmd::run`]).
+mod run {
+    use asi_lift::cmd::run::vcd_size_warning;
+    use asi_phy::SimTime;
+
+    const MIN: u64 = 60;
+
+    fn secs(s: u64) -> SimTime {
+        SimTime::from_millis(s * 1000)
+    }
+
+    #[test]
+    fn a_long_vcd_is_warned_of_naming_the_option_that_bounds_it() {
+        let ten_ms = (SimTime::ZERO, SimTime::from_millis(10));
+        // 12 minutes of pulse wire and the rest: about 2.9 GB.
+        let w = vcd_size_warning(secs(12 * MIN), None, ten_ms).expect("12 minutes");
+        assert!(w.contains("about 2.9 GB"), "{w}");
+        assert!(w.contains("--pulse-window"), "{w}");
+        // A minute, or 12 minutes with a bounded pulse wire, stays below 1 GB.
+        assert_eq!(vcd_size_warning(secs(MIN), None, ten_ms), None);
+        let bounded = Some((secs(60), secs(120)));
+        assert_eq!(vcd_size_warning(secs(12 * MIN), bounded, ten_ms), None);
+        // A pulse window past the end of the run counts for nothing.
+        let late = Some((secs(13 * MIN), secs(20 * MIN)));
+        assert_eq!(vcd_size_warning(secs(12 * MIN), late, ten_ms), None);
+        // 10 s of line voltage is the bulk of a short run's VCD.
+        let w = vcd_size_warning(secs(20), None, (SimTime::ZERO, secs(10))).expect("voltage");
+        assert!(w.contains("--waveform-window"), "{w}");
+    }
 }

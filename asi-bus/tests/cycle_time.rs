@@ -1,13 +1,12 @@
 //! Cycle time in simulation against the seed's T = (n + 2) · 154 µs (seed 003 §2.1, formula
 //! (1); docs/master.md, §7).
 
-mod common;
+use crate::common::*;
 use asi_bus::Bus;
 use asi_master::{MasterConfig, ProjectedConfig, ProjectedSlave};
 use asi_phy::{Call, Nibble, PulseFault, SimDuration};
 use asi_slaves::devices::{IoModule, AB_MODULE};
 use asi_slaves::Slave;
-use common::*;
 
 fn settle(bus: &mut Bus) {
     bus.advance_to(ms(40));

@@ -3,14 +3,13 @@
 //! slaves answering at once, safety slaves that freeze, trip or go missing (docs/master.md, §3;
 //! docs/asi.md §2.5, §5, §7).
 
-mod common;
+use crate::common::*;
 use asi_bus::Bus;
 use asi_master::{MasterConfig, Phase, ProjectedConfig, TransactionRecord};
 use asi_phy::{Check, FaultRates, Nibble, PulseFault};
 use asi_slaves::devices::{FloorStation, IoModule, AC2726, IG5886};
 use asi_slaves::monitor::NotReleased;
 use asi_slaves::Slave;
-use common::*;
 
 /// Steps the bus to just after a transaction's responses went on the line, so that the next
 /// telegram on the line is the next request.

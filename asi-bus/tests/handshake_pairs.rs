@@ -2,8 +2,7 @@
 //! the PLC side of asi-master and the device side of asi-slaves, on the engines and words of
 //! asi-phy.
 
-mod common;
-
+use crate::common::display_bits;
 use asi_master::integrated_analog::*;
 use asi_master::plc_handshake::*;
 use asi_phy::handshake::*;
@@ -11,7 +10,6 @@ use asi_phy::handshake_words::*;
 use asi_phy::Nibble;
 use asi_slaves::analog_firmware::*;
 use asi_slaves::device_handshake::*;
-use common::display_bits;
 
 /// Runs a PLC-side and a device-side step function against each other: the device steps
 /// `dev_per_plc` times per PLC step (cycles per scan).

@@ -2,7 +2,7 @@
 //! AS-i cycles and wherever either side is reset, the next word gets through, whole and
 //! unchanged.
 
-mod common;
+use crate::common;
 
 use asi_master::integrated_analog::S73OutputMaster;
 use asi_master::plc_handshake::{CabinDisplayMaster, CabinPanelMaster, FloorStationMaster};

@@ -1,7 +1,7 @@
 //! The lab lift's handshakes over the simulated bus, with the PLC side stepped from the
 //! process image every 10 ms scan (docs/lab-bus.md, §5; seed 003 tables 4.2–4.7, 2.2).
 
-mod common;
+use crate::common::*;
 use asi_bus::lab::LabLift;
 use asi_bus::Bus;
 use asi_master::plc_handshake::{
@@ -10,7 +10,6 @@ use asi_master::plc_handshake::{
 use asi_master::TransactionRecord;
 use asi_phy::handshake_words::CabinPanelState;
 use asi_phy::{Call, Nibble, SimDuration, SimTime};
-use common::*;
 
 const SCAN: SimDuration = SimDuration::from_millis(10);
 

@@ -1,7 +1,7 @@
 //! The process image against seed 003 table 4.1 on the running lab bus: where each slave's
 //! nibble and each flag sits, host flags in output word 0, analog words (docs/master.md).
 
-mod common;
+use crate::common::*;
 use asi_bus::lab::LabLift;
 use asi_bus::Bus;
 use asi_master::{HostFlags, MasterConfig, Phase, ProjectedConfig, ProjectedSlave, TxKind};
@@ -9,7 +9,6 @@ use asi_phy::handshake_words::AnalogValue;
 use asi_phy::{Call, Nibble};
 use asi_slaves::devices::{AnalogInput, IoModule, AC2726, ANALOG_INPUT_2CH};
 use asi_slaves::Slave;
-use common::*;
 
 #[test]
 fn input_nibbles_land_where_table_4_1_puts_them() {

@@ -1,12 +1,11 @@
 //! Host jobs through the command mailbox in parameter words 32..49 (seed 003 table 4.1;
 //! src/mailbox.rs protocol).
 
-mod common;
+use crate::common::*;
 use asi_bus::Bus;
 use asi_master::mailbox::{completed, post, Command, JobResult};
 use asi_master::{EcFlags, Mode};
 use asi_phy::SimDuration;
-use common::*;
 
 fn job(bus: &mut Bus, cmd: Command, args: &[u8]) -> (JobResult, [u8; 34]) {
     post(&mut bus.image_mut().output, cmd, args);

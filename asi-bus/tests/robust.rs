@@ -3,11 +3,10 @@
 //! master keeps its repeat rule: a repeat comes only right after a failed first try to the same
 //! slave, never twice in a row, and the statistics count exactly the repeats the records show.
 
-mod common;
+use crate::common::*;
 use asi_bus::lab::LabLift;
 use asi_master::TransactionRecord;
 use asi_phy::{FaultRates, SimDuration};
-use common::*;
 use proptest::prelude::*;
 
 proptest! {

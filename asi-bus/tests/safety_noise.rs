@@ -1,13 +1,11 @@
 //! The Safety-at-Work monitor under random line noise: noise never makes a free sensor look
 //! tripped while the master keeps it in LAS, and never makes a tripped sensor look free.
 
-mod common;
-
+use crate::common::{a, addr};
 use asi_bus::lab::LabLift;
 use asi_phy::fault::FaultRates;
 use asi_phy::{SimDuration, SimTime};
 use asi_slaves::monitor::NotReleased;
-use common::{a, addr};
 use proptest::prelude::*;
 
 const SENSORS: [u8; 2] = [11, 12];

@@ -2,9 +2,8 @@
 //! the 9 µs pause that ends the telegram (84 + 9 = 93 µs after the request starts). Inputs set
 //! before that instant are in the response, inputs set after it wait for the next cycle.
 
-mod common;
+use crate::common::*;
 use asi_phy::{Call, SimDuration};
-use common::*;
 
 fn first_ready_exchange(offset_us: u64) -> (SimDuration, u64) {
     let mut lab = running_lab(40);

@@ -1,10 +1,9 @@
 //! Power-on start-up of the lab lift's bus: detection, activation, first cycles (docs/master.md;
 //! docs/asi.md §5.1).
 
-mod common;
+use crate::common::*;
 use asi_bus::lab::LabLift;
 use asi_master::{Phase, TxKind};
-use common::*;
 
 #[test]
 fn power_on_start_up_of_the_lab_bus() {

@@ -1,8 +1,7 @@
 //! Trace records go to `tracing` (target `asi_master::trace`, level TRACE), to the ring and to
 //! the callback, one per transaction.
 
-mod common;
-use common::*;
+use crate::common::*;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 use tracing::span::{Attributes, Id, Record};
@@ -43,8 +42,31 @@ impl Subscriber for Count {
     fn exit(&self, _: &Id) {}
 }
 
+/// Set in the process that runs the test body, see [`every_transaction_is_one_record_everywhere`].
+const ALONE: &str = "ASI_BUS_TRACING_OUT_ALONE";
+
+/// The test body runs in a process of its own: this binary again, with only this test. A
+/// scoped subscriber is not enough when other tests run buses on other threads, because
+/// `tracing` settles once per call site and for the whole process whether anyone listens: if
+/// another thread's bus reaches the call site first, while this subscriber is the only one, the
+/// answer is "no one" (that thread's default) and the records are lost here too.
 #[test]
 fn every_transaction_is_one_record_everywhere() {
+    if std::env::var_os(ALONE).is_none() {
+        let out = std::process::Command::new(std::env::current_exe().expect("the test binary"))
+            .args([
+                "every_transaction_is_one_record_everywhere",
+                "--test-threads=1",
+            ])
+            .env(ALONE, "1")
+            .output()
+            .expect("the test binary runs");
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success(), "{stdout}{stderr}");
+        assert!(stdout.contains("test result: ok. 1 passed"), "{stdout}");
+        return;
+    }
     let events = Arc::new(AtomicUsize::new(0));
     let first = Arc::new(Mutex::new(String::new()));
     let sub = Count {

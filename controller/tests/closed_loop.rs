@@ -2,7 +2,7 @@
 //! plant's signals and writes the converter. Tests the logic of seed tables 6.3–6.5; the full
 //! rig with the AS-i handshakes and the safety logic is tested in the workspace's tests crate.
 
-mod common;
+use crate::common;
 
 use asi_phy::{SimDuration, SimTime};
 use controller::{Algorithm, ControllerConfig, Program, ProgramEventKind, Source, State};

@@ -5,7 +5,7 @@
 //! ("Aktuální patro → Jede", "Dobrždění → Aktuální patro"), not while floors are passed;
 //! initialisation shows floor 1 and "down", its last step ("Brzdí → 1. Patro") included.
 
-mod common;
+use crate::common;
 
 use asi_phy::{SimDuration, SimTime};
 use controller::{ControllerConfig, Program, ProgramEventKind, State};

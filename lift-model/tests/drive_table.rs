@@ -1,10 +1,8 @@
 //! Seed 003 table 6.6 (and §6.4 for 11000): set-point → frequency → motor → sprocket →
 //! cabin velocity, one test per row, on the formulas and on the running plant.
 
-mod common;
-
+use crate::common::*;
 use asi_phy::SimTime;
-use common::*;
 use lift_model::{converter_frequency_hz, DriveConfig, PlantEventKind, VaneSensor};
 
 /// `value` printed with as many decimals as the seed's `table` text has.

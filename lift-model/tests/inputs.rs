@@ -2,10 +2,8 @@
 //! edges, STOP's three contacts, door, load, displays; and inputs that make no sense are
 //! refused with an error, never a panic.
 
-mod common;
-
+use crate::common::*;
 use asi_phy::{SimDuration, SimTime};
-use common::*;
 use lab::{DisplayWord, DisplayWordError};
 use lift_model::{
     Button, ContactFault, DisplayId, DisplayState, Lift, LiftConfig, LoadLevel, PlantError,

@@ -1,10 +1,8 @@
 //! Safety-relevant physics (docs/lift-plant.md, §6; seed 003 §6.3): K1 and the brake, EDM through the
 //! mirror contact, the hand crank, overtravel trips and crashes into the mechanical ends.
 
-mod common;
-
+use crate::common::*;
 use asi_phy::{SimDuration, SimTime};
-use common::*;
 use lift_model::{DriveConfig, End, LiftConfig, PlantError, PlantEventKind, VaneSensor};
 
 fn near(x: f64, expected: f64) -> bool {

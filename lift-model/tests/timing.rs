@@ -2,10 +2,8 @@
 //! rounded up to the first nanosecond at which the new level holds, for steady speed, ramps
 //! and braking, and whatever step the caller takes.
 
-mod common;
-
+use crate::common::*;
 use asi_phy::{SimDuration, SimTime};
-use common::*;
 use lift_model::{DriveConfig, Lift, LiftConfig, PlantEvent, PlantEventKind, VaneSensor};
 use proptest::prelude::*;
 

@@ -2,10 +2,8 @@
 //! floor-1 vane is turned so the left sensor meets its long track first going down, at every
 //! other floor the right sensor does; going up the order mirrors; both on is the level zone.
 
-mod common;
-
+use crate::common::*;
 use asi_phy::SimDuration;
-use common::*;
 use lift_model::{LiftConfig, PlantEventKind, VaneSensor};
 
 use VaneSensor::{Left, Right};

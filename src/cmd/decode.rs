@@ -38,6 +38,7 @@ pub struct DecodeArgs {
     pub sample_period: Option<String>,
 }
 
+/// The capture formats of `--format`.
 #[derive(Clone, Copy, ValueEnum)]
 pub enum InputFormat {
     /// `time,voltage` lines.
@@ -46,6 +47,7 @@ pub enum InputFormat {
     Vcd,
 }
 
+/// What the receiver listens for (`--expect`).
 #[derive(Clone, Copy, ValueEnum)]
 pub enum Listen {
     /// Master requests only.

@@ -23,7 +23,7 @@ const SIZE: (u32, u32) = (1400, 1000);
 /// The window of the bus error rate.
 const BUS_WINDOW_S: f64 = 1.0;
 /// The finest sampling step; longer runs get a coarser one (see [`sample_step`]).
-const MIN_STEP: SimDuration = SimDuration::from_millis(20);
+pub const MIN_STEP: SimDuration = SimDuration::from_millis(20);
 /// At most about this many samples per run, so that the SVG stays small.
 const MAX_SAMPLES: u64 = 5_000;
 
@@ -149,7 +149,7 @@ impl Samples {
 }
 
 /// A call button's floor: `cabin:3`, `hall-up:2` → 3, 2.
-fn button_floor(button: &str) -> Option<u8> {
+pub fn button_floor(button: &str) -> Option<u8> {
     button.rsplit_once(':')?.1.parse().ok()
 }
 
@@ -529,26 +529,4 @@ fn bus_panel(area: &Area<'_>, key: &Area<'_>, s: &Samples, rep: &Report, t_end: 
             ),
         ],
     )
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn the_sampling_step_keeps_long_runs_small() {
-        assert_eq!(sample_step(SimDuration::from_secs(80)), MIN_STEP);
-        assert_eq!(sample_step(SimDuration::from_secs(100)), MIN_STEP);
-        assert_eq!(
-            sample_step(SimDuration::from_secs(600)),
-            SimDuration::from_millis(120)
-        );
-    }
-
-    #[test]
-    fn a_button_names_its_floor() {
-        assert_eq!(button_floor("cabin:3"), Some(3));
-        assert_eq!(button_floor("hall-down:4"), Some(4));
-        assert_eq!(button_floor("cabin"), None);
-    }
 }

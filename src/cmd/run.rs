@@ -78,6 +78,7 @@ pub enum AlgorithmArg {
     Collective,
 }
 
+/// The forms of the report (`--format`).
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum Format {
     /// The readable log of the run and a summary.
@@ -86,6 +87,7 @@ pub enum Format {
     Json,
 }
 
+/// The forms of the transaction trace (`--trace-format`).
 #[derive(Clone, Copy, ValueEnum)]
 pub enum TraceForm {
     /// One readable line per transaction.
@@ -310,7 +312,7 @@ const VCD_WARN_BYTES: u64 = 1_000_000_000;
 
 /// A warning if the VCD of a run ending at `end` will be larger than [`VCD_WARN_BYTES`]: its
 /// estimated size and the option that bounds it.
-fn vcd_size_warning(
+pub fn vcd_size_warning(
     end: SimTime,
     pulse_window: Option<(SimTime, SimTime)>,
     voltage_window: (SimTime, SimTime),
@@ -348,34 +350,4 @@ fn parse_window(option: &str, s: &str) -> Result<(SimTime, SimTime), String> {
         return Err(err("END must be after START".into()));
     }
     Ok((SimTime::ZERO + a, SimTime::ZERO + b))
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    const MIN: u64 = 60;
-
-    fn secs(s: u64) -> SimTime {
-        SimTime::from_millis(s * 1000)
-    }
-
-    #[test]
-    fn a_long_vcd_is_warned_of_naming_the_option_that_bounds_it() {
-        let ten_ms = (SimTime::ZERO, SimTime::from_millis(10));
-        // 12 minutes of pulse wire and the rest: about 2.9 GB.
-        let w = vcd_size_warning(secs(12 * MIN), None, ten_ms).expect("12 minutes");
-        assert!(w.contains("about 2.9 GB"), "{w}");
-        assert!(w.contains("--pulse-window"), "{w}");
-        // A minute, or 12 minutes with a bounded pulse wire, stays below 1 GB.
-        assert_eq!(vcd_size_warning(secs(MIN), None, ten_ms), None);
-        let bounded = Some((secs(60), secs(120)));
-        assert_eq!(vcd_size_warning(secs(12 * MIN), bounded, ten_ms), None);
-        // A pulse window past the end of the run counts for nothing.
-        let late = Some((secs(13 * MIN), secs(20 * MIN)));
-        assert_eq!(vcd_size_warning(secs(12 * MIN), late, ten_ms), None);
-        // 10 s of line voltage is the bulk of a short run's VCD.
-        let w = vcd_size_warning(secs(20), None, (SimTime::ZERO, secs(10))).expect("voltage");
-        assert!(w.contains("--waveform-window"), "{w}");
-    }
 }
