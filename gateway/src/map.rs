@@ -318,11 +318,11 @@ impl Gateway {
         if (CYCLE_REGISTERS..CYCLE_REGISTERS + 3).contains(&i) {
             let stats = rig.lab().bus.stats();
             let us = |d: SimDuration| (d.as_nanos() / 1000).min(u64::from(u16::MAX)) as u16;
-            let mean = if stats.cycles == 0 {
-                SimDuration::ZERO
-            } else {
-                SimDuration::from_nanos(stats.cycle_total.as_nanos() / stats.cycles)
-            };
+            let mean = stats
+                .cycle_total
+                .as_nanos()
+                .checked_div(stats.cycles)
+                .map_or(SimDuration::ZERO, SimDuration::from_nanos);
             return Some(match i - CYCLE_REGISTERS {
                 0 => us(mean),
                 1 => us(stats.cycle_min),
@@ -433,9 +433,9 @@ impl Gateway {
             } else if i == WATCHDOG_REGISTER {
                 self.watchdog = SimDuration::from_millis(u64::from(v));
             } else {
-                let (who, action) = command(i - COMMAND_REGISTERS, v)
-                    .map_err(|_| ExceptionCode::IllegalDataValue)?;
-                rig.act_now(who, &action);
+                let action =
+                    command(i - COMMAND_REGISTERS, v).ok_or(ExceptionCode::IllegalDataValue)?;
+                rig.act_now("client", &action);
             }
         }
         if outputs {
@@ -462,12 +462,12 @@ impl Gateway {
         if (COMMAND_REGISTERS..COMMAND_REGISTERS + COMMANDS.len() as u16).contains(&i) {
             let floors = rig.lift().config().floors;
             return match command(i - COMMAND_REGISTERS, v) {
-                Ok((_, Action::Press { button, .. })) => match button.floor() {
+                Some(Action::Press { button, .. }) => match button.floor() {
                     Some(f) if f > floors => Err(ExceptionCode::IllegalDataValue),
                     _ => Ok(()),
                 },
-                Ok(_) => Ok(()),
-                Err(()) => Err(ExceptionCode::IllegalDataValue),
+                Some(_) => Ok(()),
+                None => Err(ExceptionCode::IllegalDataValue),
             };
         }
         Err(ExceptionCode::IllegalDataAddress)
@@ -583,19 +583,16 @@ fn signals_word(s: ToSafety) -> u16 {
     u16::from(s.restart) | u16::from(s.overloaded) << 1
 }
 
-/// The simulator command of register `2000 + k` with value `v`.
-pub fn command(k: u16, v: u16) -> Result<(&'static str, Action), ()> {
+/// The simulator command of register `2000 + k` with value `v`, if `v` is a valid value.
+pub fn command(k: u16, v: u16) -> Option<Action> {
     let ms = |v: u16| SimDuration::from_millis(u64::from(v));
     let action = match k {
         0 => Action::Press {
-            button: button(v).ok_or(())?,
+            button: button(v)?,
             hold: DEFAULT_HOLD,
         },
         1 | 2 => {
-            let slave = u8::try_from(v)
-                .ok()
-                .filter(|a| (1..=31).contains(a))
-                .ok_or(())?;
+            let slave = u8::try_from(v).ok().filter(|a| (1..=31).contains(a))?;
             Action::Fault(if k == 1 {
                 Fault::SlaveOffline { slave }
             } else {
@@ -607,7 +604,7 @@ pub fn command(k: u16, v: u16) -> Result<(&'static str, Action), ()> {
             1 => LoadLevel::Loaded,
             2 => LoadLevel::Full,
             3 => LoadLevel::Overloaded,
-            _ => return Err(()),
+            _ => return None,
         }),
         4 if v <= 1 => Action::Door { closed: v == 1 },
         5 if v == 1 => Action::Reset,
@@ -615,9 +612,9 @@ pub fn command(k: u16, v: u16) -> Result<(&'static str, Action), ()> {
         7 if v > 0 => Action::Fault(Fault::PowerFail { duration: ms(v) }),
         8 if v > 0 => Action::Fault(Fault::SafeLinkDrop { duration: ms(v) }),
         9 if v == 1 => Action::Rescue,
-        _ => return Err(()),
+        _ => return None,
     };
-    Ok(("client", action))
+    Some(action)
 }
 
 /// The button of a press command: 0x01ff cabin f, 0x02ff hall up at f, 0x03ff hall down at
@@ -694,9 +691,13 @@ mod tests {
         assert_eq!(button(0x0100), None);
         assert_eq!(button(0x0401), None);
         assert_eq!(button(0x0600), None);
-        assert!(command(3, 4).is_err());
-        assert!(command(1, 32).is_err());
-        assert!(command(10, 1).is_err());
+        assert!(command(3, 4).is_none());
+        assert!(command(1, 32).is_none());
+        assert!(command(10, 1).is_none());
+        assert_eq!(
+            command(1, 7),
+            Some(Action::Fault(Fault::SlaveOffline { slave: 7 }))
+        );
     }
 
     #[test]
