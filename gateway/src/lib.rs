@@ -12,9 +12,10 @@
 
 pub mod live;
 pub mod map;
+pub mod ttk;
 
 use crossbeam_channel::{Receiver, Sender};
-use live::{Call, LiveConfig, Status, ToRig};
+use live::{Call, LiveConfig, Status, ToRig, TtkCall};
 use rig::{Report, Rig};
 use std::future::Future;
 use std::net::SocketAddr;
@@ -48,6 +49,7 @@ pub enum GatewayError {
 /// A live run with its Modbus server, started by [`start`].
 pub struct Running {
     addr: SocketAddr,
+    ttk_addr: Option<SocketAddr>,
     tx: Sender<ToRig>,
     status: Receiver<Status>,
     rig: JoinHandle<Report>,
@@ -58,6 +60,11 @@ impl Running {
     /// The address the Modbus server listens on (with the port the system chose for port 0).
     pub fn local_addr(&self) -> SocketAddr {
         self.addr
+    }
+
+    /// The address the TTK4145 server listens on, if there is one.
+    pub fn ttk_addr(&self) -> Option<SocketAddr> {
+        self.ttk_addr
     }
 
     /// The status the rig thread sends about once per wall second, and at the end.
@@ -92,9 +99,30 @@ impl Running {
     }
 }
 
+/// Binds `addr` for the runtime, or says which address could not be bound.
+fn bind(
+    runtime: &tokio::runtime::Runtime,
+    addr: SocketAddr,
+) -> Result<(tokio::net::TcpListener, SocketAddr), GatewayError> {
+    let listen_error = |source| GatewayError::Listen { addr, source };
+    let listener = std::net::TcpListener::bind(addr)
+        .and_then(|l| l.set_nonblocking(true).map(|()| l))
+        .map_err(listen_error)?;
+    let bound = listener.local_addr().map_err(listen_error)?;
+    let _guard = runtime.enter();
+    let listener = tokio::net::TcpListener::from_std(listener).map_err(listen_error)?;
+    Ok((listener, bound))
+}
+
 /// Starts a live run: builds the rig with `make_rig` on its own thread, listens on `listen`
-/// and serves Modbus TCP until the run ends.
-pub fn start<F>(make_rig: F, cfg: LiveConfig, listen: SocketAddr) -> Result<Running, GatewayError>
+/// and serves Modbus TCP until the run ends; with `ttk`, serves the TTK4145 protocol there
+/// too.
+pub fn start<F>(
+    make_rig: F,
+    cfg: LiveConfig,
+    listen: SocketAddr,
+    ttk: Option<SocketAddr>,
+) -> Result<Running, GatewayError>
 where
     F: FnOnce() -> Result<Rig, String> + Send + 'static,
 {
@@ -104,24 +132,9 @@ where
         .enable_all()
         .build()
         .map_err(GatewayError::Runtime)?;
-    let listener = std::net::TcpListener::bind(listen)
-        .and_then(|l| l.set_nonblocking(true).map(|()| l))
-        .map_err(|source| GatewayError::Listen {
-            addr: listen,
-            source,
-        })?;
-    let addr = listener
-        .local_addr()
-        .map_err(|source| GatewayError::Listen {
-            addr: listen,
-            source,
-        })?;
-    let listener = {
-        let _guard = runtime.enter();
-        tokio::net::TcpListener::from_std(listener)
-            .map_err(|source| GatewayError::Listen { addr, source })?
-    };
-
+    let (listener, addr) = bind(&runtime, listen)?;
+    let ttk = ttk.map(|a| bind(&runtime, a)).transpose()?;
+    let ttk_addr = ttk.as_ref().map(|(_, a)| *a);
     let (tx, rx) = crossbeam_channel::unbounded();
     let (status_tx, status) = crossbeam_channel::bounded(64);
     let (ready_tx, ready) = crossbeam_channel::bounded(1);
@@ -164,8 +177,12 @@ where
         let on_process_error = |_err: std::io::Error| {};
         let _ = server.serve(&on_connected, on_process_error).await;
     });
+    if let Some((listener, _)) = ttk {
+        runtime.spawn(serve_ttk(listener, tx.clone()));
+    }
     Ok(Running {
         addr,
+        ttk_addr,
         tx,
         status,
         rig,
@@ -201,5 +218,36 @@ impl tokio_modbus::server::Service for ModbusService {
                 .await
                 .unwrap_or(Err(ExceptionCode::ServerDeviceFailure))
         })
+    }
+}
+
+/// The TTK4145 server: fixed 4-byte messages, each handed to the rig thread; a read's answer
+/// goes back, a write gets none.
+async fn serve_ttk(listener: tokio::net::TcpListener, tx: Sender<ToRig>) {
+    use tokio::io::{AsyncReadExt, AsyncWriteExt};
+    loop {
+        let Ok((mut stream, _)) = listener.accept().await else {
+            continue;
+        };
+        let tx = tx.clone();
+        let _ = tx.send(ToRig::Connected);
+        tokio::spawn(async move {
+            let mut msg = [0u8; 4];
+            while stream.read_exact(&mut msg).await.is_ok() {
+                let (reply, answer) = tokio::sync::oneshot::channel();
+                if tx.send(ToRig::Ttk(TtkCall { msg, reply })).is_err() {
+                    return;
+                }
+                match answer.await {
+                    Ok(Some(a)) => {
+                        if stream.write_all(&a).await.is_err() {
+                            return;
+                        }
+                    }
+                    Ok(None) => {}
+                    Err(_) => return,
+                }
+            }
+        });
     }
 }

@@ -11,6 +11,7 @@
 //! run.
 
 use crate::map::{Gateway, Owner};
+use crate::ttk::Ttk;
 use asi_phy::{SimDuration, SimTime};
 use crossbeam_channel::{Receiver, RecvTimeoutError, Sender, TryRecvError};
 use rig::report::LiveReport;
@@ -57,10 +58,20 @@ pub struct Call {
     pub reply: tokio::sync::oneshot::Sender<Result<Response, ExceptionCode>>,
 }
 
+/// A TTK4145 message, with where its answer goes (`None` for a write).
+pub struct TtkCall {
+    /// The 4-byte message.
+    pub msg: [u8; 4],
+    /// Where the answer goes.
+    pub reply: tokio::sync::oneshot::Sender<Option<[u8; 4]>>,
+}
+
 /// What reaches the rig thread.
 pub enum ToRig {
     /// A client's request.
     Call(Call),
+    /// A TTK4145 client's message.
+    Ttk(TtkCall),
     /// A client connected.
     Connected,
     /// End the run now (Ctrl-C).
@@ -95,6 +106,7 @@ const STATUS_EVERY: Duration = Duration::from_secs(1);
 /// from `rx` and sending a [`Status`] to `status` every wall second; returns the report.
 pub fn run(mut rig: Rig, cfg: LiveConfig, rx: &Receiver<ToRig>, status: &Sender<Status>) -> Report {
     let mut gw = Gateway::new(cfg.owner, cfg.watchdog);
+    let mut ttk = Ttk::default();
     let mut connections = 0u64;
     let mut max_lag = Duration::ZERO;
     let mut lag_warned = false;
@@ -127,7 +139,9 @@ pub fn run(mut rig: Rig, cfg: LiveConfig, rx: &Receiver<ToRig>, status: &Sender<
                 // Wait for a request until the next millisecond of simulated time is due.
                 let next = Duration::from_secs_f64(1e-3 / x).min(Duration::from_millis(1));
                 match rx.recv_timeout(next) {
-                    Ok(m) => stopped |= handle(m, &mut rig, &mut gw, at, &mut connections),
+                    Ok(m) => {
+                        stopped |= handle(m, &mut rig, &mut gw, &mut ttk, at, &mut connections)
+                    }
                     Err(RecvTimeoutError::Timeout) => {}
                     Err(RecvTimeoutError::Disconnected) => break 'run,
                 }
@@ -138,8 +152,8 @@ pub fn run(mut rig: Rig, cfg: LiveConfig, rx: &Receiver<ToRig>, status: &Sender<
             }
             Speed::Max => match rx.recv_timeout(STATUS_EVERY) {
                 Ok(m) => {
-                    let call = matches!(m, ToRig::Call(_));
-                    stopped |= handle(m, &mut rig, &mut gw, at, &mut connections);
+                    let call = matches!(m, ToRig::Call(_) | ToRig::Ttk(_));
+                    stopped |= handle(m, &mut rig, &mut gw, &mut ttk, at, &mut connections);
                     if call {
                         let target = (at + cfg.step).min(rig.end());
                         at = advance(&mut rig, &mut gw, at, target);
@@ -149,10 +163,12 @@ pub fn run(mut rig: Rig, cfg: LiveConfig, rx: &Receiver<ToRig>, status: &Sender<
                 Err(RecvTimeoutError::Disconnected) => break 'run,
             },
         }
-        // Everything else waiting is served at the same moment.
-        loop {
+        // At a speed factor or running free, everything else waiting is served at the same
+        // moment; in lockstep each request has its own step, and none is served at the end.
+        let lockstep = cfg.speed == Speed::Max && cfg.owner == Owner::External;
+        while !lockstep && at < rig.end() {
             match rx.try_recv() {
-                Ok(m) => stopped |= handle(m, &mut rig, &mut gw, at, &mut connections),
+                Ok(m) => stopped |= handle(m, &mut rig, &mut gw, &mut ttk, at, &mut connections),
                 Err(TryRecvError::Empty) => break,
                 Err(TryRecvError::Disconnected) => break 'run,
             }
@@ -178,6 +194,7 @@ pub fn run(mut rig: Rig, cfg: LiveConfig, rx: &Receiver<ToRig>, status: &Sender<
         connections,
         watchdog_trips: gw.watchdog_trips,
         max_lag_ms: (max_lag.as_secs_f64() * 1e4).round() / 10.0,
+        lamps: ttk.lamps().clone(),
     });
     report
 }
@@ -193,8 +210,20 @@ fn advance(rig: &mut Rig, gw: &mut Gateway, at: SimTime, target: SimTime) -> Sim
 }
 
 /// Serves one message at `at`; `true` if it ends the run.
-fn handle(m: ToRig, rig: &mut Rig, gw: &mut Gateway, at: SimTime, connections: &mut u64) -> bool {
+fn handle(
+    m: ToRig,
+    rig: &mut Rig,
+    gw: &mut Gateway,
+    ttk: &mut Ttk,
+    at: SimTime,
+    connections: &mut u64,
+) -> bool {
     match m {
+        ToRig::Ttk(c) => {
+            let answer = ttk.serve(rig, gw, at, c.msg);
+            let _ = c.reply.send(answer);
+            false
+        }
         ToRig::Call(c) => {
             let answer = gw.serve(rig, at, &c.request);
             // A client that has gone no longer waits for its answer.

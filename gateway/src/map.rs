@@ -473,6 +473,18 @@ impl Gateway {
         Err(ExceptionCode::IllegalDataAddress)
     }
 
+    /// A sign of life from a client that writes only on change (the TTK4145 front end): the
+    /// watchdog starts again, as after a write.
+    pub fn alive(&mut self, rig: &mut Rig, now: SimTime) {
+        self.wrote(rig, now);
+    }
+
+    /// The controller's signals to the safety logic, set by a front end.
+    pub fn set_signals(&mut self, rig: &mut Rig, signals: ToSafety) {
+        self.signals = signals;
+        rig.set_plc_signals(signals);
+    }
+
     /// The client wrote the outputs at `now`: the watchdog starts again.
     fn wrote(&mut self, rig: &mut Rig, now: SimTime) {
         self.last_write = Some(now);

@@ -16,6 +16,10 @@ use tokio_modbus::client::Context;
 use tokio_modbus::prelude::*;
 
 fn start(toml: &str, owner: Owner, speed: Speed) -> Running {
+    start_with(toml, owner, speed, false)
+}
+
+fn start_with(toml: &str, owner: Owner, speed: Speed, ttk: bool) -> Running {
     let sc = Scenario::from_toml("test.toml", toml).expect("a valid scenario");
     let make = move || {
         let rig = Rig::new(sc).map_err(|e| e.to_string())?;
@@ -31,7 +35,8 @@ fn start(toml: &str, owner: Owner, speed: Speed) -> Running {
         step: SimDuration::from_millis(1),
     };
     let loopback: SocketAddr = "127.0.0.1:0".parse().expect("an address");
-    gateway::start(make, cfg, loopback).expect("the gateway starts")
+    let ttk = ttk.then_some(loopback);
+    gateway::start(make, cfg, loopback, ttk).expect("the gateway starts")
 }
 
 async fn connect(addr: SocketAddr) -> Context {
@@ -118,8 +123,9 @@ async fn an_outside_plc_serves_the_calls_through_the_gateway_without_violations(
     assert_eq!(live.controller, "external");
     assert_eq!(live.watchdog_trips, 0);
     assert_eq!(live.exceptions, 0);
-    // A scan every 10 ms of the minute, give or take the last one.
-    assert!((5_900..=6_000).contains(&scans), "{scans} scans");
+    // In lockstep the run is exact: a scan every 10 ms of simulated time, the first at 0 and
+    // the last at 59.99 s (the request at 60 s is not served: the run has ended).
+    assert_eq!(scans, 6_000);
     assert_eq!(r.final_state.state, None, "no built-in program ran");
 }
 
@@ -380,4 +386,138 @@ fn a_watching_client_sees_the_lists_and_the_image_of_the_lab_bus() {
     assert_eq!(word1[3] & 1, ready[2] & 1);
     running.stop();
     let _ = running.wait();
+}
+
+/// A TTK4145 message; the answer of a read.
+fn ttk(s: &mut TcpStream, msg: [u8; 4]) -> Option<[u8; 4]> {
+    s.write_all(&msg).ok()?;
+    if !(6..=9).contains(&msg[0]) {
+        return None;
+    }
+    let mut a = [0u8; 4];
+    s.read_exact(&mut a).ok()?;
+    Some(a)
+}
+
+const TTK: &str = r#"
+name = "a TTK4145 controller"
+duration = "60s"
+[lift]
+start_mm = 650.0
+[[event]]
+at = "15s"
+press = "cabin:4"
+[[event]]
+at = "30s"
+press = "hall-up:1"
+"#;
+
+/// A TTK4145 course controller in its simplest form: find a floor going down, then serve the
+/// calls in the order seen, stopping at the floor sensor, with the lamps a student sets.
+/// Every message advances the lockstep simulation by 1 ms; it stops after `messages`.
+fn ttk_controller(addr: SocketAddr, messages: u32) -> Vec<u8> {
+    let mut s = raw(addr);
+    let mut sent = 0u32;
+    let mut calls: Vec<u8> = Vec::new();
+    let mut floor: Option<u8> = None;
+    let mut dir: i8 = -1;
+    let mut stops = Vec::new();
+    ttk(&mut s, [1, dir as u8, 0, 0]);
+    while sent < messages {
+        // Poll the buttons: hall up/down and cabin, floors 0..3.
+        for kind in 0..3u8 {
+            for f in 0..4u8 {
+                sent += 1;
+                if ttk(&mut s, [6, kind, f, 0]) == Some([6, 1, 0, 0]) && !calls.contains(&f) {
+                    calls.push(f);
+                    ttk(&mut s, [2, kind, f, 1]);
+                }
+            }
+        }
+        sent += 1;
+        let sensor = ttk(&mut s, [7, 0, 0, 0]).expect("a floor sensor answer");
+        if sensor[1] == 1 && floor != Some(sensor[2]) {
+            floor = Some(sensor[2]);
+            ttk(&mut s, [3, sensor[2], 0, 0]);
+        }
+        let here = if sensor[1] == 1 {
+            Some(sensor[2])
+        } else {
+            None
+        };
+        let target = calls.first().copied();
+        let want: i8 = match (here, target, floor) {
+            // Not yet at any floor: keep going down.
+            (None, _, None) => -1,
+            (Some(f), Some(t), _) if f == t => 0,
+            (_, Some(t), Some(f)) if t > f => 1,
+            (_, Some(t), Some(f)) if t < f => -1,
+            (Some(_), None, _) => 0,
+            _ => dir,
+        };
+        if want != dir {
+            dir = want;
+            ttk(&mut s, [1, dir as u8, 0, 0]);
+            if dir == 0 {
+                if let Some(f) = here {
+                    stops.push(f);
+                    calls.retain(|&c| c != f);
+                    for kind in 0..3u8 {
+                        ttk(&mut s, [2, kind, f, 0]);
+                    }
+                }
+            }
+        }
+    }
+    stops
+}
+
+#[test]
+fn a_ttk4145_controller_drives_the_lab_lift_and_its_lamps_are_recorded() {
+    let running = start_with(TTK, Owner::External, Speed::Max, true);
+    let addr = running.ttk_addr().expect("a TTK4145 address");
+    let stops = ttk_controller(addr, 59_000);
+    running.stop();
+    let r = running.wait();
+    // Down to floor 2 from between 2 and 3, up to 4 for the cabin call, down to 1 for the hall
+    // call (TTK floors count from 0).
+    assert_eq!(stops, [1, 3, 0]);
+    assert!(r.violations.is_empty(), "{:?}", r.violations);
+    let arrived: Vec<u8> = r.arrivals.iter().map(|a| a.floor).collect();
+    assert_eq!(arrived, [2, 4, 1]);
+    assert!(r.passengers.iter().all(|p| p.served_at_s.is_some()));
+    let live = r.live.expect("live");
+    assert_eq!(live.lamps.get("floor indicator"), Some(&1));
+    assert_eq!(live.lamps.get("cabin lamp 4"), Some(&0));
+    assert_eq!(live.exceptions, 0);
+    assert!(r
+        .log
+        .iter()
+        .any(|l| l.who == "ttk4145" && l.text == "motor up"));
+}
+
+#[test]
+fn a_ttk4145_client_that_sends_nonsense_gets_no_answer_and_the_next_read_works() {
+    let running = start_with(QUIET, Owner::External, Speed::Factor(1.0), true);
+    let addr = running.ttk_addr().expect("a TTK4145 address");
+    let mut s = raw(addr);
+    // Unknown opcodes, a button of a fifth floor, an unknown button kind: no answer.
+    s.write_all(&[0xEE, 1, 2, 3, 10, 0, 0, 0, 6, 0, 4, 0, 6, 7, 0, 0])
+        .expect("sent");
+    // The next read is answered: the cabin starts at floor 1, level.
+    assert_eq!(ttk(&mut s, [7, 0, 0, 0]), Some([7, 1, 0, 0]));
+    assert_eq!(
+        ttk(&mut s, [9, 0, 0, 0]),
+        Some([9, 0, 0, 0]),
+        "the door is closed"
+    );
+    // A message cut short by a disconnect.
+    let mut cut = raw(addr);
+    cut.write_all(&[6, 2]).expect("sent");
+    drop(cut);
+    assert_eq!(ttk(&mut s, [8, 0, 0, 0]), Some([8, 0, 0, 0]));
+    running.stop();
+    let live = running.wait().live.expect("live");
+    assert_eq!(live.exceptions, 4);
+    assert_eq!(live.requests, 7);
 }

@@ -62,6 +62,10 @@ pub struct LiveReport {
     pub watchdog_trips: u64,
     /// The most the simulation fell behind the wall clock, ms (0 at `max`).
     pub max_lag_ms: f64,
+    /// The lamps a TTK4145 client set that the lab lift lacks, as it left them (absent
+    /// without one).
+    #[serde(skip_serializing_if = "std::collections::BTreeMap::is_empty")]
+    pub lamps: std::collections::BTreeMap<String, u8>,
 }
 
 /// The cabin came to rest level at a floor.

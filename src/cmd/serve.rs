@@ -30,9 +30,15 @@ pub struct ServeArgs {
     #[arg(long, value_name = "X|max", default_value = "1")]
     pub speed: String,
     /// Who runs the lift: the built-in PLC program (clients may watch), or the Modbus client
-    /// (the built-in program is off; the client writes the output image).
-    #[arg(long, value_enum, default_value_t = ControllerArg::Builtin)]
-    pub controller: ControllerArg,
+    /// (the built-in program is off; the client writes the output image) [default: builtin;
+    /// external with `--ttk4145`].
+    #[arg(long, value_enum)]
+    pub controller: Option<ControllerArg>,
+    /// Also serve the TTK4145 lab elevator protocol (4-byte messages) on this address, for
+    /// the course's elevator controllers (README.md, "The TTK4145 front end"); the built-in
+    /// program is off then.
+    #[arg(long, value_name = "ADDR", num_args = 0..=1, default_missing_value = "127.0.0.1:15657")]
+    pub ttk4145: Option<String>,
     /// With an outside controller: the output image goes to zero when no client has written
     /// it for this long (simulated time; 0 = off).
     #[arg(long, value_name = "DURATION", default_value = "1s")]
@@ -84,6 +90,7 @@ pub fn run(args: ServeArgs) -> Result<u8, String> {
         listen,
         speed,
         controller,
+        ttk4145,
         watchdog,
         step,
         until,
@@ -97,6 +104,21 @@ pub fn run(args: ServeArgs) -> Result<u8, String> {
     let listen: SocketAddr = listen.parse().map_err(|e| {
         format!("--listen {listen}: {e} (expected an address such as 127.0.0.1:5020)")
     })?;
+    let ttk = ttk4145
+        .map(|a| {
+            a.parse::<SocketAddr>().map_err(|e| {
+                format!("--ttk4145 {a}: {e} (expected an address such as 127.0.0.1:15657)")
+            })
+        })
+        .transpose()?;
+    let controller = match (controller, ttk) {
+        (Some(ControllerArg::Builtin), Some(_)) => {
+            return Err("--ttk4145: a TTK4145 client is the controller; it cannot run beside --controller builtin".into());
+        }
+        (Some(c), _) => c,
+        (None, Some(_)) => ControllerArg::External,
+        (None, None) => ControllerArg::Builtin,
+    };
     let speed = parse_speed(&speed)?;
     let duration =
         |flag: &str, s: &str| s.parse::<SimDuration>().map_err(|e| format!("{flag}: {e}"));
@@ -155,13 +177,18 @@ pub fn run(args: ServeArgs) -> Result<u8, String> {
         watchdog,
         step,
     };
-    let running = gateway::start(make_rig, cfg, listen).map_err(|e| format!("--listen: {e}"))?;
+    let running = gateway::start(make_rig, cfg, listen, ttk).map_err(|e| e.to_string())?;
     running.stop_on_ctrl_c();
     let addr = running.local_addr();
-    if !addr.ip().is_loopback() {
-        eprintln!(
-            "asi-lift: warning: listening on {addr}, not loopback: anyone who reaches this machine can drive the lift"
-        );
+    for a in std::iter::once(addr).chain(running.ttk_addr()) {
+        if !a.ip().is_loopback() {
+            eprintln!(
+                "asi-lift: warning: listening on {a}, not loopback: anyone who reaches this machine can drive the lift"
+            );
+        }
+    }
+    if let Some(a) = running.ttk_addr() {
+        eprintln!("asi-lift: TTK4145 elevator server on {a}");
     }
     eprintln!(
         "asi-lift: Modbus TCP gateway on {addr}, {} controller, speed {speed}{}; Ctrl-C ends the run",

@@ -1,0 +1,189 @@
+//! A second front end: the protocol of the TTK4145 lab elevator (NTNU's real-time course and
+//! its Simulator-v2), mapped onto the lab lift (README, "The TTK4145 front end").
+//!
+//! Every message is 4 bytes, `[opcode, a, b, c]`; reads get a 4-byte answer, writes none.
+//! Floors count from 0 (lab floor 1 is TTK floor 0); buttons are 0 hall up, 1 hall down,
+//! 2 cabin. The mapping:
+//!
+//! | opcode | TTK4145 | on the lab lift |
+//! |---|---|---|
+//! | 0 | reload config | nothing |
+//! | 1 | motor direction `a` = 1 up, 0 stop, 255 (−1) down | the converter (slave 7: D0 run, D1 up) and the speed set-point (slave 10) through the AS-i output image: travel 10000 µA, stop = run off and 4000 µA (a ramp stop); a move while the STOP circuit waits for its restart pulses the restart first |
+//! | 2 | button lamp `a` type, `b` floor, `c` value | recorded (the lab lift has no call lamps) |
+//! | 3 | floor indicator `a` | recorded (the lab's displays are driven through handshakes the front end does not run) |
+//! | 4 | door open lamp `a` | recorded |
+//! | 5 | stop lamp `a` | recorded |
+//! | 6 | read button `a` type, `b` floor → `[6, pressed, 0, 0]` | the plant's button, held or not |
+//! | 7 | read floor sensor → `[7, at, floor, 0]` | at = the cabin stands in a floor's level zone (both vane sensors on its vane, ±10 mm) |
+//! | 8 | read stop → `[8, pressed, 0, 0]` | the cabin's STOP button |
+//! | 9 | read obstruction → `[9, active, 0, 0]` | the door is open |
+//!
+//! The overload goes to the safety logic from the load sensor's nibble (slave 8, D1..D0 = 3),
+//! as the built-in program sends it, at every message. Unknown opcodes and reads of a floor or button that does
+//! not exist get no answer and count as exceptions.
+
+use crate::map::Gateway;
+use asi_phy::{SimDuration, SimTime, SlaveAddr};
+use controller::plc::ToSafety;
+use lab::address::{CONVERTER, LOAD_SENSOR, SPEED_SETPOINT};
+use lab::setpoint::STANDSTILL_UA;
+use lift_model::Button;
+use rig::Rig;
+use std::collections::BTreeMap;
+
+/// The set-point of a TTK4145 move: the lab program's travel speed (59.4 mm/s; its braking
+/// distance, about 8 mm, ends inside the ±10 mm level zone when the client stops at the
+/// floor sensor).
+pub const TRAVEL_UA: u16 = 10_000;
+
+/// How long the restart pulse of a move lasts: several PLC scans and safety scans.
+const RESTART_PULSE: SimDuration = SimDuration::from_millis(50);
+
+/// The TTK4145 front end's state: the motor command and the lamps the client set.
+#[derive(Clone, Debug, Default)]
+pub struct Ttk {
+    /// The last motor direction: 1 up, 0 stop, −1 down.
+    motor: i8,
+    /// Lamps by name, as the client last set them.
+    lamps: BTreeMap<String, u8>,
+    /// Until when the restart pulse of a move lasts.
+    restart_until: Option<SimTime>,
+}
+
+impl Ttk {
+    /// Serves one message at `at`; the answer, if the message is a read.
+    pub fn serve(
+        &mut self,
+        rig: &mut Rig,
+        gw: &mut Gateway,
+        at: SimTime,
+        msg: [u8; 4],
+    ) -> Option<[u8; 4]> {
+        gw.requests += 1;
+        if self.restart_until.is_some_and(|t| at >= t) {
+            self.restart_until = None;
+        }
+        let answer = self.dispatch(rig, at, msg);
+        // The controller's signals to the safety logic: the restart pulse of a move, and the
+        // overload from the load sensor's nibble (slave 8, D1..D0 = 3), at every message.
+        let image = &rig.lab().bus.image();
+        let load = SlaveAddr::a(LOAD_SENSOR).map_or(0, |a| image.input.nibble(a).get() & 0b11);
+        gw.set_signals(
+            rig,
+            ToSafety {
+                restart: self.restart_until.is_some(),
+                overloaded: load == 3,
+            },
+        );
+        if answer.is_none() && !(0..=5).contains(&msg[0]) {
+            gw.exceptions += 1;
+        }
+        // Any message is a sign of life: a TTK4145 client writes the motor only when it
+        // changes, so reads keep the watchdog quiet too.
+        gw.alive(rig, at);
+        answer
+    }
+
+    fn dispatch(&mut self, rig: &mut Rig, at: SimTime, [op, a, b, c]: [u8; 4]) -> Option<[u8; 4]> {
+        let floors = rig.lift().config().floors;
+        let lift = rig.lift();
+        match op {
+            0 => None,
+            1 => {
+                self.motor(rig, at, a as i8);
+                None
+            }
+            2 => {
+                let kind = match a {
+                    0 => "hall-up",
+                    1 => "hall-down",
+                    _ => "cabin",
+                };
+                self.lamp(rig, format!("{kind} lamp {}", u16::from(b) + 1), c);
+                None
+            }
+            3 => {
+                self.lamp(rig, "floor indicator".into(), a.saturating_add(1));
+                None
+            }
+            4 => {
+                self.lamp(rig, "door lamp".into(), a);
+                None
+            }
+            5 => {
+                self.lamp(rig, "stop lamp".into(), a);
+                None
+            }
+            6 => {
+                let floor = b.checked_add(1).filter(|f| *f <= floors)?;
+                let button = match a {
+                    0 => Button::HallUp(floor),
+                    1 => Button::HallDown(floor),
+                    2 => Button::Cabin(floor),
+                    _ => return None,
+                };
+                Some([6, u8::from(lift.is_pressed(button)), 0, 0])
+            }
+            7 => {
+                let level = lift
+                    .in_level_zone()
+                    .then(|| lift.config().level_floor(lift.position_mm()))
+                    .flatten();
+                Some(match level {
+                    Some(f) => [7, 1, f - 1, 0],
+                    None => [7, 0, 0, 0],
+                })
+            }
+            8 => Some([8, u8::from(lift.stop_pressed()), 0, 0]),
+            9 => Some([9, u8::from(!lift.door_closed()), 0, 0]),
+            _ => None,
+        }
+    }
+
+    /// Motor direction `dir`: the converter's nibble and the set-point in the output image,
+    /// and the controller's signals to the safety logic.
+    fn motor(&mut self, rig: &mut Rig, at: SimTime, dir: i8) {
+        let dir = dir.signum();
+        let moving = dir != 0;
+        let image = &mut rig.lab_mut().bus.image_mut();
+        if let Some(a) = SlaveAddr::a(CONVERTER) {
+            let nibble = u8::from(moving) | u8::from(dir > 0) << 1;
+            if let Some(n) = asi_phy::Nibble::new(nibble) {
+                image.output.set_nibble(a, n);
+            }
+        }
+        image.output.set_analog(
+            SPEED_SETPOINT,
+            1,
+            if moving { TRAVEL_UA } else { STANDSTILL_UA },
+        );
+        // A move while the STOP circuit is not running asks for its restart, as the built-in
+        // program does after a cabin request; the safety logic decides.
+        if moving && !rig.estop_out() && !rig.lift().stop_pressed() && self.restart_until.is_none()
+        {
+            self.restart_until = Some(at + RESTART_PULSE);
+        }
+        if dir != self.motor {
+            self.motor = dir;
+            let text = match dir {
+                1 => "motor up",
+                -1 => "motor down",
+                _ => "motor stop",
+            };
+            rig.log_now("ttk4145", text.into());
+        }
+    }
+
+    /// A lamp the lab lift lacks: logged when it changes.
+    fn lamp(&mut self, rig: &mut Rig, name: String, value: u8) {
+        if self.lamps.get(&name) != Some(&value) {
+            rig.log_now("ttk4145", format!("{name}: {value}"));
+            self.lamps.insert(name, value);
+        }
+    }
+
+    /// The lamps as the client left them.
+    pub fn lamps(&self) -> &BTreeMap<String, u8> {
+        &self.lamps
+    }
+}
