@@ -243,6 +243,67 @@ fn a_campaign_whose_reader_goes_ends_quietly() {
     );
 }
 
+#[test]
+fn serve_names_its_bad_arguments_and_a_busy_port() {
+    let err = fails(asi_lift().args(["serve", "--speed", "0"]));
+    assert!(err.contains("--speed 0") && err.contains("max"), "{err}");
+    let err = fails(asi_lift().args(["serve", "--listen", "localhost"]));
+    assert!(err.contains("--listen localhost"), "{err}");
+    let err = fails(asi_lift().args(["serve", "--ttk4145", "--controller", "builtin"]));
+    assert!(err.contains("--ttk4145"), "{err}");
+    let err = fails(asi_lift().args(["serve", "--step", "0ms", "--controller", "external"]));
+    assert!(err.contains("--step"), "{err}");
+    let err = fails(asi_lift().args(["serve", "--trace", "-"]));
+    assert!(err.contains("--trace"), "{err}");
+    // A port already taken is named.
+    let taken = std::net::TcpListener::bind("127.0.0.1:0").expect("a port");
+    let addr = taken.local_addr().expect("its address").to_string();
+    let err = fails(asi_lift().args(["serve", "--listen", &addr]));
+    assert!(err.contains(&format!("cannot listen on {addr}")), "{err}");
+}
+
+#[test]
+fn serve_runs_free_to_its_end_and_writes_the_report_with_the_live_figures() {
+    let d = temp();
+    let report = d.path().join("r.json");
+    let out = asi_lift()
+        .args([
+            "serve",
+            "--speed",
+            "max",
+            "--until",
+            "3s",
+            "--listen",
+            "127.0.0.1:0",
+        ])
+        .args(["--format", "json", "--report"])
+        .arg(&report)
+        .output()
+        .expect("asi-lift runs");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("Modbus TCP gateway on 127.0.0.1:"), "{err}");
+    let text = std::fs::read_to_string(&report).expect("the report");
+    let json: serde_json::Value = serde_json::from_str(&text).expect("JSON");
+    assert_eq!(json["simulated_s"], 3.0);
+    assert_eq!(json["live"]["controller"], "builtin");
+    assert_eq!(json["live"]["speed"], "max");
+    // Without clients, a live run at `max` is the batch run: the same report but `live`.
+    let run = asi_lift()
+        .args(["run", "--until", "3s", "--format", "json"])
+        .output()
+        .expect("asi-lift runs");
+    let mut batch: serde_json::Value = serde_json::from_slice(&run.stdout).expect("JSON");
+    let mut live = json;
+    live.as_object_mut().expect("an object").remove("live");
+    batch.as_object_mut().expect("an object").remove("live");
+    assert_eq!(live, batch);
+}
+
 /// The command in this process: [`asi_lift::run`] on parsed arguments, and the campaign's
 /// files.
 mod command {

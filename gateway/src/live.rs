@@ -182,7 +182,9 @@ pub fn run(mut rig: Rig, cfg: LiveConfig, rx: &Receiver<ToRig>, status: &Sender<
         rig.log_now("live", "stopped by the operator (Ctrl-C)".into());
     }
     let _ = status.try_send(status_of(&rig, &gw, at, start, sim0, cfg.speed, true));
-    let mut report = rig.finish();
+    // The moment at the end itself, as `asi-lift run` has it, then the report.
+    rig.set_end(at);
+    let mut report = rig.run(None);
     report.live = Some(LiveReport {
         controller: match cfg.owner {
             Owner::Builtin => "builtin".into(),
