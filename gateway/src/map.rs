@@ -23,6 +23,7 @@
 //! | input registers | 1040..1042 | AS-i cycle time µs: last mean, minimum, maximum | read |
 //! | input registers | 1050..1053 | simulated time, ms, 64-bit, high word first | read |
 //! | input registers | 1054 | safety bits: as discrete inputs 1000..1004 in bits 0..4 | read |
+//! | input registers | 1055 | the load sensor's level (slave 8, D1..D0: 0 empty .. 3 overloaded) | read |
 //! | holding registers | 0..243 | the output data image (table 4.1): host flags and slaves, mailbox 32..49, analog outputs 68..155 (S-7.3 set-point: word 68) | read/write |
 //! | holding registers | 1000 | to the safety logic: bit 0 restart, bit 1 overloaded (as coils 1000, 1001) | read/write |
 //! | holding registers | 1008 | watchdog time, ms (0 = off) | read/write |
@@ -31,9 +32,10 @@
 
 use asi_master::image::{F0_CONFIG_ERROR, IMAGE_WORDS};
 use asi_master::{EcFlags, SlaveList};
-use asi_phy::{SimDuration, SimTime};
+use asi_phy::{SimDuration, SimTime, SlaveAddr};
 use bitvec::prelude::*;
 use controller::plc::ToSafety;
+use lab::address::LOAD_SENSOR;
 use lift_model::{Button, LoadLevel};
 use rig::scenario::{Action, Fault, DEFAULT_HOLD};
 use rig::Rig;
@@ -73,6 +75,8 @@ pub const CYCLE_REGISTERS: u16 = 1040;
 pub const TIME_REGISTERS: u16 = 1050;
 /// Input register of the safety bits.
 pub const SAFETY_REGISTER: u16 = 1054;
+/// Input register of the load sensor's level (slave 8, D1..D0: 0 empty .. 3 overloaded).
+pub const LOAD_REGISTER: u16 = 1055;
 /// Holding register of the signals to the safety logic.
 pub const PLC_SIGNALS_REGISTER: u16 = 1000;
 /// Holding register of the watchdog time.
@@ -303,6 +307,11 @@ impl Gateway {
                 return Some(u16::from(config_error));
             }
             SAFETY_REGISTER => return Some(self.safety_bits(rig)),
+            LOAD_REGISTER => {
+                let nibble = SlaveAddr::a(LOAD_SENSOR)
+                    .map_or(0, |a| rig.lab().bus.image().input.nibble(a).get());
+                return Some(u16::from(nibble & 0b11));
+            }
             _ => {}
         }
         if (ERROR_REGISTERS..ERROR_REGISTERS + 16).contains(&i) {

@@ -195,6 +195,25 @@ async fn the_watchdog_zeroes_the_outputs_of_a_controller_that_went_quiet() {
     let running = start(DOOR_OPEN, Owner::External, Speed::Max);
     let addr = running.local_addr();
     let mut ctx = connect(addr).await;
+    // Function 23 writes the watchdog time (1 s, as it is) and reads it back in one request.
+    let rw = ctx
+        .read_write_multiple_registers(1008, 1, 1008, &[1000])
+        .await;
+    assert_eq!(rw.expect("io").expect("no exception"), vec![1000]);
+    // The load (a simulator command) reaches the load sensor's register over the bus.
+    assert!(matches!(
+        ctx.write_single_register(2003, 2).await,
+        Ok(Ok(()))
+    ));
+    for _ in 0..20 {
+        let _ = time_and_safety(&mut ctx).await;
+    }
+    let load = ctx.read_input_registers(1055, 1).await;
+    assert_eq!(load.expect("io").expect("no exception"), vec![2]);
+    assert!(matches!(
+        ctx.write_single_register(2003, 0).await,
+        Ok(Ok(()))
+    ));
     // Close the door by a simulator command, then run up for 2 s and go quiet.
     assert!(matches!(
         ctx.write_single_register(2004, 1).await,
