@@ -1,7 +1,7 @@
 //! Throughput of a 31-slave bus in normal operation at pulse level (issue 3: ≥ 5 M
 //! transactions per second on one core).
 //!
-//! Run: `cargo bench -p asi-bus -- --warm-up-time 1 --measurement-time 5`.
+//! Run: `cargo bench -p asi-lift-benches --bench bus -- --warm-up-time 1 --measurement-time 5`.
 
 // criterion_group! and criterion_main! generate undocumented items.
 #![allow(missing_docs)]

@@ -2,7 +2,7 @@
 //! next, and advancing by a PLC scan, on a 24-floor lift shuttling between its overtravel
 //! sensors at Rychlost 11000 (reversing on each trip, so every kind of motion segment occurs).
 //!
-//! Run: `cargo bench -p lift-model -- --warm-up-time 1 --measurement-time 3`
+//! Run: `cargo bench -p asi-lift-benches --bench events -- --warm-up-time 1 --measurement-time 3`
 
 use std::hint::black_box;
 

@@ -2,7 +2,7 @@
 //! encode request → pulse train ≥ 100 M/s; pulse-level decode with all seven checks
 //! ≥ 50 M telegrams/s; waveform demodulation ≥ 250 M samples/s.
 //!
-//! `cargo bench -p asi-phy --bench phy`
+//! `cargo bench -p asi-lift-benches --bench phy`
 
 // criterion_group! generates an undocumented public function.
 #![allow(missing_docs)]
