@@ -139,7 +139,7 @@ pub struct ControlBits {
     pub activate: bool,
     /// S_Control_Reset: acknowledges an error on its rising edge, the only way out of it.
     pub reset: bool,
-    /// S_Control_<function>, indexed by [`Function::index`]: FALSE = requested.
+    /// `S_Control_<function>`, indexed by [`Function::index`]: FALSE = requested.
     pub function: [bool; Function::COUNT],
 }
 
@@ -189,7 +189,7 @@ impl ControlBits {
 /// The status outputs of one scan (seed 000 §5.1).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct StatusBits {
-    /// S_Status_<function>, indexed by [`Function::index`]: TRUE = the function is active and
+    /// `S_Status_<function>`, indexed by [`Function::index`]: TRUE = the function is active and
     /// its safe state is reached; FALSE = inactive, not yet safe, or an error.
     pub function: [bool; Function::COUNT],
     /// S_Status_SDC: TRUE from a request until the function's safe state is reached.
@@ -199,7 +199,7 @@ pub struct StatusBits {
 }
 
 impl StatusBits {
-    /// S_Status_<f>.
+    /// `S_Status_<f>`.
     pub fn of(&self, f: Function) -> bool {
         self.function[f.index()]
     }
