@@ -3,11 +3,14 @@
 //! - [`primitives`]: IEC `R_TRIG`, `F_TRIG`, `TON` and the TwinSAFE 0→1→0 pulse detector;
 //! - [`kl6904`]: the Beckhoff KL6904 logic terminal (seed 004);
 //! - [`plcopen`]: SF_EmergencyStop (seed 002), SF_Equivalent and SF_EDM;
+//! - [`drive`]: a drive's integrated safety functions STO, SBC, SS1, SS2, SOS, SLS, SLP, SDI,
+//!   SLI, SLA (seeds 000 and 001, docs/drive-safety.md), not wired into the lift yet;
 //! - [`lift`]: the lift's safety project (docs/safety.md), the API the rig wires.
 //!
 //! All time is [`asi_phy::SimTime`], passed in by the caller; nothing reads the wall clock and
 //! nothing is random, so a run is reproducible scan by scan.
 
+pub mod drive;
 pub mod kl6904;
 pub mod lift;
 pub mod plcopen;

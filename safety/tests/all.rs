@@ -2,6 +2,7 @@
 //! binary (`--test all`): one binary links the dependencies once instead of once per file.
 //! A new test file is added here as a module (Cargo.toml has `autotests = false`).
 
+mod drive;
 mod kl6904_logic;
 mod kl6904_modules;
 mod lift;
