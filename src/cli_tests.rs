@@ -304,6 +304,38 @@ fn serve_runs_free_to_its_end_and_writes_the_report_with_the_live_figures() {
     assert_eq!(live, batch);
 }
 
+#[test]
+fn ctrl_c_ends_a_live_run_cleanly_with_its_report() {
+    let d = temp();
+    let report = d.path().join("r.txt");
+    let mut child = asi_lift()
+        .args(["serve", "--listen", "127.0.0.1:0", "--report"])
+        .arg(&report)
+        .stderr(Stdio::piped())
+        .stdout(Stdio::null())
+        .spawn()
+        .expect("asi-lift starts");
+    let mut err = BufReader::new(child.stderr.take().expect("its standard error"));
+    let mut line = String::new();
+    err.read_line(&mut line).expect("the first line");
+    assert!(line.contains("Modbus TCP gateway on"), "{line}");
+    // Let it run a moment, then Ctrl-C (SIGINT), as a user at the terminal does.
+    std::thread::sleep(std::time::Duration::from_millis(1500));
+    let kill = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .expect("kill runs");
+    assert!(kill.success());
+    let status = child.wait().expect("asi-lift ends");
+    assert!(status.success(), "{status:?}");
+    let text = std::fs::read_to_string(&report).expect("the report is written");
+    assert!(text.contains("stopped by the operator (Ctrl-C)"), "{text}");
+    assert!(
+        text.contains("live               builtin controller at speed 1"),
+        "{text}"
+    );
+}
+
 /// The command in this process: [`asi_lift::run`] on parsed arguments, and the campaign's
 /// files.
 mod command {
