@@ -230,7 +230,7 @@ impl StandReport {
         );
         let _ = writeln!(
             s,
-            "{:>9}  {:<9}  {:>11}  {:>9}  what",
+            "{:>11}  {:<9}  {:>12}  {:>11}  what",
             "time", "who", "speed", "position"
         );
         for l in &self.log {
