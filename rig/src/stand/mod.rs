@@ -533,9 +533,12 @@ impl Stand {
     fn move_axis(&mut self, now: SimTime) {
         let dt = SCAN.as_secs_f64();
         let v0 = self.speed;
-        // A step of `a · dt` toward `target`, landing on it exactly (no float residue).
+        // A step of `a · dt` toward `target`, landing on it exactly, on a grid of 1e-9 rev/s:
+        // ten steps of 0.1 rev/s from 1 rev/s make 2 rev/s, not 2.0000000000000004, which
+        // SOS would take for a speed above its 2 rev/s.
         let toward = |v: f64, target: f64, a: f64| {
             let next = if v < target { v + a * dt } else { v - a * dt };
+            let next = (next * 1e9).round() / 1e9;
             if (next - target).abs() < 1e-9 || (v < target) != (next < target) {
                 target
             } else {
