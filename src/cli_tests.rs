@@ -805,3 +805,74 @@ mod run {
         assert!(w.contains("--waveform-window"), "{w}");
     }
 }
+
+/// `asi-lift stand ss1` (seed 000, guide A.4): the page's states with their times, the
+/// stopwatch, the torque; twice the same output; exit code 0 (the stand only shows).
+#[test]
+fn stand_ss1_prints_what_the_student_sees() {
+    let run = || asi_lift().args(["stand", "ss1"]).output().expect("runs");
+    let out = run();
+    assert!(out.status.success(), "{out:?}");
+    let text = String::from_utf8(out.stdout.clone()).expect("UTF-8");
+    for line in [
+        "    0.000 s  Neaktivní (green)",
+        "    2.000 s  Del+Decel (orange)",
+        "   17.000 s  NOK (red)",
+        "   22.000 s  Neaktivní (green)",
+        "stopwatch: 15000 ms",
+    ] {
+        assert!(
+            text.lines().any(|l| l == line),
+            "no line {line:?} in\n{text}"
+        );
+    }
+    assert!(
+        text.lines()
+            .any(|l| l.starts_with("   17.000 s  safety")
+                && l.ends_with("torque off, the axis coasts")),
+        "{text}"
+    );
+    assert_eq!(run().stdout, out.stdout, "the same output twice");
+}
+
+/// `asi-lift stand` lists the nine guides; `--format json` is a report; a bad file is named
+/// by file, line and field; an unknown name lists the built-in ones.
+#[test]
+fn stand_lists_reports_json_and_names_errors() {
+    let out = asi_lift().arg("stand").output().expect("runs");
+    let text = String::from_utf8_lossy(&out.stdout);
+    let names: Vec<&str> = text
+        .lines()
+        .take_while(|l| !l.is_empty())
+        .filter_map(|l| l.split_whitespace().next())
+        .collect();
+    assert_eq!(
+        names,
+        ["sto", "sos", "ss1", "ss2", "sls1", "sls2", "sli", "sdi-p", "sdi-n"]
+    );
+
+    let out = asi_lift()
+        .args(["stand", "sli", "--format", "json"])
+        .output()
+        .expect("runs");
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    assert_eq!(v["function"], "SLI");
+    assert_eq!(v["hmi"][1]["text"], "OK");
+    assert_eq!(v["hmi"][2]["text"], "NOK");
+    assert_eq!(v["final_state"], "Ready");
+
+    let d = temp();
+    let f = d.path().join("bad.toml");
+    std::fs::write(
+        &f,
+        "function = \"ss1\"\nduration = \"10s\"\n[[event]]\nat = \"1s\"\ncurtain = \"wave\"\n",
+    )
+    .expect("write");
+    let err = fails(asi_lift().arg("stand").arg(&f));
+    assert!(
+        err.contains("bad.toml:5:11: event[1].curtain: unknown curtain action"),
+        "{err}"
+    );
+    let err = fails(asi_lift().args(["stand", "nonesuch"]));
+    assert!(err.contains("there are sto, sos, ss1"), "{err}");
+}

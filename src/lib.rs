@@ -56,6 +56,12 @@ enum Command {
     /// Run many random valid scenarios on the whole rig (README.md, "Campaigns"): one JSON
     /// line per run, every failure shrunk to a scenario file that reproduces it; or merge
     /// result files with `campaign summarize`.
+    /// The teaching stand of seed 000 (README.md, "The teaching stand"): a servo axis whose
+    /// safe drive (STO, SOS, SS1, SS2, SLS, SLI, SDI) is requested by a light curtain. Runs a
+    /// stand scenario (a file or a built-in name: one per test guide) and prints what a
+    /// student sees: the HMI page's states, the stopwatch, torque and speed, with times.
+    /// Without an argument it lists the built-in ones.
+    Stand(cmd::stand::StandArgs),
     #[command(args_conflicts_with_subcommands = true)]
     Campaign {
         #[command(subcommand)]
@@ -74,6 +80,7 @@ pub fn run(cli: Cli) -> Result<u8, String> {
         Command::Decode(args) => cmd::decode::run(args),
         Command::Timing(args) => cmd::timing::run(args),
         Command::Serve(args) => cmd::serve::run(args),
+        Command::Stand(args) => cmd::stand::run(args),
         Command::Campaign { action, args } => match action {
             None => cmd::campaign::run(args),
             Some(cmd::campaign::CampaignAction::Summarize { files, json }) => {

@@ -10,6 +10,7 @@ pub mod plot;
 pub mod run;
 pub mod scenarios;
 pub mod serve;
+pub mod stand;
 pub mod timing;
 
 use std::io::{BufRead, Read, Write};

@@ -5,7 +5,7 @@
 //! silently ignored), `write` writes one back.
 
 pub mod builtin;
-mod read;
+pub(crate) mod read;
 #[cfg(test)]
 mod tests;
 mod write;

@@ -82,7 +82,7 @@ struct RawFault {
 }
 
 /// Turns byte offsets into lines and columns, and names errors.
-struct Locator<'a> {
+pub(crate) struct Locator<'a> {
     file: &'a str,
     text: &'a str,
     /// The byte offset where each line begins, so that a place is found by a binary search
@@ -91,7 +91,7 @@ struct Locator<'a> {
 }
 
 impl<'a> Locator<'a> {
-    fn new(file: &'a str, text: &'a str) -> Locator<'a> {
+    pub(crate) fn new(file: &'a str, text: &'a str) -> Locator<'a> {
         let line_starts = std::iter::once(0)
             .chain(text.match_indices('\n').map(|(i, _)| i + 1))
             .collect();
@@ -103,7 +103,7 @@ impl<'a> Locator<'a> {
     }
 
     /// Line and column (both from 1; the column in characters) of a byte offset.
-    fn position(&self, offset: usize) -> (usize, usize) {
+    pub(crate) fn position(&self, offset: usize) -> (usize, usize) {
         let offset = offset.min(self.text.len());
         let line = self.line_starts.partition_point(|&s| s <= offset);
         let start = self.line_starts[line.saturating_sub(1)];
@@ -115,7 +115,7 @@ impl<'a> Locator<'a> {
         (line, column)
     }
 
-    fn error(
+    pub(crate) fn error(
         &self,
         span: Option<Range<usize>>,
         field: impl Into<String>,
@@ -133,7 +133,7 @@ impl<'a> Locator<'a> {
 
     /// The key written on the line of `offset`, with its table (`lift.floors`,
     /// `event[3].press`), for errors the TOML reader reports without it.
-    fn key_at(&self, offset: usize) -> String {
+    pub(crate) fn key_at(&self, offset: usize) -> String {
         let (line_no, _) = self.position(offset);
         let line_text = |n: usize| -> &str {
             let start = self.line_starts[n - 1];
@@ -195,7 +195,7 @@ fn shorten_quotes(message: &str) -> String {
     out
 }
 
-fn duration(
+pub(crate) fn duration(
     loc: &Locator<'_>,
     field: &str,
     s: &Spanned<String>,

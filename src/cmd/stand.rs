@@ -1,0 +1,70 @@
+//! `asi-lift stand`: seed 000's teaching stand (rig::stand): a stand scenario run and shown as a
+//! student at the stand sees it, or the list of the built-in ones (one per test guide).
+
+use super::{print_out, read_input};
+use rig::stand::builtin::{find, stand_scenario, STAND_BUILTINS};
+use rig::stand::{run as run_stand, StandScenario};
+use std::path::{Path, PathBuf};
+
+/// The arguments of `asi-lift stand`.
+#[derive(clap::Args)]
+pub struct StandArgs {
+    /// The stand scenario: a file (TOML, `-` for standard input) or the name of a built-in
+    /// one. Without it, the built-in ones are listed.
+    pub scenario: Option<PathBuf>,
+    /// The form of what is printed.
+    #[arg(long, value_enum, default_value_t = super::run::Format::Text)]
+    pub format: super::run::Format,
+}
+
+/// Runs a stand scenario and prints its log and the page's states; the stand only shows,
+/// so the exit code is 0 whatever the guide's outcome.
+pub fn run(args: StandArgs) -> Result<u8, String> {
+    let Some(scenario) = args.scenario else {
+        let width = STAND_BUILTINS
+            .iter()
+            .map(|b| b.name.len())
+            .max()
+            .unwrap_or(0);
+        let mut text = String::new();
+        for b in STAND_BUILTINS {
+            text.push_str(&format!("{:width$}  {}\n", b.name, b.summary()));
+        }
+        text.push_str("\nasi-lift stand NAME runs one (seed 000's test guides, appendix A).\n");
+        print_out(&text)?;
+        return Ok(0);
+    };
+    let sc = load(&scenario)?;
+    let report = run_stand(&sc);
+    let body = match args.format {
+        super::run::Format::Text => report.to_text(),
+        super::run::Format::Json => {
+            report
+                .to_json()
+                .map_err(|e| format!("the report as JSON: {e}"))?
+                + "\n"
+        }
+    };
+    print_out(&body)?;
+    Ok(0)
+}
+
+/// A file if there is one by that name (`-` for standard input), else a built-in scenario.
+fn load(scenario: &Path) -> Result<StandScenario, String> {
+    let is_file =
+        scenario == Path::new("-") || scenario.exists() || scenario.components().count() > 1;
+    if is_file {
+        let text = read_input(scenario)?;
+        return StandScenario::from_toml(&scenario.display().to_string(), &text)
+            .map_err(|e| e.to_string());
+    }
+    let name = scenario.to_string_lossy();
+    let b = find(&name).ok_or_else(|| {
+        let names: Vec<&str> = STAND_BUILTINS.iter().map(|b| b.name).collect();
+        format!(
+            "{name}: no built-in stand scenario of that name (and no file {name} here); there are {}",
+            names.join(", ")
+        )
+    })?;
+    stand_scenario(b).map_err(|e| e.to_string())
+}
