@@ -149,10 +149,20 @@ pub fn run(mut rig: Rig, cfg: LiveConfig, rx: &Receiver<ToRig>, status: &Sender<
                 Err(RecvTimeoutError::Disconnected) => break 'run,
             },
         }
-        // Everything else waiting is served at the same moment.
+        // Everything else waiting is served at the same moment, except in lockstep (`max` with
+        // an outside controller), where every request advances the simulation by the step,
+        // however fast it follows the one before.
+        let lockstep = cfg.speed == Speed::Max && cfg.owner == Owner::External;
         loop {
             match rx.try_recv() {
-                Ok(m) => stopped |= handle(m, &mut rig, &mut gw, at, &mut connections),
+                Ok(m) => {
+                    let call = matches!(m, ToRig::Call(_));
+                    stopped |= handle(m, &mut rig, &mut gw, at, &mut connections);
+                    if lockstep && call {
+                        let target = (at + cfg.step).min(rig.end());
+                        at = advance(&mut rig, &mut gw, at, target);
+                    }
+                }
                 Err(TryRecvError::Empty) => break,
                 Err(TryRecvError::Disconnected) => break 'run,
             }
