@@ -164,7 +164,7 @@ class Lift:
             if code in (HALL_UP, HALL_DOWN, HALL_BOTH):
                 self.call(now, self.hall_calls, f, "hall")
         set_nibble(out, CABIN_DISPLAY, self.display.step(nibble(inp, CABIN_DISPLAY), shown)[0])
-        if (inp[0] & F0_F1 == 0) != self.bus_ok:    # a slave left or joined: new cabin word
+        if ((inp[0] & F0_F1) == 0) != self.bus_ok:    # a slave left or joined: new cabin word
             self.bus_ok = not self.bus_ok
             self.panel.reset()
         n, word = self.panel.step(nibble(inp, CABIN_PANEL))
@@ -179,7 +179,7 @@ class Lift:
                     if not safety & ESTOP_OK:       # a cabin call ends a STOP (§5.4)
                         self.restart_wanted = True
         load = nibble(inp, LOAD_SENSOR)             # D1..D0 load, D2 "ready"
-        overloaded = load & 3 == 3 or not load & 4
+        overloaded = (load & 3) == 3 or not load & 4
         # The STOP circuit's restart: a one-scan pulse every 500 ms, after power-on and after
         # a STOP once a cabin call came, until EStopOut says the circuit runs (§5.4).
         if safety & ESTOP_OK:
