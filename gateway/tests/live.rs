@@ -375,6 +375,33 @@ fn bad_requests_get_the_standard_exceptions_and_the_server_goes_on() {
 }
 
 #[test]
+fn in_lockstep_every_request_advances_the_simulation_by_one_step() {
+    // Requests that reach the rig thread while it is still busy with the one before (here:
+    // 200 sent in one write) must not be served at the same moment: simulated time (input
+    // registers 1050..1053) goes up by exactly 1 ms per request, from 0.
+    let running = start(QUIET, Owner::External, Speed::Max);
+    let mut s = raw(running.local_addr());
+    let burst: Vec<u8> = (0..200u16)
+        .flat_map(|tid| frame(tid, &[0x04, 0x04, 0x1A, 0, 4]))
+        .collect();
+    s.write_all(&burst).expect("sent");
+    let times: Vec<u64> = (0..200u16)
+        .map(|tid| {
+            let mut a = [0u8; 7 + 2 + 8];
+            s.read_exact(&mut a).expect("an answer");
+            assert_eq!(u16::from_be_bytes([a[0], a[1]]), tid);
+            a[9..].chunks(2).fold(0, |v, c| {
+                v << 16 | u64::from(u16::from_be_bytes([c[0], c[1]]))
+            })
+        })
+        .collect();
+    assert_eq!(times, (0..200).collect::<Vec<u64>>());
+    running.stop();
+    let r = running.wait();
+    assert_eq!(r.live.expect("live").requests, 200);
+}
+
+#[test]
 fn a_watching_client_sees_the_lists_and_the_image_of_the_lab_bus() {
     let running = start(QUIET, Owner::Builtin, Speed::Factor(4.0));
     let addr = running.local_addr();
