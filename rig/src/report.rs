@@ -517,6 +517,10 @@ impl Report {
             Some(t) => {
                 let _ = writeln!(s, "  initialised at     {t:.3} s");
             }
+            // Only the built-in program tells when it is initialised.
+            None if self.final_state.state.is_none() => {
+                let _ = writeln!(s, "  initialised at     not known (an outside controller)");
+            }
             None => {
                 let _ = writeln!(s, "  initialised at     never");
             }
