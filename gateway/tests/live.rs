@@ -94,7 +94,7 @@ async fn plc_over_modbus(addr: SocketAddr) -> u64 {
 
 const CALLS: &str = r#"
 name = "calls over the gateway"
-duration = "60s"
+duration = "45s"
 [lift]
 start_mm = 0.0
 [[event]]
@@ -124,14 +124,14 @@ async fn an_outside_plc_serves_the_calls_through_the_gateway_without_violations(
     assert_eq!(live.watchdog_trips, 0);
     assert_eq!(live.exceptions, 0);
     // In lockstep the run is exact: a scan every 10 ms of simulated time, the first at 0 and
-    // the last at 59.99 s (the request at 60 s is not served: the run has ended).
-    assert_eq!(scans, 6_000);
+    // the last at 44.99 s (the request at 45 s is not served: the run has ended).
+    assert_eq!(scans, 4_500);
     assert_eq!(r.final_state.state, None, "no built-in program ran");
 }
 
 const DOOR_OPEN: &str = r#"
 name = "run with the door open"
-duration = "60s"
+duration = "30s"
 [lift]
 start_mm = 0.0
 door = "open"
@@ -166,7 +166,7 @@ async fn run_up_regardless(addr: SocketAddr, for_ms: u64) {
 #[tokio::test(flavor = "multi_thread", worker_threads = 1)]
 async fn a_controller_that_runs_with_the_door_open_is_stopped_by_the_safety_logic() {
     let running = start(DOOR_OPEN, Owner::External, Speed::Max);
-    run_up_regardless(running.local_addr(), 59_000).await;
+    run_up_regardless(running.local_addr(), 29_000).await;
     // The rest of the minute passes with reads only.
     let mut ctx = connect(running.local_addr()).await;
     while time_and_safety(&mut ctx).await.is_some() {}
