@@ -121,7 +121,7 @@ pub fn run(mut rig: Rig, cfg: LiveConfig, rx: &Receiver<ToRig>, status: &Sender<
                 let wall = start.elapsed();
                 let target = sim0 + sim_of(wall.mul_f64(x));
                 let target = target.min(rig.end());
-                at = advance(&mut rig, &mut gw, at, target);
+                at = advance(&mut rig, &mut gw, &mut ttk, at, target);
                 let lag = behind(start, sim0, at, x);
                 if lag > LAG_REPORTED {
                     max_lag = max_lag.max(lag);
@@ -148,7 +148,7 @@ pub fn run(mut rig: Rig, cfg: LiveConfig, rx: &Receiver<ToRig>, status: &Sender<
             }
             Speed::Max if cfg.owner == Owner::Builtin => {
                 let target = (at + FREE_RUN_SLICE).min(rig.end());
-                at = advance(&mut rig, &mut gw, at, target);
+                at = advance(&mut rig, &mut gw, &mut ttk, at, target);
             }
             Speed::Max => match rx.recv_timeout(STATUS_EVERY) {
                 Ok(m) => {
@@ -156,7 +156,7 @@ pub fn run(mut rig: Rig, cfg: LiveConfig, rx: &Receiver<ToRig>, status: &Sender<
                     stopped |= handle(m, &mut rig, &mut gw, &mut ttk, at, &mut connections);
                     if call {
                         let target = (at + cfg.step).min(rig.end());
-                        at = advance(&mut rig, &mut gw, at, target);
+                        at = advance(&mut rig, &mut gw, &mut ttk, at, target);
                     }
                 }
                 Err(RecvTimeoutError::Timeout) => {}
@@ -201,13 +201,21 @@ pub fn run(mut rig: Rig, cfg: LiveConfig, rx: &Receiver<ToRig>, status: &Sender<
     report
 }
 
-/// Runs the rig's moments up to `target` and the watchdog after them; returns `target`.
-fn advance(rig: &mut Rig, gw: &mut Gateway, at: SimTime, target: SimTime) -> SimTime {
+/// Runs the rig's moments up to `target`, then the watchdog and the TTK4145 front end's
+/// display handshakes; returns `target`.
+pub(crate) fn advance(
+    rig: &mut Rig,
+    gw: &mut Gateway,
+    ttk: &mut Ttk,
+    at: SimTime,
+    target: SimTime,
+) -> SimTime {
     if target <= at {
         return at;
     }
     while rig.step_until(target).is_some() {}
     gw.watch(rig, target);
+    ttk.scan(rig, target);
     target
 }
 

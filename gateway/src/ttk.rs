@@ -10,7 +10,7 @@
 //! | 0 | reload config | nothing |
 //! | 1 | motor direction `a` = 1 up, 0 stop, 255 (−1) down | the converter (slave 7: D0 run, D1 up) and the speed set-point (slave 10) through the AS-i output image: travel 10000 µA, stop = run off and 4000 µA (a ramp stop); a move while the STOP circuit waits for its restart pulses the restart first |
 //! | 2 | button lamp `a` type, `b` floor, `c` value | recorded (the lab lift has no call lamps) |
-//! | 3 | floor indicator `a` | recorded (the lab's displays are driven through handshakes the front end does not run) |
+//! | 3 | floor indicator `a` | the lab's displays (floor stations 1..4, cabin display 5): the front end runs the PLC side of their handshakes (seed 003 tables 4.2–4.5) every 10 ms, showing the indicator's floor, the arrow of the motor's direction and "moving"; also recorded |
 //! | 4 | door open lamp `a` | recorded |
 //! | 5 | stop lamp `a` | recorded |
 //! | 6 | read button `a` type, `b` floor → `[6, pressed, 0, 0]` | the plant's button, held or not |
@@ -23,9 +23,13 @@
 //! not exist get no answer and count as exceptions.
 
 use crate::map::Gateway;
+use asi_master::plc_handshake::{CabinDisplayMaster, FloorStationMaster};
 use asi_phy::{SimDuration, SimTime, SlaveAddr};
 use controller::plc::ToSafety;
-use lab::address::{CONVERTER, LOAD_SENSOR, SPEED_SETPOINT};
+use lab::address::{
+    CABIN_DISPLAY, CONVERTER, FLOOR_1, FLOOR_STATIONS, LOAD_SENSOR, SPEED_SETPOINT,
+};
+use lab::display::DisplayWord;
 use lab::setpoint::STANDSTILL_UA;
 use lift_model::Button;
 use rig::Rig;
@@ -39,9 +43,24 @@ pub const TRAVEL_UA: u16 = 10_000;
 /// How long the restart pulse of a move lasts: several PLC scans and safety scans.
 const RESTART_PULSE: SimDuration = SimDuration::from_millis(50);
 
-/// The TTK4145 front end's state: the motor command and the lamps the client set.
+/// How often the front end steps the display handshakes: the built-in program's scan.
+const DISPLAY_SCAN: SimDuration = SimDuration::from_millis(10);
+
+/// The TTK4145 front end's state: the motor command, the lamps the client set, and the PLC
+/// side of the display handshakes once a client has spoken.
 #[derive(Clone, Debug, Default)]
 pub struct Ttk {
+    /// A TTK4145 client has sent a message: the front end drives the displays.
+    active: bool,
+    /// The floor indicator, lab floors (1..).
+    indicator: Option<u8>,
+    /// The PLC side of the floor stations' and the cabin display's handshakes.
+    floors: Vec<FloorStationMaster>,
+    cabin_display: CabinDisplayMaster,
+    /// The word last handed to the handshakes.
+    shown: Option<u16>,
+    /// When the handshakes step next.
+    next_scan: SimTime,
     /// The last motor direction: 1 up, 0 stop, −1 down.
     motor: i8,
     /// Lamps by name, as the client last set them.
@@ -60,6 +79,13 @@ impl Ttk {
         msg: [u8; 4],
     ) -> Option<[u8; 4]> {
         gw.requests += 1;
+        if !self.active {
+            self.active = true;
+            self.floors = (0..FLOOR_STATIONS)
+                .map(|_| FloorStationMaster::new())
+                .collect();
+            self.next_scan = at;
+        }
         if self.restart_until.is_some_and(|t| at >= t) {
             self.restart_until = None;
         }
@@ -103,7 +129,9 @@ impl Ttk {
                 None
             }
             3 => {
-                self.lamp(rig, "floor indicator".into(), a.saturating_add(1));
+                let floor = a.saturating_add(1);
+                self.indicator = Some(floor);
+                self.lamp(rig, "floor indicator".into(), floor);
                 None
             }
             4 => {
@@ -182,8 +210,95 @@ impl Ttk {
         }
     }
 
+    /// Steps the display handshakes every 10 ms up to `at`, once a client has spoken: the
+    /// floor stations and the cabin display show the indicator's floor, the arrow of the
+    /// motor's direction and "moving" while the motor runs.
+    pub fn scan(&mut self, rig: &mut Rig, at: SimTime) {
+        if !self.active || at < self.next_scan {
+            return;
+        }
+        self.next_scan = at + DISPLAY_SCAN;
+        if let Some(floor) = self.indicator {
+            let word = DisplayWord {
+                floor,
+                up: self.motor > 0,
+                down: self.motor < 0,
+                moving: self.motor != 0,
+                fault: false,
+            };
+            if let Ok(w) = word.encode() {
+                if self.shown != Some(w) {
+                    self.shown = Some(w);
+                    for station in &mut self.floors {
+                        station.set_word(w);
+                    }
+                    self.cabin_display.set_word(w);
+                }
+            }
+        }
+        let image = rig.lab_mut().bus.image_mut();
+        for (i, station) in self.floors.iter_mut().enumerate() {
+            if let Some(a) = SlaveAddr::a(FLOOR_1 + i as u8) {
+                image
+                    .output
+                    .set_nibble(a, station.step(image.input.nibble(a)));
+            }
+        }
+        if let Some(a) = SlaveAddr::a(CABIN_DISPLAY) {
+            image
+                .output
+                .set_nibble(a, self.cabin_display.step(image.input.nibble(a)));
+        }
+    }
+
     /// The lamps as the client left them.
     pub fn lamps(&self) -> &BTreeMap<String, u8> {
         &self.lamps
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::map::Owner;
+    use lift_model::{DisplayId, DisplayState};
+    use rig::Scenario;
+
+    #[test]
+    fn the_floor_indicator_and_the_motor_show_on_the_labs_displays() {
+        let toml = "name = \"t\"\nduration = \"10s\"\n[lift]\nstart_mm = 0.0\n";
+        let sc = Scenario::from_toml("t.toml", toml).expect("a scenario");
+        let mut rig = Rig::new(sc).expect("a rig").with_external_controller();
+        let mut gw = Gateway::new(Owner::External, SimDuration::from_secs(1));
+        let mut ttk = Ttk::default();
+        let t0 = SimTime::ZERO;
+        assert_eq!(ttk.serve(&mut rig, &mut gw, t0, [3, 2, 0, 0]), None);
+        assert_eq!(ttk.serve(&mut rig, &mut gw, t0, [1, 1, 0, 0]), None);
+        let mut at = t0;
+        while at < SimTime::from_millis(3_000) {
+            let next = at + SimDuration::from_millis(1);
+            at = crate::live::advance(&mut rig, &mut gw, &mut ttk, at, next);
+        }
+        let shown = DisplayState::Showing(DisplayWord {
+            floor: 3,
+            up: true,
+            down: false,
+            moving: true,
+            fault: false,
+        });
+        for id in [DisplayId::Floor(1), DisplayId::Floor(4), DisplayId::Cabin] {
+            assert_eq!(rig.lift().display(id), Some(shown), "{id:?}");
+        }
+        // Stopped: the floor without arrows.
+        assert_eq!(ttk.serve(&mut rig, &mut gw, at, [1, 0, 0, 0]), None);
+        let until = at + SimDuration::from_millis(1_000);
+        while at < until {
+            let next = at + SimDuration::from_millis(1);
+            at = crate::live::advance(&mut rig, &mut gw, &mut ttk, at, next);
+        }
+        let Some(DisplayState::Showing(w)) = rig.lift().display(DisplayId::Cabin) else {
+            panic!("the cabin display shows a word");
+        };
+        assert_eq!((w.floor, w.up, w.down, w.moving), (3, false, false, false));
     }
 }
