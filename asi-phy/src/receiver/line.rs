@@ -84,103 +84,32 @@ impl LineDecoder {
     /// Takes a slice of pulses, calling `out` with every frame they complete; the same as
     /// calling [`LineDecoder::push`] for each.
     ///
-    /// This is the receiver's one per-pulse loop. The state of the run lives in locals so that
-    /// it stays in registers; the common pulse (within the tolerance of one of the next two
-    /// grid points) costs no branch beyond the loop's own.
+    /// This is the receiver's one per-pulse loop, [`Run::extend`]; this function only cuts the
+    /// slice at the pauses, so that the loop itself holds nothing but the run.
     pub fn push_slice(&mut self, pulses: &[Pulse], mut out: impl FnMut(Frame)) {
         let (h, tol, pause) = (self.half_bit, self.tolerance, self.pause);
-        let half = (h / 2) as i64;
         let mut rest = pulses;
-        if !self.active {
-            let Some((first, tail)) = rest.split_first() else {
+        loop {
+            if !self.active {
+                let Some((first, tail)) = rest.split_first() else {
+                    return;
+                };
+                self.run = Run::begin(*first, h);
+                self.active = true;
+                rest = tail;
+            }
+            if rest.is_empty() {
                 return;
-            };
-            self.run = Run::begin(*first, h);
-            self.active = true;
-            rest = tail;
-        }
-        if rest.is_empty() {
-            return;
-        }
-        // The run in locals, so that nothing in the loop takes its address.
-        let Run {
-            mut t0,
-            mut last_t,
-            mut next_at,
-            mut last_g,
-            mut last_positive,
-            mut count,
-            mut occupied,
-            mut positive,
-            mut failed,
-            ..
-        } = self.run;
-        let mut same = false;
-        let mut off = false;
-        // The locals back in a run, with the checks the loop collected. Any pulse added makes a
-        // clean run's stored bits stale.
-        macro_rules! packed {
-            () => {
-                Run {
-                    t0,
-                    last_t,
-                    next_at,
-                    last_g,
-                    last_positive,
-                    count,
-                    occupied,
-                    positive,
-                    failed: failed
-                        .with_if(Check::Alternation, same)
-                        .with_if(Check::Pause, off),
-                    clean: None,
-                }
-            };
-        }
-        for p in rest {
-            let at = p.at.as_nanos();
-            let pos = p.polarity == Polarity::Positive;
-            // A pulse that goes back in time wraps to a huge gap: it is no pause.
-            if at.wrapping_sub(last_t) >= pause && at >= last_t {
-                out(packed!().finish());
-                Run {
-                    t0,
-                    last_t,
-                    next_at,
-                    last_g,
-                    last_positive,
-                    count,
-                    occupied,
-                    positive,
-                    failed,
-                    ..
-                } = Run::begin(*p, h);
-                same = false;
-                off = false;
-                continue;
             }
-            let dev1 = at.wrapping_sub(t0).wrapping_sub(next_at) as i64;
-            let two = dev1 > half;
-            let dev = dev1.wrapping_sub(if two { h as i64 } else { 0 });
-            let g = if dev.unsigned_abs() <= tol {
-                last_g + 1 + two as u64
-            } else {
-                off = true;
-                off_grid(h, at, t0, last_t, last_g)
+            let taken = self.run.extend(rest, h, tol, pause);
+            // The pulse after the run, if any, comes after a pause and begins the next one.
+            rest = match rest.get(taken..) {
+                Some(r) if !r.is_empty() => r,
+                _ => return,
             };
-            same |= pos == last_positive;
-            if g < 64 {
-                occupied |= 1 << g;
-                positive |= (pos as u64) << g;
-            }
-            last_g = g;
-            // Wraps only past 584 years of grid points, where every pulse is a pause error.
-            next_at = g.wrapping_add(1).wrapping_mul(h);
-            last_t = at;
-            last_positive = pos;
-            count = count.saturating_add(1);
+            self.active = false;
+            out(self.run.finish());
         }
-        self.run = packed!();
     }
 
     /// Takes a whole encoded pulse train; the same result as pushing its pulses one by one,
@@ -302,7 +231,106 @@ impl Run {
         }
     }
 
-    fn finish(self) -> Frame {
+    /// Adds the leading pulses of `pulses` that belong to this run (all up to the first that
+    /// comes after a pause) and returns how many it took.
+    ///
+    /// The state lives in locals so that it stays in registers, and the grid point after the
+    /// last pulse is kept as an absolute time (`t0 + next_at`, wrapping as `next_at` does),
+    /// advanced by one or two half bits: the chain from one pulse to the next is a subtraction,
+    /// a comparison and an addition. The common pulse (within the tolerance of one of the next
+    /// two grid points) costs no branch beyond the loop's own.
+    fn extend(&mut self, pulses: &[Pulse], h: u64, tol: u64, pause: u64) -> usize {
+        let half = (h / 2) as i64;
+        let t0 = self.t0;
+        let mut next = t0.wrapping_add(self.next_at);
+        let mut last_t = self.last_t;
+        let mut last_positive = self.last_positive;
+        let mut occupied = self.occupied;
+        let mut positive = self.positive;
+        let mut same = false;
+        let mut off = false;
+        let mut taken = 0;
+        loop {
+            // The grid point of the last pulse as a bit (0 once past the masks' 64 points),
+            // and how many points the pulses on the grid have advanced from it.
+            let mut cursor = if self.last_g < 64 {
+                1u64 << self.last_g
+            } else {
+                0
+            };
+            let mut steps = 0u64;
+            let mut stop = None;
+            while let Some(p) = pulses.get(taken) {
+                let at = p.at.as_nanos();
+                // A pulse that goes back in time wraps to a huge gap: it is no pause.
+                if at.wrapping_sub(last_t) >= pause && at >= last_t {
+                    stop = Some(false);
+                    break;
+                }
+                let dev1 = at.wrapping_sub(next) as i64;
+                let two = dev1 > half;
+                // `h` if the pulse is nearer the second grid point, else 0: a mask, not a
+                // branch (which way a pulse goes is the data's, and a branch on it mispredicts).
+                let skip = (two as u64).wrapping_neg() & h;
+                let dev = dev1.wrapping_sub(skip as i64);
+                if dev.unsigned_abs() > tol {
+                    stop = Some(true);
+                    break;
+                }
+                let pos = p.polarity == Polarity::Positive;
+                next = next.wrapping_add(h).wrapping_add(skip);
+                cursor = (cursor << 1) << two as u32;
+                steps += 1 + two as u64;
+                occupied |= cursor;
+                positive |= cursor & (pos as u64).wrapping_neg();
+                same |= pos == last_positive;
+                last_t = at;
+                last_positive = pos;
+                taken += 1;
+            }
+            self.last_g += steps;
+            if stop != Some(true) {
+                break;
+            }
+            // A pulse off the next two grid points: the run has a pause error.
+            let p = pulses[taken];
+            let at = p.at.as_nanos();
+            let pos = p.polarity == Polarity::Positive;
+            off = true;
+            let g = off_grid(h, at, t0, last_t, self.last_g);
+            // Wraps only past 584 years of grid points, where every pulse is a pause error.
+            next = t0.wrapping_add(g.wrapping_add(1).wrapping_mul(h));
+            same |= pos == last_positive;
+            if g < 64 {
+                occupied |= 1 << g;
+                positive |= (pos as u64) << g;
+            }
+            self.last_g = g;
+            last_t = at;
+            last_positive = pos;
+            taken += 1;
+        }
+        if taken > 0 {
+            self.next_at = next.wrapping_sub(t0);
+            self.last_t = last_t;
+            self.last_positive = last_positive;
+            self.occupied = occupied;
+            self.positive = positive;
+            self.count = self
+                .count
+                .saturating_add(u32::try_from(taken).unwrap_or(u32::MAX));
+            self.failed = self
+                .failed
+                .with_if(Check::Alternation, same)
+                .with_if(Check::Pause, off);
+        }
+        // Any pulse added makes a clean run's stored bits stale (and a clean run finished here
+        // decodes to the same bits from its masks).
+        self.clean = None;
+        taken
+    }
+
+    fn finish(&self) -> Frame {
         let g = self.last_g;
         let n = g.div_ceil(2);
         let mut failed = self.failed;

@@ -30,6 +30,8 @@ mod checks;
 mod config;
 mod line;
 #[cfg(test)]
+mod reference;
+#[cfg(test)]
 mod tests;
 
 pub use checks::{Check, Checks};

@@ -277,3 +277,376 @@ fn odd_inputs_never_panic() {
     assert_eq!(got[0].bit_count, 5000);
     assert!(got[0].failed.contains(Check::Length));
 }
+
+/// The equivalence of the fast line decoder with the one it replaced (`reference.rs`): random
+/// pulse sequences, cut and fed in random ways, give the same frames, the same telegrams and
+/// the same state (`poll_at`) after every step.
+mod equivalence {
+    use super::super::reference::ReferenceLineDecoder;
+    use super::*;
+    use proptest::prelude::*;
+
+    /// Settings: the bus's own, and odd ones (a tolerance at or past half the grid, a grid of
+    /// 1 ns, a pause shorter than the grid).
+    fn config() -> impl Strategy<Value = ReceiverConfig> {
+        let odd = (
+            1u64..8_000,
+            0u64..5_000,
+            1u64..40_000,
+            0u64..40_000,
+            0u64..100_000,
+        )
+            .prop_map(
+                |(half_bit, tolerance, pause, async_pause, response_window)| ReceiverConfig {
+                    half_bit,
+                    tolerance,
+                    pause,
+                    async_pause,
+                    response_window,
+                    expect: Expect::Both,
+                },
+            );
+        (
+            prop_oneof![
+                4 => Just(timing().receiver(Expect::Both)),
+                1 => Just(ReceiverConfig { half_bit: 1, tolerance: 0, pause: 2, ..timing().receiver(Expect::Both) }),
+                2 => odd,
+            ],
+            prop_oneof![
+                Just(Expect::Requests),
+                Just(Expect::Responses),
+                Just(Expect::Both)
+            ],
+        )
+            .prop_map(|(cfg, expect)| ReceiverConfig { expect, ..cfg })
+    }
+
+    /// One fault on an encoded pulse sequence.
+    #[derive(Clone, Debug)]
+    enum Fault {
+        Drop(usize),
+        Insert(usize, i64, bool),
+        Shift(usize, i64),
+        Flip(usize),
+        Truncate(usize),
+        Gap(usize, u64),
+        BackInTime(usize, u64),
+    }
+
+    fn fault() -> impl Strategy<Value = Fault> {
+        let shift = prop_oneof![
+            3 => -600i64..=600,
+            2 => -3_500i64..=3_500,
+            1 => -40_000i64..=40_000,
+        ];
+        prop_oneof![
+            (any::<usize>()).prop_map(Fault::Drop),
+            (any::<usize>(), -6_000i64..6_000, any::<bool>())
+                .prop_map(|(i, d, p)| Fault::Insert(i, d, p)),
+            (any::<usize>(), shift).prop_map(|(i, d)| Fault::Shift(i, d)),
+            (any::<usize>()).prop_map(Fault::Flip),
+            (any::<usize>()).prop_map(Fault::Truncate),
+            (
+                any::<usize>(),
+                prop_oneof![0u64..60_000, any::<u64>().prop_map(|g| g >> 8)]
+            )
+                .prop_map(|(i, g)| Fault::Gap(i, g)),
+            (any::<usize>(), 0u64..200_000).prop_map(|(i, d)| Fault::BackInTime(i, d)),
+        ]
+    }
+
+    fn polarity(positive: bool) -> Polarity {
+        if positive {
+            Polarity::Positive
+        } else {
+            Polarity::Negative
+        }
+    }
+
+    /// Encoded requests and responses back to back with random gaps, then faults.
+    fn faulty_line() -> impl Strategy<Value = Vec<Pulse>> {
+        let telegram = (
+            any::<bool>(),
+            any::<u16>(),
+            prop_oneof![
+                4 => Just(18_000u64),
+                4 => Just(10_000u64),
+                2 => 0u64..30_000,
+                1 => 0u64..2_000_000,
+            ],
+        );
+        (
+            prop::collection::vec(telegram, 0..12),
+            prop::collection::vec(fault(), 0..8),
+            prop_oneof![Just(0u64), Just(1u64 << 40), Just(u64::MAX - (1 << 30))],
+        )
+            .prop_map(|(telegrams, faults, origin)| {
+                let h = timing().half_bit();
+                let mut pulses: Vec<Pulse> = Vec::new();
+                let mut t = origin;
+                for (is_request, bits, gap) in telegrams {
+                    let train = if is_request {
+                        let body = bits & 0x7FF;
+                        let bits = (body << 2) | (((body.count_ones() & 1) as u16) << 1) | 1;
+                        // Every request, and now and then one with a wrong bit.
+                        let bits = if bits & 0x8000 != 0 {
+                            bits ^ 0x10
+                        } else {
+                            bits
+                        };
+                        PulseTrain::request(
+                            Request::from_bits(bits & 0x3FFF).unwrap_or(dexg(1, 0)),
+                            SimTime::from_nanos(t),
+                            h,
+                        )
+                    } else {
+                        PulseTrain::response(
+                            Response::new(Nibble::from_low_bits(bits as u8)),
+                            SimTime::from_nanos(t),
+                            h,
+                        )
+                    };
+                    pulses.extend(train.iter());
+                    t = train.end().as_nanos().saturating_add(gap);
+                }
+                for f in faults {
+                    let n = pulses.len();
+                    match f {
+                        Fault::Drop(i) if n > 0 => {
+                            pulses.remove(i % n);
+                        }
+                        Fault::Insert(i, d, p) => {
+                            let i = if n == 0 { 0 } else { i % (n + 1) };
+                            let base = pulses
+                                .get(i.min(n.saturating_sub(1)))
+                                .map_or(t, |p| p.at.as_nanos());
+                            let at = SimTime::from_nanos(base.saturating_add_signed(d));
+                            pulses.insert(i, Pulse::new(at, polarity(p)));
+                        }
+                        Fault::Shift(i, d) if n > 0 => {
+                            let p = &mut pulses[i % n];
+                            p.at = SimTime::from_nanos(p.at.as_nanos().saturating_add_signed(d));
+                        }
+                        Fault::Flip(i) if n > 0 => {
+                            let p = &mut pulses[i % n];
+                            p.polarity = p.polarity.flipped();
+                        }
+                        Fault::Truncate(i) if n > 0 => pulses.truncate(i % n),
+                        Fault::Gap(i, g) if n > 0 => {
+                            for p in &mut pulses[i % n..] {
+                                p.at = SimTime::from_nanos(p.at.as_nanos().saturating_add(g));
+                            }
+                        }
+                        Fault::BackInTime(i, d) if n > 0 => {
+                            for p in &mut pulses[i % n..] {
+                                p.at = SimTime::from_nanos(p.at.as_nanos().saturating_sub(d));
+                            }
+                        }
+                        _ => {}
+                    }
+                }
+                pulses
+            })
+    }
+
+    /// Pulses at arbitrary times: near the grid, anywhere, back in time, at the clock's ends.
+    fn wild_line() -> impl Strategy<Value = Vec<Pulse>> {
+        let step = prop_oneof![
+            3 => (2_500u64..3_500).prop_map(|d| d as i64),
+            2 => (5_500u64..6_500).prop_map(|d| d as i64),
+            1 => Just(3_000i64),
+            1 => Just(6_000i64),
+            1 => (0u64..40_000).prop_map(|d| d as i64),
+            1 => -5_000i64..0,
+            1 => any::<i64>(),
+        ];
+        (
+            prop::collection::vec((step, any::<bool>()), 0..200),
+            prop_oneof![
+                Just(0u64),
+                Just(1u64 << 40),
+                Just(u64::MAX - 100_000),
+                any::<u64>()
+            ],
+        )
+            .prop_map(|(steps, origin)| {
+                let mut t = origin;
+                steps
+                    .into_iter()
+                    .map(|(d, p)| {
+                        t = t.saturating_add_signed(d);
+                        Pulse::new(SimTime::from_nanos(t), polarity(p))
+                    })
+                    .collect()
+            })
+    }
+
+    /// How the pulses reach the decoder.
+    #[derive(Clone, Debug)]
+    enum Feed {
+        Slice(usize),
+        One,
+        Poll(u64),
+        Flush,
+        Reset,
+    }
+
+    fn feeds() -> impl Strategy<Value = Vec<Feed>> {
+        prop::collection::vec(
+            prop_oneof![
+                6 => (1usize..64).prop_map(Feed::Slice),
+                3 => Just(Feed::One),
+                1 => (0u64..40_000).prop_map(Feed::Poll),
+                1 => Just(Feed::Flush),
+                1 => Just(Feed::Reset),
+            ],
+            1..40,
+        )
+    }
+
+    fn check_feeds(
+        cfg: ReceiverConfig,
+        pulses: &[Pulse],
+        feeds: &[Feed],
+    ) -> Result<(), TestCaseError> {
+        let mut fast = LineDecoder::new(&cfg);
+        let mut slow = ReferenceLineDecoder::new(&cfg);
+        let mut rest = pulses;
+        let mut step = 0;
+        while !rest.is_empty() {
+            let feed = &feeds[step % feeds.len()];
+            step += 1;
+            let (mut a, mut b) = (Vec::new(), Vec::new());
+            match feed {
+                Feed::Slice(n) => {
+                    let (now, later) = rest.split_at((*n).min(rest.len()));
+                    fast.push_slice(now, |f| a.push(f));
+                    slow.push_slice(now, |f| b.push(f));
+                    rest = later;
+                }
+                Feed::One => {
+                    a.extend(fast.push(rest[0]));
+                    b.extend(slow.push(rest[0]));
+                    rest = &rest[1..];
+                }
+                Feed::Poll(d) => {
+                    let now = rest[0]
+                        .at
+                        .checked_sub(SimDuration::from_nanos(*d))
+                        .unwrap_or(rest[0].at);
+                    a.extend(fast.poll(now));
+                    b.extend(slow.poll(now));
+                }
+                Feed::Flush => {
+                    a.extend(fast.flush());
+                    b.extend(slow.flush());
+                }
+                Feed::Reset => {
+                    fast.reset();
+                    slow.reset();
+                }
+            }
+            if matches!(feed, Feed::Poll(_) | Feed::Flush | Feed::Reset) {
+                // Then one pulse, so that every step takes at least one.
+                a.extend(fast.push(rest[0]));
+                b.extend(slow.push(rest[0]));
+                rest = &rest[1..];
+            }
+            prop_assert_eq!(&a, &b, "step {} {:?}", step, feed);
+            prop_assert_eq!(fast.poll_at(), slow.poll_at(), "step {}", step);
+        }
+        prop_assert_eq!(fast.flush(), slow.flush());
+        Ok(())
+    }
+
+    /// The whole receiver as the benchmark drives it: one slice, then a flush.
+    fn check_receiver(cfg: ReceiverConfig, pulses: &[Pulse]) -> Result<(), TestCaseError> {
+        let mut rx = Receiver::new(cfg);
+        let mut a = Vec::new();
+        rx.push_slice(pulses, |r| a.push(r));
+        a.extend(rx.flush());
+        let mut line = ReferenceLineDecoder::new(&cfg);
+        let mut listener = Listener::new(&cfg);
+        let mut b = Vec::new();
+        line.push_slice(pulses, |f| b.push(listener.accept(&f)));
+        b.extend(line.flush().map(|f| listener.accept(&f)));
+        prop_assert_eq!(a, b);
+        Ok(())
+    }
+
+    /// Encoded trains through `push_train` (its clean path and its pulse-by-pulse one), mixed
+    /// with single pulses.
+    fn check_trains(
+        cfg: ReceiverConfig,
+        trains: &[(bool, u16, u64, bool)],
+    ) -> Result<(), TestCaseError> {
+        let h = timing().half_bit();
+        let mut fast = LineDecoder::new(&cfg);
+        let mut slow = ReferenceLineDecoder::new(&cfg);
+        let mut t = 1u64 << 30;
+        for &(is_request, bits, gap, by_train) in trains {
+            let train = if is_request {
+                PulseTrain::request(
+                    Request::from_bits(bits & 0x3FFF).unwrap_or(dexg(2, 1)),
+                    SimTime::from_nanos(t),
+                    h,
+                )
+            } else {
+                PulseTrain::response(
+                    Response::new(Nibble::from_low_bits(bits as u8)),
+                    SimTime::from_nanos(t),
+                    h,
+                )
+            };
+            let (mut a, mut b) = (Vec::new(), Vec::new());
+            if by_train {
+                a.extend(fast.push_train(&train));
+                b.extend(slow.push_train(&train));
+            } else {
+                let pulses: Vec<Pulse> = train.iter().collect();
+                fast.push_slice(&pulses, |f| a.push(f));
+                slow.push_slice(&pulses, |f| b.push(f));
+            }
+            prop_assert_eq!(a, b);
+            prop_assert_eq!(fast.poll_at(), slow.poll_at());
+            t = train.end().as_nanos() + gap;
+        }
+        prop_assert_eq!(fast.flush(), slow.flush());
+        Ok(())
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(1_000))]
+
+        #[test]
+        fn the_line_decoder_equals_its_reference_on_faulty_lines(
+            cfg in config(),
+            pulses in faulty_line(),
+            feeds in feeds(),
+        ) {
+            check_feeds(cfg, &pulses, &feeds)?;
+            check_receiver(cfg, &pulses)?;
+        }
+
+        #[test]
+        fn the_line_decoder_equals_its_reference_on_wild_pulses(
+            cfg in config(),
+            pulses in wild_line(),
+            feeds in feeds(),
+        ) {
+            check_feeds(cfg, &pulses, &feeds)?;
+            check_receiver(cfg, &pulses)?;
+        }
+
+        #[test]
+        fn the_line_decoder_equals_its_reference_on_trains(
+            cfg in config(),
+            trains in prop::collection::vec(
+                (any::<bool>(), any::<u16>(), prop_oneof![Just(18_000u64), Just(10_000u64), 0u64..30_000], any::<bool>()),
+                0..24,
+            ),
+        ) {
+            check_trains(cfg, &trains)?;
+        }
+    }
+}
