@@ -567,3 +567,29 @@ fn a_ttk4145_client_that_sends_nonsense_gets_no_answer_and_the_next_read_works()
     assert_eq!(live.exceptions, 4);
     assert_eq!(live.requests, 7);
 }
+
+#[test]
+fn a_ttk4145_controller_that_runs_with_the_door_open_is_stopped_by_the_safety_logic() {
+    let running = start_with(DOOR_OPEN, Owner::External, Speed::Max, true);
+    let addr = running.ttk_addr().expect("a TTK4145 address");
+    let mut s = raw(addr);
+    // The obstruction switch says the door is open; the client drives up all the same.
+    assert_eq!(ttk(&mut s, [9, 0, 0, 0]), Some([9, 1, 0, 0]));
+    ttk(&mut s, [1, 1, 0, 0]);
+    for _ in 0..29_000 {
+        ttk(&mut s, [8, 0, 0, 0]).expect("an answer");
+    }
+    running.stop();
+    let r = running.wait();
+    let kinds: Vec<ViolationKind> = r.violations.iter().map(|v| v.kind).collect();
+    assert_eq!(
+        kinds.first(),
+        Some(&ViolationKind::DoorOpenMoving),
+        "{kinds:?}"
+    );
+    assert!(!kinds.contains(&ViolationKind::MechanicalEnd), "{kinds:?}");
+    assert!(!r.final_state.contactor_closed);
+    assert!(!r.final_state.moving);
+    let cause = r.final_state.k1_open_cause.expect("a cause");
+    assert!(cause.contains("overtravel"), "{cause}");
+}
