@@ -156,12 +156,7 @@ pub fn run(args: RunArgs) -> Result<u8, String> {
     }
     let mut rig = Rig::new(sc).map_err(|e| e.to_string())?;
     if let (Some(path), Some(sink)) = (&trace, &trace_sink) {
-        let form = match trace_format {
-            Some(TraceForm::Text) => TraceFormat::Text,
-            Some(TraceForm::Jsonl) => TraceFormat::Jsonl,
-            None => TraceFormat::for_path(path),
-        };
-        rig.trace_to(outs.writer(sink)?, form);
+        rig.trace_to(outs.writer(sink)?, trace_form(trace_format, path));
     }
     if vcd_sink.is_some() || csv_sink.is_some() {
         let writer = |s: &_| outs.writer(s).map(|w| w as Box<dyn std::io::Write>);
@@ -197,15 +192,7 @@ pub fn run(args: RunArgs) -> Result<u8, String> {
         // other outputs, cut short, are not put in place.
         return Ok(0);
     }
-    let body = match format {
-        Format::Text => rep.to_text(),
-        Format::Json => {
-            rep.to_json()
-                .map_err(|e| format!("the report as JSON: {e}"))?
-                + "\n"
-        }
-    };
-    outs.write_all(&report_sink, &body)?;
+    outs.write_all(&report_sink, &report_body(&rep, format)?)?;
     if let (Some(sink), Some(mut samples)) = (&plot_sink, samples) {
         samples.finish(&rep);
         let svg = plot::draw(&samples, &rep).map_err(|e| {
@@ -237,6 +224,27 @@ pub fn run(args: RunArgs) -> Result<u8, String> {
     } else {
         EXIT_VIOLATIONS
     })
+}
+
+/// The report as `format` asks.
+pub fn report_body(rep: &rig::Report, format: Format) -> Result<String, String> {
+    Ok(match format {
+        Format::Text => rep.to_text(),
+        Format::Json => {
+            rep.to_json()
+                .map_err(|e| format!("the report as JSON: {e}"))?
+                + "\n"
+        }
+    })
+}
+
+/// The trace's form: `--trace-format` if given, else the file name's.
+pub fn trace_form(form: Option<TraceForm>, path: &Path) -> TraceFormat {
+    match form {
+        Some(TraceForm::Text) => TraceFormat::Text,
+        Some(TraceForm::Jsonl) => TraceFormat::Jsonl,
+        None => TraceFormat::for_path(path),
+    }
 }
 
 /// The scenario named on the command line: a file if there is one by that name (`-` for

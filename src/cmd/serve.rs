@@ -2,10 +2,9 @@
 //! an outside controller or a client that watches the built-in one (README, "Live mode").
 
 use super::output::Outputs;
-use super::run::{load_scenario, Format, TraceForm};
+use super::run::{load_scenario, report_body, trace_form, Format, TraceForm};
 use super::{print_out, EXIT_VIOLATIONS};
 use asi_phy::SimDuration;
-use asi_trace::trace::TraceFormat;
 use clap::ValueEnum;
 use gateway::live::LiveConfig;
 use gateway::{Owner, Speed};
@@ -152,12 +151,7 @@ pub fn run(args: ServeArgs) -> Result<u8, String> {
         None => None,
         Some(path) => {
             let sink = outs.add("--trace", path)?;
-            let form = match trace_format {
-                Some(TraceForm::Text) => TraceFormat::Text,
-                Some(TraceForm::Jsonl) => TraceFormat::Jsonl,
-                None => TraceFormat::for_path(path),
-            };
-            Some((outs.writer(&sink)?, form))
+            Some((outs.writer(&sink)?, trace_form(trace_format, path)))
         }
     };
 
@@ -223,15 +217,7 @@ pub fn run(args: ServeArgs) -> Result<u8, String> {
         eprintln!();
     }
     let rep = running.wait();
-    let body = match format {
-        Format::Text => rep.to_text(),
-        Format::Json => {
-            rep.to_json()
-                .map_err(|e| format!("the report as JSON: {e}"))?
-                + "\n"
-        }
-    };
-    outs.write_all(&report_sink, &body)?;
+    outs.write_all(&report_sink, &report_body(&rep, format)?)?;
     outs.commit()?;
     if report != Path::new("-") {
         print_out(&format!(

@@ -131,6 +131,30 @@ impl<'a> Locator<'a> {
         }
     }
 
+    /// The one action of event `n` (at `span`), or an error naming the event: none (`kinds`
+    /// lists what it may hold) or more than one.
+    pub(crate) fn one_action<T>(
+        &self,
+        mut actions: Vec<T>,
+        span: Range<usize>,
+        n: usize,
+        kinds: &str,
+    ) -> Result<T, ScenarioError> {
+        match actions.len() {
+            1 => Ok(actions.remove(0)),
+            0 => Err(self.error(
+                Some(span),
+                format!("event[{n}]"),
+                format!("no action: give one of {kinds}"),
+            )),
+            _ => Err(self.error(
+                Some(span),
+                format!("event[{n}]"),
+                "more than one action: give each its own [[event]]",
+            )),
+        }
+    }
+
     /// The key written on the line of `offset`, with its table (`lift.floors`,
     /// `event[3].press`), for errors the TOML reader reports without it.
     pub(crate) fn key_at(&self, offset: usize) -> String {
@@ -590,21 +614,12 @@ fn read_event(
     if let Some(f) = &e.fault {
         actions.push(Action::Fault(fault(loc, &field("fault"), f)?));
     }
-    let action = match actions.len() {
-        1 => actions.remove(0),
-        0 => return Err(loc.error(
-            Some(span),
-            format!("event[{n}]"),
-            "no action: give one of press, load, door, crank_mm, reset, rescue, ack, attend, fault",
-        )),
-        _ => {
-            return Err(loc.error(
-                Some(span),
-                format!("event[{n}]"),
-                "more than one action: give each its own [[event]]",
-            ))
-        }
-    };
+    let action = loc.one_action(
+        actions,
+        span.clone(),
+        n,
+        "press, load, door, crank_mm, reset, rescue, ack, attend, fault",
+    )?;
     let (line, _) = loc.position(span.start);
     Ok(ScenarioEvent { at, action, line })
 }

@@ -252,23 +252,7 @@ fn read_event(
         }
         actions.push(StandAction::Reset);
     }
-    let action = match actions.len() {
-        1 => actions.remove(0),
-        0 => {
-            return Err(loc.error(
-                Some(span),
-                format!("event[{n}]"),
-                "no action: give one of drive, speed, curtain, reset",
-            ))
-        }
-        _ => {
-            return Err(loc.error(
-                Some(span),
-                format!("event[{n}]"),
-                "more than one action: give each its own [[event]]",
-            ))
-        }
-    };
+    let action = loc.one_action(actions, span.clone(), n, "drive, speed, curtain, reset")?;
     let (line, _) = loc.position(span.start);
     Ok(StandEvent { at, action, line })
 }
