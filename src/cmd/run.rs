@@ -67,6 +67,11 @@ pub struct RunArgs {
     /// Overwrite the report, trace, VCD, CSV and plot files if they exist.
     #[arg(long)]
     pub force: bool,
+    /// Run the bus pulse-exact: every telegram through the pulse decoder, without the
+    /// simulator's fast paths. Every output is the same; it is slower, and the reference the
+    /// fast paths are checked and measured against.
+    #[arg(long)]
+    pub pulse_exact: bool,
 }
 
 /// The control algorithms of `--algorithm`.
@@ -113,6 +118,7 @@ pub fn run(args: RunArgs) -> Result<u8, String> {
         pulse_window,
         plot,
         force,
+        pulse_exact,
     } = args;
     let (mut sc, file) = load_scenario(scenario.as_deref())?;
     if let Some(s) = seed {
@@ -155,6 +161,7 @@ pub fn run(args: RunArgs) -> Result<u8, String> {
         }
     }
     let mut rig = Rig::new(sc).map_err(|e| e.to_string())?;
+    rig.set_pulse_exact(pulse_exact);
     if let (Some(path), Some(sink)) = (&trace, &trace_sink) {
         rig.trace_to(outs.writer(sink)?, trace_form(trace_format, path));
     }

@@ -6,6 +6,7 @@ mod cabin_handshake;
 mod campaign;
 mod display_word;
 mod end_to_end;
+mod fast_path;
 mod line_noise;
 mod roundtrip;
 mod safety_regressions;

@@ -102,6 +102,13 @@ impl Bus {
         )));
     }
 
+    /// Pulse-exact (`true`): every telegram goes through the pulse decoder, without the
+    /// line's fast path for clean telegrams (asi-phy `Wire::set_pulse_exact`). Every outcome
+    /// is the same either way; the exact path is the reference for tests and benchmarks.
+    pub fn set_pulse_exact(&mut self, on: bool) {
+        self.medium.set_pulse_exact(on);
+    }
+
     /// The line fault rates in force.
     pub fn line_fault_rates(&self) -> FaultRates {
         self.medium.fault_rates()

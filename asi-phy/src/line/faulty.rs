@@ -31,6 +31,11 @@ impl<L> Faulty<L> {
         }
     }
 
+    /// The line inside.
+    pub fn inner_mut(&mut self) -> &mut L {
+        &mut self.inner
+    }
+
     /// Seeded random line faults from now on (`FaultRates::NONE` or `None` switches them off).
     pub fn set_faults(&mut self, injector: Option<FaultInjector>) {
         self.injector = injector.filter(|i| !i.rates().is_clean());

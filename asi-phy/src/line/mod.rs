@@ -40,4 +40,10 @@ impl Medium {
     pub fn quiet(timing: &BusTiming) -> Medium {
         Faulty::new(Tap::new(Wire::new(timing)))
     }
+
+    /// Pulse-exact (`true`) or with the wire's fast path for clean telegrams (the default):
+    /// see [`Wire::set_pulse_exact`].
+    pub fn set_pulse_exact(&mut self, on: bool) {
+        self.inner_mut().inner_mut().set_pulse_exact(on);
+    }
 }

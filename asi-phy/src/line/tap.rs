@@ -26,6 +26,11 @@ impl<L> Tap<L> {
         self.recorded = on.then(|| self.recorded.take().unwrap_or_default());
     }
 
+    /// The line inside.
+    pub fn inner_mut(&mut self) -> &mut L {
+        &mut self.inner
+    }
+
     /// Takes the pulses recorded since the last call (in the order they went on the line).
     pub fn take_pulses(&mut self) -> Vec<Pulse> {
         self.recorded

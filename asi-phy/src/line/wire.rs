@@ -11,6 +11,7 @@ pub struct Wire {
     decoder: LineDecoder,
     pause: SimDuration,
     pending: Option<(PulseTrain, Frame)>,
+    exact: bool,
 }
 
 impl Wire {
@@ -20,7 +21,16 @@ impl Wire {
             decoder: LineDecoder::new(&timing.receiver(Expect::Both)),
             pause: timing.min_pause(),
             pending: None,
+            exact: false,
         }
+    }
+
+    /// Pulse-exact (`true`): every train goes through the pulse decoder, the fast path for
+    /// clean telegrams is off. The frames are the same either way (tested for every request
+    /// and response in `tests/line.rs`, and for whole runs of the rig); the exact mode is
+    /// the reference the fast path is measured and checked against.
+    pub fn set_pulse_exact(&mut self, on: bool) {
+        self.exact = on;
     }
 
     /// Hands a pending clean train to the decoder (something else comes on the line).
@@ -35,7 +45,7 @@ impl Wire {
 
 impl Line for Wire {
     fn transmit(&mut self, train: &PulseTrain, raw: u32, bits: u32, done: &mut impl FnMut(Frame)) {
-        if self.decoder.poll_at().is_none() {
+        if !self.exact && self.decoder.poll_at().is_none() {
             let quiet = match &self.pending {
                 None => true,
                 Some((p, _)) => train.start() >= p.end() && train.start() - p.end() >= self.pause,

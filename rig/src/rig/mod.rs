@@ -216,6 +216,14 @@ impl Rig {
         self.outputs.trace = Some((out, format));
     }
 
+    /// Runs the bus pulse-exact (`true`): every telegram through the pulse decoder, none of
+    /// the fast paths. Reports, traces and wave outputs are the same either way (tested for
+    /// every scenario and for random ones with faults); the exact path is what the speed of
+    /// the fast one is measured against (README, "Measured performance").
+    pub fn set_pulse_exact(&mut self, on: bool) {
+        self.lab.bus.set_pulse_exact(on);
+    }
+
     /// Writes the VCD and the line-voltage CSV of the run (see [`crate::waves`]).
     pub fn waves_to(&mut self, out: WaveOutputs) {
         self.enable_trace_ring();
