@@ -10,6 +10,7 @@
 use crate::pulse::{Polarity, Pulse, PulseTrain};
 use crate::time::{SimDuration, SimTime};
 use crate::waveform::{NoiseBurst, Waveform};
+use rand::distr::Bernoulli;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -214,8 +215,37 @@ fn clamp_probability(p: f64) -> f64 {
 pub struct FaultInjector {
     rng: ChaCha8Rng,
     rates: FaultRates,
+    odds: Odds,
     half_bit: SimDuration,
     injected: u64,
+}
+
+/// The rates as Bernoulli distributions, made once instead of at every draw: a draw from one
+/// takes the same random number and gives the same answer as `random_bool` with its
+/// probability (rand's `random_bool` makes the same distribution and samples it), so the
+/// random stream and the corruption stay what they were.
+#[derive(Clone, Copy, Debug)]
+struct Odds {
+    drop: Bernoulli,
+    flip: Bernoulli,
+    shift: Bernoulli,
+    insert: Bernoulli,
+    half: Bernoulli,
+}
+
+impl Odds {
+    fn of(r: &FaultRates) -> Odds {
+        let b = |p: f64| {
+            Bernoulli::new(clamp_probability(p)).expect("a clamped probability is in 0..=1")
+        };
+        Odds {
+            drop: b(r.drop),
+            flip: b(r.flip),
+            shift: b(r.shift),
+            insert: b(r.insert),
+            half: b(0.5),
+        }
+    }
 }
 
 impl FaultInjector {
@@ -224,6 +254,7 @@ impl FaultInjector {
         FaultInjector {
             rng: ChaCha8Rng::seed_from_u64(seed),
             rates,
+            odds: Odds::of(&rates),
             half_bit,
             injected: 0,
         }
@@ -237,6 +268,7 @@ impl FaultInjector {
     /// Changes the rates; the random stream continues.
     pub fn set_rates(&mut self, rates: FaultRates) {
         self.rates = rates;
+        self.odds = Odds::of(&rates);
     }
 
     /// Faults injected so far.
@@ -256,7 +288,7 @@ impl FaultInjector {
             out.extend(pulses);
             return 0;
         }
-        let r = self.rates;
+        let r = self.odds;
         let h = self.half_bit.as_nanos() as i64;
         let j = self.rates.jitter.as_nanos() as i64;
         let mut faults = 0u32;
@@ -266,23 +298,23 @@ impl FaultInjector {
             if j > 0 {
                 p.at = shift(p.at, self.rng.random_range(-j..=j));
             }
-            if self.rng.random_bool(clamp_probability(r.drop)) {
+            if self.rng.sample(r.drop) {
                 faults += 1;
             } else {
-                if self.rng.random_bool(clamp_probability(r.flip)) {
+                if self.rng.sample(r.flip) {
                     p.polarity = p.polarity.flipped();
                     faults += 1;
                 }
-                if self.rng.random_bool(clamp_probability(r.shift)) {
-                    let by = if self.rng.random_bool(0.5) { h } else { -h };
+                if self.rng.sample(r.shift) {
+                    let by = if self.rng.sample(r.half) { h } else { -h };
                     p.at = shift(p.at, by);
                     faults += 1;
                     sorted = false;
                 }
                 out.push(p);
             }
-            if self.rng.random_bool(clamp_probability(r.insert)) {
-                let polarity = if self.rng.random_bool(0.5) {
+            if self.rng.sample(r.insert) {
+                let polarity = if self.rng.sample(r.half) {
                     Polarity::Positive
                 } else {
                     Polarity::Negative
@@ -363,6 +395,95 @@ mod tests {
                 Polarity::Negative
             },
         )
+    }
+
+    /// The injector as it was written first: `random_bool` with the probability at every
+    /// draw. The injector's odds, made once, must corrupt exactly as this does.
+    fn corrupt_by_random_bool(
+        rng: &mut ChaCha8Rng,
+        r: FaultRates,
+        h: i64,
+        pulses: &[Pulse],
+    ) -> (Vec<Pulse>, u32) {
+        let mut out = Vec::new();
+        let mut faults = 0;
+        let j = r.jitter.as_nanos() as i64;
+        for &p in pulses {
+            let mut p = p;
+            if j > 0 {
+                p.at = shift(p.at, rng.random_range(-j..=j));
+            }
+            if rng.random_bool(clamp_probability(r.drop)) {
+                faults += 1;
+            } else {
+                if rng.random_bool(clamp_probability(r.flip)) {
+                    p.polarity = p.polarity.flipped();
+                    faults += 1;
+                }
+                if rng.random_bool(clamp_probability(r.shift)) {
+                    p.at = shift(p.at, if rng.random_bool(0.5) { h } else { -h });
+                    faults += 1;
+                }
+                out.push(p);
+            }
+            if rng.random_bool(clamp_probability(r.insert)) {
+                let polarity = if rng.random_bool(0.5) {
+                    Polarity::Positive
+                } else {
+                    Polarity::Negative
+                };
+                out.push(Pulse::new(
+                    p.at + SimDuration::from_nanos(h as u64),
+                    polarity,
+                ));
+                faults += 1;
+            }
+        }
+        out.sort_by_key(|p| p.at);
+        (out, faults)
+    }
+
+    use proptest::prelude::Just;
+
+    proptest::proptest! {
+        #[test]
+        fn the_injectors_odds_draw_as_random_bool_does(
+            seed in proptest::prelude::any::<u64>(),
+            rates in proptest::collection::vec(
+                proptest::prop_oneof![
+                    Just(0.0), Just(1.0), 0.0..1.0f64, Just(f64::NAN)
+                ], 4),
+            jitter in proptest::prop_oneof![Just(0u64), 1..500u64],
+            telegrams in 1..40usize,
+        ) {
+            let r = FaultRates {
+                drop: rates[0],
+                insert: rates[1],
+                flip: rates[2],
+                shift: rates[3],
+                jitter: SimDuration::from_nanos(jitter),
+            };
+            let h = SimDuration::from_nanos(3_000);
+            let mut inj = FaultInjector::new(seed, r, h);
+            let mut reference = ChaCha8Rng::seed_from_u64(seed);
+            let mut out = Vec::new();
+            for k in 0..telegrams as u64 {
+                let Ok(q) = crate::Request::from_bits((k * 977 % 16384) as u16) else {
+                    continue;
+                };
+                let train = PulseTrain::request(q, SimTime::from_micros(200 * k), h);
+                let pulses: Vec<Pulse> = train.iter().collect();
+                let faults = inj.corrupt(pulses.iter().copied(), &mut out);
+                let (want, want_faults) = corrupt_by_random_bool(&mut reference, r, 3_000, &pulses);
+                proptest::prop_assert_eq!(faults, want_faults);
+                // Pulses at the same time may come in either order; the line sorts them so.
+                let mut got = out.clone();
+                got.sort_by_key(|p| (p.at, p.polarity == Polarity::Positive));
+                let mut want = want;
+                want.sort_by_key(|p| (p.at, p.polarity == Polarity::Positive));
+                proptest::prop_assert_eq!(got, want);
+            }
+        }
     }
 
     #[test]

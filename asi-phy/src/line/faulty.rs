@@ -16,6 +16,7 @@ pub struct Faulty<L> {
     pulses: Vec<Pulse>,
     scratch: Vec<Pulse>,
     faults_injected: u64,
+    exact: bool,
 }
 
 impl<L> Faulty<L> {
@@ -28,7 +29,15 @@ impl<L> Faulty<L> {
             pulses: Vec::with_capacity(64),
             scratch: Vec::with_capacity(64),
             faults_injected: 0,
+            exact: false,
         }
+    }
+
+    /// Pulse-exact (`true`): with random faults armed, every train goes on as pulses, also
+    /// those the injector left untouched (the default, `false`, hands those on as clean
+    /// trains; see [`Wire::set_pulse_exact`](super::Wire::set_pulse_exact)).
+    pub fn set_faults_pulse_exact(&mut self, on: bool) {
+        self.exact = on;
     }
 
     /// The line inside.
@@ -96,6 +105,22 @@ impl<L: Line> Line for Faulty<L> {
         if self.is_clean() {
             self.inner.transmit(train, raw, bits, done);
             return;
+        }
+        // Random faults only: the injector draws for every pulse as ever, and a train it left
+        // untouched (no fault, no jitter) is a clean train that may take the wire's fast path;
+        // the rest go on as pulses. Same draws, same frames (tests/line.rs).
+        if self.one_shot.is_empty() && !self.exact {
+            if let Some(inj) = &mut self.injector {
+                let mut pulses = core::mem::take(&mut self.pulses);
+                let faults = inj.corrupt(train.iter(), &mut pulses);
+                if faults == 0 && inj.rates().jitter.is_zero() {
+                    self.inner.transmit(train, raw, bits, done);
+                } else {
+                    self.inner.transmit_pulses(&mut pulses, done);
+                }
+                self.pulses = pulses;
+                return;
+            }
         }
         let mut pulses = core::mem::take(&mut self.pulses);
         pulses.clear();

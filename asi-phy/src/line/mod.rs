@@ -41,9 +41,11 @@ impl Medium {
         Faulty::new(Tap::new(Wire::new(timing)))
     }
 
-    /// Pulse-exact (`true`) or with the wire's fast path for clean telegrams (the default):
-    /// see [`Wire::set_pulse_exact`].
+    /// Pulse-exact (`true`) or with the fast paths for clean telegrams (the default): the
+    /// wire's ([`Wire::set_pulse_exact`]) and, on a noisy line, the fault wrapper's for the
+    /// trains the injector left untouched ([`Faulty::set_faults_pulse_exact`]).
     pub fn set_pulse_exact(&mut self, on: bool) {
+        self.set_faults_pulse_exact(on);
         self.inner_mut().inner_mut().set_pulse_exact(on);
     }
 }
