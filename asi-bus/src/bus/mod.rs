@@ -128,6 +128,8 @@ pub struct Bus {
     output_taken: bool,
     ring: Option<TraceRing>,
     callback: Option<TraceCallback>,
+    /// The frames of a response, kept between transactions so that none allocates.
+    response_frames: Vec<Frame>,
 }
 
 impl core::fmt::Debug for Bus {
@@ -171,6 +173,7 @@ impl Bus {
             output_taken: false,
             ring: None,
             callback: None,
+            response_frames: Vec::new(),
         };
         for s in slaves {
             bus.add_slave(s)?;
@@ -541,7 +544,8 @@ impl Bus {
         if readdressed || matches!(req.call(), Call::BroadcastReset | Call::ResetSlave { .. }) {
             self.reindex();
         }
-        let mut frames: Vec<Frame> = Vec::new();
+        let mut frames = core::mem::take(&mut self.response_frames);
+        frames.clear();
         let mut collect = |f| frames.push(f);
         match n {
             0 => {}
@@ -561,9 +565,10 @@ impl Bus {
                 self.medium.transmit_merged(&all, &mut collect);
             }
         }
-        for f in frames {
-            self.hear(now, &f, Role::Response);
+        for f in &frames {
+            self.hear(now, f, Role::Response);
         }
+        self.response_frames = frames;
     }
 
     // ----- application access -----------------------------------------------------------

@@ -628,14 +628,14 @@ impl TwinSafeLogic {
         self.image[fb] = errors.fb_err;
         self.image[com] = errors.com_err;
         self.image[out] = errors.out_err;
-        let name = self.c.groups[g].name.clone();
+        let name = || self.c.groups[g].name.clone();
         let entered_error =
             state == GroupState::Error && !matches!(before, GroupState::Error | GroupState::Reset);
         if entered_error {
             self.push(
                 now,
                 LogicEventKind::GroupTripped {
-                    group: name,
+                    group: name(),
                     errors,
                 },
             );
@@ -647,7 +647,7 @@ impl TwinSafeLogic {
             self.push(
                 now,
                 LogicEventKind::GroupRunning {
-                    group: name,
+                    group: name(),
                     running,
                 },
             );
@@ -659,10 +659,12 @@ impl TwinSafeLogic {
         let run = self.groups[cm.group].running();
         let value = |k: usize| -> bool { cm.inputs[k].is_some_and(|(s, _)| self.image[s]) };
         let linked = |k: usize| cm.inputs[k].map(|(s, c)| (c, self.image[s]));
-        let outputs: Vec<bool> = match &mut self.modules[m] {
-            ModuleRt::And => vec![and((0..8).filter_map(linked))],
-            ModuleRt::Or => vec![or((0..8).filter_map(linked))],
-            ModuleRt::Decouple => decouple(core::array::from_fn(value)).to_vec(),
+        // At most 9 outputs (OPMODE: 8 and Error), kept on the stack: a scan runs every 1 ms.
+        let mut outputs = Outputs::default();
+        match &mut self.modules[m] {
+            ModuleRt::And => outputs.push(and((0..8).filter_map(linked))),
+            ModuleRt::Or => outputs.push(or((0..8).filter_map(linked))),
+            ModuleRt::Decouple => outputs.extend(decouple(core::array::from_fn(value))),
             ModuleRt::OpMode(fb) => {
                 let o = fb.scan(
                     now,
@@ -672,7 +674,7 @@ impl TwinSafeLogic {
                         restart: value(8),
                     },
                 );
-                o.op_out.iter().copied().chain([o.error]).collect()
+                outputs.extend(o.op_out.iter().copied().chain([o.error]));
             }
             ModuleRt::Estop(fb) => {
                 let o = fb.scan(
@@ -685,7 +687,7 @@ impl TwinSafeLogic {
                         edm2: value(10),
                     },
                 );
-                vec![o.estop_out, o.estop_del_out, o.error]
+                outputs.extend([o.estop_out, o.estop_del_out, o.error]);
             }
             ModuleRt::Mon(fb) => {
                 let o = fb.scan(
@@ -699,10 +701,10 @@ impl TwinSafeLogic {
                         edm2: value(8),
                     },
                 );
-                vec![o.mon_out, o.mon_del_out, o.error]
+                outputs.extend([o.mon_out, o.mon_del_out, o.error]);
             }
         };
-        for (k, v) in outputs.into_iter().enumerate() {
+        for (k, &v) in outputs.as_slice().iter().enumerate() {
             let gated = v && (run || !cm.safety_outputs[k]);
             self.image[cm.outputs[k]] = gated;
         }
@@ -798,5 +800,31 @@ impl TwinSafeLogic {
             }
         }?;
         self.image.get(slot).copied()
+    }
+}
+
+/// A module's outputs in one scan, in their order, on the stack.
+#[derive(Default)]
+struct Outputs {
+    values: [bool; 12],
+    len: usize,
+}
+
+impl Outputs {
+    fn push(&mut self, v: bool) {
+        // A module has at most 9 outputs (verify::output_specs); more would be a logic slip,
+        // and the outputs past the array would be lost rather than panic in a safety scan.
+        if let Some(slot) = self.values.get_mut(self.len) {
+            *slot = v;
+            self.len += 1;
+        }
+    }
+
+    fn extend(&mut self, vs: impl IntoIterator<Item = bool>) {
+        vs.into_iter().for_each(|v| self.push(v));
+    }
+
+    fn as_slice(&self) -> &[bool] {
+        &self.values[..self.len]
     }
 }
