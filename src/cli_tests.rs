@@ -103,6 +103,43 @@ fn an_unwritable_or_existing_report_is_refused_and_the_users_file_kept() {
     assert_eq!(files_in(d.path()), ["r.json"]);
 }
 
+/// A trace that cannot be written whole (a full disk: /dev/full) keeps every trace and
+/// waveform file out of place, so a file of that name keeps what it had, even with --force;
+/// the report is written and the command says what was not.
+#[test]
+fn a_trace_that_cannot_be_written_leaves_the_users_files_alone() {
+    let d = temp();
+    let vcd = d.path().join("run.vcd");
+    std::fs::write(&vcd, "mine").expect("write");
+    let report = d.path().join("r.txt");
+    let err = fails(
+        asi_lift()
+            .args([
+                "run",
+                "demo",
+                "--until",
+                "3s",
+                "--force",
+                "--trace",
+                "/dev/full",
+            ])
+            .arg("--vcd")
+            .arg(&vcd)
+            .arg("--report")
+            .arg(&report),
+    );
+    assert!(err.contains("--trace /dev/full"), "{err}");
+    assert!(err.contains("--vcd"), "{err}");
+    assert!(err.contains("No space left"), "{err}");
+    assert_eq!(std::fs::read_to_string(&vcd).expect("read"), "mine");
+    let text = std::fs::read_to_string(&report).expect("the report is written");
+    assert!(
+        text.contains("the bus trace could not be written"),
+        "{text}"
+    );
+    assert_eq!(files_in(d.path()), ["r.txt", "run.vcd"]);
+}
+
 #[test]
 fn a_reader_that_goes_ends_the_run_quietly() {
     let d = temp();

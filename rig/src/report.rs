@@ -42,6 +42,10 @@ pub struct Report {
     /// The readable log of the run, one line per event.
     #[serde(skip)]
     pub log: Vec<LogLine>,
+    /// The first error writing the bus trace or the waveforms (VCD, CSV), if any: the command
+    /// then keeps those files out of place and says so.
+    #[serde(skip)]
+    pub output_error: Option<String>,
 }
 
 /// What a live run (`asi-lift serve`) adds to the report: who controlled the lift and how the
@@ -467,6 +471,7 @@ impl Report {
             availability: Availability::default(),
             live: None,
             log: Vec::new(),
+            output_error: None,
         }
     }
 

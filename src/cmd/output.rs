@@ -117,6 +117,8 @@ struct Pending {
     /// As the user wrote it, for messages.
     shown: PathBuf,
     target: Target,
+    /// Not written whole: left out at the commit.
+    discarded: bool,
 }
 
 /// How an output file is written.
@@ -200,6 +202,7 @@ impl Outputs {
                     place: path.to_path_buf(),
                     shown: path.to_path_buf(),
                     target: Target::Stream(f),
+                    discarded: false,
                 });
                 return Ok(Sink::File(self.pending.len() - 1));
             }
@@ -226,6 +229,7 @@ impl Outputs {
             place,
             shown: path.to_path_buf(),
             target: Target::Temp(temp),
+            discarded: false,
         });
         Ok(Sink::File(self.pending.len() - 1))
     }
@@ -271,6 +275,41 @@ impl Outputs {
         }
     }
 
+    /// Drops the output of `sink` that could not be written whole: its temporary file goes,
+    /// and whatever was at its place stays. Returns how to name it in a message (`--trace
+    /// t.jsonl`); `None` for standard output, which cannot be taken back.
+    pub fn discard(&mut self, sink: &Sink) -> Option<String> {
+        let Sink::File(i) = sink else {
+            return None;
+        };
+        let p = &mut self.pending[*i];
+        // At the commit its temporary file is deleted instead of renamed.
+        p.discarded = true;
+        Some(format!("{} {}", p.flag, p.shown.display()))
+    }
+
+    /// When the run could not write its trace or waveforms whole (`error`, the report's
+    /// `output_error`), keeps every one of `sinks` out of place and returns the message the
+    /// command ends with, naming them; `None` when all went well.
+    pub fn keep_out_unwritten(
+        &mut self,
+        error: Option<&str>,
+        sinks: &[(&'static str, Option<&Sink>)],
+    ) -> Option<String> {
+        let e = error?;
+        let names: Vec<String> = sinks
+            .iter()
+            .filter_map(|&(flag, sink)| {
+                let sink = sink?;
+                Some(self.discard(sink).unwrap_or_else(|| format!("{flag} -")))
+            })
+            .collect();
+        Some(format!(
+            "{}: cannot write: {e}; the report is written, the trace and waveforms are not",
+            names.join(", ")
+        ))
+    }
+
     /// Moves every file into place. Without `force`, a file that appeared at a place while the
     /// command ran is kept, and this output is reported instead of replacing it.
     pub fn commit(self) -> Result<(), String> {
@@ -278,6 +317,10 @@ impl Outputs {
             let Target::Temp(temp) = p.target else {
                 continue;
             };
+            if p.discarded {
+                // Dropped, the temporary file is deleted; the place keeps what it had.
+                continue;
+            }
             temp.as_file()
                 .sync_data()
                 .map_err(|e| format!("{} {}: {e}", p.flag, p.shown.display()))?;

@@ -210,7 +210,20 @@ pub fn run(args: RunArgs) -> Result<u8, String> {
         })?;
         outs.write_all(sink, &svg)?;
     }
+    // A trace or waveform file that could not be written whole is not put in place (a file
+    // of that name keeps what it had); the report and the plot are.
+    let lost = outs.keep_out_unwritten(
+        rep.output_error.as_deref(),
+        &[
+            ("--trace", trace_sink.as_ref()),
+            ("--vcd", vcd_sink.as_ref()),
+            ("--csv", csv_sink.as_ref()),
+        ],
+    );
     outs.commit()?;
+    if let Some(lost) = lost {
+        return Err(lost);
+    }
     if report != Path::new("-") {
         let summary = format!(
             "{}report written to {}\n",

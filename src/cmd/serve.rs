@@ -147,12 +147,13 @@ pub fn run(args: ServeArgs) -> Result<u8, String> {
     if trace.as_deref() == Some(Path::new("-")) {
         return Err("--trace: a live run's trace goes to a file, not to standard output".into());
     }
-    let trace_out = match &trace {
-        None => None,
-        Some(path) => {
-            let sink = outs.add("--trace", path)?;
-            Some((outs.writer(&sink)?, trace_form(trace_format, path)))
-        }
+    let trace_sink = trace
+        .as_deref()
+        .map(|p| outs.add("--trace", p))
+        .transpose()?;
+    let trace_out = match (&trace, &trace_sink) {
+        (Some(path), Some(sink)) => Some((outs.writer(sink)?, trace_form(trace_format, path))),
+        _ => None,
     };
 
     let make_rig = move || {
@@ -218,7 +219,14 @@ pub fn run(args: ServeArgs) -> Result<u8, String> {
     }
     let rep = running.wait();
     outs.write_all(&report_sink, &report_body(&rep, format)?)?;
+    let lost = outs.keep_out_unwritten(
+        rep.output_error.as_deref(),
+        &[("--trace", trace_sink.as_ref())],
+    );
     outs.commit()?;
+    if let Some(lost) = lost {
+        return Err(lost);
+    }
     if report != Path::new("-") {
         print_out(&format!(
             "{}report written to {}\n",

@@ -817,6 +817,7 @@ impl Rig {
         if let Some(e) = self.trace_error().map(str::to_owned) {
             let text = format!("the bus trace could not be written: {e}");
             self.log("rig", text);
+            self.report.output_error = Some(e);
         }
         let now = self.now;
         self.watch_bus(now);
