@@ -167,12 +167,21 @@ fn the_demo_gives_the_same_vcd_on_both_paths() {
 }
 
 /// The CI campaign's profile (faults of every kind, line noise among them).
+/// Runs `0..runs` of the CI campaign's seed, shared out over the machine's cores.
 fn random_runs(runs: u64, until: Option<SimDuration>) {
     let profile = Profile::built_in("default").expect("the default profile");
-    for index in 0..runs {
-        let g = generate(2026, index, &profile);
-        agree(&format!("random run {index}"), &g.scenario, until, false);
-    }
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get() as u64);
+    std::thread::scope(|s| {
+        for k in 0..threads {
+            let profile = &profile;
+            s.spawn(move || {
+                for index in (k..runs).step_by(threads as usize) {
+                    let g = generate(2026, index, profile);
+                    agree(&format!("random run {index}"), &g.scenario, until, false);
+                }
+            });
+        }
+    });
 }
 
 #[test]
