@@ -180,9 +180,7 @@ where
     let ttk_addr = ttk.as_ref().map(|(_, a)| *a);
     let http = http.map(|a| bind(&runtime, a)).transpose()?;
     let http_addr = http.as_ref().map(|(_, a)| *a);
-    let (snapshots_tx, snapshots) = tokio::sync::watch::channel::<std::sync::Arc<str>>(
-        std::sync::Arc::from("{\"type\":\"starting\"}"),
-    );
+    let (snapshots_tx, snapshots) = tokio::sync::watch::channel(None);
     let history = live::History::default();
     let view = http.is_some().then(|| ViewOut {
         snapshots: snapshots_tx,

@@ -85,20 +85,22 @@ pub type History = Arc<Mutex<VecDeque<[f64; 3]>>>;
 
 /// How much of the cabin's past the plot shows.
 pub const HISTORY: f64 = 30.0;
-/// The most points the history holds (30 s at 20 snapshots per wall second, at speed 1).
+/// The most points the history holds (30 s at 25 snapshots per wall second is 750).
 const HISTORY_POINTS: usize = 1200;
 
 /// Where the rig thread publishes the live view's snapshots.
 #[derive(Clone)]
 pub struct ViewOut {
-    /// The latest snapshot as JSON text; every browser's socket watches it.
-    pub snapshots: tokio::sync::watch::Sender<Arc<str>>,
+    /// The latest snapshot as JSON text (none before the first); every browser's socket
+    /// watches it.
+    pub snapshots: tokio::sync::watch::Sender<Option<Arc<str>>>,
     /// The plot's points so far, for a browser that connects.
     pub history: History,
 }
 
-/// How often the rig thread builds a snapshot for the live view, wall time.
-pub const VIEW_EVERY: Duration = Duration::from_millis(50);
+/// How often the rig thread builds a snapshot for the live view, wall time: 25 a second, so
+/// that a browser gets at least 20 whatever the pacing loop's granularity.
+pub const VIEW_EVERY: Duration = Duration::from_millis(40);
 
 /// What reaches the rig thread.
 pub enum ToRig {
@@ -174,7 +176,7 @@ impl Viewer {
         }
         // The view holds only strings, numbers and booleans: it is always JSON.
         if let Ok(json) = serde_json::to_string(&v) {
-            self.out.snapshots.send_replace(json.into());
+            self.out.snapshots.send_replace(Some(json.into()));
         }
     }
 }

@@ -1,7 +1,7 @@
 //! The live view's web server (README, "Live view in the browser"): one page embedded in the
 //! binary and a WebSocket at `/ws` on axum, on the gateway's tokio runtime.
 //!
-//! The rig thread publishes a snapshot about every 50 ms of wall time ([`crate::live::ViewOut`]);
+//! The rig thread publishes a snapshot every 40 ms of wall time ([`crate::live::ViewOut`]);
 //! each socket forwards the latest one as it is able (a slow browser skips snapshots, it never
 //! holds the others up), after the plot's history on connecting. What a browser sends is a
 //! command: `{"id": 1, "command": {"press": "cabin:3"}}`, at most
@@ -36,8 +36,8 @@ const MAX_FRAME_BYTES: usize = 64 * 1024;
 /// What every request of the live view shares.
 #[derive(Clone)]
 pub struct Web {
-    /// The latest snapshot.
-    pub snapshots: watch::Receiver<Arc<str>>,
+    /// The latest snapshot (none before the first).
+    pub snapshots: watch::Receiver<Option<Arc<str>>>,
     /// The plot's history.
     pub history: History,
     /// The rig thread.
@@ -151,7 +151,9 @@ async fn serve_socket(mut socket: WebSocket, web: Web) {
                     let _ = socket.send(Message::Close(None)).await;
                     return;
                 }
-                let text = snapshots.borrow_and_update().clone();
+                let Some(text) = snapshots.borrow_and_update().clone() else {
+                    continue;
+                };
                 if socket.send(Message::Text(text.as_ref().into())).await.is_err() {
                     return;
                 }
