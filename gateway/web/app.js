@@ -141,8 +141,8 @@ function buildShaft(s) {
     el("polygon", { points: `${W1},${y(mm)} ${W1 + 24},${y(mm) - 12} ${W1 + 24},${y(mm) + 12}`, class: "ot" }, svg));
   // The cabin: from its floor (the position) up 240 mm.
   const cabin = el("g", { id: "cabin" }, svg);
-  const body = el("rect", { x: 110, y: -240, width: 100, height: 240, class: "cabin" }, cabin);
-  const door = el("rect", { x: 204, y: -200, width: 6, height: 200, class: "door" }, cabin);
+  const body = el("rect", { x: 106, y: -240, width: 108, height: 240, class: "cabin" }, cabin);
+  const door = el("rect", { x: 208, y: -200, width: 6, height: 200, class: "door" }, cabin);
   const load = el("text", { x: 160, y: -120, class: "cabin-text" }, cabin);
   const dir = el("text", { x: 160, y: -60, class: "cabin-text big" }, cabin);
   const sl = el("circle", { cx: 95, cy: 0, r: 9, class: "sensor" }, cabin);
