@@ -22,7 +22,8 @@ const STEP: Duration = Duration::from_secs(60);
 
 /// The lab lift at floor 1 at speed `speed`, with the live view.
 fn start(speed: f64) -> Running {
-    let toml = "name = \"browser\"\nduration = \"30min\"\n[lift]\nstart_mm = 0.0\nload = \"loaded\"\n";
+    let toml =
+        "name = \"browser\"\nduration = \"30min\"\n[lift]\nstart_mm = 0.0\nload = \"loaded\"\n";
     let sc = Scenario::from_toml("browser.toml", toml).expect("a valid scenario");
     let make = move || Rig::new(sc).map_err(|e| e.to_string());
     let cfg = LiveConfig {
@@ -96,7 +97,9 @@ async fn click(c: &Client, id: &str) {
         .for_element(Locator::Id(id))
         .await
         .unwrap_or_else(|e| panic!("#{id}: {e}"));
-    e.click().await.unwrap_or_else(|e| panic!("click #{id}: {e}"));
+    e.click()
+        .await
+        .unwrap_or_else(|e| panic!("click #{id}: {e}"));
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
@@ -105,7 +108,9 @@ async fn the_live_view_in_chromium() {
     let addr = running.http_addr().expect("the live view's address");
     let profile = std::env::temp_dir().join(format!("asi-lift-chromium-{}", std::process::id()));
     let c = browser(&profile).await;
-    c.goto(&format!("http://{addr}/")).await.expect("the page loads");
+    c.goto(&format!("http://{addr}/"))
+        .await
+        .expect("the page loads");
     assert_eq!(c.title().await.expect("a title"), "asi-lift live view");
     wait_text(&c, "conn", "the socket goes live", |t| t == "live").await;
     // The controller initialises at floor 1 first.
@@ -150,7 +155,10 @@ async fn the_live_view_in_chromium() {
 
     // A slave off line leaves LAS.
     let las = |t: &str| t.split(' ').map(str::to_owned).collect::<Vec<_>>();
-    let t = wait_text(&c, "las", "slave 11 in LAS", |t| las(t).contains(&"11A".into())).await;
+    let t = wait_text(&c, "las", "slave 11 in LAS", |t| {
+        las(t).contains(&"11A".into())
+    })
+    .await;
     assert!(las(&t).contains(&"8A".into()), "{t}");
     click(&c, "offline-11").await;
     wait_text(&c, "las", "slave 11 leaves LAS", |t| {
@@ -158,7 +166,10 @@ async fn the_live_view_in_chromium() {
     })
     .await;
     click(&c, "online-11").await;
-    wait_text(&c, "las", "slave 11 back in LAS", |t| las(t).contains(&"11A".into())).await;
+    wait_text(&c, "las", "slave 11 back in LAS", |t| {
+        las(t).contains(&"11A".into())
+    })
+    .await;
 
     // On a phone-sized screen nothing is wider than the screen.
     c.set_window_size(390, 844).await.expect("a phone's window");

@@ -133,7 +133,9 @@ mod tests {
         );
         assert_eq!(
             parse(&json!({"fault": {"kind": "slave-offline", "slave": 7}}), 4),
-            Ok(Command::Act(Action::Fault(Fault::SlaveOffline { slave: 7 })))
+            Ok(Command::Act(Action::Fault(Fault::SlaveOffline {
+                slave: 7
+            })))
         );
         assert_eq!(
             parse(&json!({"line_noise": 0.001}), 4),

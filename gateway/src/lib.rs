@@ -160,7 +160,11 @@ where
 }
 
 /// As [`start`], with every server of [`Listen`]: with `http`, the live view too.
-pub fn start_servers<F>(make_rig: F, cfg: LiveConfig, listen: Listen) -> Result<Running, GatewayError>
+pub fn start_servers<F>(
+    make_rig: F,
+    cfg: LiveConfig,
+    listen: Listen,
+) -> Result<Running, GatewayError>
 where
     F: FnOnce() -> Result<Rig, String> + Send + 'static,
 {

@@ -232,7 +232,15 @@ pub fn run_with_view(
                 let next = Duration::from_secs_f64(1e-3 / x).min(Duration::from_millis(1));
                 match rx.recv_timeout(next) {
                     Ok(m) => {
-                        stopped |= handle(m, &mut rig, &mut gw, &mut ttk, at, &mut connections, viewer.as_mut())
+                        stopped |= handle(
+                            m,
+                            &mut rig,
+                            &mut gw,
+                            &mut ttk,
+                            at,
+                            &mut connections,
+                            viewer.as_mut(),
+                        )
                     }
                     Err(RecvTimeoutError::Timeout) => {}
                     Err(RecvTimeoutError::Disconnected) => break 'run,
@@ -249,7 +257,15 @@ pub fn run_with_view(
             }) {
                 Ok(m) => {
                     let call = matches!(m, ToRig::Call(_) | ToRig::Ttk(_));
-                    stopped |= handle(m, &mut rig, &mut gw, &mut ttk, at, &mut connections, viewer.as_mut());
+                    stopped |= handle(
+                        m,
+                        &mut rig,
+                        &mut gw,
+                        &mut ttk,
+                        at,
+                        &mut connections,
+                        viewer.as_mut(),
+                    );
                     if call {
                         let target = (at + cfg.step).min(rig.end());
                         at = advance(&mut rig, &mut gw, &mut ttk, at, target);
@@ -264,7 +280,17 @@ pub fn run_with_view(
         let lockstep = cfg.speed == Speed::Max && cfg.owner == Owner::External;
         while !lockstep && at < rig.end() {
             match rx.try_recv() {
-                Ok(m) => stopped |= handle(m, &mut rig, &mut gw, &mut ttk, at, &mut connections, viewer.as_mut()),
+                Ok(m) => {
+                    stopped |= handle(
+                        m,
+                        &mut rig,
+                        &mut gw,
+                        &mut ttk,
+                        at,
+                        &mut connections,
+                        viewer.as_mut(),
+                    )
+                }
                 Err(TryRecvError::Empty) => break,
                 Err(TryRecvError::Disconnected) => break 'run,
             }

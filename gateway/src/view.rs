@@ -307,8 +307,14 @@ pub fn build(rig: &Rig, run: Run, telegrams: Option<&Telegrams>) -> View {
                 right: cfg.vane_track_mm(VaneSensor::Right, f).unwrap_or_default(),
             })
             .collect(),
-        trip_mm: [cfg.trip_position_mm(End::Bottom), cfg.trip_position_mm(End::Top)],
-        end_mm: [cfg.end_position_mm(End::Bottom), cfg.end_position_mm(End::Top)],
+        trip_mm: [
+            cfg.trip_position_mm(End::Bottom),
+            cfg.trip_position_mm(End::Top),
+        ],
+        end_mm: [
+            cfg.end_position_mm(End::Bottom),
+            cfg.end_position_mm(End::Top),
+        ],
     };
     let mut buttons = vec![Button::Stop, Button::Bell];
     for f in 1..=floors {
@@ -415,7 +421,9 @@ pub fn build(rig: &Rig, run: Run, telegrams: Option<&Telegrams>) -> View {
             .and_then(|d| d.k1_open_cause)
             .filter(|_| !lift.k1_closed())
             .map(|c| c.to_string()),
-        stop_link: diag.map(|d| d.stop_link.names().collect()).unwrap_or_default(),
+        stop_link: diag
+            .map(|d| d.stop_link.names().collect())
+            .unwrap_or_default(),
         logic_fault: diag.is_some_and(|d| d.logic_fault),
     };
 
@@ -461,7 +469,9 @@ pub fn build(rig: &Rig, run: Run, telegrams: Option<&Telegrams>) -> View {
 
 /// The lab bus's slave addresses: the lift's own and the extra modules of the scenario.
 fn lab_addresses(rig: &Rig) -> Vec<u8> {
-    (1..32u8).filter(|&n| rig.lab().slave_id(n).is_some()).collect()
+    (1..32u8)
+        .filter(|&n| rig.lab().slave_id(n).is_some())
+        .collect()
 }
 
 fn display(id: DisplayId, state: Option<DisplayState>) -> DisplayView {

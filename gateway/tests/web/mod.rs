@@ -40,7 +40,8 @@ fn http(addr: SocketAddr, request: &str) -> (String, String) {
     let mut s = TcpStream::connect(addr).expect("a connection");
     s.set_read_timeout(Some(Duration::from_secs(5)))
         .expect("a timeout");
-    s.write_all(request.as_bytes()).expect("the request goes out");
+    s.write_all(request.as_bytes())
+        .expect("the request goes out");
     let mut out = Vec::new();
     let _ = s.read_to_end(&mut out);
     let text = String::from_utf8_lossy(&out).into_owned();
@@ -102,16 +103,19 @@ fn the_page_is_served_and_nothing_else() {
     let addr = running.http_addr().expect("the live view's address");
     let (status, body) = get(addr, "/");
     assert!(status.contains("200"), "{status}");
-    assert!(
-        body.contains("<title>asi-lift live view</title>"),
-        "{body}"
-    );
+    assert!(body.contains("<title>asi-lift live view</title>"), "{body}");
     for (path, needle) in [("/app.js", "new WebSocket"), ("/style.css", "@media")] {
         let (status, body) = get(addr, path);
         assert!(status.contains("200"), "{path}: {status}");
         assert!(body.contains(needle), "{path}");
     }
-    for path in ["/etc/passwd", "/../Cargo.toml", "/index.htm", "/ws/x", "/%00"] {
+    for path in [
+        "/etc/passwd",
+        "/../Cargo.toml",
+        "/index.htm",
+        "/ws/x",
+        "/%00",
+    ] {
         let (status, _) = get(addr, path);
         assert!(status.contains("404"), "{path}: {status}");
     }
@@ -203,7 +207,9 @@ async fn a_press_from_the_page_brings_the_cabin_to_floor_3() {
         .expect("the run ends");
     assert!(r.arrivals.iter().any(|a| a.floor == 3), "{:?}", r.arrivals);
     assert!(
-        r.log.iter().any(|l| l.who == "web" && l.text.contains("cabin button 3")),
+        r.log
+            .iter()
+            .any(|l| l.who == "web" && l.text.contains("cabin button 3")),
         "the log names the page's press"
     );
 }
@@ -218,7 +224,10 @@ async fn bad_commands_get_clear_errors_and_the_server_goes_on() {
         r["error"].as_str().expect("an error").to_owned()
     };
     let e = error(&command(&mut ws, 1, json!({"press": "cabin:9"})).await);
-    assert_eq!(e, "press: floor `9` does not exist: the lift has floors 1..4");
+    assert_eq!(
+        e,
+        "press: floor `9` does not exist: the lift has floors 1..4"
+    );
     let e = error(&command(&mut ws, 2, json!({"fault": {"kind": "meltdown"}})).await);
     assert!(e.starts_with("fault.kind: unknown fault `meltdown`"), "{e}");
     // Once K1 has closed, the hand crank is refused.
@@ -259,9 +268,7 @@ async fn bad_commands_get_clear_errors_and_the_server_goes_on() {
     assert!(tokio_tungstenite::connect_async(req).await.is_err());
     // A message over the frame limit closes that socket only.
     let mut big = connect(addr).await;
-    let _ = big
-        .send(Message::Text("y".repeat(100_000).into()))
-        .await;
+    let _ = big.send(Message::Text("y".repeat(100_000).into())).await;
     // The first socket goes on, and a good command still works.
     let r = command(&mut ws, 6, json!({"door": "open"})).await;
     assert_eq!(r["ok"], true, "{r}");
@@ -271,7 +278,10 @@ async fn bad_commands_get_clear_errors_and_the_server_goes_on() {
         if v["lift"]["door_closed"] == false {
             break;
         }
-        assert!(t0.elapsed() < Duration::from_secs(5), "the door stays closed");
+        assert!(
+            t0.elapsed() < Duration::from_secs(5),
+            "the door stays closed"
+        );
     }
     // A slave taken off line leaves LAS.
     let r = command(
@@ -285,12 +295,18 @@ async fn bad_commands_get_clear_errors_and_the_server_goes_on() {
     loop {
         let v = next_of(&mut ws, "view").await;
         let slaves = v["bus"]["slaves"].as_array().expect("slaves").clone();
-        let s11 = slaves.iter().find(|s| s["number"] == 11).expect("slave 11 is projected");
+        let s11 = slaves
+            .iter()
+            .find(|s| s["number"] == 11)
+            .expect("slave 11 is projected");
         if s11["las"] == false {
             assert_eq!(s11["lps"], true);
             break;
         }
-        assert!(t0.elapsed() < Duration::from_secs(5), "slave 11 stays in LAS");
+        assert!(
+            t0.elapsed() < Duration::from_secs(5),
+            "slave 11 stays in LAS"
+        );
     }
     running.stop();
     tokio::task::spawn_blocking(move || running.wait())
