@@ -45,7 +45,7 @@ pub fn parse(value: &serde_json::Value, floors: u8) -> Result<Command, String> {
         return Err("at: a command from the page happens now; it takes no time".into());
     }
     // The scenario reader checks the event: as a file of one event for a lift of `floors`.
-    let event = toml::Value::try_from(value).map_err(|e| format!("{}", toml_value_error(&e)))?;
+    let event = toml::Value::try_from(value).map_err(|e| toml_value_error(&e))?;
     let mut table = toml::Table::new();
     table.insert("at".into(), toml::Value::String("0s".into()));
     if let toml::Value::Table(t) = event {
