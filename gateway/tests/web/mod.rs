@@ -129,6 +129,23 @@ fn the_page_is_served_and_nothing_else() {
         "POST / HTTP/1.1\r\nHost: x\r\nContent-Length: 3\r\nConnection: close\r\n\r\nabc",
     );
     assert!(status.contains("405"), "{status}");
+    // A WebSocket that sends a frame of no known kind is closed; the server goes on.
+    let mut s = TcpStream::connect(addr).expect("a connection");
+    s.set_read_timeout(Some(Duration::from_secs(5)))
+        .expect("a timeout");
+    let upgrade = format!(
+        "GET /ws HTTP/1.1\r\nHost: {addr}\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n\
+         Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\nSec-WebSocket-Version: 13\r\n\r\n"
+    );
+    s.write_all(upgrade.as_bytes())
+        .expect("the upgrade goes out");
+    let mut head = [0u8; 12];
+    s.read_exact(&mut head).expect("an answer");
+    assert_eq!(&head, b"HTTP/1.1 101");
+    s.write_all(&[0x8b, 0x84, 1, 2, 3, 4, 0xde, 0xad, 0xbe, 0xef])
+        .expect("a bad frame goes out");
+    let mut rest = Vec::new();
+    let _ = s.read_to_end(&mut rest);
     let (status, _) = get(addr, "/");
     assert!(status.contains("200"), "the server goes on: {status}");
     running.stop();
