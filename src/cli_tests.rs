@@ -292,11 +292,49 @@ fn serve_names_its_bad_arguments_and_a_busy_port() {
     assert!(err.contains("--step"), "{err}");
     let err = fails(asi_lift().args(["serve", "--trace", "-"]));
     assert!(err.contains("--trace"), "{err}");
+    let err = fails(asi_lift().args(["serve", "--http", "localhost"]));
+    assert!(
+        err.contains("--http localhost") && err.contains("127.0.0.1:8080"),
+        "{err}"
+    );
     // A port already taken is named.
     let taken = std::net::TcpListener::bind("127.0.0.1:0").expect("a port");
     let addr = taken.local_addr().expect("its address").to_string();
     let err = fails(asi_lift().args(["serve", "--listen", &addr]));
     assert!(err.contains(&format!("cannot listen on {addr}")), "{err}");
+    let err = fails(asi_lift().args(["serve", "--listen", "127.0.0.1:0", "--http", &addr]));
+    assert!(err.contains(&format!("cannot listen on {addr}")), "{err}");
+}
+
+#[test]
+fn serve_with_the_live_view_gives_the_same_run_as_without() {
+    let d = temp();
+    let report = d.path().join("r.json");
+    let out = asi_lift()
+        .args(["serve", "--speed", "max", "--until", "3s"])
+        .args(["--listen", "127.0.0.1:0", "--http", "127.0.0.1:0"])
+        .args(["--format", "json", "--report"])
+        .arg(&report)
+        .output()
+        .expect("asi-lift runs");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("live view on http://127.0.0.1:"), "{err}");
+    let text = std::fs::read_to_string(&report).expect("the report");
+    let mut live: serde_json::Value = serde_json::from_str(&text).expect("JSON");
+    // Watching does not change the run: the batch run's report but `live`.
+    let run = asi_lift()
+        .args(["run", "--until", "3s", "--format", "json"])
+        .output()
+        .expect("asi-lift runs");
+    let mut batch: serde_json::Value = serde_json::from_slice(&run.stdout).expect("JSON");
+    live.as_object_mut().expect("an object").remove("live");
+    batch.as_object_mut().expect("an object").remove("live");
+    assert_eq!(live, batch);
 }
 
 #[test]

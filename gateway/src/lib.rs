@@ -6,16 +6,21 @@
 //! The deterministic core (the rig and everything below it) has no clock and no network; this
 //! crate adds both: `live` paces the rig and serves requests between its moments, `map` is the
 //! register map, and the Modbus server (tokio-modbus on tokio) forwards each request to the rig
-//! thread over a crossbeam channel and waits for the answer.
+//! thread over a crossbeam channel and waits for the answer. With `--http`, the live view
+//! (`web`, `view`, `command`): a page in the browser that shows the rig as it runs and sends
+//! it commands, over the same channel.
 
 #![forbid(unsafe_code)]
 
+pub mod command;
 pub mod live;
 pub mod map;
 pub mod ttk;
+pub mod view;
+pub mod web;
 
 use crossbeam_channel::{Receiver, Sender};
-use live::{Call, LiveConfig, Status, ToRig, TtkCall};
+use live::{Call, LiveConfig, Status, ToRig, TtkCall, ViewOut};
 use rig::{Report, Rig};
 use std::future::Future;
 use std::net::SocketAddr;
@@ -50,6 +55,7 @@ pub enum GatewayError {
 pub struct Running {
     addr: SocketAddr,
     ttk_addr: Option<SocketAddr>,
+    http_addr: Option<SocketAddr>,
     tx: Sender<ToRig>,
     status: Receiver<Status>,
     rig: JoinHandle<Report>,
@@ -65,6 +71,11 @@ impl Running {
     /// The address the TTK4145 server listens on, if there is one.
     pub fn ttk_addr(&self) -> Option<SocketAddr> {
         self.ttk_addr
+    }
+
+    /// The address the live view's web server listens on, if there is one.
+    pub fn http_addr(&self) -> Option<SocketAddr> {
+        self.http_addr
     }
 
     /// The status the rig thread sends about once per wall second, and at the end.
@@ -114,6 +125,17 @@ fn bind(
     Ok((listener, bound))
 }
 
+/// Where a live run's servers listen.
+#[derive(Clone, Copy, Debug)]
+pub struct Listen {
+    /// Modbus TCP.
+    pub modbus: SocketAddr,
+    /// The TTK4145 protocol, if wanted.
+    pub ttk: Option<SocketAddr>,
+    /// The live view in the browser (HTTP and WebSocket), if wanted.
+    pub http: Option<SocketAddr>,
+}
+
 /// Starts a live run: builds the rig with `make_rig` on its own thread, listens on `listen`
 /// and serves Modbus TCP until the run ends; with `ttk`, serves the TTK4145 protocol there
 /// too.
@@ -126,6 +148,31 @@ pub fn start<F>(
 where
     F: FnOnce() -> Result<Rig, String> + Send + 'static,
 {
+    start_servers(
+        make_rig,
+        cfg,
+        Listen {
+            modbus: listen,
+            ttk,
+            http: None,
+        },
+    )
+}
+
+/// As [`start`], with every server of [`Listen`]: with `http`, the live view too.
+pub fn start_servers<F>(
+    make_rig: F,
+    cfg: LiveConfig,
+    listen: Listen,
+) -> Result<Running, GatewayError>
+where
+    F: FnOnce() -> Result<Rig, String> + Send + 'static,
+{
+    let Listen {
+        modbus: listen,
+        ttk,
+        http,
+    } = listen;
     let runtime = tokio::runtime::Builder::new_multi_thread()
         .worker_threads(1)
         .thread_name("asi-lift-gateway")
@@ -135,6 +182,14 @@ where
     let (listener, addr) = bind(&runtime, listen)?;
     let ttk = ttk.map(|a| bind(&runtime, a)).transpose()?;
     let ttk_addr = ttk.as_ref().map(|(_, a)| *a);
+    let http = http.map(|a| bind(&runtime, a)).transpose()?;
+    let http_addr = http.as_ref().map(|(_, a)| *a);
+    let (snapshots_tx, snapshots) = tokio::sync::watch::channel(None);
+    let history = live::History::default();
+    let view = http.is_some().then(|| ViewOut {
+        snapshots: snapshots_tx,
+        history: history.clone(),
+    });
     let (tx, rx) = crossbeam_channel::unbounded();
     let (status_tx, status) = crossbeam_channel::bounded(64);
     let (ready_tx, ready) = crossbeam_channel::bounded(1);
@@ -143,7 +198,7 @@ where
         .spawn(move || match make_rig() {
             Ok(rig) => {
                 let _ = ready_tx.send(Ok(()));
-                live::run(rig, cfg, &rx, &status_tx)
+                live::run_with_view(rig, cfg, &rx, &status_tx, view)
             }
             Err(e) => {
                 let _ = ready_tx.send(Err(e));
@@ -180,9 +235,21 @@ where
     if let Some((listener, _)) = ttk {
         runtime.spawn(serve_ttk(listener, tx.clone()));
     }
+    if let Some((listener, _)) = http {
+        let app = web::router(web::Web {
+            snapshots,
+            history,
+            tx: tx.clone(),
+        });
+        runtime.spawn(async move {
+            // A connection that breaks or sends what is not HTTP ends alone; the server goes on.
+            let _ = axum::serve(listener, app).await;
+        });
+    }
     Ok(Running {
         addr,
         ttk_addr,
+        http_addr,
         tx,
         status,
         rig,

@@ -10,12 +10,16 @@
 //! client's program and the simulation run in lockstep and the same requests give the same
 //! run.
 
+use crate::command;
 use crate::map::{Gateway, Owner};
 use crate::ttk::Ttk;
+use crate::view::{self, Telegrams};
 use asi_phy::{SimDuration, SimTime};
 use crossbeam_channel::{Receiver, RecvTimeoutError, Sender, TryRecvError};
 use rig::report::LiveReport;
 use rig::{Report, Rig};
+use std::collections::VecDeque;
+use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 use tokio_modbus::{ExceptionCode, Request, Response};
 
@@ -66,12 +70,46 @@ pub struct TtkCall {
     pub reply: tokio::sync::oneshot::Sender<Option<[u8; 4]>>,
 }
 
+/// A command from the live view's page ([`crate::command`]), with where its answer goes:
+/// done, or why not.
+pub struct WebCall {
+    /// The command, a JSON object not yet checked.
+    pub command: serde_json::Value,
+    /// Where the answer goes.
+    pub reply: tokio::sync::oneshot::Sender<Result<(), String>>,
+}
+
+/// The cabin's height and speed over the last [`HISTORY`] of simulated time, for the page's
+/// plot: `[t_s, position_mm, velocity_mm_s]`, oldest first, one per snapshot.
+pub type History = Arc<Mutex<VecDeque<[f64; 3]>>>;
+
+/// How much of the cabin's past the plot shows.
+pub const HISTORY: f64 = 30.0;
+/// The most points the history holds (30 s at 25 snapshots per wall second is 750).
+const HISTORY_POINTS: usize = 1200;
+
+/// Where the rig thread publishes the live view's snapshots.
+#[derive(Clone)]
+pub struct ViewOut {
+    /// The latest snapshot as JSON text (none before the first); every browser's socket
+    /// watches it.
+    pub snapshots: tokio::sync::watch::Sender<Option<Arc<str>>>,
+    /// The plot's points so far, for a browser that connects.
+    pub history: History,
+}
+
+/// How often the rig thread builds a snapshot for the live view, wall time: 25 a second, so
+/// that a browser gets at least 20 whatever the pacing loop's granularity.
+pub const VIEW_EVERY: Duration = Duration::from_millis(40);
+
 /// What reaches the rig thread.
 pub enum ToRig {
     /// A client's request.
     Call(Call),
     /// A TTK4145 client's message.
     Ttk(TtkCall),
+    /// A command from the live view's page.
+    Web(WebCall),
     /// A client connected.
     Connected,
     /// End the run now (Ctrl-C).
@@ -104,7 +142,61 @@ const STATUS_EVERY: Duration = Duration::from_secs(1);
 
 /// The rig thread's loop: runs `rig` until its end or a [`ToRig::Stop`], serving requests
 /// from `rx` and sending a [`Status`] to `status` every wall second; returns the report.
-pub fn run(mut rig: Rig, cfg: LiveConfig, rx: &Receiver<ToRig>, status: &Sender<Status>) -> Report {
+pub fn run(rig: Rig, cfg: LiveConfig, rx: &Receiver<ToRig>, status: &Sender<Status>) -> Report {
+    run_with_view(rig, cfg, rx, status, None)
+}
+
+/// The live view's side of the rig thread: the snapshots it publishes.
+struct Viewer {
+    out: ViewOut,
+    telegrams: Telegrams,
+    last: Option<Instant>,
+    commands: u64,
+}
+
+impl Viewer {
+    /// Whether the next snapshot is due.
+    fn due(&self) -> bool {
+        self.last.is_none_or(|l| l.elapsed() >= VIEW_EVERY)
+    }
+
+    /// Publishes a snapshot now.
+    fn publish(&mut self, rig: &Rig, run: view::Run) {
+        self.last = Some(Instant::now());
+        let v = view::build(rig, run, Some(&self.telegrams));
+        let point = [v.t_s, v.lift.position_mm, v.lift.velocity_mm_s];
+        if let Ok(mut h) = self.out.history.lock() {
+            while h
+                .front()
+                .is_some_and(|p| p[0] < point[0] - HISTORY || h.len() >= HISTORY_POINTS)
+            {
+                h.pop_front();
+            }
+            h.push_back(point);
+        }
+        // The view holds only strings, numbers and booleans: it is always JSON.
+        if let Ok(json) = serde_json::to_string(&v) {
+            self.out.snapshots.send_replace(Some(json.into()));
+        }
+    }
+}
+
+/// As [`run`], and with `view` publishes a snapshot for the live view every [`VIEW_EVERY`] of
+/// wall time and serves the page's commands ([`ToRig::Web`]). The live view takes the rig's
+/// transaction observer ([`Rig::on_transaction`]) for its list of the last telegrams.
+pub fn run_with_view(
+    mut rig: Rig,
+    cfg: LiveConfig,
+    rx: &Receiver<ToRig>,
+    status: &Sender<Status>,
+    view: Option<ViewOut>,
+) -> Report {
+    let mut viewer = view.map(|out| Viewer {
+        telegrams: view::observe(&mut rig),
+        out,
+        last: None,
+        commands: 0,
+    });
     let mut gw = Gateway::new(cfg.owner, cfg.watchdog);
     let mut ttk = Ttk::default();
     let mut connections = 0u64;
@@ -140,7 +232,15 @@ pub fn run(mut rig: Rig, cfg: LiveConfig, rx: &Receiver<ToRig>, status: &Sender<
                 let next = Duration::from_secs_f64(1e-3 / x).min(Duration::from_millis(1));
                 match rx.recv_timeout(next) {
                     Ok(m) => {
-                        stopped |= handle(m, &mut rig, &mut gw, &mut ttk, at, &mut connections)
+                        stopped |= handle(
+                            m,
+                            &mut rig,
+                            &mut gw,
+                            &mut ttk,
+                            at,
+                            &mut connections,
+                            viewer.as_mut(),
+                        )
                     }
                     Err(RecvTimeoutError::Timeout) => {}
                     Err(RecvTimeoutError::Disconnected) => break 'run,
@@ -150,10 +250,22 @@ pub fn run(mut rig: Rig, cfg: LiveConfig, rx: &Receiver<ToRig>, status: &Sender<
                 let target = (at + FREE_RUN_SLICE).min(rig.end());
                 at = advance(&mut rig, &mut gw, &mut ttk, at, target);
             }
-            Speed::Max => match rx.recv_timeout(STATUS_EVERY) {
+            Speed::Max => match rx.recv_timeout(if viewer.is_some() {
+                VIEW_EVERY
+            } else {
+                STATUS_EVERY
+            }) {
                 Ok(m) => {
                     let call = matches!(m, ToRig::Call(_) | ToRig::Ttk(_));
-                    stopped |= handle(m, &mut rig, &mut gw, &mut ttk, at, &mut connections);
+                    stopped |= handle(
+                        m,
+                        &mut rig,
+                        &mut gw,
+                        &mut ttk,
+                        at,
+                        &mut connections,
+                        viewer.as_mut(),
+                    );
                     if call {
                         let target = (at + cfg.step).min(rig.end());
                         at = advance(&mut rig, &mut gw, &mut ttk, at, target);
@@ -168,7 +280,17 @@ pub fn run(mut rig: Rig, cfg: LiveConfig, rx: &Receiver<ToRig>, status: &Sender<
         let lockstep = cfg.speed == Speed::Max && cfg.owner == Owner::External;
         while !lockstep && at < rig.end() {
             match rx.try_recv() {
-                Ok(m) => stopped |= handle(m, &mut rig, &mut gw, &mut ttk, at, &mut connections),
+                Ok(m) => {
+                    stopped |= handle(
+                        m,
+                        &mut rig,
+                        &mut gw,
+                        &mut ttk,
+                        at,
+                        &mut connections,
+                        viewer.as_mut(),
+                    )
+                }
                 Err(TryRecvError::Empty) => break,
                 Err(TryRecvError::Disconnected) => break 'run,
             }
@@ -177,11 +299,19 @@ pub fn run(mut rig: Rig, cfg: LiveConfig, rx: &Receiver<ToRig>, status: &Sender<
             last_status = Instant::now();
             let _ = status.try_send(status_of(&rig, &gw, at, start, sim0, cfg.speed, false));
         }
+        if let Some(v) = viewer.as_mut().filter(|v| v.due()) {
+            let s = status_of(&rig, &gw, at, start, sim0, cfg.speed, false);
+            v.publish(&rig, run_of(&s, cfg));
+        }
     }
     if stopped {
         rig.log_now("live", "stopped by the operator (Ctrl-C)".into());
     }
-    let _ = status.try_send(status_of(&rig, &gw, at, start, sim0, cfg.speed, true));
+    let last = status_of(&rig, &gw, at, start, sim0, cfg.speed, true);
+    if let Some(v) = viewer.as_mut() {
+        v.publish(&rig, run_of(&last, cfg));
+    }
+    let _ = status.try_send(last);
     // The moment at the end itself, as `asi-lift run` has it, then the report.
     rig.set_end(at);
     let mut report = rig.run(None);
@@ -219,6 +349,20 @@ pub(crate) fn advance(
     target
 }
 
+/// The live view's line about the run.
+fn run_of(s: &Status, cfg: LiveConfig) -> view::Run {
+    view::Run {
+        speed: cfg.speed.to_string(),
+        lag_ms: (s.lag_ms * 10.0).round() / 10.0,
+        controller: match cfg.owner {
+            Owner::Builtin => "builtin",
+            Owner::External => "external",
+        },
+        requests: s.requests,
+        ended: s.ended,
+    }
+}
+
 /// Serves one message at `at`; `true` if it ends the run.
 fn handle(
     m: ToRig,
@@ -227,8 +371,24 @@ fn handle(
     ttk: &mut Ttk,
     at: SimTime,
     connections: &mut u64,
+    viewer: Option<&mut Viewer>,
 ) -> bool {
     match m {
+        ToRig::Web(c) => {
+            let answer = match viewer {
+                Some(v) => {
+                    v.commands += 1;
+                    // Every change of the line noise draws from a seed of its own.
+                    let seed = 0x6c69_6e65 ^ v.commands;
+                    let floors = rig.lift().config().floors;
+                    command::parse(&c.command, floors)
+                        .and_then(|cmd| command::apply(rig, &cmd, seed))
+                }
+                None => Err("this run has no live view".into()),
+            };
+            let _ = c.reply.send(answer);
+            false
+        }
         ToRig::Ttk(c) => {
             let answer = ttk.serve(rig, gw, at, c.msg);
             let _ = c.reply.send(answer);

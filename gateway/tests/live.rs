@@ -1,5 +1,7 @@
 //! The gateway end to end: a live run served over Modbus TCP on a loopback port, driven by
-//! Rust clients (tokio-modbus) and by raw bytes.
+//! Rust clients (tokio-modbus) and by raw bytes; and the live view (`web`).
+
+mod web;
 
 use asi_master::ProcessImage;
 use asi_phy::{SimDuration, SimTime};

@@ -38,6 +38,12 @@ pub struct ServeArgs {
     /// program is off then.
     #[arg(long, value_name = "ADDR", num_args = 0..=1, default_missing_value = "127.0.0.1:15657")]
     pub ttk4145: Option<String>,
+    /// Also serve the live view, a page that shows the rig as it runs and lets a browser press
+    /// its buttons and inject faults (README.md, "Live view in the browser"), on this address
+    /// [default: off; 127.0.0.1:8080 when given without an address]. Only loopback unless an
+    /// address is given here.
+    #[arg(long, value_name = "ADDR", num_args = 0..=1, default_missing_value = "127.0.0.1:8080")]
+    pub http: Option<String>,
     /// With an outside controller: the output image goes to zero when no client has written
     /// it for this long (simulated time; 0 = off).
     #[arg(long, value_name = "DURATION", default_value = "1s")]
@@ -90,6 +96,7 @@ pub fn run(args: ServeArgs) -> Result<u8, String> {
         speed,
         controller,
         ttk4145,
+        http,
         watchdog,
         step,
         until,
@@ -107,6 +114,13 @@ pub fn run(args: ServeArgs) -> Result<u8, String> {
         .map(|a| {
             a.parse::<SocketAddr>().map_err(|e| {
                 format!("--ttk4145 {a}: {e} (expected an address such as 127.0.0.1:15657)")
+            })
+        })
+        .transpose()?;
+    let http = http
+        .map(|a| {
+            a.parse::<SocketAddr>().map_err(|e| {
+                format!("--http {a}: {e} (expected an address such as 127.0.0.1:8080)")
             })
         })
         .transpose()?;
@@ -172,10 +186,18 @@ pub fn run(args: ServeArgs) -> Result<u8, String> {
         watchdog,
         step,
     };
-    let running = gateway::start(make_rig, cfg, listen, ttk).map_err(|e| e.to_string())?;
+    let servers = gateway::Listen {
+        modbus: listen,
+        ttk,
+        http,
+    };
+    let running = gateway::start_servers(make_rig, cfg, servers).map_err(|e| e.to_string())?;
     running.stop_on_ctrl_c();
     let addr = running.local_addr();
-    for a in std::iter::once(addr).chain(running.ttk_addr()) {
+    for a in std::iter::once(addr)
+        .chain(running.ttk_addr())
+        .chain(running.http_addr())
+    {
         if !a.ip().is_loopback() {
             eprintln!(
                 "asi-lift: warning: listening on {a}, not loopback: anyone who reaches this machine can drive the lift"
@@ -184,6 +206,9 @@ pub fn run(args: ServeArgs) -> Result<u8, String> {
     }
     if let Some(a) = running.ttk_addr() {
         eprintln!("asi-lift: TTK4145 elevator server on {a}");
+    }
+    if let Some(a) = running.http_addr() {
+        eprintln!("asi-lift: live view on http://{a}/");
     }
     eprintln!(
         "asi-lift: Modbus TCP gateway on {addr}, {} controller, speed {speed}{}; Ctrl-C ends the run",

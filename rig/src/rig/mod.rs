@@ -943,6 +943,12 @@ impl Rig {
         self.safety_out.as_ref()
     }
 
+    /// The run's log so far (lines from different sources in the order they were written;
+    /// the report sorts them by time at the end).
+    pub fn log_lines(&self) -> &[LogLine] {
+        &self.report.log
+    }
+
     /// The violations found so far.
     pub fn violations(&self) -> &[Violation] {
         &self.report.violations

@@ -1,0 +1,162 @@
+//! The commands of the live view's page (README, "Live view in the browser"): one JSON object
+//! with one action, in the words of a scenario file's `[[event]]` (`{"press": "cabin:3"}`,
+//! `{"fault": {"kind": "slave-offline", "slave": 7}}`, `{"load": "full"}`, `{"crank_mm": -20}`
+//! …) and checked by the scenario reader itself, so that the page can do what a scenario can
+//! and nothing else; and the one setting a scenario has outside its events that a teacher
+//! changes while the lift runs, `{"line_noise": 0.0001}` (the `bus.pulse_error_rate`).
+//!
+//! A command has no time: it happens at the moment the simulation has reached.
+
+use asi_phy::fault::FaultRates;
+use asi_phy::PulseErrorRate;
+use rig::scenario::Action;
+use rig::{Rig, Scenario};
+
+/// The longest command the page may send, bytes of JSON text.
+pub const MAX_COMMAND_BYTES: usize = 4096;
+
+/// A command from the page, checked.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Command {
+    /// What a scenario event does.
+    Act(Action),
+    /// The line noise from now on: the probability that a pulse is corrupted.
+    LineNoise(f64),
+}
+
+/// Checks one command (a JSON object) for a lift of `floors` floors; the error says which key
+/// is at fault and why, in the scenario reader's words.
+pub fn parse(value: &serde_json::Value, floors: u8) -> Result<Command, String> {
+    let obj = value
+        .as_object()
+        .ok_or("a command is a JSON object with one action, such as {\"press\": \"cabin:3\"}")?;
+    if let Some(v) = obj.get("line_noise") {
+        if obj.len() > 1 {
+            return Err("line_noise: give it alone, without other keys".into());
+        }
+        let rate = v
+            .as_f64()
+            .ok_or("line_noise: a number, the probability that a pulse is corrupted (0..1)")?;
+        return PulseErrorRate::new(rate)
+            .map(|r| Command::LineNoise(r.get()))
+            .map_err(|e| format!("line_noise: {e}"));
+    }
+    if obj.contains_key("at") {
+        return Err("at: a command from the page happens now; it takes no time".into());
+    }
+    // The scenario reader checks the event: as a file of one event for a lift of `floors`.
+    let event = toml::Value::try_from(value).map_err(|e| toml_value_error(&e))?;
+    let mut table = toml::Table::new();
+    table.insert("at".into(), toml::Value::String("0s".into()));
+    if let toml::Value::Table(t) = event {
+        table.extend(t);
+    }
+    let mut lift = toml::Table::new();
+    lift.insert("floors".into(), toml::Value::Integer(i64::from(floors)));
+    let mut file = toml::Table::new();
+    file.insert("lift".into(), toml::Value::Table(lift));
+    file.insert(
+        "event".into(),
+        toml::Value::Array(vec![toml::Value::Table(table)]),
+    );
+    let text = toml::to_string(&file).map_err(|e| e.to_string())?;
+    let sc = Scenario::from_toml("command", &text).map_err(|e| {
+        let field = e.field.strip_prefix("event[1].").unwrap_or(&e.field);
+        let field = if field == "event[1]" { "" } else { field };
+        if field.is_empty() {
+            e.message
+        } else {
+            format!("{field}: {}", e.message)
+        }
+    })?;
+    let event = sc
+        .events
+        .into_iter()
+        .next()
+        .ok_or("a command with no action: give one of press, load, door, crank_mm, reset, rescue, ack, attend, fault, line_noise")?;
+    Ok(Command::Act(event.action))
+}
+
+/// A JSON value TOML cannot hold (a `null`): said in the page's words.
+fn toml_value_error(e: &toml::ser::Error) -> String {
+    let text = e.to_string();
+    if text.contains("None") || text.contains("null") || text.contains("unit") {
+        "a command has no null values".into()
+    } else {
+        format!("not a command: {text}")
+    }
+}
+
+/// Does `cmd` on `rig` now, or says why it cannot be done in the rig's state (the hand crank
+/// with K1 closed). `seed` seeds the line noise.
+pub fn apply(rig: &mut Rig, cmd: &Command, seed: u64) -> Result<(), String> {
+    match cmd {
+        Command::Act(action) => {
+            if let Action::Crank { .. } = action {
+                if rig.lift().k1_closed() {
+                    return Err(
+                        "crank_mm: K1 is closed: the hand crank turns only while the drive has no power"
+                            .into(),
+                    );
+                }
+            }
+            rig.act_now("web", action);
+            Ok(())
+        }
+        Command::LineNoise(rate) => {
+            let rates = match PulseErrorRate::new(*rate) {
+                Ok(r) if r.get() > 0.0 => FaultRates::uniform(r),
+                _ => FaultRates::NONE,
+            };
+            rig.lab_mut().bus.set_line_faults(seed, rates);
+            rig.log_now("web", format!("line noise: pulse error rate {rate}"));
+            Ok(())
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use lift_model::Button;
+    use rig::scenario::Fault;
+    use serde_json::json;
+
+    #[test]
+    fn commands_are_scenario_events() {
+        assert_eq!(
+            parse(&json!({"press": "cabin:3"}), 4),
+            Ok(Command::Act(Action::Press {
+                button: Button::Cabin(3),
+                hold: rig::scenario::DEFAULT_HOLD
+            }))
+        );
+        assert_eq!(
+            parse(&json!({"fault": {"kind": "slave-offline", "slave": 7}}), 4),
+            Ok(Command::Act(Action::Fault(Fault::SlaveOffline {
+                slave: 7
+            })))
+        );
+        assert_eq!(
+            parse(&json!({"line_noise": 0.001}), 4),
+            Ok(Command::LineNoise(0.001))
+        );
+    }
+
+    #[test]
+    fn bad_commands_say_what_is_wrong() {
+        let err = |v| parse(&v, 4).expect_err("an error");
+        assert_eq!(
+            err(json!({"press": "cabin:9"})),
+            "press: floor `9` does not exist: the lift has floors 1..4"
+        );
+        assert!(err(json!({"jump": 1})).contains("unknown field `jump`"));
+        assert!(err(json!({"press": "stop", "load": "full"})).contains("more than one action"));
+        assert!(err(json!({})).contains("no action"));
+        assert!(err(json!([1, 2])).contains("JSON object"));
+        assert!(err(json!({"press": null})).contains("null"));
+        assert!(err(json!({"at": "1s", "reset": true})).starts_with("at:"));
+        assert!(err(json!({"line_noise": 2.0})).starts_with("line_noise:"));
+        assert!(err(json!({"fault": {"kind": "slave-offline", "slave": 40}})).contains("1..31"));
+    }
+}
