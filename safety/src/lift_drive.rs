@@ -225,7 +225,9 @@ impl LiftDriveSafety {
             return None;
         }
         Some(match self.drive.error() {
-            Some(v) => format!("the safe drive tripped ({v}); the operator's reset acknowledges it"),
+            Some(v) => {
+                format!("the safe drive tripped ({v}); the operator's reset acknowledges it")
+            }
             None if out.status.of(Function::Ss1) => {
                 "the safe drive's SS1 ended the STOP with torque off".into()
             }

@@ -166,11 +166,13 @@ fn each_signal_requests_its_function_and_slp_is_always_requested() {
         want.sort_by_key(|f| f.index());
         assert_eq!(requested(inputs), want, "{f}");
     }
-    assert!(LiftDriveSafety::requests(&LiftDriveInputs {
-        reset: true,
-        ..idle()
-    })
-    .reset);
+    assert!(
+        LiftDriveSafety::requests(&LiftDriveInputs {
+            reset: true,
+            ..idle()
+        })
+        .reset
+    );
 }
 
 #[test]

@@ -1,6 +1,7 @@
 //! The invariant watch: the judge of every run (README "Violations"). It sees the plant as it
 //! is at each moment and says when the guarded lift is unsafe: the cabin moving with the door
-//! open or overloaded, K1 closed with an overtravel sensor tripped, STOP not opening K1.
+//! open or overloaded, K1 closed with an overtravel sensor tripped, STOP not opening K1, and
+//! (with the safe drive) the car moving at a floor with the door open.
 
 use crate::report::ViolationKind;
 use asi_phy::{SimDuration, SimTime};
@@ -10,6 +11,10 @@ const DOOR_BUDGET: SimDuration = SimDuration::from_millis(1000);
 const OVERLOAD_BUDGET: SimDuration = SimDuration::from_millis(1000);
 const OVERTRAVEL_BUDGET: SimDuration = SimDuration::from_millis(50);
 const STOP_MARGIN: SimDuration = SimDuration::from_millis(200);
+/// How far the car may move at a floor with the door open before the watch calls it a
+/// violation (with the safe drive; README "Violations"): the safe drive's SOS holds it within
+/// 0.5 motor revolutions (5.0 mm), and its brake needs a little more.
+pub(super) const MOVED_AT_FLOOR_MM: f64 = 10.0;
 
 /// What the watch looks at, at one moment.
 #[derive(Clone, Copy, Debug)]
@@ -25,6 +30,12 @@ pub(super) struct Observed {
     pub k1_closed: bool,
     /// A STOP channel is open.
     pub stop: bool,
+    /// The cabin's height, mm.
+    pub position_mm: f64,
+    /// The floor whose level window the cabin is in, if any.
+    pub level_floor: Option<u8>,
+    /// Watch "moved at a floor with the door open" (the safe drive is on).
+    pub watch_moved_at_floor: bool,
 }
 
 /// Watches the invariants.
@@ -37,8 +48,10 @@ pub(super) struct InvariantWatch {
     stop_since: Option<(SimTime, bool)>,
     /// The cabin moves by the hand crank (from the turn's start to the next rest).
     by_hand: bool,
-    /// Reported once per episode: door, overload, overtravel.
-    reported: [bool; 3],
+    /// Where the car stood at rest at a floor when the door was open there (floor, mm).
+    door_open_at: Option<(u8, f64)>,
+    /// Reported once per episode: door, overload, overtravel, moved at a floor.
+    reported: [bool; 4],
 }
 
 impl InvariantWatch {
@@ -76,7 +89,10 @@ impl InvariantWatch {
                 found.push((kind, detail));
             }
         };
-        if moving && over(self.door_open_since, DOOR_BUDGET) {
+        // With the safe drive, a car that rested at a floor with the door open is judged by
+        // how far it moves there (below), not by whether it moves at all.
+        let judged_at_floor = o.watch_moved_at_floor && self.door_open_at.is_some();
+        if moving && !judged_at_floor && over(self.door_open_since, DOOR_BUDGET) {
             once(
                 0,
                 ViolationKind::DoorOpenMoving,
@@ -99,6 +115,28 @@ impl InvariantWatch {
                 ),
             );
         }
+        if o.watch_moved_at_floor && o.door_open && !self.by_hand && !o.hand_cranking {
+            match self.door_open_at {
+                None if velocity == 0.0 => {
+                    self.door_open_at = o.level_floor.map(|f| (f, o.position_mm));
+                }
+                Some((floor, x0)) if (o.position_mm - x0).abs() > MOVED_AT_FLOOR_MM => {
+                    once(
+                        3,
+                        ViolationKind::MovedAtFloor,
+                        format!(
+                            "the car moved {:+.1} mm at floor {floor} with the door open, more than {MOVED_AT_FLOOR_MM} mm",
+                            o.position_mm - x0
+                        ),
+                    );
+                }
+                _ => {}
+            }
+        } else {
+            // Closed, or moved by hand (the operator's deliberate move): a new reference
+            // the next time the car rests with the door open.
+            self.door_open_at = None;
+        }
         if let Some((since, opened)) = self.stop_since {
             if t - since > estop_delay + STOP_MARGIN {
                 if !opened {
@@ -110,9 +148,14 @@ impl InvariantWatch {
                 self.stop_since = None;
             }
         }
-        for (slot, on) in [o.door_open, o.overloaded, tripped_k1]
-            .into_iter()
-            .enumerate()
+        for (slot, on) in [
+            o.door_open,
+            o.overloaded,
+            tripped_k1,
+            self.door_open_at.is_some(),
+        ]
+        .into_iter()
+        .enumerate()
         {
             if !on {
                 self.reported[slot] = false;
