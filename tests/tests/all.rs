@@ -8,6 +8,7 @@ mod display_word;
 mod end_to_end;
 mod line_noise;
 mod roundtrip;
+mod safe_drive;
 mod safety_regressions;
 mod snapshots;
 mod traces;

@@ -623,6 +623,11 @@ mod tests {
                     Action::Fault(Fault::Vane { sensor, fault }) => {
                         format!("vane {sensor:?} {fault:?}")
                     }
+                    Action::Fault(
+                        f @ (Fault::ConverterRunaway { .. } | Fault::ConverterRepaired),
+                    ) => {
+                        format!("{f:?}")
+                    }
                 });
             }
         }

@@ -164,3 +164,106 @@ impl InvariantWatch {
         found
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const DELAY: SimDuration = SimDuration::from_millis(9_100);
+
+    /// The car at `position_mm` (floor 2 is at 400 mm), `velocity_mm_s`, door open, the watch
+    /// of the safe drive on.
+    fn seen(position_mm: f64, velocity_mm_s: f64) -> Observed {
+        Observed {
+            velocity_mm_s,
+            hand_cranking: false,
+            door_open: true,
+            overloaded: false,
+            overtravel_tripped: false,
+            k1_closed: true,
+            stop: false,
+            position_mm,
+            level_floor: ((390.0..=410.0).contains(&position_mm)).then_some(2),
+            watch_moved_at_floor: true,
+        }
+    }
+
+    /// Feeds `path` (ms, position, velocity) to a watch; the kinds it reports.
+    fn watch(path: &[(u64, Observed)]) -> Vec<ViolationKind> {
+        let mut w = InvariantWatch::default();
+        path.iter()
+            .flat_map(|(ms, o)| w.check(SimTime::from_millis(*ms), *o, DELAY))
+            .map(|(k, _)| k)
+            .collect()
+    }
+
+    #[test]
+    fn a_car_that_moves_more_than_10_mm_at_a_floor_with_the_door_open_is_a_violation() {
+        let found = watch(&[
+            (0, seen(400.0, 0.0)),
+            (2_000, seen(405.0, 5.0)),
+            (2_500, seen(410.5, 5.0)),
+            (3_000, seen(412.0, 5.0)),
+        ]);
+        assert_eq!(found, [ViolationKind::MovedAtFloor]);
+    }
+
+    #[test]
+    fn within_10_mm_it_is_not_and_the_door_budget_does_not_judge_it() {
+        // Moving with the door open for more than 1 s would be door-open-moving; at a floor
+        // the safe drive's watch judges the distance instead.
+        let found = watch(&[
+            (0, seen(400.0, 0.0)),
+            (2_000, seen(400.01, 2.0)),
+            (2_010, seen(409.9, 0.0)),
+        ]);
+        assert!(found.is_empty(), "{found:?}");
+    }
+
+    #[test]
+    fn without_the_safe_drive_the_watch_is_as_it_was() {
+        let off = |mut o: Observed| {
+            o.watch_moved_at_floor = false;
+            o
+        };
+        let found = watch(&[(0, off(seen(400.0, 0.0))), (2_000, off(seen(420.0, 5.0)))]);
+        assert_eq!(found, [ViolationKind::DoorOpenMoving]);
+    }
+
+    #[test]
+    fn a_hand_crank_and_a_car_between_floors_are_not_judged_by_the_floor_watch() {
+        let crank = |mut o: Observed| {
+            o.hand_cranking = true;
+            o.k1_closed = false;
+            o
+        };
+        let found = watch(&[
+            (0, seen(400.0, 0.0)),
+            (1_000, crank(seen(400.0, 10.0))),
+            (3_000, crank(seen(420.0, 10.0))),
+            (3_100, seen(421.0, 0.0)),
+        ]);
+        assert!(found.is_empty(), "{found:?}");
+        // Door opened between floors, car at rest: no floor, no reference.
+        let found = watch(&[(0, seen(250.0, 0.0)), (500, seen(262.0, 0.0))]);
+        assert!(found.is_empty(), "{found:?}");
+    }
+
+    #[test]
+    fn reported_once_per_door_opening() {
+        let mut closed = seen(400.0, 0.0);
+        closed.door_open = false;
+        let found = watch(&[
+            (0, seen(400.0, 0.0)),
+            (100, seen(415.0, 1.0)),
+            (200, seen(430.0, 1.0)),
+            (300, closed),
+            (400, seen(400.0, 0.0)),
+            (500, seen(389.0, -1.0)),
+        ]);
+        assert_eq!(
+            found,
+            [ViolationKind::MovedAtFloor, ViolationKind::MovedAtFloor]
+        );
+    }
+}
