@@ -193,3 +193,79 @@ fn a_campaign_with_the_safe_drive_has_no_violations() {
     let g = generate(17, 0, &Profile::built_in("default").expect("default"));
     assert!(!g.scenario.safe_drive);
 }
+
+/// The times (ns) and values of the 1-bit VCD variable `name` of scope `rig.drive_safety`.
+fn vcd_bit(vcd: &str, name: &str) -> Vec<(u64, bool)> {
+    let id = vcd
+        .lines()
+        .skip_while(|l| !l.contains("$scope module drive_safety"))
+        .find_map(|l| {
+            let w: Vec<&str> = l.split_whitespace().collect();
+            (w.len() >= 5 && w[0] == "$var" && w[4] == name).then(|| w[3].to_owned())
+        })
+        .unwrap_or_else(|| panic!("no variable {name} in rig.drive_safety"));
+    let body = &vcd[vcd.find("$enddefinitions").expect("header")..];
+    let mut t = 0;
+    let mut out = Vec::new();
+    for tok in body.lines().map(str::trim) {
+        if let Some(n) = tok.strip_prefix('#').and_then(|n| n.parse().ok()) {
+            t = n;
+        } else if tok.len() == id.len() + 1 && tok.ends_with(id.as_str()) {
+            match &tok[..1] {
+                "0" => out.push((t, false)),
+                "1" => out.push((t, true)),
+                _ => {}
+            }
+        }
+    }
+    out
+}
+
+#[test]
+fn the_vcd_shows_the_functions_bits_under_rig_drive_safety() {
+    use asi_lift_tests::Shared;
+    use asi_phy::SimTime;
+    use rig::rig::Rig;
+    use rig::waves::WaveOutputs;
+    let vcd_of = |sc: Scenario| {
+        let vcd = Shared::default();
+        let mut rig = Rig::new(sc).expect("rig");
+        rig.waves_to(WaveOutputs {
+            vcd: Some(Box::new(vcd.clone())),
+            csv: None,
+            window: (SimTime::ZERO, SimTime::from_micros(10)),
+            pulse_window: Some((SimTime::ZERO, SimTime::from_micros(10))),
+        });
+        rig.run(Some(SimDuration::from_millis(30_100)));
+        String::from_utf8(vcd.bytes()).expect("utf-8")
+    };
+    let vcd = vcd_of(scenario("safe-drive-runaway"));
+    // SOS: its control bit falls when the door opens (25 s; active-low), its status rises in
+    // that scan and falls at the trip (30.009 s) with NotErrFunc and the torque.
+    let s = |ms: u64| ms * 1_000_000;
+    let last_before = |bits: &[(u64, bool)], t: u64| {
+        bits.iter()
+            .filter(|(at, _)| *at <= t)
+            .last()
+            .map(|(_, b)| *b)
+    };
+    let control = vcd_bit(&vcd, "control_sos");
+    assert_eq!(last_before(&control, s(24_999)), Some(true));
+    assert_eq!(last_before(&control, s(25_000)), Some(false));
+    let status = vcd_bit(&vcd, "status_sos");
+    assert_eq!(last_before(&status, s(25_000)), Some(true));
+    assert_eq!(last_before(&status, s(30_008)), Some(true));
+    assert_eq!(last_before(&status, s(30_009)), Some(false));
+    for name in ["status_not_err_func", "torque_enabled"] {
+        let bits = vcd_bit(&vcd, name);
+        assert_eq!(last_before(&bits, s(30_008)), Some(true), "{name}");
+        assert_eq!(last_before(&bits, s(30_009)), Some(false), "{name}");
+    }
+    // SLP is requested throughout (its control bit FALSE) and its status TRUE until the trip.
+    assert!(vcd_bit(&vcd, "control_slp").iter().all(|(_, b)| !b));
+    // Without the safe drive the VCD has no such scope.
+    let mut off = scenario("safe-drive-runaway");
+    off.safe_drive = false;
+    off.duration = SimDuration::from_millis(300);
+    assert!(!vcd_of(off).contains("drive_safety"));
+}
