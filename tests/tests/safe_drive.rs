@@ -269,3 +269,32 @@ fn the_vcd_shows_the_functions_bits_under_rig_drive_safety() {
     off.duration = SimDuration::from_millis(300);
     assert!(!vcd_of(off).contains("drive_safety"));
 }
+
+#[test]
+fn slp_stops_a_runaway_on_the_journey_up_and_the_overtravel_sensor_backs_it() {
+    // README "The safe drive on the lift": a runaway up during the journey to floor 4.
+    let r = run_toml(
+        "slp",
+        "duration = \"40s\"\n[lift]\nstart_mm = 650.0\n[drive]\nsafe = true\n\
+         [[event]]\nat = \"15s\"\npress = \"cabin:4\"\n\
+         [[event]]\nat = \"17s\"\nfault = { kind = \"converter-runaway\", direction = \"up\" }\n",
+    );
+    assert!(r.violations.is_empty(), "{}", r.to_text());
+    let d = drive(&r);
+    assert_eq!(d.trips.len(), 1, "{:?}", d.trips);
+    assert_eq!(d.trips[0].function, "SLP");
+    assert!(
+        (d.trips[0].at_s - 24.601).abs() < 1e-9,
+        "{}",
+        d.trips[0].at_s
+    );
+    // 1250 mm is SLP's limit; at 153.2 mm/s the brake needs 23.5 mm more.
+    assert!(
+        (d.trips[0].position_mm - 1250.0).abs() < 0.2,
+        "{}",
+        d.trips[0].position_mm
+    );
+    assert!((r.final_state.position_mm - 1273.5).abs() < 0.1);
+    assert!(logged(&r, "plant", "overtravel sensor (Top) tripped"));
+    assert!(!logged(&r, "plant", "crash"));
+}
