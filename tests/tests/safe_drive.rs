@@ -245,8 +245,8 @@ fn the_vcd_shows_the_functions_bits_under_rig_drive_safety() {
     let s = |ms: u64| ms * 1_000_000;
     let last_before = |bits: &[(u64, bool)], t: u64| {
         bits.iter()
-            .filter(|(at, _)| *at <= t)
-            .last()
+            .rev()
+            .find(|(at, _)| *at <= t)
             .map(|(_, b)| *b)
     };
     let control = vcd_bit(&vcd, "control_sos");
