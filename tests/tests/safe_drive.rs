@@ -243,12 +243,8 @@ fn the_vcd_shows_the_functions_bits_under_rig_drive_safety() {
     // SOS: its control bit falls when the door opens (25 s; active-low), its status rises in
     // that scan and falls at the trip (30.009 s) with NotErrFunc and the torque.
     let s = |ms: u64| ms * 1_000_000;
-    let last_before = |bits: &[(u64, bool)], t: u64| {
-        bits.iter()
-            .rev()
-            .find(|(at, _)| *at <= t)
-            .map(|(_, b)| *b)
-    };
+    let last_before =
+        |bits: &[(u64, bool)], t: u64| bits.iter().rev().find(|(at, _)| *at <= t).map(|(_, b)| *b);
     let control = vcd_bit(&vcd, "control_sos");
     assert_eq!(last_before(&control, s(24_999)), Some(true));
     assert_eq!(last_before(&control, s(25_000)), Some(false));
