@@ -4,7 +4,6 @@
 //! output in series with the safety logic's K1 output: STO (with SBC) is K1 opening, the
 //! converter losing power and the brake falling.
 
-use super::Rig;
 use crate::report::{round3, DriveReport, DriveTrip, Ss1Stop, Trip, TripKind};
 use crate::waves::DriveSample;
 use asi_phy::SimTime;
@@ -68,28 +67,47 @@ impl SafeDriveGuard {
     }
 }
 
-impl Rig {
-    /// The safe drive's scan at `t`, after the safety logic's (its EStopOut is `estop_out`,
-    /// its K1 output `k1`); returns K1's coil: the safety logic's output and the drive's
-    /// torque enable in series. Without the safe drive, `k1` as it is.
-    pub(super) fn drive_scan(&mut self, t: SimTime, estop_out: bool, k1: bool) -> bool {
-        let Some(guard) = self.drive.as_mut() else {
-            return k1;
-        };
-        let initialising = self.external.is_none()
-            && self.plc.program().state() == controller::State::Initialising;
-        let a = &self.applied;
+/// What the rig gives the safe drive in one scan: the safety logic's and the controller's
+/// signals, the operator's reset and the encoder (the plant's cabin).
+pub(super) struct Signals {
+    /// The safety logic's EStopOut (`false` = STOP demanded).
+    pub estop_out: bool,
+    /// The built-in controller initialises.
+    pub initialising: bool,
+    /// What the converter is told: run, up, set-point.
+    pub run: bool,
+    pub up: bool,
+    pub setpoint_ua: u16,
+    /// The operator's safety reset.
+    pub reset: bool,
+    /// The door contact.
+    pub door_closed: bool,
+    /// The cabin's height (mm) and velocity (mm/s).
+    pub position_mm: f64,
+    pub velocity_mm_s: f64,
+}
+
+impl SafeDriveGuard {
+    /// One scan at `t`: the monitor's requests from `s`, its trips recorded (also in `trips`,
+    /// the report's safety trips); returns the torque enable (in series with K1) and the log's
+    /// lines.
+    pub(super) fn scan(
+        &mut self,
+        t: SimTime,
+        s: &Signals,
+        trips: &mut Vec<Trip>,
+    ) -> (bool, Vec<(SimTime, String)>) {
         let inputs = LiftDriveInputs {
-            estop_out,
-            door_closed: self.lift.door_closed(),
-            initialising,
-            init_down: initialising && a.run && !a.up,
-            creeping: a.run && a.setpoint_ua > STANDSTILL_UA && a.setpoint_ua <= guard.creep_ua,
-            reset: self.operator_reset,
-            encoder: Some((self.lift.position_mm(), self.lift.velocity_mm_s())),
+            estop_out: s.estop_out,
+            door_closed: s.door_closed,
+            initialising: s.initialising,
+            init_down: s.initialising && s.run && !s.up,
+            creeping: s.run && s.setpoint_ua > STANDSTILL_UA && s.setpoint_ua <= self.creep_ua,
+            reset: s.reset,
+            encoder: Some((s.position_mm, s.velocity_mm_s)),
         };
-        let out = guard.safety.scan(t, &inputs).clone();
-        let position_mm = round3(self.lift.position_mm());
+        let out = self.safety.scan(t, &inputs).clone();
+        let position_mm = round3(s.position_mm);
         let mut lines = Vec::new();
         for e in &out.events {
             let at_s = e.at.as_secs_f64();
@@ -97,35 +115,35 @@ impl Rig {
                 DriveEventKind::Tripped(v) => {
                     let function = v.function().map_or("encoder".into(), |f| f.to_string());
                     let cause = v.to_string();
-                    guard.report.trips.push(DriveTrip {
+                    self.report.trips.push(DriveTrip {
                         at_s,
-                        function: function.clone(),
+                        function,
                         cause: cause.clone(),
                         position_mm,
                     });
-                    self.report.safety.trips.push(Trip {
+                    trips.push(Trip {
                         at_s,
                         kind: TripKind::Trip,
                         cause: format!("safe drive: {cause}"),
                     });
                 }
                 DriveEventKind::Requested(Function::Ss1) => {
-                    guard.report.ss1_stops.push(Ss1Stop {
+                    self.report.ss1_stops.push(Ss1Stop {
                         requested_at_s: at_s,
                         torque_off_at_s: None,
                         took_s: None,
                         released_at_s: None,
                     });
                 }
-                DriveEventKind::Released(Function::Ss1) => {
-                    if let Some(s) = guard.report.ss1_stops.last_mut() {
-                        s.released_at_s = Some(at_s);
-                    }
-                }
                 DriveEventKind::SafeStateReached(Function::Ss1) => {
-                    if let Some(s) = guard.report.ss1_stops.last_mut() {
+                    if let Some(s) = self.report.ss1_stops.last_mut() {
                         s.torque_off_at_s = Some(at_s);
                         s.took_s = Some(round3(at_s - s.requested_at_s));
+                    }
+                }
+                DriveEventKind::Released(Function::Ss1) => {
+                    if let Some(s) = self.report.ss1_stops.last_mut() {
+                        s.released_at_s = Some(at_s);
                     }
                 }
                 _ => {}
@@ -153,23 +171,19 @@ impl Rig {
                 lines.push((e.at, text));
             }
         }
-        for (at, text) in lines {
-            self.log_at(at, "drive", text);
-        }
-        k1 && out.torque_enabled
+        (out.torque_enabled, lines)
     }
 
     /// The attendant's rescue for a car the safe drive's SLP stopped beyond its limit but
     /// short of the overtravel sensor: a crank back to the nearer end floor's level, only with
     /// K1 open. `None` when SLP did not trip.
-    pub(super) fn slp_rescue_mm(&self) -> Option<f64> {
-        let guard = self.drive.as_ref()?;
-        if !matches!(guard.error(), Some(Violation::OutsidePositionLimits { .. })) {
+    pub(super) fn slp_rescue_mm(&self, lift: &Lift, floors: u8) -> Option<f64> {
+        if !matches!(self.error(), Some(Violation::OutsidePositionLimits { .. })) {
             return None;
         }
-        let x = self.lift.position_mm();
-        let floor = if x < 0.0 { 1 } else { self.sc.floors };
-        let to = self.lift.config().floor_level_mm(floor)?;
-        (!self.lift.k1_closed()).then_some(to - x)
+        let x = lift.position_mm();
+        let floor = if x < 0.0 { 1 } else { floors };
+        let to = lift.config().floor_level_mm(floor)?;
+        (!lift.k1_closed()).then_some(to - x)
     }
 }

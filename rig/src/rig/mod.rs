@@ -540,7 +540,9 @@ impl Rig {
     fn rescue(&mut self, t: SimTime, who: &'static str) -> Result<(), lift_model::PlantError> {
         let rescue = match operator::rescue(&self.lift, self.sc.floors) {
             Rescue::NotNeeded => self
-                .slp_rescue_mm()
+                .drive
+                .as_ref()
+                .and_then(|d| d.slp_rescue_mm(&self.lift, self.sc.floors))
                 .map_or(Rescue::NotNeeded, Rescue::Crank),
             r => r,
         };
@@ -766,6 +768,32 @@ impl Rig {
             }
             self.plant_dirty = true;
         }
+    }
+
+    /// The safe drive's scan at `t` (docs/drive-safety.md §6), after the safety logic's (its
+    /// EStopOut `estop_out`, its K1 output `k1`); returns K1's coil: the safety logic's output
+    /// and the drive's torque enable in series. Without the safe drive, `k1` as it is.
+    fn drive_scan(&mut self, t: SimTime, estop_out: bool, k1: bool) -> bool {
+        let Some(guard) = self.drive.as_mut() else {
+            return k1;
+        };
+        let signals = drive::Signals {
+            estop_out,
+            initialising: self.external.is_none()
+                && self.plc.program().state() == controller::State::Initialising,
+            run: self.applied.run,
+            up: self.applied.up,
+            setpoint_ua: self.applied.setpoint_ua,
+            reset: self.operator_reset,
+            door_closed: self.lift.door_closed(),
+            position_mm: self.lift.position_mm(),
+            velocity_mm_s: self.lift.velocity_mm_s(),
+        };
+        let (torque, lines) = guard.scan(t, &signals, &mut self.report.safety.trips);
+        for (at, text) in lines {
+            self.log_at(at, "drive", text);
+        }
+        k1 && torque
     }
 
     fn plc_scan(&mut self, t: SimTime) {
