@@ -61,8 +61,8 @@ impl SafeDriveGuard {
         self.safety.error()
     }
 
-    /// The record, to the end of the run at `now`.
-    pub(super) fn finish(&mut self, _now: SimTime) -> DriveReport {
+    /// The record of the run.
+    pub(super) fn finish(&mut self) -> DriveReport {
         std::mem::take(&mut self.report)
     }
 }

@@ -197,10 +197,6 @@ impl Rig {
             drive: None,
             sc,
         };
-        if rig.sc.safe_drive {
-            rig.drive = Some(drive::SafeDriveGuard::new(&rig.lift)?);
-            rig.log("rig", "drive: safe encoder and drive safety monitor (SS1, SOS, SLS, SDI, SLP; STO through K1)".into());
-        }
         rig.lift.set_load(SimTime::ZERO, rig.sc.load)?;
         rig.lift.set_door(SimTime::ZERO, rig.sc.door_closed)?;
         rig.log(
@@ -217,6 +213,13 @@ impl Rig {
                 rig.sc.pulse_error_rate
             ),
         );
+        if rig.sc.safe_drive {
+            rig.drive = Some(drive::SafeDriveGuard::new(&rig.lift)?);
+            rig.log(
+                "rig",
+                "safe drive: encoder on the motor, drive safety monitor (SS1, SOS, SLS, SDI, SLP; STO through K1)".into(),
+            );
+        }
         Ok(rig)
     }
 
@@ -926,7 +929,7 @@ impl Rig {
         self.report.bus = words::bus_report(stats, dropouts);
         self.report.passengers = self.passengers.report();
         if let Some(d) = self.drive.as_mut() {
-            self.report.safety.drive = Some(d.finish(now));
+            self.report.safety.drive = Some(d.finish());
         }
         // Lines from different sources come in scan order; keep them in time order.
         self.report.log.sort_by(|a, b| a.at_s.total_cmp(&b.at_s));
