@@ -331,3 +331,43 @@ fn an_injected_converter_fault_brakes_the_cabin_and_survives_a_power_cycle() {
     ok(lift.set_converter_fault(t, false));
     assert!(lift.converter_ready());
 }
+
+#[test]
+fn a_runaway_converter_drives_against_its_commands_until_k1_opens() {
+    // At rest at floor 2 with power and the converter told to stand still.
+    let mut lift = lift_at(400.0);
+    ok(lift.set_contactor(SimTime::ZERO, true));
+    ok(lift.set_converter(SimTime::ZERO, false, true, 4_000));
+    assert_eq!(lift.velocity_mm_s(), 0.0);
+    ok(lift.set_converter_runaway(SimTime::ZERO, Some(false)));
+    assert_eq!(lift.converter_runaway(), Some(false));
+    // It ramps down at the converter's ramp (50 Hz/s: 223.4 mm/s²) to the 20 mA frequency
+    // (34.3 Hz): 153.230 mm/s, and shows neither a fault nor a lost ready.
+    let top = speed(20_000);
+    assert!((top - 153.230).abs() < 0.001, "{top}");
+    assert!(lift.converter_ready() && !lift.converter_fault());
+    let ramp_end = run_to(&mut lift, |k| matches!(k, PlantEventKind::RampEnd { .. }));
+    assert_eq!(
+        ramp_end.kind,
+        PlantEventKind::RampEnd {
+            velocity_mm_s: -top
+        }
+    );
+    let ramp_mm_s2 = DriveConfig::default().ramp_mm_s2();
+    assert!(((ramp_end.at - SimTime::ZERO).as_secs_f64() - top / ramp_mm_s2).abs() < 1e-6);
+    // Commands change nothing.
+    let t = lift.now();
+    ok(lift.set_converter(t, true, true, 6_000));
+    assert_eq!(lift.velocity_mm_s(), -top);
+    assert_eq!(lift.acceleration_mm_s2(), 0.0);
+    // Power off: the brake stops it; power back: it runs away again.
+    ok(lift.set_contactor(t, false));
+    assert_eq!(lift.acceleration_mm_s2(), 500.0);
+    run_to(&mut lift, |k| matches!(k, PlantEventKind::Stopped { .. }));
+    let t = lift.now();
+    ok(lift.set_contactor(t, true));
+    assert_eq!(lift.acceleration_mm_s2(), -ramp_mm_s2);
+    // Repaired: it follows its commands again (run up at 6000 µA).
+    ok(lift.set_converter_runaway(t, None));
+    assert!(lift.velocity_mm_s() == 0.0 && lift.acceleration_mm_s2() == ramp_mm_s2);
+}

@@ -242,6 +242,45 @@ pub struct SafetyReport {
     /// How many rounds (rescue, acknowledge, reset) the attendant made (absent when none).
     #[serde(skip_serializing_if = "is_zero")]
     pub attendant_rounds: u32,
+    /// The safe drive's record (absent without `[drive] safe = true`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub drive: Option<DriveReport>,
+}
+
+/// What the safe drive did (docs/drive-safety.md §6).
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct DriveReport {
+    /// Every trip: which function, and why (each also a `safety.trips` record).
+    pub trips: Vec<DriveTrip>,
+    /// Every SS1 stop: from the STOP circuit's demand to the torque off.
+    pub ss1_stops: Vec<Ss1Stop>,
+}
+
+/// A safe-drive function tripped: STO and the brake.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct DriveTrip {
+    /// When, seconds.
+    pub at_s: f64,
+    /// The function (`SOS`, `SLS2`, `SLP`, …), or `encoder` when the reading was lost.
+    pub function: String,
+    /// Why, in words, with the measured value and the limit.
+    pub cause: String,
+    /// The car's height then, mm.
+    pub position_mm: f64,
+}
+
+/// One SS1 stop.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Ss1Stop {
+    /// When SS1 was requested (the STOP circuit's demand), seconds.
+    pub requested_at_s: f64,
+    /// When SS1 took the torque off (null if the demand ended first, or the run did).
+    pub torque_off_at_s: Option<f64>,
+    /// The time the stop took, seconds (null as above).
+    pub took_s: Option<f64>,
+    /// When the demand ended (the STOP circuit restarted; at power-on its first start),
+    /// seconds; null if it lasted to the end of the run.
+    pub released_at_s: Option<f64>,
 }
 
 fn is_zero(n: &u32) -> bool {
@@ -351,6 +390,10 @@ pub enum ViolationKind {
     /// The cabin hits a mechanical end of the shaft.
     #[serde(rename = "mechanical-end")]
     MechanicalEnd,
+    /// The car moved at a floor with the door open, further than a few mm (watched with the
+    /// safe drive only; README "Violations").
+    #[serde(rename = "moved-at-floor")]
+    MovedAtFloor,
     /// The cabin moves overloaded beyond the reaction budget.
     #[serde(rename = "overloaded-moving")]
     OverloadedMoving,
@@ -361,10 +404,11 @@ pub enum ViolationKind {
 
 impl ViolationKind {
     /// Every kind.
-    pub const ALL: [ViolationKind; 5] = [
+    pub const ALL: [ViolationKind; 6] = [
         ViolationKind::DoorOpenMoving,
         ViolationKind::K1InOvertravel,
         ViolationKind::MechanicalEnd,
+        ViolationKind::MovedAtFloor,
         ViolationKind::OverloadedMoving,
         ViolationKind::StopIgnored,
     ];
@@ -376,6 +420,7 @@ impl ViolationKind {
             ViolationKind::OverloadedMoving => "overloaded-moving",
             ViolationKind::K1InOvertravel => "k1-in-overtravel",
             ViolationKind::MechanicalEnd => "mechanical-end",
+            ViolationKind::MovedAtFloor => "moved-at-floor",
             ViolationKind::StopIgnored => "stop-ignored",
         }
     }
@@ -466,6 +511,7 @@ impl Report {
                 trips: Vec::new(),
                 monitor: Vec::new(),
                 attendant_rounds: 0,
+                drive: None,
             },
             violations: Vec::new(),
             availability: Availability::default(),
@@ -638,6 +684,38 @@ impl Report {
         }
         if causes.len() > SHOWN {
             let _ = writeln!(s, "    … and {} more", causes.len() - SHOWN);
+        }
+        if let Some(d) = &self.safety.drive {
+            let _ = writeln!(s, "  safe drive         {} trips", d.trips.len());
+            for t in d.trips.iter().take(SHOWN) {
+                let _ = writeln!(
+                    s,
+                    "    {:>10.3} s  {} tripped: {}",
+                    t.at_s, t.function, t.cause
+                );
+            }
+            for st in &d.ss1_stops {
+                match st.took_s {
+                    Some(took) => {
+                        let _ = writeln!(
+                            s,
+                            "    {:>10.3} s  STOP: SS1 took the torque off after {took:.3} s",
+                            st.requested_at_s
+                        );
+                    }
+                    None => {
+                        let _ = writeln!(
+                            s,
+                            "    {:>10.3} s  STOP circuit demand: SS1 requested, {}",
+                            st.requested_at_s,
+                            match st.released_at_s {
+                                Some(r) => format!("released at {r:.3} s with the torque on"),
+                                None => "the torque still on".into(),
+                            }
+                        );
+                    }
+                }
+            }
         }
         if self.safety.attendant_rounds > 0 {
             let _ = writeln!(s, "  attendant rounds   {}", self.safety.attendant_rounds);

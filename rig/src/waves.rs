@@ -111,6 +111,80 @@ pub struct RigSample {
     pub out_err: bool,
     /// The AS-i supply, V.
     pub supply_v: f64,
+    /// The safe drive's bits (with `[drive] safe = true`).
+    pub drive: Option<DriveSample>,
+}
+
+/// The safe drive's bits at one moment (scope `rig.drive_safety`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DriveSample {
+    /// The control bits the safety logic sets (active-low: FALSE = requested) and Reset.
+    pub control: safety::drive::ControlBits,
+    /// The status bits, SDC and NotErrFunc.
+    pub status: safety::drive::StatusBits,
+    /// The torque enabled (FALSE = STO, K1 open, brake applied).
+    pub torque: bool,
+}
+
+/// The VCD's variables of the safe drive: per function its control and status bit.
+struct DriveIds {
+    control: Vec<VarId>,
+    status: Vec<VarId>,
+    sdc: VarId,
+    not_err_func: VarId,
+    torque: VarId,
+    reset: VarId,
+}
+
+fn declare_drive(w: &mut VcdWriter<Box<dyn Write>>) -> DriveIds {
+    const DRIVE: &[&str] = &["rig", "drive_safety"];
+    // In the order of `Function::ALL`.
+    const CONTROL: [&str; 14] = [
+        "control_sto",
+        "control_sbc",
+        "control_ss1",
+        "control_ss2",
+        "control_sos",
+        "control_sls1",
+        "control_sls2",
+        "control_sls3",
+        "control_sls4",
+        "control_slp",
+        "control_sdi_p",
+        "control_sdi_n",
+        "control_sli",
+        "control_sla",
+    ];
+    const STATUS: [&str; 14] = [
+        "status_sto",
+        "status_sbc",
+        "status_ss1",
+        "status_ss2",
+        "status_sos",
+        "status_sls1",
+        "status_sls2",
+        "status_sls3",
+        "status_sls4",
+        "status_slp",
+        "status_sdi_p",
+        "status_sdi_n",
+        "status_sli",
+        "status_sla",
+    ];
+    DriveIds {
+        control: CONTROL
+            .iter()
+            .map(|n| w.var(DRIVE, n, VarKind::Wire(1)))
+            .collect(),
+        status: STATUS
+            .iter()
+            .map(|n| w.var(DRIVE, n, VarKind::Wire(1)))
+            .collect(),
+        sdc: w.var(DRIVE, "status_sdc", VarKind::Wire(1)),
+        not_err_func: w.var(DRIVE, "status_not_err_func", VarKind::Wire(1)),
+        torque: w.var(DRIVE, "torque_enabled", VarKind::Wire(1)),
+        reset: w.var(DRIVE, "control_reset", VarKind::Wire(1)),
+    }
 }
 
 struct Ids {
@@ -192,6 +266,7 @@ fn declare(w: &mut VcdWriter<Box<dyn Write>>) -> Ids {
 /// The waveform outputs of one run.
 pub struct Waves {
     vcd: Option<(VcdWriter<Box<dyn Write>>, Ids)>,
+    drive: Option<DriveIds>,
     csv: Option<Box<dyn Write>>,
     window: (SimTime, SimTime),
     pulse_window: (SimTime, SimTime),
@@ -215,6 +290,7 @@ impl Waves {
         });
         Waves {
             vcd,
+            drive: None,
             csv: out.csv,
             window: out.window,
             pulse_window: out
@@ -228,6 +304,15 @@ impl Waves {
             last_real: None,
             error: None,
         }
+    }
+
+    /// Adds the scope `rig.drive_safety` (the safe drive's bits) to the VCD; before the first
+    /// sample.
+    pub fn with_drive_safety(mut self) -> Waves {
+        if let Some((w, _)) = &mut self.vcd {
+            self.drive = Some(declare_drive(w));
+        }
+        self
     }
 
     /// The first error writing an output, if any.
@@ -342,6 +427,21 @@ impl Waves {
         w.change(n, ids.state, Sample::Text(s.controller_state.into()));
         w.change(n, ids.group, Sample::Text(s.group_state.into()));
         w.change(n, ids.supply, Sample::Real(s.supply_v));
+        if let (Some(d), Some(ds)) = (&self.drive, &s.drive) {
+            for (i, f) in safety::drive::Function::ALL.iter().enumerate() {
+                w.change(n, d.control[i], (!ds.control.requested(*f)).into());
+                w.change(n, d.status[i], ds.status.of(*f).into());
+            }
+            let bits = [
+                (d.sdc, ds.status.sdc),
+                (d.not_err_func, ds.status.not_err_func),
+                (d.torque, ds.torque),
+                (d.reset, ds.control.reset),
+            ];
+            for (id, b) in bits {
+                w.change(n, id, b.into());
+            }
+        }
     }
 
     /// Writes what is complete up to `now` (the bus's time).

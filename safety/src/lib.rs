@@ -4,8 +4,10 @@
 //! - [`kl6904`]: the Beckhoff KL6904 logic terminal (seed 004);
 //! - [`plcopen`]: SF_EmergencyStop (seed 002), SF_Equivalent and SF_EDM;
 //! - [`drive`]: a drive's integrated safety functions STO, SBC, SS1, SS2, SOS, SLS, SLP, SDI,
-//!   SLI, SLA (seeds 000 and 001, docs/drive-safety.md), not wired into the lift yet;
-//! - [`lift`]: the lift's safety project (docs/safety.md), the API the rig wires.
+//!   SLI, SLA (seeds 000 and 001, docs/drive-safety.md);
+//! - [`lift`]: the lift's safety project (docs/safety.md), the API the rig wires;
+//! - [`lift_drive`]: the lift's safe drive, a [`drive`] monitor on the lift's motor with the
+//!   safety logic's requests (docs/drive-safety.md §6), the option `[drive] safe = true`.
 //!
 //! All time is [`asi_phy::SimTime`], passed in by the caller; nothing reads the wall clock and
 //! nothing is random, so a run is reproducible scan by scan.
@@ -13,6 +15,7 @@
 pub mod drive;
 pub mod kl6904;
 pub mod lift;
+pub mod lift_drive;
 pub mod plcopen;
 pub mod primitives;
 

@@ -6,6 +6,7 @@ mod drive;
 mod kl6904_logic;
 mod kl6904_modules;
 mod lift;
+mod lift_drive;
 mod plcopen_invariants;
 mod plcopen_vectors;
 mod project_files;

@@ -1006,3 +1006,69 @@ proptest! {
         prop_assert!((t as f64 - expected).abs() <= 2.0 * SCAN_MS as f64, "{} vs {}", t, expected);
     }
 }
+
+mod two_channel {
+    //! Seed 001's two-channel activation (docs/drive-safety.md §3.5).
+
+    use asi_phy::SimTime;
+    use proptest::prelude::*;
+    use proptest::test_runner::RngSeed;
+    use safety::drive::TwoChannelActivation;
+
+    fn ms(t: u64) -> SimTime {
+        SimTime::from_millis(t)
+    }
+
+    /// Scans every 1 ms from 0 to `end`; input a falls at `fall_a` and rises at `rise_a`,
+    /// b likewise; returns the control bit per ms.
+    fn run(fall: (u64, u64), rise: (u64, u64), end: u64) -> (Vec<bool>, bool) {
+        let mut act = TwoChannelActivation::default();
+        let bits = (0..=end)
+            .map(|t| {
+                let a = !(fall.0..rise.0).contains(&t);
+                let b = !(fall.1..rise.1).contains(&t);
+                act.scan(ms(t), a, b)
+            })
+            .collect();
+        (bits, act.latched())
+    }
+
+    #[test]
+    fn one_channel_requests_both_release_and_10_ms_apart_is_within() {
+        let (bits, latched) = run((100, 110), (500, 490), 600);
+        assert!(!latched);
+        assert!(bits[99] && !bits[100], "requested with the first channel");
+        assert!(!bits[499] && bits[500], "released with the second");
+    }
+
+    #[test]
+    fn a_discrepancy_beyond_10_ms_latches_until_the_restart() {
+        let mut act = TwoChannelActivation::default();
+        assert!(act.scan(ms(0), true, true));
+        assert!(!act.scan(ms(100), false, true));
+        assert!(!act.scan(ms(109), false, true));
+        assert!(!act.latched());
+        assert!(!act.scan(ms(110), false, true));
+        assert!(act.latched(), "still different 10 ms after");
+        // Both channels agree again: still requested.
+        assert!(!act.scan(ms(200), true, true));
+        act.restart();
+        assert!(act.scan(ms(201), true, true));
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig {
+            cases: 128,
+            rng_seed: RngSeed::Fixed(1),
+            failure_persistence: None,
+            ..ProptestConfig::default()
+        })]
+
+        /// Edges at most 10 ms apart never latch; more than 10 ms apart always do.
+        #[test]
+        fn the_10_ms_rule(first in 10u64..200, skew in 0u64..40, rise_skew in 0u64..40) {
+            let (_, latched) = run((first, first + skew), (400, 400 + rise_skew), 500);
+            prop_assert_eq!(latched, skew > 10 || rise_skew > 10);
+        }
+    }
+}

@@ -9,6 +9,7 @@ mod end_to_end;
 mod fast_path;
 mod line_noise;
 mod roundtrip;
+mod safe_drive;
 mod safety_regressions;
 mod snapshots;
 mod traces;

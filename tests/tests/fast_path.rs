@@ -99,7 +99,7 @@ fn agree(what: &str, sc: &Scenario, until: Option<SimDuration>, vcd: bool) {
     }
 }
 
-const SCENARIOS: [&str; 14] = [
+const SCENARIOS: [&str; 16] = [
     "busy",
     "demo",
     "door",
@@ -111,6 +111,8 @@ const SCENARIOS: [&str; 14] = [
     "overload",
     "overtravel",
     "power-fail",
+    "safe-drive",
+    "safe-drive-runaway",
     "safe-link-drop",
     "stop",
     "vane-sensor-broken",
@@ -166,10 +168,10 @@ fn the_demo_gives_the_same_vcd_on_both_paths() {
     );
 }
 
-/// The CI campaign's profile (faults of every kind, line noise among them).
-/// Runs `0..runs` of the CI campaign's seed, shared out over the machine's cores.
-fn random_runs(runs: u64, until: Option<SimDuration>) {
-    let profile = Profile::built_in("default").expect("the default profile");
+/// Runs `0..runs` of the campaign `profile` with the CI campaign's seed, shared out over the
+/// machine's cores.
+fn random_runs(profile: &str, runs: u64, until: Option<SimDuration>) {
+    let profile = Profile::built_in(profile).expect("a built-in profile");
     let threads = std::thread::available_parallelism().map_or(1, |n| n.get() as u64);
     std::thread::scope(|s| {
         for k in 0..threads {
@@ -177,7 +179,8 @@ fn random_runs(runs: u64, until: Option<SimDuration>) {
             s.spawn(move || {
                 for index in (k..runs).step_by(threads as usize) {
                     let g = generate(2026, index, profile);
-                    agree(&format!("random run {index}"), &g.scenario, until, false);
+                    let what = format!("random run {index} ({})", profile.name);
+                    agree(&what, &g.scenario, until, false);
                 }
             });
         }
@@ -186,11 +189,13 @@ fn random_runs(runs: u64, until: Option<SimDuration>) {
 
 #[test]
 fn random_runs_with_faults_give_the_same_outputs_on_both_paths() {
-    random_runs(4, Some(SimDuration::from_secs(90)));
+    random_runs("default", 4, Some(SimDuration::from_secs(90)));
 }
 
 #[test]
-#[ignore = "200 runs of minutes: .ci/run runs it on the release build"]
+#[ignore = "240 runs of minutes: .ci/run runs it on the release build"]
 fn every_fast_path_agrees_on_200_random_runs() {
-    random_runs(200, None);
+    random_runs("default", 200, None);
+    // And the lift with the safe drive (issue 17).
+    random_runs("safe-drive", 40, None);
 }

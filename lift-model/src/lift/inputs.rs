@@ -97,6 +97,28 @@ impl Lift {
         Ok(())
     }
 
+    /// Fault injection: the converter runs away — its control has failed and it drives the
+    /// motor `Some(up)` (`true` up, `false` down) at its highest frequency
+    /// ([`crate::drive::MAX_SETPOINT_UA`], 34.3 Hz, 153.2 mm/s), ramping as usual, whatever its
+    /// run, direction and set-point inputs say; `None` repairs it. It still needs power:
+    /// opening K1 stops it (the brake), closing K1 again starts it again. Its ready and fault
+    /// outputs show nothing wrong: the converter does not know it has failed.
+    pub fn set_converter_runaway(
+        &mut self,
+        now: SimTime,
+        runaway: Option<bool>,
+    ) -> Result<(), PlantError> {
+        self.catch_up(now)?;
+        self.converter.runaway = runaway;
+        self.update_goal();
+        Ok(())
+    }
+
+    /// The converter's runaway fault, if one is injected: `Some(true)` up.
+    pub fn converter_runaway(&self) -> Option<bool> {
+        self.converter.runaway
+    }
+
     /// A person presses `button` at `now` and holds it for `duration`: it reads pressed from
     /// `now` until the nanosecond before `now + duration`, and its release is reported as an
     /// event at `now + duration`. A press while it is held extends it; [`SimDuration::MAX`]

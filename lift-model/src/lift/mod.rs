@@ -103,6 +103,9 @@ struct Converter {
     setpoint_ua: u16,
     injected_fault: bool,
     stalled: bool,
+    /// A runaway fault: the converter drives the motor this way (`true` up) at its highest
+    /// frequency, whatever run, direction and set-point say.
+    runaway: Option<bool>,
 }
 
 /// The events queued since the caller last drained them, in time order.
@@ -196,6 +199,7 @@ impl Lift {
                 setpoint_ua: lab::setpoint::STANDSTILL_UA,
                 injected_fault: false,
                 stalled: false,
+                runaway: None,
             },
             crank_target_mm: None,
             buttons: Buttons::new(floors),

@@ -159,6 +159,14 @@ impl Lift {
             return Goal::Brake;
         }
         let c = &self.converter;
+        if let Some(up) = c.runaway {
+            let speed = self
+                .config
+                .drive
+                .setpoint_velocity_mm_s(crate::drive::MAX_SETPOINT_UA);
+            let v_target = if up { speed } else { -speed };
+            return Goal::Drive { v_target };
+        }
         let speed = if c.run {
             self.config.drive.setpoint_velocity_mm_s(c.setpoint_ua)
         } else {

@@ -404,6 +404,13 @@ pub fn generate(campaign_seed: u64, index: u64, profile: &Profile) -> Generated 
     // a Safety-at-Work monitor trip by line noise that stays on (campaign 12 run 6768).
     tail.push((recovery, Action::Attend));
     let probe_floor = b.rng.random_range(1..=floors);
+    // Drawn last, and only when the profile leaves it to chance, so that the runs of a
+    // profile without the safe drive stay as they were.
+    let safe_drive = match profile.safe_drive_chance {
+        c if c <= 0.0 => false,
+        c if c >= 1.0 => true,
+        c => b.rng.random_bool(c),
+    };
     tail.push((
         probe_at,
         Action::Press {
@@ -444,6 +451,7 @@ pub fn generate(campaign_seed: u64, index: u64, profile: &Profile) -> Generated 
             extra_slaves,
             plc_scan,
             power_on_reset,
+            safe_drive,
             events,
         },
         tail: is_tail,
@@ -614,6 +622,11 @@ mod tests {
                     Action::Fault(Fault::SafeLinkDrop { .. }) => "safe-link-drop".into(),
                     Action::Fault(Fault::Vane { sensor, fault }) => {
                         format!("vane {sensor:?} {fault:?}")
+                    }
+                    Action::Fault(
+                        f @ (Fault::ConverterRunaway { .. } | Fault::ConverterRepaired),
+                    ) => {
+                        format!("{f:?}")
                     }
                 });
             }

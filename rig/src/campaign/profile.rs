@@ -184,10 +184,12 @@ pub struct Profile {
     pub long_hold_chance: f64,
     /// Chance that a run leaves a vane sensor broken to the end (in service: null).
     pub leave_vane_broken_chance: f64,
+    /// Chance that a run has the safe drive (`[drive] safe = true`; docs/drive-safety.md §6).
+    pub safe_drive_chance: f64,
 }
 
 /// Names of the built-in profiles.
-pub const BUILT_IN: [&str; 4] = ["default", "quiet", "noisy", "smoke"];
+pub const BUILT_IN: [&str; 5] = ["default", "quiet", "noisy", "smoke", "safe-drive"];
 
 impl Profile {
     /// The built-in profile `name`, if there is one.
@@ -212,6 +214,10 @@ impl Profile {
                 p.duration = (SimDuration::from_secs(110), SimDuration::from_secs(130));
                 p.probe_lead = SimDuration::from_secs(45);
                 p.events = (1, 6);
+            }
+            "safe-drive" => {
+                p.name = "safe-drive".into();
+                p.safe_drive_chance = 1.0;
             }
             _ => return None,
         }
@@ -263,6 +269,7 @@ impl Profile {
             no_power_on_reset_chance: 0.05,
             long_hold_chance: 0.1,
             leave_vane_broken_chance: 0.02,
+            safe_drive_chance: 0.0,
         }
     }
 
@@ -344,6 +351,11 @@ impl Profile {
                 "leave_vane_broken_chance",
                 raw.leave_vane_broken_chance,
                 &mut p.leave_vane_broken_chance,
+            ),
+            (
+                "safe_drive_chance",
+                raw.safe_drive_chance,
+                &mut p.safe_drive_chance,
             ),
         ] {
             if let Some(v) = value {
@@ -488,6 +500,7 @@ struct RawProfile {
     no_power_on_reset_chance: Option<f64>,
     long_hold_chance: Option<f64>,
     leave_vane_broken_chance: Option<f64>,
+    safe_drive_chance: Option<f64>,
     floors: Option<BTreeMap<String, u32>>,
     algorithm: Option<BTreeMap<String, u32>>,
     pulse_error_rate: Option<BTreeMap<String, u32>>,

@@ -1,6 +1,7 @@
 //! The invariant watch: the judge of every run (README "Violations"). It sees the plant as it
 //! is at each moment and says when the guarded lift is unsafe: the cabin moving with the door
-//! open or overloaded, K1 closed with an overtravel sensor tripped, STOP not opening K1.
+//! open or overloaded, K1 closed with an overtravel sensor tripped, STOP not opening K1, and
+//! (with the safe drive) the car moving at a floor with the door open.
 
 use crate::report::ViolationKind;
 use asi_phy::{SimDuration, SimTime};
@@ -10,6 +11,10 @@ const DOOR_BUDGET: SimDuration = SimDuration::from_millis(1000);
 const OVERLOAD_BUDGET: SimDuration = SimDuration::from_millis(1000);
 const OVERTRAVEL_BUDGET: SimDuration = SimDuration::from_millis(50);
 const STOP_MARGIN: SimDuration = SimDuration::from_millis(200);
+/// How far the car may move at a floor with the door open before the watch calls it a
+/// violation (with the safe drive; README "Violations"): the safe drive's SOS holds it within
+/// 0.5 motor revolutions (5.0 mm), and its brake needs a little more.
+pub(super) const MOVED_AT_FLOOR_MM: f64 = 10.0;
 
 /// What the watch looks at, at one moment.
 #[derive(Clone, Copy, Debug)]
@@ -25,6 +30,12 @@ pub(super) struct Observed {
     pub k1_closed: bool,
     /// A STOP channel is open.
     pub stop: bool,
+    /// The cabin's height, mm.
+    pub position_mm: f64,
+    /// The floor whose level window the cabin is in, if any.
+    pub level_floor: Option<u8>,
+    /// Watch "moved at a floor with the door open" (the safe drive is on).
+    pub watch_moved_at_floor: bool,
 }
 
 /// Watches the invariants.
@@ -37,8 +48,10 @@ pub(super) struct InvariantWatch {
     stop_since: Option<(SimTime, bool)>,
     /// The cabin moves by the hand crank (from the turn's start to the next rest).
     by_hand: bool,
-    /// Reported once per episode: door, overload, overtravel.
-    reported: [bool; 3],
+    /// Where the car stood at rest at a floor when the door was open there (floor, mm).
+    door_open_at: Option<(u8, f64)>,
+    /// Reported once per episode: door, overload, overtravel, moved at a floor.
+    reported: [bool; 4],
 }
 
 impl InvariantWatch {
@@ -76,7 +89,10 @@ impl InvariantWatch {
                 found.push((kind, detail));
             }
         };
-        if moving && over(self.door_open_since, DOOR_BUDGET) {
+        // With the safe drive, a car that rested at a floor with the door open is judged by
+        // how far it moves there (below), not by whether it moves at all.
+        let judged_at_floor = o.watch_moved_at_floor && self.door_open_at.is_some();
+        if moving && !judged_at_floor && over(self.door_open_since, DOOR_BUDGET) {
             once(
                 0,
                 ViolationKind::DoorOpenMoving,
@@ -99,6 +115,28 @@ impl InvariantWatch {
                 ),
             );
         }
+        if o.watch_moved_at_floor && o.door_open && !self.by_hand && !o.hand_cranking {
+            match self.door_open_at {
+                None if velocity == 0.0 => {
+                    self.door_open_at = o.level_floor.map(|f| (f, o.position_mm));
+                }
+                Some((floor, x0)) if (o.position_mm - x0).abs() > MOVED_AT_FLOOR_MM => {
+                    once(
+                        3,
+                        ViolationKind::MovedAtFloor,
+                        format!(
+                            "the car moved {:+.1} mm at floor {floor} with the door open, more than {MOVED_AT_FLOOR_MM} mm",
+                            o.position_mm - x0
+                        ),
+                    );
+                }
+                _ => {}
+            }
+        } else {
+            // Closed, or moved by hand (the operator's deliberate move): a new reference
+            // the next time the car rests with the door open.
+            self.door_open_at = None;
+        }
         if let Some((since, opened)) = self.stop_since {
             if t - since > estop_delay + STOP_MARGIN {
                 if !opened {
@@ -110,14 +148,122 @@ impl InvariantWatch {
                 self.stop_since = None;
             }
         }
-        for (slot, on) in [o.door_open, o.overloaded, tripped_k1]
-            .into_iter()
-            .enumerate()
+        for (slot, on) in [
+            o.door_open,
+            o.overloaded,
+            tripped_k1,
+            self.door_open_at.is_some(),
+        ]
+        .into_iter()
+        .enumerate()
         {
             if !on {
                 self.reported[slot] = false;
             }
         }
         found
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const DELAY: SimDuration = SimDuration::from_millis(9_100);
+
+    /// The car at `position_mm` (floor 2 is at 400 mm), `velocity_mm_s`, door open, the watch
+    /// of the safe drive on.
+    fn seen(position_mm: f64, velocity_mm_s: f64) -> Observed {
+        Observed {
+            velocity_mm_s,
+            hand_cranking: false,
+            door_open: true,
+            overloaded: false,
+            overtravel_tripped: false,
+            k1_closed: true,
+            stop: false,
+            position_mm,
+            level_floor: ((390.0..=410.0).contains(&position_mm)).then_some(2),
+            watch_moved_at_floor: true,
+        }
+    }
+
+    /// Feeds `path` (ms, position, velocity) to a watch; the kinds it reports.
+    fn watch(path: &[(u64, Observed)]) -> Vec<ViolationKind> {
+        let mut w = InvariantWatch::default();
+        path.iter()
+            .flat_map(|(ms, o)| w.check(SimTime::from_millis(*ms), *o, DELAY))
+            .map(|(k, _)| k)
+            .collect()
+    }
+
+    #[test]
+    fn a_car_that_moves_more_than_10_mm_at_a_floor_with_the_door_open_is_a_violation() {
+        let found = watch(&[
+            (0, seen(400.0, 0.0)),
+            (2_000, seen(405.0, 5.0)),
+            (2_500, seen(410.5, 5.0)),
+            (3_000, seen(412.0, 5.0)),
+        ]);
+        assert_eq!(found, [ViolationKind::MovedAtFloor]);
+    }
+
+    #[test]
+    fn within_10_mm_it_is_not_and_the_door_budget_does_not_judge_it() {
+        // Moving with the door open for more than 1 s would be door-open-moving; at a floor
+        // the safe drive's watch judges the distance instead.
+        let found = watch(&[
+            (0, seen(400.0, 0.0)),
+            (2_000, seen(400.01, 2.0)),
+            (2_010, seen(409.9, 0.0)),
+        ]);
+        assert!(found.is_empty(), "{found:?}");
+    }
+
+    #[test]
+    fn without_the_safe_drive_the_watch_is_as_it_was() {
+        let off = |mut o: Observed| {
+            o.watch_moved_at_floor = false;
+            o
+        };
+        let found = watch(&[(0, off(seen(400.0, 0.0))), (2_000, off(seen(420.0, 5.0)))]);
+        assert_eq!(found, [ViolationKind::DoorOpenMoving]);
+    }
+
+    #[test]
+    fn a_hand_crank_and_a_car_between_floors_are_not_judged_by_the_floor_watch() {
+        let crank = |mut o: Observed| {
+            o.hand_cranking = true;
+            o.k1_closed = false;
+            o
+        };
+        let found = watch(&[
+            (0, seen(400.0, 0.0)),
+            (1_000, crank(seen(400.0, 10.0))),
+            (3_000, crank(seen(420.0, 10.0))),
+            (3_100, seen(421.0, 0.0)),
+        ]);
+        assert!(found.is_empty(), "{found:?}");
+        // Door opened between floors, car at rest: no floor, no reference.
+        let found = watch(&[(0, seen(250.0, 0.0)), (500, seen(262.0, 0.0))]);
+        assert!(found.is_empty(), "{found:?}");
+    }
+
+    #[test]
+    fn reported_once_per_door_opening() {
+        let mut closed = seen(400.0, 0.0);
+        closed.door_open = false;
+        let found = watch(&[
+            (0, seen(400.0, 0.0)),
+            (100, seen(415.0, 1.0)),
+            (200, seen(430.0, 1.0)),
+            (300, closed),
+            (400, seen(400.0, 0.0)),
+            (500, seen(389.0, -1.0)),
+        ]);
+        assert_eq!(
+            found,
+            [ViolationKind::MovedAtFloor, ViolationKind::MovedAtFloor]
+        );
     }
 }

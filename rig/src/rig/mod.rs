@@ -10,6 +10,7 @@
 //! the plant sees a new output exactly when the slave takes it. Nothing reads the wall clock;
 //! the only random source is the bus's line noise, seeded from the scenario.
 
+mod drive;
 mod invariants;
 mod las;
 mod operator;
@@ -69,6 +70,9 @@ pub enum RigError {
     /// The plant refuses the scenario's initial state.
     #[error("lift: {0}")]
     Plant(#[from] lift_model::PlantError),
+    /// The safe drive's parameters are refused.
+    #[error("safe drive: {0}")]
+    Drive(#[from] safety::drive::DriveConfigError),
 }
 
 /// When the operator presses the safety reset after power-on.
@@ -129,6 +133,8 @@ pub struct Rig {
     /// An outside controller is the PLC ([`Rig::with_external_controller`]): the built-in
     /// program is off, and these are the standard signals it last gave the safety logic.
     external: Option<ToSafety>,
+    /// The safe drive (`[drive] safe = true`).
+    drive: Option<drive::SafeDriveGuard>,
 }
 
 impl Rig {
@@ -188,6 +194,7 @@ impl Rig {
             las_watch: LasWatch::default(),
             bus_fault_since: None,
             external: None,
+            drive: None,
             sc,
         };
         rig.lift.set_load(SimTime::ZERO, rig.sc.load)?;
@@ -206,6 +213,13 @@ impl Rig {
                 rig.sc.pulse_error_rate
             ),
         );
+        if rig.sc.safe_drive {
+            rig.drive = Some(drive::SafeDriveGuard::new(&rig.lift)?);
+            rig.log(
+                "rig",
+                "safe drive: encoder on the motor, drive safety monitor (SS1, SOS, SLS, SDI, SLP; STO through K1)".into(),
+            );
+        }
         Ok(rig)
     }
 
@@ -228,7 +242,11 @@ impl Rig {
     pub fn waves_to(&mut self, out: WaveOutputs) {
         self.enable_trace_ring();
         self.lab.bus.record_line(true);
-        self.outputs.waves = Some(Waves::new(out, self.lab.bus.timing()));
+        let waves = Waves::new(out, self.lab.bus.timing());
+        self.outputs.waves = Some(match self.drive {
+            Some(_) => waves.with_drive_safety(),
+            None => waves,
+        });
     }
 
     /// Hands every bus transaction to `f` (at every PLC scan and at the end, in order).
@@ -302,6 +320,7 @@ impl Rig {
             com_err: diag.is_some_and(|d| d.group.errors.com_err),
             out_err: diag.is_some_and(|d| d.group.errors.out_err),
             supply_v: self.lab.bus.supply_voltage(),
+            drive: self.drive.as_ref().map(|d| d.sample()),
         }
     }
 
@@ -530,7 +549,15 @@ impl Rig {
 
     /// The operator's overtravel rescue ([`operator::rescue`]).
     fn rescue(&mut self, t: SimTime, who: &'static str) -> Result<(), lift_model::PlantError> {
-        match operator::rescue(&self.lift, self.sc.floors) {
+        let rescue = match operator::rescue(&self.lift, self.sc.floors) {
+            Rescue::NotNeeded => self
+                .drive
+                .as_ref()
+                .and_then(|d| d.slp_rescue_mm(&self.lift, self.sc.floors))
+                .map_or(Rescue::NotNeeded, Rescue::Crank),
+            r => r,
+        };
+        match rescue {
             Rescue::NotNeeded => {
                 self.log(who, "the cabin needs no rescue".into());
                 Ok(())
@@ -572,6 +599,16 @@ impl Rig {
             }
             Fault::Vane { sensor, fault } => {
                 if let Err(e) = self.lift.set_vane_fault(t, sensor, fault) {
+                    self.log("plant", format!("error: {e}"));
+                }
+                self.plant_dirty = true;
+            }
+            Fault::ConverterRunaway { .. } | Fault::ConverterRepaired => {
+                let runaway = match f {
+                    Fault::ConverterRunaway { up } => Some(up),
+                    _ => None,
+                };
+                if let Err(e) = self.lift.set_converter_runaway(t, runaway) {
                     self.log("plant", format!("error: {e}"));
                 }
                 self.plant_dirty = true;
@@ -708,8 +745,19 @@ impl Rig {
         self.from_safety = FromSafety {
             estop_out: out.estop_out,
         };
-        if self.attendant.watch(t, out.diag.k1_open_cause.as_ref()) {
-            let cause = out.diag.k1_open_cause.map(|c| c.to_string());
+        let k1 = self.drive_scan(t, out.estop_out, out.k1);
+        let drive_tripped = self.drive.as_ref().is_some_and(|d| d.error().is_some());
+        let answered = out
+            .diag
+            .k1_open_cause
+            .as_ref()
+            .is_some_and(operator::answers);
+        if self.attendant.watch(t, answered || (drive_tripped && !k1)) {
+            let cause = out
+                .diag
+                .k1_open_cause
+                .map(|c| c.to_string())
+                .or_else(|| self.drive.as_ref().and_then(|d| d.torque_off_cause()));
             self.log(
                 "attendant",
                 format!(
@@ -725,13 +773,39 @@ impl Rig {
             self.timers.push((reset, Timer::Attendant(Round::Reset)));
         }
         self.safety_out = Some(out.diag);
-        if out.k1 != self.k1 {
-            self.k1 = out.k1;
-            if let Err(e) = self.lift.set_contactor(t, out.k1) {
+        if k1 != self.k1 {
+            self.k1 = k1;
+            if let Err(e) = self.lift.set_contactor(t, k1) {
                 self.log("plant", format!("error: {e}"));
             }
             self.plant_dirty = true;
         }
+    }
+
+    /// The safe drive's scan at `t` (docs/drive-safety.md §6), after the safety logic's (its
+    /// EStopOut `estop_out`, its K1 output `k1`); returns K1's coil: the safety logic's output
+    /// and the drive's torque enable in series. Without the safe drive, `k1` as it is.
+    fn drive_scan(&mut self, t: SimTime, estop_out: bool, k1: bool) -> bool {
+        let Some(guard) = self.drive.as_mut() else {
+            return k1;
+        };
+        let signals = drive::Signals {
+            estop_out,
+            initialising: self.external.is_none()
+                && self.plc.program().state() == controller::State::Initialising,
+            run: self.applied.run,
+            up: self.applied.up,
+            setpoint_ua: self.applied.setpoint_ua,
+            reset: self.operator_reset,
+            door_closed: self.lift.door_closed(),
+            position_mm: self.lift.position_mm(),
+            velocity_mm_s: self.lift.velocity_mm_s(),
+        };
+        let (torque, lines) = guard.scan(t, &signals, &mut self.report.safety.trips);
+        for (at, text) in lines {
+            self.log_at(at, "drive", text);
+        }
+        k1 && torque
     }
 
     fn plc_scan(&mut self, t: SimTime) {
@@ -782,6 +856,9 @@ impl Rig {
             overtravel_tripped: !l.overtravel_bottom_free() || !l.overtravel_top_free(),
             k1_closed: l.k1_closed(),
             stop: l.stop_channels() != [true, true],
+            position_mm: l.position_mm(),
+            level_floor: l.config().level_floor(l.position_mm()),
+            watch_moved_at_floor: self.drive.is_some(),
         };
         for (kind, detail) in self.watch.check(t, seen, self.estop_delay) {
             self.violation(t, kind, detail);
@@ -851,12 +928,19 @@ impl Rig {
                 .as_ref()
                 .and_then(|d| d.k1_open_cause)
                 .filter(|_| !self.lift.k1_closed())
-                .map(|c| words::k1_open_cause(c, self.lab.monitor())),
+                .map(|c| words::k1_open_cause(c, self.lab.monitor()))
+                .or_else(|| {
+                    let d = self.drive.as_ref().filter(|_| !self.lift.k1_closed())?;
+                    d.torque_off_cause()
+                }),
             fifo_cabin: builtin.then(|| p.fifo_cabin()),
             fifo_hall: builtin.then(|| p.fifo_hall()),
         };
         self.report.bus = words::bus_report(stats, dropouts);
         self.report.passengers = self.passengers.report();
+        if let Some(d) = self.drive.as_mut() {
+            self.report.safety.drive = Some(d.finish());
+        }
         // Lines from different sources come in scan order; keep them in time order.
         self.report.log.sort_by(|a, b| a.at_s.total_cmp(&b.at_s));
         self.report

@@ -31,6 +31,13 @@ pub(super) fn describe(a: &Action) -> String {
                 SensorFault::StuckOn => format!("fault: the {sensor} vane sensor is stuck on"),
                 SensorFault::StuckOff => format!("fault: the {sensor} vane sensor is stuck off"),
             },
+            Fault::ConverterRunaway { up } => format!(
+                "fault: the converter runs away {}, against its commands",
+                if *up { "up" } else { "down" }
+            ),
+            Fault::ConverterRepaired => {
+                "fault cleared: the converter follows its commands again".into()
+            }
         },
     }
 }
@@ -98,11 +105,19 @@ impl Attendant {
 
     /// After a safety scan at `t` whose K1 is open for `cause` (`None`: closed): `true` when
     /// a round begins now.
-    pub(super) fn watch(&mut self, t: asi_phy::SimTime, cause: Option<&K1Cause>) -> bool {
+    #[cfg(test)]
+    pub(super) fn watch_cause(&mut self, t: asi_phy::SimTime, cause: Option<&K1Cause>) -> bool {
+        self.watch(t, cause.is_some_and(answers))
+    }
+
+    /// After a safety scan at `t`: `answered` = K1 is open for a cause a round answers (see
+    /// [`answers`]; with the safe drive also its trip, acknowledged by the reset): `true` when
+    /// a round begins now.
+    pub(super) fn watch(&mut self, t: asi_phy::SimTime, answered: bool) -> bool {
         if !self.on {
             return false;
         }
-        if !cause.is_some_and(answers) {
+        if !answered {
             self.open_since = None;
             return false;
         }
@@ -119,7 +134,7 @@ impl Attendant {
 /// a group error (acknowledge), a monitor waiting for its reset. Not a STOP pressed, a STOP
 /// waiting for the controller's restart, an overloaded cabin or a stopped logic: no round
 /// helps those.
-fn answers(cause: &K1Cause) -> bool {
+pub(super) fn answers(cause: &K1Cause) -> bool {
     matches!(
         cause,
         K1Cause::Overtravel { .. } | K1Cause::GroupError(_) | K1Cause::OvertravelResetPending
@@ -141,29 +156,29 @@ mod tests {
     fn an_attendant_answers_a_trip_after_the_notice_and_again_while_k1_stays_open() {
         let mut a = Attendant::default();
         assert!(
-            !a.watch(at(0), Some(&TRIP)),
+            !a.watch_cause(at(0), Some(&TRIP)),
             "not on before it is told to attend"
         );
         a.start(at(1_000));
-        assert!(!a.watch(at(1_000), Some(&TRIP)));
-        assert!(!a.watch(at(2_999), Some(&TRIP)));
-        assert!(a.watch(at(3_000), Some(&TRIP)), "2 s of K1 open");
+        assert!(!a.watch_cause(at(1_000), Some(&TRIP)));
+        assert!(!a.watch_cause(at(2_999), Some(&TRIP)));
+        assert!(a.watch_cause(at(3_000), Some(&TRIP)), "2 s of K1 open");
         // The round: ack at 9 s, reset at 10 s; the next one no earlier than 12 s.
-        assert!(!a.watch(at(11_999), Some(&TRIP)));
-        assert!(a.watch(at(12_000), Some(&TRIP)));
+        assert!(!a.watch_cause(at(11_999), Some(&TRIP)));
+        assert!(a.watch_cause(at(12_000), Some(&TRIP)));
     }
 
     #[test]
     fn a_closed_k1_or_a_cause_no_round_helps_restarts_the_notice() {
         let mut a = Attendant::default();
         a.start(at(0));
-        assert!(!a.watch(at(0), Some(&TRIP)));
-        assert!(!a.watch(at(1_500), None));
-        assert!(!a.watch(at(2_500), Some(&TRIP)));
-        assert!(!a.watch(at(4_000), Some(&K1Cause::StopPressed)));
-        assert!(!a.watch(at(4_100), Some(&K1Cause::Overloaded)));
-        assert!(!a.watch(at(5_000), Some(&TRIP)));
-        assert!(!a.watch(at(6_999), Some(&TRIP)));
-        assert!(a.watch(at(7_000), Some(&TRIP)));
+        assert!(!a.watch_cause(at(0), Some(&TRIP)));
+        assert!(!a.watch_cause(at(1_500), None));
+        assert!(!a.watch_cause(at(2_500), Some(&TRIP)));
+        assert!(!a.watch_cause(at(4_000), Some(&K1Cause::StopPressed)));
+        assert!(!a.watch_cause(at(4_100), Some(&K1Cause::Overloaded)));
+        assert!(!a.watch_cause(at(5_000), Some(&TRIP)));
+        assert!(!a.watch_cause(at(6_999), Some(&TRIP)));
+        assert!(a.watch_cause(at(7_000), Some(&TRIP)));
     }
 }

@@ -37,6 +37,8 @@ builtins!(
     "overload",
     "overtravel",
     "power-fail",
+    "safe-drive",
+    "safe-drive-runaway",
     "safe-link-drop",
     "stop",
     "vane-sensor-broken",

@@ -45,6 +45,10 @@ pub struct Scenario {
     /// Whether the operator presses the safety reset once after power-on, as at the lab
     /// (the overtravel monitor needs a manual reset before K1 can close).
     pub power_on_reset: bool,
+    /// The lab drive has a safe encoder and a drive safety monitor (`[drive] safe = true`;
+    /// docs/drive-safety.md §6): SS1 on STOP, SOS with the door open, SLS, SDI and SLP, STO
+    /// through K1. Off by default.
+    pub safe_drive: bool,
     /// The events, in time order.
     pub events: Vec<ScenarioEvent>,
 }
@@ -130,6 +134,14 @@ pub enum Fault {
         /// Its fault from now on (`SensorFault::None` = repaired).
         fault: SensorFault,
     },
+    /// The converter runs away: it drives the motor this way at its highest frequency,
+    /// against its commands, while it has power (docs/lift-plant.md §4.7).
+    ConverterRunaway {
+        /// `true` up.
+        up: bool,
+    },
+    /// The converter's runaway is repaired: it follows its commands again.
+    ConverterRepaired,
 }
 
 /// The PLC scan periods the program works with. The cabin's 32-bit word takes 14 handshake
@@ -220,6 +232,7 @@ impl Scenario {
             extra_slaves: 0,
             plc_scan: SimDuration::from_millis(10),
             power_on_reset: true,
+            safe_drive: false,
             events: Vec::new(),
         }
     }

@@ -24,6 +24,7 @@ struct RawScenario {
     bus: Option<RawBus>,
     controller: Option<RawController>,
     safety: Option<RawSafety>,
+    drive: Option<RawDrive>,
     #[serde(default)]
     event: Vec<Spanned<RawEvent>>,
 }
@@ -58,6 +59,12 @@ struct RawSafety {
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
+struct RawDrive {
+    safe: Option<bool>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
 struct RawEvent {
     at: Spanned<String>,
     press: Option<Spanned<String>>,
@@ -79,6 +86,7 @@ struct RawFault {
     slave: Option<Spanned<i64>>,
     duration: Option<Spanned<String>>,
     sensor: Option<Spanned<String>>,
+    direction: Option<Spanned<String>>,
 }
 
 /// Turns byte offsets into lines and columns, and names errors.
@@ -340,6 +348,9 @@ fn fault(loc: &Locator<'_>, field: &str, f: &Spanned<RawFault>) -> Result<Fault,
             Ok(())
         }
     };
+    if !kind.starts_with("converter-runaway") {
+        unused(raw.direction.is_some(), "direction")?;
+    }
     match kind {
         "slave-offline" | "slave-online" => {
             unused(raw.duration.is_some(), "duration")?;
@@ -385,12 +396,40 @@ fn fault(loc: &Locator<'_>, field: &str, f: &Spanned<RawFault>) -> Result<Fault,
             };
             Ok(Fault::Vane { sensor, fault })
         }
+        "converter-runaway" | "converter-repaired" => {
+            unused(raw.slave.is_some(), "slave")?;
+            unused(raw.duration.is_some(), "duration")?;
+            unused(raw.sensor.is_some(), "sensor")?;
+            if kind == "converter-repaired" {
+                unused(raw.direction.is_some(), "direction")?;
+                return Ok(Fault::ConverterRepaired);
+            }
+            let d = raw.direction.as_ref().ok_or_else(|| {
+                loc.error(
+                    Some(f.span()),
+                    format!("{field}.direction"),
+                    format!("`{kind}` needs `direction = \"up\"` or `\"down\"`"),
+                )
+            })?;
+            let up = match d.get_ref().as_str() {
+                "up" => true,
+                "down" => false,
+                other => {
+                    return Err(loc.error(
+                        Some(d.span()),
+                        format!("{field}.direction"),
+                        format!("unknown direction `{other}`: use up or down"),
+                    ))
+                }
+            };
+            Ok(Fault::ConverterRunaway { up })
+        }
         other => Err(loc.error(
             Some(raw.kind.span()),
             format!("{field}.kind"),
             format!(
                 "unknown fault `{other}`: use slave-offline, slave-online, power-fail, safe-link-drop, \
-                 vane-stuck-on, vane-stuck-off or vane-repaired"
+                 vane-stuck-on, vane-stuck-off, vane-repaired, converter-runaway or converter-repaired"
             ),
         )),
     }
@@ -414,6 +453,9 @@ impl Scenario {
         }
         if let Some(r) = raw.safety.as_ref().and_then(|s| s.power_on_reset) {
             sc.power_on_reset = r;
+        }
+        if let Some(d) = raw.drive.as_ref().and_then(|d| d.safe) {
+            sc.safe_drive = d;
         }
         for (i, ev) in raw.event.iter().enumerate() {
             let event = read_event(&loc, i + 1, ev, sc.floors)?;

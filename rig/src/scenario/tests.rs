@@ -194,6 +194,8 @@ mod round_trip {
                 .prop_map(|duration| Action::Fault(Fault::SafeLinkDrop { duration })),
             (sensor, sensor_fault)
                 .prop_map(|(sensor, fault)| Action::Fault(Fault::Vane { sensor, fault })),
+            any::<bool>().prop_map(|up| Action::Fault(Fault::ConverterRunaway { up })),
+            Just(Action::Fault(Fault::ConverterRepaired)),
         ]
     }
 
@@ -227,6 +229,7 @@ mod round_trip {
             extra_slaves in 0..=20u8,
             scan in PLC_SCAN_RANGE.start().as_nanos()..=PLC_SCAN_RANGE.end().as_nanos(),
             power_on_reset in any::<bool>(),
+            safe_drive in any::<bool>(),
         ) -> Scenario {
             Scenario {
                 name,
@@ -241,6 +244,7 @@ mod round_trip {
                 extra_slaves,
                 plc_scan: SimDuration::from_nanos(scan),
                 power_on_reset,
+                safe_drive,
                 events,
             }
         }
@@ -298,4 +302,52 @@ fn the_demo_is_valid() {
     let s = Scenario::from_toml("demo.toml", text).expect("demo");
     assert!(!s.events.is_empty());
     assert_eq!(Scenario::demo(), Ok(s));
+}
+
+#[test]
+fn the_safe_drive_and_the_converter_runaway_are_read_and_checked() {
+    let sc = Scenario::from_toml(
+        "t.toml",
+        "[drive]\nsafe = true\n\n[[event]]\nat = \"5s\"\nfault = { kind = \"converter-runaway\", direction = \"down\" }\n\n[[event]]\nat = \"6s\"\nfault = { kind = \"converter-repaired\" }\n",
+    )
+    .expect("reads");
+    assert!(sc.safe_drive);
+    assert_eq!(
+        sc.events[0].action,
+        Action::Fault(Fault::ConverterRunaway { up: false })
+    );
+    assert_eq!(sc.events[1].action, Action::Fault(Fault::ConverterRepaired));
+    assert!(!Scenario::defaults().safe_drive, "off by default");
+    let ev = |fault: &str| format!("[[event]]\nat = \"5s\"\nfault = {fault}\n");
+    assert_eq!(
+        err(&ev("{ kind = \"converter-runaway\" }")),
+        "t.toml:3:9: event[1].fault.direction: `converter-runaway` needs `direction = \"up\"` or `\"down\"`"
+    );
+    assert_eq!(
+        err(&ev(
+            "{ kind = \"converter-runaway\", direction = \"sideways\" }"
+        )),
+        "t.toml:3:51: event[1].fault.direction: unknown direction `sideways`: use up or down"
+    );
+    assert_eq!(
+        err(&ev("{ kind = \"converter-repaired\", direction = \"up\" }")),
+        "t.toml:3:9: event[1].fault.direction: `converter-repaired` takes no `direction`"
+    );
+    assert_eq!(
+        err(&ev(
+            "{ kind = \"power-fail\", duration = \"1s\", direction = \"up\" }"
+        )),
+        "t.toml:3:9: event[1].fault.direction: `power-fail` takes no `direction`"
+    );
+    assert_eq!(
+        err(&ev(
+            "{ kind = \"converter-runaway\", direction = \"up\", slave = 7 }"
+        )),
+        "t.toml:3:9: event[1].fault.slave: `converter-runaway` takes no `slave`"
+    );
+    let e = err("[drive]\nsafe = \"yes\"\n");
+    assert!(e.starts_with("t.toml:2:8: drive.safe: "), "{e}");
+    let e = err("[drive]\nsafe = true\nsafety = true\n");
+    assert!(e.contains("unknown field `safety`"), "{e}");
+    assert!(err(&ev("{ kind = \"runaway\" }")).contains("converter-runaway or converter-repaired"));
 }

@@ -45,6 +45,10 @@ impl Scenario {
             exact_duration(self.plc_scan)
         );
         let _ = writeln!(s, "\n[safety]\npower_on_reset = {}", self.power_on_reset);
+        // Written only when on, so that the files of scenarios without it stay as they were.
+        if self.safe_drive {
+            let _ = writeln!(s, "\n[drive]\nsafe = true");
+        }
         let mut events: Vec<&ScenarioEvent> = self.events.iter().collect();
         events.sort_by_key(|e| e.at);
         for e in events {
@@ -137,5 +141,10 @@ fn fault_text(f: &Fault) -> String {
             };
             format!("{{ kind = \"{kind}\", sensor = \"{}\" }}", side(sensor))
         }
+        Fault::ConverterRunaway { up } => format!(
+            "{{ kind = \"converter-runaway\", direction = \"{}\" }}",
+            if *up { "up" } else { "down" }
+        ),
+        Fault::ConverterRepaired => "{ kind = \"converter-repaired\" }".into(),
     }
 }

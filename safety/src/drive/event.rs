@@ -159,7 +159,7 @@ impl fmt::Display for Violation {
                 upper,
             } => write!(
                 f,
-                "SLP: the axis is at {position:.3} rev, outside the allowed range {lower} to {upper} rev"
+                "SLP: the axis is at {position:.3} rev, outside the allowed range {lower:.3} to {upper:.3} rev"
             ),
             Violation::NotAtStandstill {
                 function,

@@ -40,10 +40,12 @@
 //!   the permitted direction since the monitoring began.
 //! - **SLA** (seed 000 §3.8, reaction not stated): the acceleration is the speed's change between
 //!   two scans; a violation trips like any other. **SLT** is not modelled (no torque input).
+//! - **Two-channel activation** (seed 001): [`TwoChannelActivation`], see its module.
 
 mod config;
 mod event;
 mod function;
+mod two_channel;
 
 pub use config::{
     DriveConfigError, DriveSafetyConfig, Encoder, SlaLimits, SliLimit, SlpLimits, SlsLimit,
@@ -51,6 +53,7 @@ pub use config::{
 };
 pub use event::{DriveEvent, DriveEventKind, Violation};
 pub use function::{ControlBits, Function, SlsLevel, StatusBits};
+pub use two_channel::{TwoChannelActivation, TWO_CHANNEL_DISCREPANCY};
 
 use asi_phy::SimTime;
 

@@ -1,0 +1,296 @@
+//! The lift with the safe drive (`[drive] safe = true`, docs/drive-safety.md §6): STOP with
+//! SS1, the runaway at a floor with the door open ending in SOS → STO, the same runaway
+//! without the safe drive, the option off leaving a run as it was, and a small campaign with
+//! the option on.
+
+use asi_lift_tests::{logged, run, run_toml, scenario, stops};
+use asi_phy::SimDuration;
+use rig::campaign::generate::generate;
+use rig::campaign::profile::Profile;
+use rig::campaign::{execute, Execution};
+use rig::report::{Report, ViolationKind};
+use rig::scenario::Scenario;
+
+/// The STOP circuit's fixed delay before K1 drops (docs/safety.md §6.2).
+const STOP_DELAY_S: f64 = 9.1;
+
+fn drive(r: &Report) -> &rig::report::DriveReport {
+    r.safety
+        .drive
+        .as_ref()
+        .unwrap_or_else(|| panic!("no safe-drive section\n{}", r.to_text()))
+}
+
+#[test]
+fn stop_is_ss1_the_torque_goes_off_once_the_car_stands_well_before_9_1_s() {
+    let r = run(scenario("safe-drive"));
+    assert!(r.violations.is_empty(), "{}", r.to_text());
+    let d = drive(&r);
+    assert!(d.trips.is_empty(), "{:?}", d.trips);
+    // The STOP at 21 s; the car stands level at floor 2 at 22.513 s; SS1 takes the torque
+    // off by the early limit at 23.004 s: 2.004 s after the STOP.
+    let stop = d
+        .ss1_stops
+        .iter()
+        .find(|s| s.requested_at_s == 21.0)
+        .unwrap_or_else(|| panic!("no SS1 at the STOP: {:?}", d.ss1_stops));
+    let took = stop.took_s.expect("the torque went off");
+    assert!(took < STOP_DELAY_S, "{took}");
+    assert!((took - 2.004).abs() < 1e-9, "{took}");
+    let rest = r
+        .arrivals
+        .iter()
+        .find(|a| a.floor == 2)
+        .expect("stopped at floor 2");
+    // The early limit's 0.5 s begin once the motor turns slower than 0.2 rev/s (2 mm/s),
+    // 9 ms before the converter's ramp (223.4 mm/s²) brings the car to rest.
+    let off = stop.torque_off_at_s.expect("off");
+    let after_rest = off - rest.at_s;
+    assert!((0.489..=0.5).contains(&after_rest), "{after_rest}");
+    assert!(logged(&r, "drive", "torque off (STO): K1 opens"));
+    // The cabin request at 40 s restarts the STOP circuit: SS1 ends, service goes on; the
+    // door opened at floor 3 is SOS, which holds without a trip.
+    assert_eq!(stops(&r), vec![1, 2, 3, 1]);
+    assert!(logged(&r, "drive", "SOS reached its safe state"));
+    assert!(r.final_state.contactor_closed);
+}
+
+#[test]
+fn without_the_safe_drive_the_same_stop_waits_9_1_s_for_k1() {
+    let mut sc = scenario("safe-drive");
+    sc.safe_drive = false;
+    let r = run(sc);
+    assert!(r.safety.drive.is_none());
+    assert!(logged(&r, "safety", "STOP delay of 9.1 s elapsed"));
+    // K1 opens only at 30.1 s: the first K1 opening after the STOP.
+    let k1 = r
+        .safety
+        .trips
+        .iter()
+        .find(|t| t.at_s > 21.0 && t.cause.starts_with("K1 opened"))
+        .expect("K1 opened");
+    assert!((k1.at_s - 30.1).abs() < 1e-6, "{}", k1.at_s);
+}
+
+#[test]
+fn a_runaway_at_a_floor_with_the_door_open_ends_in_sos_then_sto_within_the_tolerance() {
+    let r = run(scenario("safe-drive-runaway"));
+    assert!(r.violations.is_empty(), "{}", r.to_text());
+    let d = drive(&r);
+    assert_eq!(d.trips.len(), 1, "{:?}", d.trips);
+    let trip = &d.trips[0];
+    assert_eq!(trip.function, "SOS");
+    assert!(
+        trip.cause.contains("faster than the allowed 0.2 rev/s"),
+        "{}",
+        trip.cause
+    );
+    // The runaway begins at 30 s; at 223.4 mm/s² the motor passes 0.2 rev/s in the 9th ms.
+    assert!((trip.at_s - 30.009).abs() < 1e-9, "{}", trip.at_s);
+    // The car stood level at floor 2; it moved a few hundredths of a mm, far inside SOS's
+    // 0.5 rev (5 mm) and the watch's 10 mm.
+    let at_floor = r
+        .arrivals
+        .iter()
+        .find(|a| a.floor == 2)
+        .expect("at floor 2")
+        .position_mm;
+    let moved = r.final_state.position_mm - at_floor;
+    assert!(moved > 0.0 && moved < 0.1, "{moved} mm");
+    // STO is K1 opening: the report's safety trips name the drive, and the operator's reset
+    // (after the repair) brings the torque back.
+    assert!(r
+        .safety
+        .trips
+        .iter()
+        .any(|t| t.cause.starts_with("safe drive: SOS")));
+    assert!(logged(&r, "drive", "error acknowledged by S_Control_Reset"));
+    assert!(r.final_state.contactor_closed, "{}", r.to_text());
+    assert!(r.to_text().contains("SOS tripped"));
+}
+
+#[test]
+fn the_same_runaway_without_the_safe_drive_runs_the_car_off_with_the_door_open() {
+    let mut sc = scenario("safe-drive-runaway");
+    sc.safe_drive = false;
+    sc.duration = SimDuration::from_secs(40);
+    let r = run(sc);
+    // Nothing stops the car until the top overtravel sensor opens K1.
+    let kinds: Vec<ViolationKind> = r.violations.iter().map(|v| v.kind).collect();
+    assert_eq!(
+        kinds,
+        vec![ViolationKind::DoorOpenMoving],
+        "{}",
+        r.to_text()
+    );
+    assert!(
+        r.final_state.position_mm > 1_260.0,
+        "{}",
+        r.final_state.position_mm
+    );
+    assert!(r.final_state.k1_open_cause.is_some());
+}
+
+#[test]
+fn the_option_off_changes_nothing_in_a_run() {
+    // The same scenario file with `[drive] safe = false` written out and with no `[drive]`
+    // at all gives the same report, and the report has no safe-drive section.
+    let body = std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenarios/stop.toml"),
+    )
+    .expect("stop.toml");
+    let plain = run_toml("stop", &body);
+    let off = run_toml("stop", &format!("{body}\n[drive]\nsafe = false\n"));
+    assert_eq!(plain, off);
+    assert!(plain.safety.drive.is_none());
+    let json = plain.to_json().expect("json");
+    assert!(!json.contains("\"drive\""));
+    assert!(!json.contains("moved-at-floor"));
+}
+
+#[test]
+fn a_scenario_with_the_safe_drive_and_a_runaway_reads_back_from_its_file() {
+    let sc = scenario("safe-drive-runaway");
+    assert!(sc.safe_drive);
+    let text = sc.to_toml();
+    assert!(text.contains("[drive]\nsafe = true"), "{text}");
+    assert!(text.contains("kind = \"converter-runaway\", direction = \"up\""));
+    let back = Scenario::from_toml("back", &text).expect("reads back");
+    let strip = |s: &Scenario| {
+        let mut s = s.clone();
+        for e in &mut s.events {
+            e.line = 0;
+        }
+        s
+    };
+    assert_eq!(strip(&back), strip(&sc));
+    // Off: no [drive] section written, as before the option existed.
+    let mut off = sc.clone();
+    off.safe_drive = false;
+    assert!(!off.to_toml().contains("[drive]"));
+}
+
+#[test]
+fn a_campaign_with_the_safe_drive_has_no_violations() {
+    // A short version of the campaign the README reports (200 runs): 6 runs of the
+    // safe-drive profile, each on the whole rig with the safe drive.
+    let profile = Profile::built_in("safe-drive").expect("built in");
+    for index in 0..6 {
+        let g = generate(17, index, &profile);
+        assert!(g.scenario.safe_drive);
+        let Execution::Report(r) = execute(&g.scenario) else {
+            panic!("run {index} did not run");
+        };
+        assert!(
+            r.violations.is_empty(),
+            "run {index}:\n{}\n{}",
+            g.scenario.to_toml(),
+            r.to_text()
+        );
+        assert!(r.safety.drive.is_some());
+    }
+    // The default profile leaves it off.
+    let g = generate(17, 0, &Profile::built_in("default").expect("default"));
+    assert!(!g.scenario.safe_drive);
+}
+
+/// The times (ns) and values of the 1-bit VCD variable `name` of scope `rig.drive_safety`.
+fn vcd_bit(vcd: &str, name: &str) -> Vec<(u64, bool)> {
+    let id = vcd
+        .lines()
+        .skip_while(|l| !l.contains("$scope module drive_safety"))
+        .find_map(|l| {
+            let w: Vec<&str> = l.split_whitespace().collect();
+            (w.len() >= 5 && w[0] == "$var" && w[4] == name).then(|| w[3].to_owned())
+        })
+        .unwrap_or_else(|| panic!("no variable {name} in rig.drive_safety"));
+    let body = &vcd[vcd.find("$enddefinitions").expect("header")..];
+    let mut t = 0;
+    let mut out = Vec::new();
+    for tok in body.lines().map(str::trim) {
+        if let Some(n) = tok.strip_prefix('#').and_then(|n| n.parse().ok()) {
+            t = n;
+        } else if tok.len() == id.len() + 1 && tok.ends_with(id.as_str()) {
+            match &tok[..1] {
+                "0" => out.push((t, false)),
+                "1" => out.push((t, true)),
+                _ => {}
+            }
+        }
+    }
+    out
+}
+
+#[test]
+fn the_vcd_shows_the_functions_bits_under_rig_drive_safety() {
+    use asi_lift_tests::Shared;
+    use asi_phy::SimTime;
+    use rig::rig::Rig;
+    use rig::waves::WaveOutputs;
+    let vcd_of = |sc: Scenario| {
+        let vcd = Shared::default();
+        let mut rig = Rig::new(sc).expect("rig");
+        rig.waves_to(WaveOutputs {
+            vcd: Some(Box::new(vcd.clone())),
+            csv: None,
+            window: (SimTime::ZERO, SimTime::from_micros(10)),
+            pulse_window: Some((SimTime::ZERO, SimTime::from_micros(10))),
+        });
+        rig.run(Some(SimDuration::from_millis(30_100)));
+        String::from_utf8(vcd.bytes()).expect("utf-8")
+    };
+    let vcd = vcd_of(scenario("safe-drive-runaway"));
+    // SOS: its control bit falls when the door opens (25 s; active-low), its status rises in
+    // that scan and falls at the trip (30.009 s) with NotErrFunc and the torque.
+    let s = |ms: u64| ms * 1_000_000;
+    let last_before =
+        |bits: &[(u64, bool)], t: u64| bits.iter().rev().find(|(at, _)| *at <= t).map(|(_, b)| *b);
+    let control = vcd_bit(&vcd, "control_sos");
+    assert_eq!(last_before(&control, s(24_999)), Some(true));
+    assert_eq!(last_before(&control, s(25_000)), Some(false));
+    let status = vcd_bit(&vcd, "status_sos");
+    assert_eq!(last_before(&status, s(25_000)), Some(true));
+    assert_eq!(last_before(&status, s(30_008)), Some(true));
+    assert_eq!(last_before(&status, s(30_009)), Some(false));
+    for name in ["status_not_err_func", "torque_enabled"] {
+        let bits = vcd_bit(&vcd, name);
+        assert_eq!(last_before(&bits, s(30_008)), Some(true), "{name}");
+        assert_eq!(last_before(&bits, s(30_009)), Some(false), "{name}");
+    }
+    // SLP is requested throughout (its control bit FALSE) and its status TRUE until the trip.
+    assert!(vcd_bit(&vcd, "control_slp").iter().all(|(_, b)| !b));
+    // Without the safe drive the VCD has no such scope.
+    let mut off = scenario("safe-drive-runaway");
+    off.safe_drive = false;
+    off.duration = SimDuration::from_millis(300);
+    assert!(!vcd_of(off).contains("drive_safety"));
+}
+
+#[test]
+fn slp_stops_a_runaway_on_the_journey_up_and_the_overtravel_sensor_backs_it() {
+    // README "The safe drive on the lift": a runaway up during the journey to floor 4.
+    let r = run_toml(
+        "slp",
+        "duration = \"40s\"\n[lift]\nstart_mm = 650.0\n[drive]\nsafe = true\n\
+         [[event]]\nat = \"15s\"\npress = \"cabin:4\"\n\
+         [[event]]\nat = \"17s\"\nfault = { kind = \"converter-runaway\", direction = \"up\" }\n",
+    );
+    assert!(r.violations.is_empty(), "{}", r.to_text());
+    let d = drive(&r);
+    assert_eq!(d.trips.len(), 1, "{:?}", d.trips);
+    assert_eq!(d.trips[0].function, "SLP");
+    assert!(
+        (d.trips[0].at_s - 24.601).abs() < 1e-9,
+        "{}",
+        d.trips[0].at_s
+    );
+    // 1250 mm is SLP's limit; at 153.2 mm/s the brake needs 23.5 mm more.
+    assert!(
+        (d.trips[0].position_mm - 1250.0).abs() < 0.2,
+        "{}",
+        d.trips[0].position_mm
+    );
+    assert!((r.final_state.position_mm - 1273.5).abs() < 0.1);
+    assert!(logged(&r, "plant", "overtravel sensor (Top) tripped"));
+    assert!(!logged(&r, "plant", "crash"));
+}
