@@ -672,9 +672,16 @@ impl Report {
             .iter()
             .filter(|t| t.kind == TripKind::PowerOff && t.cause.starts_with("K1 opened"))
             .count();
+        // With the safe drive its torque-off opens K1 too: the count is the safety logic's,
+        // and says so; the drive's own are listed below.
+        let by = if self.safety.drive.is_some() {
+            " by the safety logic"
+        } else {
+            ""
+        };
         let _ = writeln!(
             s,
-            "  safety trips       {} (K1 opened {power_off} {})",
+            "  safety trips       {} (K1 opened{by} {power_off} {})",
             causes.len(),
             if power_off == 1 { "time" } else { "times" }
         );
