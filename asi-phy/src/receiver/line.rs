@@ -34,17 +34,59 @@ pub(super) struct Run {
     pub(super) t0: u64,
     /// Time of the last pulse, ns.
     pub(super) last_t: u64,
-    /// Time of grid point `last_g + 1` after `t0`, ns.
-    pub(super) next_at: u64,
     /// Grid point of the last pulse.
     pub(super) last_g: u64,
     pub(super) last_positive: bool,
+    /// The last pulse lies within the tolerance of its grid point `last_g` (counted modulo
+    /// 2⁶⁴ ns, as the decoder's grid arithmetic is): on a grid where [`Grid::recip`] is set,
+    /// a pulse on one of the next two grid points then cannot come after a pause.
+    pub(super) on_grid: bool,
     pub(super) count: u32,
     pub(super) occupied: u64,
     pub(super) positive: u64,
     pub(super) failed: Checks,
     /// For a run known to be clean Manchester: its bits in transmission order.
     pub(super) clean: Option<u32>,
+}
+
+/// The grid of a decoder and the constant of its fast scan ([`Run::scan`]).
+#[derive(Clone, Copy, Debug)]
+struct Grid {
+    /// Half-bit, ns.
+    h: u64,
+    /// Jitter tolerance, ns.
+    tol: u64,
+    /// Twice the tolerance (saturating).
+    two_tol: u64,
+    /// The silence that ends a run, ns.
+    pause: u64,
+    /// ⌈2^[`RECIP_SHIFT`] / h⌉ where the fast scan applies, else 0: where the grid is at most
+    /// 2²⁴ ns, the tolerance under half of it (so a pulse is within the tolerance of at most one
+    /// grid point) and two half-bits and twice the tolerance shorter than the pause (so two
+    /// pulses each within the tolerance of grid points one or two apart are never a pause).
+    recip: u64,
+}
+
+/// The shift of the fast scan's reciprocal: for `y < 64·h` and `h ≤ 2²⁴`,
+/// `y · ⌈2⁵⁷ / h⌉ >> 57` is `y / h` exactly and the product stays below 2⁶⁴.
+const RECIP_SHIFT: u32 = 57;
+
+impl Grid {
+    fn new(cfg: &ReceiverConfig) -> Grid {
+        let (h, tol, pause) = (cfg.half_bit, cfg.tolerance, cfg.pause);
+        let fast = h <= 1 << 24 && tol < h.div_ceil(2) && 2 * h + 2 * tol < pause;
+        Grid {
+            h,
+            tol,
+            two_tol: tol.saturating_mul(2),
+            pause,
+            recip: if fast {
+                (1u64 << RECIP_SHIFT).div_ceil(h)
+            } else {
+                0
+            },
+        }
+    }
 }
 
 /// The line half of a receiver: assembles pulses into [`Frame`]s on the half-bit grid.
@@ -54,9 +96,7 @@ pub(super) struct Run {
 /// result is the same as running a full [`Receiver`](super::Receiver) per slave.
 #[derive(Clone, Debug)]
 pub struct LineDecoder {
-    half_bit: u64,
-    tolerance: u64,
-    pause: u64,
+    grid: Grid,
     active: bool,
     run: Run,
 }
@@ -65,9 +105,7 @@ impl LineDecoder {
     /// A decoder with the grid, tolerance and pause of `cfg`.
     pub fn new(cfg: &ReceiverConfig) -> LineDecoder {
         LineDecoder {
-            half_bit: cfg.half_bit,
-            tolerance: cfg.tolerance,
-            pause: cfg.pause,
+            grid: Grid::new(cfg),
             active: false,
             run: Run::default(),
         }
@@ -84,24 +122,24 @@ impl LineDecoder {
     /// Takes a slice of pulses, calling `out` with every frame they complete; the same as
     /// calling [`LineDecoder::push`] for each.
     ///
-    /// This is the receiver's one per-pulse loop, [`Run::extend`]; this function only cuts the
-    /// slice at the pauses, so that the loop itself holds nothing but the run.
+    /// The per-pulse work is [`Run::extend`]; this function only cuts the slice at the pauses,
+    /// so that the loop itself holds nothing but the run.
     pub fn push_slice(&mut self, pulses: &[Pulse], mut out: impl FnMut(Frame)) {
-        let (h, tol, pause) = (self.half_bit, self.tolerance, self.pause);
+        let grid = self.grid;
         let mut rest = pulses;
         loop {
             if !self.active {
                 let Some((first, tail)) = rest.split_first() else {
                     return;
                 };
-                self.run = Run::begin(*first, h);
+                self.run = Run::begin(*first);
                 self.active = true;
                 rest = tail;
             }
             if rest.is_empty() {
                 return;
             }
-            let taken = self.run.extend(rest, h, tol, pause);
+            let taken = self.run.extend(rest, &grid);
             // The pulse after the run, if any, comes after a pause and begins the next one.
             rest = match rest.get(taken..) {
                 Some(r) if !r.is_empty() => r,
@@ -117,8 +155,8 @@ impl LineDecoder {
     /// every telegram a correct transmitter sends).
     pub fn push_train(&mut self, train: &PulseTrain) -> Option<Frame> {
         let start = train.start().as_nanos();
-        let after_pause =
-            !self.active || (start >= self.run.last_t && start - self.run.last_t >= self.pause);
+        let after_pause = !self.active
+            || (start >= self.run.last_t && start - self.run.last_t >= self.grid.pause);
         let clean = if after_pause {
             self.clean_run(train)
         } else {
@@ -145,7 +183,7 @@ impl LineDecoder {
     fn clean_run(&self, train: &PulseTrain) -> Option<Run> {
         let (occupied, positive) = train.masks();
         // The receiver anchors its grid at the first pulse: a clean train has it at point 0.
-        if occupied & 1 == 0 || train.half_bit().as_nanos() != self.half_bit {
+        if occupied & 1 == 0 || train.half_bit().as_nanos() != self.grid.h {
             return None;
         }
         let g = 63 - occupied.leading_zeros() as u64;
@@ -164,10 +202,10 @@ impl LineDecoder {
         }
         Some(Run {
             t0: train.start().as_nanos(),
-            last_t: train.start().as_nanos() + g * self.half_bit,
-            next_at: (g + 1) * self.half_bit,
+            last_t: train.start().as_nanos() + g * self.grid.h,
             last_g: g,
             last_positive: positive & (1 << g) != 0,
+            on_grid: true,
             count: occupied.count_ones(),
             occupied,
             positive,
@@ -178,13 +216,13 @@ impl LineDecoder {
 
     /// The silence that ends a frame.
     pub fn pause(&self) -> SimDuration {
-        SimDuration::from_nanos(self.pause)
+        SimDuration::from_nanos(self.grid.pause)
     }
 
     /// When the frame in progress will be complete if no further pulse comes.
     pub fn poll_at(&self) -> Option<SimTime> {
         self.active
-            .then(|| SimTime::from_nanos(self.run.last_t.saturating_add(self.pause)))
+            .then(|| SimTime::from_nanos(self.run.last_t.saturating_add(self.grid.pause)))
     }
 
     /// Completes the frame in progress if the line has been silent for a pause by `now`.
@@ -211,14 +249,14 @@ impl LineDecoder {
 }
 
 impl Run {
-    fn begin(p: Pulse, h: u64) -> Run {
+    fn begin(p: Pulse) -> Run {
         let positive = p.polarity == Polarity::Positive;
         Run {
             t0: p.at.as_nanos(),
             last_t: p.at.as_nanos(),
-            next_at: h,
             last_g: 0,
             last_positive: positive,
+            on_grid: true,
             count: 1,
             occupied: 1,
             positive: positive as u64,
@@ -234,88 +272,39 @@ impl Run {
     /// Adds the leading pulses of `pulses` that belong to this run (all up to the first that
     /// comes after a pause) and returns how many it took.
     ///
-    /// The state lives in locals so that it stays in registers, and the grid point after the
-    /// last pulse is kept as an absolute time (`t0 + next_at`, wrapping as `next_at` does),
-    /// advanced by one or two half bits: the chain from one pulse to the next is a subtraction,
-    /// a comparison and an addition. The common pulse (within the tolerance of one of the next
-    /// two grid points) costs no branch beyond the loop's own.
-    fn extend(&mut self, pulses: &[Pulse], h: u64, tol: u64, pause: u64) -> usize {
-        let half = (h / 2) as i64;
-        let t0 = self.t0;
-        let mut next = t0.wrapping_add(self.next_at);
-        let mut last_t = self.last_t;
-        let mut last_positive = self.last_positive;
-        let mut occupied = self.occupied;
-        let mut positive = self.positive;
+    /// While the last pulse lies on its grid point, the pulses go through the fast scan
+    /// ([`Run::scan`]); the first it does not take (the pulse after a pause, one off the grid,
+    /// one past the masks) goes through [`Run::step`], which is the reference rule for any
+    /// pulse, and the scan resumes once a pulse lies on the grid again.
+    #[inline]
+    fn extend(&mut self, pulses: &[Pulse], grid: &Grid) -> usize {
         let mut same = false;
         let mut off = false;
         let mut taken = 0;
         loop {
-            // The grid point of the last pulse as a bit (0 once past the masks' 64 points),
-            // and how many points the pulses on the grid have advanced from it.
-            let mut cursor = if self.last_g < 64 {
-                1u64 << self.last_g
-            } else {
-                0
-            };
-            let mut steps = 0u64;
-            let mut stop = None;
-            while let Some(p) = pulses.get(taken) {
-                let at = p.at.as_nanos();
-                // A pulse that goes back in time wraps to a huge gap: it is no pause.
-                if at.wrapping_sub(last_t) >= pause && at >= last_t {
-                    stop = Some(false);
-                    break;
-                }
-                let dev1 = at.wrapping_sub(next) as i64;
-                let two = dev1 > half;
-                // `h` if the pulse is nearer the second grid point, else 0: a mask, not a
-                // branch (which way a pulse goes is the data's, and a branch on it mispredicts).
-                let skip = (two as u64).wrapping_neg() & h;
-                let dev = dev1.wrapping_sub(skip as i64);
-                if dev.unsigned_abs() > tol {
-                    stop = Some(true);
-                    break;
-                }
-                let pos = p.polarity == Polarity::Positive;
-                next = next.wrapping_add(h).wrapping_add(skip);
-                cursor = (cursor << 1) << two as u32;
-                steps += 1 + two as u64;
-                occupied |= cursor;
-                positive |= cursor & (pos as u64).wrapping_neg();
-                same |= pos == last_positive;
-                last_t = at;
-                last_positive = pos;
-                taken += 1;
+            if grid.recip != 0 && self.on_grid && self.last_g < 62 {
+                // At most this many pulses keep the grid point within the masks (each takes
+                // one or two points).
+                let room = ((63 - self.last_g) / 2) as usize;
+                let end = pulses.len().min(taken + room);
+                let (n, s) = self.scan(&pulses[taken..end], grid);
+                same |= s;
+                taken += n;
             }
-            self.last_g += steps;
-            if stop != Some(true) {
+            let Some(&p) = pulses.get(taken) else {
+                break;
+            };
+            let at = p.at.as_nanos();
+            // A pulse that goes back in time wraps to a huge gap: it is no pause.
+            if at.wrapping_sub(self.last_t) >= grid.pause && at >= self.last_t {
                 break;
             }
-            // A pulse off the next two grid points: the run has a pause error.
-            let p = pulses[taken];
-            let at = p.at.as_nanos();
-            let pos = p.polarity == Polarity::Positive;
-            off = true;
-            let g = off_grid(h, at, t0, last_t, self.last_g);
-            // Wraps only past 584 years of grid points, where every pulse is a pause error.
-            next = t0.wrapping_add(g.wrapping_add(1).wrapping_mul(h));
-            same |= pos == last_positive;
-            if g < 64 {
-                occupied |= 1 << g;
-                positive |= (pos as u64) << g;
-            }
-            self.last_g = g;
-            last_t = at;
-            last_positive = pos;
+            let (s, o) = self.step(p, grid);
+            same |= s;
+            off |= o;
             taken += 1;
         }
         if taken > 0 {
-            self.next_at = next.wrapping_sub(t0);
-            self.last_t = last_t;
-            self.last_positive = last_positive;
-            self.occupied = occupied;
-            self.positive = positive;
             self.count = self
                 .count
                 .saturating_add(u32::try_from(taken).unwrap_or(u32::MAX));
@@ -330,28 +319,118 @@ impl Run {
         taken
     }
 
+    /// The fast scan: takes the leading pulses of `pulses` that each lie within the tolerance
+    /// of one of the two grid points after the previous one's, and returns how many it took and
+    /// whether two consecutive ones (counting the run's last pulse before them) have the same
+    /// sign. The caller ensures that the grid has a fast scan ([`Grid::recip`]), that the
+    /// run's last pulse lies on its grid point ([`Run::on_grid`]), and that `pulses` is short
+    /// enough to keep every grid point under 64.
+    ///
+    /// Every pulse is placed on the grid by itself, from its distance to the run's first pulse
+    /// (a multiplication by the reciprocal of the grid), and then checked exactly: its distance
+    /// to that grid point is at most the tolerance, and the point is one or two after the last.
+    /// That is exactly where the reference rule puts it (with a tolerance under half the grid,
+    /// the next two grid points' tolerance windows are apart), and such a pulse is never a pause
+    /// (see [`Grid::recip`]); so the pulses hold no chain from one to the next but the check
+    /// of the step, and the signs are compared once from the masks.
+    #[inline]
+    fn scan(&mut self, pulses: &[Pulse], grid: &Grid) -> (usize, bool) {
+        let base = self.t0.wrapping_sub(grid.tol);
+        let (h, recip, two_tol) = (grid.h, grid.recip, grid.two_tol);
+        let q0 = self.last_g;
+        let mut q_prev = q0;
+        let mut occupied = 0u64;
+        let mut positive = 0u64;
+        let mut n = 0;
+        for p in pulses {
+            // The distance from the grid point before the pulse's window, modulo 2⁶⁴.
+            let y = p.at.as_nanos().wrapping_sub(base);
+            let q = y.wrapping_mul(recip) >> RECIP_SHIFT;
+            let within = y.wrapping_sub(q.wrapping_mul(h)) <= two_tol;
+            let step = q.wrapping_sub(q_prev).wrapping_sub(1) <= 1;
+            if !(within && step) {
+                break;
+            }
+            // q ≤ 63: at most `(63 - q0) / 2` pulses, each one or two points on.
+            occupied |= 1u64.wrapping_shl(q as u32);
+            positive |= (p.polarity as u64).wrapping_shl(q as u32);
+            q_prev = q;
+            n += 1;
+        }
+        if n == 0 {
+            return (0, false);
+        }
+        // The pulses from the run's last one on lie one or two grid points apart: two are
+        // consecutive where they are adjacent, or two apart with nothing between.
+        let last = 1u64 << q0;
+        let all = occupied | last;
+        let pos = positive | if self.last_positive { last } else { 0 };
+        let neg = all & !pos;
+        let same = (pos & (pos >> 1))
+            | (neg & (neg >> 1))
+            | (((pos & (pos >> 2)) | (neg & (neg >> 2))) & !(all >> 1));
+        self.occupied |= occupied;
+        self.positive |= positive;
+        self.last_g = q_prev;
+        self.last_t = pulses[n - 1].at.as_nanos();
+        self.last_positive = positive >> q_prev & 1 == 1;
+        (n, same != 0)
+    }
+
+    /// One pulse that does not come after a pause, by the reference rule: on the nearer of the
+    /// next two grid points if within the tolerance of it, else off the grid (a pause error).
+    /// Returns whether it has the last pulse's sign and whether it is off the grid.
+    #[inline(never)]
+    fn step(&mut self, p: Pulse, grid: &Grid) -> (bool, bool) {
+        let h = grid.h;
+        let at = p.at.as_nanos();
+        let pos = p.polarity == Polarity::Positive;
+        // Wraps only past 584 years of grid points, where every pulse is a pause error.
+        let next_at = self.last_g.wrapping_add(1).wrapping_mul(h);
+        let dev1 = at.wrapping_sub(self.t0).wrapping_sub(next_at) as i64;
+        let two = dev1 > (h / 2) as i64;
+        let dev = dev1.wrapping_sub(if two { h as i64 } else { 0 });
+        let off = dev.unsigned_abs() > grid.tol;
+        let g = if off {
+            off_grid(h, at, self.t0, self.last_t, self.last_g)
+        } else {
+            self.last_g.wrapping_add(1 + two as u64)
+        };
+        let same = pos == self.last_positive;
+        if g < 64 {
+            self.occupied |= 1 << g;
+            self.positive |= (pos as u64) << g;
+        }
+        self.last_g = g;
+        self.last_t = at;
+        self.last_positive = pos;
+        self.on_grid = at
+            .wrapping_sub(self.t0)
+            .wrapping_sub(g.wrapping_mul(h))
+            .wrapping_add(grid.tol)
+            <= grid.two_tol;
+        (same, off)
+    }
+
+    #[inline]
     fn finish(&self) -> Frame {
         let g = self.last_g;
         let n = g.div_ceil(2);
         let mut failed = self.failed;
         let cells = n.min(32) as u32;
+        let mids = mid_mask(cells);
         let raw = match self.clean {
             Some(raw) => raw,
+            None if self.occupied & mids == mids => {
+                // Bit i is 1 where the mid pulse of cell i (point 2i + 1) is negative. Reversed,
+                // point 2i + 1 is point 62 − 2i, which compacts to bit 31 − i: the bits in
+                // transmission order, first bit highest, in the top `cells` bits.
+                let top = compact((!self.positive & mids).reverse_bits());
+                (u64::from(top) >> (32 - cells)) as u32
+            }
             None => {
-                let mids = mid_mask(cells);
-                let raw = if self.occupied & mids == mids {
-                    // Bit i is 1 where the mid pulse of cell i is negative.
-                    compact((!self.positive & mids) >> 1)
-                } else {
-                    failed = failed.with(Check::Information);
-                    level_bits(self.occupied, self.positive, cells)
-                };
-                // Bit i is in position i; turn it into transmission order, first bit highest.
-                if cells == 0 {
-                    0
-                } else {
-                    reverse_low(raw, cells)
-                }
+                failed = failed.with(Check::Information);
+                level_raw(self.occupied, self.positive, cells)
             }
         };
         if cells >= 1 && raw >> (cells - 1) & 1 == 1 {
@@ -404,6 +483,16 @@ const fn mid_mask(cells: u32) -> u64 {
         0
     } else {
         0xAAAA_AAAA_AAAA_AAAA & (u64::MAX >> (64 - 2 * cells))
+    }
+}
+
+/// [`level_bits`] in transmission order, first bit highest.
+#[cold]
+fn level_raw(occupied: u64, positive: u64, cells: u32) -> u32 {
+    if cells == 0 {
+        0
+    } else {
+        reverse_low(level_bits(occupied, positive, cells), cells)
     }
 }
 
