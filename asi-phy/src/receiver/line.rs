@@ -127,26 +127,37 @@ impl LineDecoder {
     pub fn push_slice(&mut self, pulses: &[Pulse], mut out: impl FnMut(Frame)) {
         let grid = self.grid;
         let mut rest = pulses;
-        loop {
-            if !self.active {
-                let Some((first, tail)) = rest.split_first() else {
-                    return;
-                };
-                self.run = Run::begin(*first);
-                self.active = true;
-                rest = tail;
-            }
+        if self.active {
             if rest.is_empty() {
                 return;
             }
             let taken = self.run.extend(rest, &grid);
             // The pulse after the run, if any, comes after a pause and begins the next one.
-            rest = match rest.get(taken..) {
-                Some(r) if !r.is_empty() => r,
+            match rest.get(taken..) {
+                Some(r) if !r.is_empty() => rest = r,
                 _ => return,
-            };
+            }
             self.active = false;
             out(self.run.finish());
+        }
+        while let Some((first, tail)) = rest.split_first() {
+            // A clean run at once; any other pulse by pulse.
+            if let Some((frame, after)) = Run::whole(first, tail, &grid) {
+                out(frame);
+                rest = after;
+                continue;
+            }
+            let mut run = Run::begin(*first);
+            let taken = run.extend(tail, &grid);
+            match tail.get(taken..) {
+                Some(r) if !r.is_empty() => rest = r,
+                _ => {
+                    self.run = run;
+                    self.active = true;
+                    return;
+                }
+            }
+            out(run.finish());
         }
     }
 
@@ -269,6 +280,77 @@ impl Run {
         }
     }
 
+    /// The run that begins with `first` and goes on in `tail`, if it is decided at once: its
+    /// pulses after the first all lie within the tolerance of the grid, one or two points apart
+    /// (the fast scan, [`Run::scan`]), with alternating signs, and the pulse after them comes
+    /// after a pause. Returns its frame and the pulses after it (which begin with the pulse
+    /// after the pause); `None` leaves the run to [`Run::begin`] and [`Run::extend`], which
+    /// give the same result for any run.
+    #[inline(always)]
+    fn whole<'p>(first: &Pulse, tail: &'p [Pulse], grid: &Grid) -> Option<(Frame, &'p [Pulse])> {
+        if grid.recip == 0 {
+            return None;
+        }
+        let t0 = first.at.as_nanos();
+        let base = t0.wrapping_sub(grid.tol);
+        let (h, recip, two_tol) = (grid.h, grid.recip, grid.two_tol);
+        let mut q_prev = 0u64;
+        let mut occupied = 1u64;
+        // The signs in order, the latest in bit 0 (1 = positive).
+        let mut signs = first.polarity as u64;
+        let mut n = 0;
+        // At most 31 pulses after the first keep every grid point under 64.
+        let scanned = &tail[..tail.len().min(31)];
+        while let Some(p) = scanned.get(n) {
+            let y = p.at.as_nanos().wrapping_sub(base);
+            let q = y.wrapping_mul(recip) >> RECIP_SHIFT;
+            let within = y.wrapping_sub(q.wrapping_mul(h)) <= two_tol;
+            let step = q.wrapping_sub(q_prev).wrapping_sub(1) <= 1;
+            if !(within && step) {
+                break;
+            }
+            occupied |= 1u64.wrapping_shl(q as u32);
+            signs = (signs << 1) | p.polarity as u64;
+            q_prev = q;
+            n += 1;
+        }
+        let last_t = if n == 0 {
+            t0
+        } else {
+            tail[n - 1].at.as_nanos()
+        };
+        let after = tail.get(n..)?;
+        let at = after.first()?.at.as_nanos();
+        if !(at.wrapping_sub(last_t) >= grid.pause && at >= last_t) {
+            return None;
+        }
+        // All n + 1 signs alternate.
+        let all = (1u64 << n) - 1;
+        if (signs ^ (signs >> 1)) & all != all {
+            return None;
+        }
+        let first_positive = first.polarity == Polarity::Positive;
+        let odd = prefix_parity(occupied);
+        let run = Run {
+            t0,
+            last_t,
+            last_g: q_prev,
+            last_positive: signs & 1 == 1,
+            on_grid: true,
+            count: n as u32 + 1,
+            occupied,
+            // The 1st, 3rd, .. pulse has the first one's sign.
+            positive: occupied & if first_positive { odd } else { !odd },
+            failed: if first_positive {
+                Checks::only(Check::StartBit)
+            } else {
+                Checks::NONE
+            },
+            clean: None,
+        };
+        Some((run.finish(), after))
+    }
+
     /// Adds the leading pulses of `pulses` that belong to this run (all up to the first that
     /// comes after a pause) and returns how many it took.
     ///
@@ -299,7 +381,9 @@ impl Run {
             if at.wrapping_sub(self.last_t) >= grid.pause && at >= self.last_t {
                 break;
             }
-            let (s, o) = self.step(p, grid);
+            let s;
+            let o;
+            (*self, s, o) = self.step(p, grid);
             same |= s;
             off |= o;
             taken += 1;
@@ -323,8 +407,8 @@ impl Run {
     /// of one of the two grid points after the previous one's, and returns how many it took and
     /// whether two consecutive ones (counting the run's last pulse before them) have the same
     /// sign. The caller ensures that the grid has a fast scan ([`Grid::recip`]), that the
-    /// run's last pulse lies on its grid point ([`Run::on_grid`]), and that `pulses` is short
-    /// enough to keep every grid point under 64.
+    /// run's last pulse lies on its grid point ([`Run::on_grid`]), and that `pulses` holds at
+    /// most `(63 - last_g) / 2` pulses, so that every grid point stays under 64.
     ///
     /// Every pulse is placed on the grid by itself, from its distance to the run's first pulse
     /// (a multiplication by the reciprocal of the grid), and then checked exactly: its distance
@@ -332,17 +416,18 @@ impl Run {
     /// That is exactly where the reference rule puts it (with a tolerance under half the grid,
     /// the next two grid points' tolerance windows are apart), and such a pulse is never a pause
     /// (see [`Grid::recip`]); so the pulses hold no chain from one to the next but the check
-    /// of the step, and the signs are compared once from the masks.
+    /// of the step. The signs are only collected in order; where they alternate (as on any
+    /// sound line) the positive pulses are every other one of the masks'.
     #[inline]
     fn scan(&mut self, pulses: &[Pulse], grid: &Grid) -> (usize, bool) {
         let base = self.t0.wrapping_sub(grid.tol);
         let (h, recip, two_tol) = (grid.h, grid.recip, grid.two_tol);
-        let q0 = self.last_g;
-        let mut q_prev = q0;
+        let mut q_prev = self.last_g;
         let mut occupied = 0u64;
-        let mut positive = 0u64;
+        // The signs in order, the latest in bit 0 (1 = positive).
+        let mut signs = 0u64;
         let mut n = 0;
-        for p in pulses {
+        while let Some(p) = pulses.get(n) {
             // The distance from the grid point before the pulse's window, modulo 2⁶⁴.
             let y = p.at.as_nanos().wrapping_sub(base);
             let q = y.wrapping_mul(recip) >> RECIP_SHIFT;
@@ -351,37 +436,41 @@ impl Run {
             if !(within && step) {
                 break;
             }
-            // q ≤ 63: at most `(63 - q0) / 2` pulses, each one or two points on.
             occupied |= 1u64.wrapping_shl(q as u32);
-            positive |= (p.polarity as u64).wrapping_shl(q as u32);
+            signs = (signs << 1) | p.polarity as u64;
             q_prev = q;
             n += 1;
         }
         if n == 0 {
             return (0, false);
         }
-        // The pulses from the run's last one on lie one or two grid points apart: two are
-        // consecutive where they are adjacent, or two apart with nothing between.
-        let last = 1u64 << q0;
-        let all = occupied | last;
-        let pos = positive | if self.last_positive { last } else { 0 };
-        let neg = all & !pos;
-        let same = (pos & (pos >> 1))
-            | (neg & (neg >> 1))
-            | (((pos & (pos >> 2)) | (neg & (neg >> 2))) & !(all >> 1));
+        // The run's last sign above the scanned ones (n ≤ 31): they alternate where every
+        // sign differs from the one before it.
+        let chain = signs | (self.last_positive as u64) << n;
+        let all = (1u64 << n) - 1;
+        let alternate = (chain ^ (chain >> 1)) & all == all;
+        let positive = if alternate {
+            // The prefix parity is 1 on the 1st, 3rd, .. scanned pulse; the 1st has the sign
+            // opposite to the run's last pulse.
+            let odd = prefix_parity(occupied);
+            occupied & if self.last_positive { !odd } else { odd }
+        } else {
+            scatter(signs, occupied)
+        };
         self.occupied |= occupied;
         self.positive |= positive;
         self.last_g = q_prev;
         self.last_t = pulses[n - 1].at.as_nanos();
-        self.last_positive = positive >> q_prev & 1 == 1;
-        (n, same != 0)
+        self.last_positive = signs & 1 == 1;
+        (n, !alternate)
     }
 
     /// One pulse that does not come after a pause, by the reference rule: on the nearer of the
     /// next two grid points if within the tolerance of it, else off the grid (a pause error).
-    /// Returns whether it has the last pulse's sign and whether it is off the grid.
+    /// Returns the run with it, whether it has the last pulse's sign and whether it is off the
+    /// grid. (By value, so that the caller's run need not live in memory.)
     #[inline(never)]
-    fn step(&mut self, p: Pulse, grid: &Grid) -> (bool, bool) {
+    fn step(mut self, p: Pulse, grid: &Grid) -> (Run, bool, bool) {
         let h = grid.h;
         let at = p.at.as_nanos();
         let pos = p.polarity == Polarity::Positive;
@@ -409,10 +498,10 @@ impl Run {
             .wrapping_sub(g.wrapping_mul(h))
             .wrapping_add(grid.tol)
             <= grid.two_tol;
-        (same, off)
+        (self, same, off)
     }
 
-    #[inline]
+    #[inline(always)]
     fn finish(&self) -> Frame {
         let g = self.last_g;
         let n = g.div_ceil(2);
@@ -454,6 +543,34 @@ impl Run {
             line_failed: failed,
         }
     }
+}
+
+/// Bit j is the parity of the bits of `x` at j and below.
+const fn prefix_parity(x: u64) -> u64 {
+    let mut x = x;
+    x ^= x << 1;
+    x ^= x << 2;
+    x ^= x << 4;
+    x ^= x << 8;
+    x ^= x << 16;
+    x ^= x << 32;
+    x
+}
+
+/// The signs of a scan that do not alternate on the grid points in `occupied`: the latest
+/// sign (bit 0 of `signs`) on the highest point, and so on down.
+#[cold]
+fn scatter(signs: u64, occupied: u64) -> u64 {
+    let mut positive = 0;
+    let mut rest = occupied;
+    let mut signs = signs;
+    while rest != 0 {
+        let top = 63 - rest.leading_zeros();
+        positive |= (signs & 1) << top;
+        signs >>= 1;
+        rest &= !(1 << top);
+    }
+    positive
 }
 
 /// `true` if `x` has an odd number of ones (without relying on a popcount instruction).
