@@ -3,7 +3,7 @@
 
 use super::checks::{Check, Checks};
 use super::config::ReceiverConfig;
-use crate::manchester::{compact, manchester_levels, reverse_low};
+use crate::manchester::{compact, compact32, manchester_levels, reverse_low, reverse_low16};
 use crate::pulse::{grid_masks, Polarity, Pulse, PulseTrain};
 use crate::time::{SimDuration, SimTime};
 
@@ -511,11 +511,17 @@ impl Run {
         let raw = match self.clean {
             Some(raw) => raw,
             None if self.occupied & mids == mids => {
-                // Bit i is 1 where the mid pulse of cell i (point 2i + 1) is negative. Reversed,
-                // point 2i + 1 is point 62 − 2i, which compacts to bit 31 − i: the bits in
-                // transmission order, first bit highest, in the top `cells` bits.
-                let top = compact((!self.positive & mids).reverse_bits());
-                (u64::from(top) >> (32 - cells)) as u32
+                // Bit i is 1 where the mid pulse of cell i (point 2i + 1) is negative.
+                let ones = !self.positive & mids;
+                if cells <= 16 {
+                    // Every telegram of the bus: 32 bits to compact and 16 to reverse.
+                    reverse_low16(compact32((ones >> 1) as u32), cells)
+                } else {
+                    // Reversed, point 2i + 1 is point 62 − 2i, which compacts to bit 31 − i:
+                    // the bits in transmission order, first bit highest, in the top `cells`.
+                    let top = compact(ones.reverse_bits());
+                    (u64::from(top) >> (32 - cells)) as u32
+                }
             }
             None => {
                 failed = failed.with(Check::Information);
@@ -573,14 +579,12 @@ fn scatter(signs: u64, occupied: u64) -> u64 {
     positive
 }
 
-/// `true` if `x` has an odd number of ones (without relying on a popcount instruction).
+/// `true` if `x` has an odd number of ones (without relying on a popcount instruction): the
+/// parity of each nibble in its low bit, then their sum in the top nibble by one multiplication.
 const fn odd_parity(x: u32) -> bool {
-    let mut x = x ^ (x >> 16);
-    x ^= x >> 8;
-    x ^= x >> 4;
+    let mut x = x ^ (x >> 1);
     x ^= x >> 2;
-    x ^= x >> 1;
-    x & 1 == 1
+    (x & 0x1111_1111).wrapping_mul(0x1111_1111) >> 28 & 1 == 1
 }
 
 /// The grid point of a pulse at `at` off the next two grid points of its run: the nearest one,
@@ -627,4 +631,21 @@ fn level_bits(occupied: u64, positive: u64, cells: u32) -> u32 {
         }
     }
     bits
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn odd_parity_counts_the_ones() {
+        let mut x = 0x9E37_79B9u32;
+        for k in 0..200_000u32 {
+            for v in [k, x, !k, k << 16] {
+                assert_eq!(odd_parity(v), v.count_ones() % 2 == 1, "{v:#x}");
+            }
+            x = x.rotate_left(5) ^ k.wrapping_mul(0x85EB_CA6B);
+        }
+        assert!(!odd_parity(0) && odd_parity(u32::MAX >> 1) && !odd_parity(u32::MAX));
+    }
 }
