@@ -636,6 +636,55 @@ fn level_bits(occupied: u64, positive: u64, cells: u32) -> u32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::receiver::Expect;
+    use crate::telegram::Request;
+    use crate::timing::BusTiming;
+
+    /// Every request's pulses, each after the first off its grid point by exactly the
+    /// tolerance (late, early, alternately), and a pulse exactly a pause after the last.
+    fn on_the_borders() -> impl Iterator<Item = (u16, Vec<Pulse>)> {
+        let timing = BusTiming::default();
+        let tol = timing.tolerance().as_nanos();
+        (0u16..1 << 11).map(move |body| {
+            let bits = (body << 2) | (((body.count_ones() & 1) as u16) << 1) | 1;
+            let req = Request::from_bits(bits).expect("valid");
+            let t0 = SimTime::from_micros(7);
+            let mut pulses: Vec<Pulse> = PulseTrain::request(req, t0, timing.half_bit())
+                .iter()
+                .collect();
+            for (i, p) in pulses.iter_mut().enumerate().skip(1) {
+                let at = p.at.as_nanos();
+                p.at = SimTime::from_nanos(if i % 2 == 1 { at + tol } else { at - tol });
+            }
+            let last = pulses.last().expect("pulses").at;
+            pulses.push(Pulse::new(last + timing.min_pause(), Polarity::Negative));
+            (bits, pulses)
+        })
+    }
+
+    /// The fast paths take pulses exactly on the tolerance's borders and end a run exactly a
+    /// pause after its last pulse (that they give the same frames as the reference decoder is
+    /// the equivalence property tests' part; this is that they are taken).
+    #[test]
+    fn the_fast_paths_take_pulses_on_the_tolerance_borders() {
+        let grid = Grid::new(&BusTiming::default().receiver(Expect::Both));
+        assert_ne!(grid.recip, 0);
+        for (bits, pulses) in on_the_borders() {
+            let n = pulses.len();
+            let (frame, after) = Run::whole(&pulses[0], &pulses[1..], &grid).expect("at once");
+            assert_eq!(after, &pulses[n - 1..], "{bits:#06x}");
+            assert_eq!(
+                (frame.raw, frame.line_failed, frame.pulses),
+                (u32::from(bits), Checks::NONE, n as u32 - 1)
+            );
+            let mut run = Run::begin(pulses[0]);
+            let (taken, same) = run.scan(&pulses[1..n - 1], &grid);
+            assert_eq!((taken, same), (n - 2, false), "{bits:#06x}");
+            // (The count is extend's to keep.)
+            run.count += taken as u32;
+            assert_eq!(run.finish(), frame);
+        }
+    }
 
     #[test]
     fn odd_parity_counts_the_ones() {
