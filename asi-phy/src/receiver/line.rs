@@ -68,7 +68,9 @@ struct Grid {
 }
 
 /// The shift of the fast scan's reciprocal: for `y < 64·h` and `h ≤ 2²⁴`,
-/// `y · ⌈2⁵⁷ / h⌉ >> 57` is `y / h` exactly and the product stays below 2⁶⁴.
+/// `y · ⌈2⁵⁷ / h⌉ >> 57` is `y / h` exactly and the product stays below 2⁶⁴. (The scan checks
+/// every placement exactly, so a wrong quotient, for a pulse far off, only sends the pulse the
+/// reference way; the exactness is what lets every pulse on the grid take the fast way.)
 const RECIP_SHIFT: u32 = 57;
 
 impl Grid {
@@ -122,8 +124,9 @@ impl LineDecoder {
     /// Takes a slice of pulses, calling `out` with every frame they complete; the same as
     /// calling [`LineDecoder::push`] for each.
     ///
-    /// The per-pulse work is [`Run::extend`]; this function only cuts the slice at the pauses,
-    /// so that the loop itself holds nothing but the run.
+    /// A run that lies on the grid with alternating signs and ends at a pause within the slice
+    /// is decoded at once (`Run::whole`); any other goes through `Run::extend`, pulse by pulse
+    /// where it leaves the grid. This function only cuts the slice at the pauses.
     pub fn push_slice(&mut self, pulses: &[Pulse], mut out: impl FnMut(Frame)) {
         let grid = self.grid;
         let mut rest = pulses;
