@@ -4,9 +4,14 @@
 //!
 //! `cargo build --release -p asi-phy --example decode_line`, then
 //! `valgrind --tool=callgrind target/release/examples/decode_line 100` and the same with `0`:
-//! the difference over 100 × 4096 telegrams is the cost of one telegram.
+//! the difference over 100 × 4096 telegrams is the cost of one telegram. With a second
+//! argument `trains` the line goes as encoded trains (`LineDecoder::push_train`), as the bus
+//! decodes it.
 
-use asi_phy::{BusTiming, Expect, Nibble, Pulse, PulseTrain, Receiver, Request, Response, SimTime};
+use asi_phy::{
+    BusTiming, Expect, LineDecoder, Listener, Nibble, Pulse, PulseTrain, Receiver, Request,
+    Response, SimTime,
+};
 use std::hint::black_box;
 
 fn main() {
@@ -16,7 +21,9 @@ fn main() {
         .unwrap_or(100);
     let timing = BusTiming::default();
     let h = timing.half_bit();
+    let trains_mode = std::env::args().nth(2).as_deref() == Some("trains");
     let mut pulses: Vec<Pulse> = Vec::new();
+    let mut trains: Vec<PulseTrain> = Vec::new();
     let mut t = SimTime::from_micros(10);
     let mut telegrams = 0u64;
     for body in 0u16..1 << 11 {
@@ -29,12 +36,27 @@ fn main() {
         );
         pulses.extend(req);
         pulses.extend(resp);
+        trains.push(req);
+        trains.push(resp);
         telegrams += 2;
         t += timing.transaction();
     }
     let mut valid = 0u64;
+    let cfg = timing.receiver(Expect::Both);
     for _ in 0..rounds {
-        let mut rx = Receiver::new(timing.receiver(Expect::Both));
+        if trains_mode {
+            let (mut line, mut listener) = (LineDecoder::new(&cfg), Listener::new(&cfg));
+            for t in black_box(&trains) {
+                if let Some(f) = line.push_train(t) {
+                    valid += listener.accept(&f).is_valid() as u64;
+                }
+            }
+            valid += line
+                .flush()
+                .map_or(0, |f| listener.accept(&f).is_valid() as u64);
+            continue;
+        }
+        let mut rx = Receiver::new(cfg);
         rx.push_slice(black_box(&pulses), |r| valid += r.is_valid() as u64);
         valid += rx.flush().map_or(0, |r| r.is_valid() as u64);
     }
