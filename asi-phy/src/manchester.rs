@@ -59,6 +59,21 @@ pub(crate) const fn reverse_low(x: u32, n: u32) -> u32 {
     r >> (32 - n)
 }
 
+/// The low `n` (≤ 16) bits of `x` in reverse order, as [`reverse_low`] with two table lookups.
+pub(crate) const fn reverse_low16(x: u32, n: u32) -> u32 {
+    let r = (REV8[(x & 0xFF) as usize] as u32) << 8 | REV8[((x >> 8) & 0xFF) as usize] as u32;
+    r >> (16 - n)
+}
+
+/// Moves bit `2i` of `x` to bit `i` (i < 16), as [`compact`] on 32 bits; odd bits are dropped.
+pub(crate) const fn compact32(x: u32) -> u32 {
+    let mut x = x & 0x5555_5555;
+    x = (x | (x >> 1)) & 0x3333_3333;
+    x = (x | (x >> 2)) & 0x0F0F_0F0F;
+    x = (x | (x >> 4)) & 0x00FF_00FF;
+    (x | (x >> 8)) & 0xFFFF
+}
+
 /// Moves bit `i` of `x` (i < 16) to bit `2i`.
 pub(crate) const fn spread(x: u32) -> u32 {
     let mut x = x & 0xFFFF;
@@ -275,6 +290,19 @@ mod tests {
     fn spread_and_compact_are_inverse() {
         for x in 0..=0xFFFFu32 {
             assert_eq!(compact(spread(x) as u64), x);
+            assert_eq!(compact32(spread(x)), x);
+            assert_eq!(compact32(spread(x) | spread(x) << 1), x);
+        }
+    }
+
+    #[test]
+    fn reverse_low16_is_reverse_low() {
+        for n in 0..=16u32 {
+            for x in (0..=0xFFFFu32).step_by(7).chain([0xFFFF, 0x8001]) {
+                let low = x & ((1u32 << n) - 1);
+                let want = if n == 0 { 0 } else { reverse_low(low, n) };
+                assert_eq!(reverse_low16(low, n), want, "{x:#x} {n}");
+            }
         }
     }
 

@@ -3,7 +3,7 @@
 
 use super::checks::{Check, Checks};
 use super::config::ReceiverConfig;
-use crate::manchester::{compact, manchester_levels, reverse_low};
+use crate::manchester::{compact, compact32, manchester_levels, reverse_low, reverse_low16};
 use crate::pulse::{grid_masks, Polarity, Pulse, PulseTrain};
 use crate::time::{SimDuration, SimTime};
 
@@ -34,17 +34,61 @@ pub(super) struct Run {
     pub(super) t0: u64,
     /// Time of the last pulse, ns.
     pub(super) last_t: u64,
-    /// Time of grid point `last_g + 1` after `t0`, ns.
-    pub(super) next_at: u64,
     /// Grid point of the last pulse.
     pub(super) last_g: u64,
     pub(super) last_positive: bool,
+    /// The last pulse lies within the tolerance of its grid point `last_g` (counted modulo
+    /// 2⁶⁴ ns, as the decoder's grid arithmetic is): on a grid where [`Grid::recip`] is set,
+    /// a pulse on one of the next two grid points then cannot come after a pause.
+    pub(super) on_grid: bool,
     pub(super) count: u32,
     pub(super) occupied: u64,
     pub(super) positive: u64,
     pub(super) failed: Checks,
     /// For a run known to be clean Manchester: its bits in transmission order.
     pub(super) clean: Option<u32>,
+}
+
+/// The grid of a decoder and the constant of its fast scan ([`Run::scan`]).
+#[derive(Clone, Copy, Debug)]
+struct Grid {
+    /// Half-bit, ns.
+    h: u64,
+    /// Jitter tolerance, ns.
+    tol: u64,
+    /// Twice the tolerance (saturating).
+    two_tol: u64,
+    /// The silence that ends a run, ns.
+    pause: u64,
+    /// ⌈2^[`RECIP_SHIFT`] / h⌉ where the fast scan applies, else 0: where the grid is at most
+    /// 2²⁴ ns, the tolerance under half of it (so a pulse is within the tolerance of at most one
+    /// grid point) and two half-bits and twice the tolerance shorter than the pause (so two
+    /// pulses each within the tolerance of grid points one or two apart are never a pause).
+    recip: u64,
+}
+
+/// The shift of the fast scan's reciprocal: for `y < 64·h` and `h ≤ 2²⁴`,
+/// `y · ⌈2⁵⁷ / h⌉ >> 57` is `y / h` exactly and the product stays below 2⁶⁴. (The scan checks
+/// every placement exactly, so a wrong quotient, for a pulse far off, only sends the pulse the
+/// reference way; the exactness is what lets every pulse on the grid take the fast way.)
+const RECIP_SHIFT: u32 = 57;
+
+impl Grid {
+    fn new(cfg: &ReceiverConfig) -> Grid {
+        let (h, tol, pause) = (cfg.half_bit, cfg.tolerance, cfg.pause);
+        let fast = h <= 1 << 24 && tol < h.div_ceil(2) && 2 * h + 2 * tol < pause;
+        Grid {
+            h,
+            tol,
+            two_tol: tol.saturating_mul(2),
+            pause,
+            recip: if fast {
+                (1u64 << RECIP_SHIFT).div_ceil(h)
+            } else {
+                0
+            },
+        }
+    }
 }
 
 /// The line half of a receiver: assembles pulses into [`Frame`]s on the half-bit grid.
@@ -54,9 +98,7 @@ pub(super) struct Run {
 /// result is the same as running a full [`Receiver`](super::Receiver) per slave.
 #[derive(Clone, Debug)]
 pub struct LineDecoder {
-    half_bit: u64,
-    tolerance: u64,
-    pause: u64,
+    grid: Grid,
     active: bool,
     run: Run,
 }
@@ -65,9 +107,7 @@ impl LineDecoder {
     /// A decoder with the grid, tolerance and pause of `cfg`.
     pub fn new(cfg: &ReceiverConfig) -> LineDecoder {
         LineDecoder {
-            half_bit: cfg.half_bit,
-            tolerance: cfg.tolerance,
-            pause: cfg.pause,
+            grid: Grid::new(cfg),
             active: false,
             run: Run::default(),
         }
@@ -84,31 +124,43 @@ impl LineDecoder {
     /// Takes a slice of pulses, calling `out` with every frame they complete; the same as
     /// calling [`LineDecoder::push`] for each.
     ///
-    /// This is the receiver's one per-pulse loop, [`Run::extend`]; this function only cuts the
-    /// slice at the pauses, so that the loop itself holds nothing but the run.
+    /// A run that lies on the grid with alternating signs and ends at a pause within the slice
+    /// is decoded at once (`Run::whole`); any other goes through `Run::extend`, pulse by pulse
+    /// where it leaves the grid. This function only cuts the slice at the pauses.
     pub fn push_slice(&mut self, pulses: &[Pulse], mut out: impl FnMut(Frame)) {
-        let (h, tol, pause) = (self.half_bit, self.tolerance, self.pause);
+        let grid = self.grid;
         let mut rest = pulses;
-        loop {
-            if !self.active {
-                let Some((first, tail)) = rest.split_first() else {
-                    return;
-                };
-                self.run = Run::begin(*first, h);
-                self.active = true;
-                rest = tail;
-            }
+        if self.active {
             if rest.is_empty() {
                 return;
             }
-            let taken = self.run.extend(rest, h, tol, pause);
+            let taken = self.run.extend(rest, &grid);
             // The pulse after the run, if any, comes after a pause and begins the next one.
-            rest = match rest.get(taken..) {
-                Some(r) if !r.is_empty() => r,
+            match rest.get(taken..) {
+                Some(r) if !r.is_empty() => rest = r,
                 _ => return,
-            };
+            }
             self.active = false;
             out(self.run.finish());
+        }
+        while let Some((first, tail)) = rest.split_first() {
+            // A clean run at once; any other pulse by pulse.
+            if let Some((frame, after)) = Run::whole(first, tail, &grid) {
+                out(frame);
+                rest = after;
+                continue;
+            }
+            let mut run = Run::begin(*first);
+            let taken = run.extend(tail, &grid);
+            match tail.get(taken..) {
+                Some(r) if !r.is_empty() => rest = r,
+                _ => {
+                    self.run = run;
+                    self.active = true;
+                    return;
+                }
+            }
+            out(run.finish());
         }
     }
 
@@ -117,8 +169,8 @@ impl LineDecoder {
     /// every telegram a correct transmitter sends).
     pub fn push_train(&mut self, train: &PulseTrain) -> Option<Frame> {
         let start = train.start().as_nanos();
-        let after_pause =
-            !self.active || (start >= self.run.last_t && start - self.run.last_t >= self.pause);
+        let after_pause = !self.active
+            || (start >= self.run.last_t && start - self.run.last_t >= self.grid.pause);
         let clean = if after_pause {
             self.clean_run(train)
         } else {
@@ -145,7 +197,7 @@ impl LineDecoder {
     fn clean_run(&self, train: &PulseTrain) -> Option<Run> {
         let (occupied, positive) = train.masks();
         // The receiver anchors its grid at the first pulse: a clean train has it at point 0.
-        if occupied & 1 == 0 || train.half_bit().as_nanos() != self.half_bit {
+        if occupied & 1 == 0 || train.half_bit().as_nanos() != self.grid.h {
             return None;
         }
         let g = 63 - occupied.leading_zeros() as u64;
@@ -164,10 +216,10 @@ impl LineDecoder {
         }
         Some(Run {
             t0: train.start().as_nanos(),
-            last_t: train.start().as_nanos() + g * self.half_bit,
-            next_at: (g + 1) * self.half_bit,
+            last_t: train.start().as_nanos() + g * self.grid.h,
             last_g: g,
             last_positive: positive & (1 << g) != 0,
+            on_grid: true,
             count: occupied.count_ones(),
             occupied,
             positive,
@@ -178,13 +230,13 @@ impl LineDecoder {
 
     /// The silence that ends a frame.
     pub fn pause(&self) -> SimDuration {
-        SimDuration::from_nanos(self.pause)
+        SimDuration::from_nanos(self.grid.pause)
     }
 
     /// When the frame in progress will be complete if no further pulse comes.
     pub fn poll_at(&self) -> Option<SimTime> {
         self.active
-            .then(|| SimTime::from_nanos(self.run.last_t.saturating_add(self.pause)))
+            .then(|| SimTime::from_nanos(self.run.last_t.saturating_add(self.grid.pause)))
     }
 
     /// Completes the frame in progress if the line has been silent for a pause by `now`.
@@ -211,14 +263,14 @@ impl LineDecoder {
 }
 
 impl Run {
-    fn begin(p: Pulse, h: u64) -> Run {
+    fn begin(p: Pulse) -> Run {
         let positive = p.polarity == Polarity::Positive;
         Run {
             t0: p.at.as_nanos(),
             last_t: p.at.as_nanos(),
-            next_at: h,
             last_g: 0,
             last_positive: positive,
+            on_grid: true,
             count: 1,
             occupied: 1,
             positive: positive as u64,
@@ -231,91 +283,115 @@ impl Run {
         }
     }
 
+    /// The run that begins with `first` and goes on in `tail`, if it is decided at once: its
+    /// pulses after the first all lie within the tolerance of the grid, one or two points apart
+    /// (the fast scan, [`Run::scan`]), with alternating signs, and the pulse after them comes
+    /// after a pause. Returns its frame and the pulses after it (which begin with the pulse
+    /// after the pause); `None` leaves the run to [`Run::begin`] and [`Run::extend`], which
+    /// give the same result for any run.
+    #[inline(always)]
+    fn whole<'p>(first: &Pulse, tail: &'p [Pulse], grid: &Grid) -> Option<(Frame, &'p [Pulse])> {
+        if grid.recip == 0 {
+            return None;
+        }
+        let t0 = first.at.as_nanos();
+        let base = t0.wrapping_sub(grid.tol);
+        let (h, recip, two_tol) = (grid.h, grid.recip, grid.two_tol);
+        let mut q_prev = 0u64;
+        let mut occupied = 1u64;
+        // The signs in order, the latest in bit 0 (1 = positive).
+        let mut signs = first.polarity as u64;
+        let mut n = 0;
+        // At most 31 pulses after the first keep every grid point under 64.
+        let scanned = &tail[..tail.len().min(31)];
+        while let Some(p) = scanned.get(n) {
+            let y = p.at.as_nanos().wrapping_sub(base);
+            let q = y.wrapping_mul(recip) >> RECIP_SHIFT;
+            let within = y.wrapping_sub(q.wrapping_mul(h)) <= two_tol;
+            let step = q.wrapping_sub(q_prev).wrapping_sub(1) <= 1;
+            if !(within && step) {
+                break;
+            }
+            occupied |= 1u64.wrapping_shl(q as u32);
+            signs = (signs << 1) | p.polarity as u64;
+            q_prev = q;
+            n += 1;
+        }
+        let last_t = if n == 0 {
+            t0
+        } else {
+            tail[n - 1].at.as_nanos()
+        };
+        let after = tail.get(n..)?;
+        let at = after.first()?.at.as_nanos();
+        if !(at.wrapping_sub(last_t) >= grid.pause && at >= last_t) {
+            return None;
+        }
+        // All n + 1 signs alternate.
+        let all = (1u64 << n) - 1;
+        if (signs ^ (signs >> 1)) & all != all {
+            return None;
+        }
+        let first_positive = first.polarity == Polarity::Positive;
+        let odd = prefix_parity(occupied);
+        let run = Run {
+            t0,
+            last_t,
+            last_g: q_prev,
+            last_positive: signs & 1 == 1,
+            on_grid: true,
+            count: n as u32 + 1,
+            occupied,
+            // The 1st, 3rd, .. pulse has the first one's sign.
+            positive: occupied & if first_positive { odd } else { !odd },
+            failed: if first_positive {
+                Checks::only(Check::StartBit)
+            } else {
+                Checks::NONE
+            },
+            clean: None,
+        };
+        Some((run.finish(), after))
+    }
+
     /// Adds the leading pulses of `pulses` that belong to this run (all up to the first that
     /// comes after a pause) and returns how many it took.
     ///
-    /// The state lives in locals so that it stays in registers, and the grid point after the
-    /// last pulse is kept as an absolute time (`t0 + next_at`, wrapping as `next_at` does),
-    /// advanced by one or two half bits: the chain from one pulse to the next is a subtraction,
-    /// a comparison and an addition. The common pulse (within the tolerance of one of the next
-    /// two grid points) costs no branch beyond the loop's own.
-    fn extend(&mut self, pulses: &[Pulse], h: u64, tol: u64, pause: u64) -> usize {
-        let half = (h / 2) as i64;
-        let t0 = self.t0;
-        let mut next = t0.wrapping_add(self.next_at);
-        let mut last_t = self.last_t;
-        let mut last_positive = self.last_positive;
-        let mut occupied = self.occupied;
-        let mut positive = self.positive;
+    /// While the last pulse lies on its grid point, the pulses go through the fast scan
+    /// ([`Run::scan`]); the first it does not take (the pulse after a pause, one off the grid,
+    /// one past the masks) goes through [`Run::step`], which is the reference rule for any
+    /// pulse, and the scan resumes once a pulse lies on the grid again.
+    #[inline]
+    fn extend(&mut self, pulses: &[Pulse], grid: &Grid) -> usize {
         let mut same = false;
         let mut off = false;
         let mut taken = 0;
         loop {
-            // The grid point of the last pulse as a bit (0 once past the masks' 64 points),
-            // and how many points the pulses on the grid have advanced from it.
-            let mut cursor = if self.last_g < 64 {
-                1u64 << self.last_g
-            } else {
-                0
-            };
-            let mut steps = 0u64;
-            let mut stop = None;
-            while let Some(p) = pulses.get(taken) {
-                let at = p.at.as_nanos();
-                // A pulse that goes back in time wraps to a huge gap: it is no pause.
-                if at.wrapping_sub(last_t) >= pause && at >= last_t {
-                    stop = Some(false);
-                    break;
-                }
-                let dev1 = at.wrapping_sub(next) as i64;
-                let two = dev1 > half;
-                // `h` if the pulse is nearer the second grid point, else 0: a mask, not a
-                // branch (which way a pulse goes is the data's, and a branch on it mispredicts).
-                let skip = (two as u64).wrapping_neg() & h;
-                let dev = dev1.wrapping_sub(skip as i64);
-                if dev.unsigned_abs() > tol {
-                    stop = Some(true);
-                    break;
-                }
-                let pos = p.polarity == Polarity::Positive;
-                next = next.wrapping_add(h).wrapping_add(skip);
-                cursor = (cursor << 1) << two as u32;
-                steps += 1 + two as u64;
-                occupied |= cursor;
-                positive |= cursor & (pos as u64).wrapping_neg();
-                same |= pos == last_positive;
-                last_t = at;
-                last_positive = pos;
-                taken += 1;
+            if grid.recip != 0 && self.on_grid && self.last_g < 62 {
+                // At most this many pulses keep the grid point within the masks (each takes
+                // one or two points).
+                let room = ((63 - self.last_g) / 2) as usize;
+                let end = pulses.len().min(taken + room);
+                let (n, s) = self.scan(&pulses[taken..end], grid);
+                same |= s;
+                taken += n;
             }
-            self.last_g += steps;
-            if stop != Some(true) {
+            let Some(&p) = pulses.get(taken) else {
+                break;
+            };
+            let at = p.at.as_nanos();
+            // A pulse that goes back in time wraps to a huge gap: it is no pause.
+            if at.wrapping_sub(self.last_t) >= grid.pause && at >= self.last_t {
                 break;
             }
-            // A pulse off the next two grid points: the run has a pause error.
-            let p = pulses[taken];
-            let at = p.at.as_nanos();
-            let pos = p.polarity == Polarity::Positive;
-            off = true;
-            let g = off_grid(h, at, t0, last_t, self.last_g);
-            // Wraps only past 584 years of grid points, where every pulse is a pause error.
-            next = t0.wrapping_add(g.wrapping_add(1).wrapping_mul(h));
-            same |= pos == last_positive;
-            if g < 64 {
-                occupied |= 1 << g;
-                positive |= (pos as u64) << g;
-            }
-            self.last_g = g;
-            last_t = at;
-            last_positive = pos;
+            let s;
+            let o;
+            (*self, s, o) = self.step(p, grid);
+            same |= s;
+            off |= o;
             taken += 1;
         }
         if taken > 0 {
-            self.next_at = next.wrapping_sub(t0);
-            self.last_t = last_t;
-            self.last_positive = last_positive;
-            self.occupied = occupied;
-            self.positive = positive;
             self.count = self
                 .count
                 .saturating_add(u32::try_from(taken).unwrap_or(u32::MAX));
@@ -330,28 +406,129 @@ impl Run {
         taken
     }
 
+    /// The fast scan: takes the leading pulses of `pulses` that each lie within the tolerance
+    /// of one of the two grid points after the previous one's, and returns how many it took and
+    /// whether two consecutive ones (counting the run's last pulse before them) have the same
+    /// sign. The caller ensures that the grid has a fast scan ([`Grid::recip`]), that the
+    /// run's last pulse lies on its grid point ([`Run::on_grid`]), and that `pulses` holds at
+    /// most `(63 - last_g) / 2` pulses, so that every grid point stays under 64.
+    ///
+    /// Every pulse is placed on the grid by itself, from its distance to the run's first pulse
+    /// (a multiplication by the reciprocal of the grid), and then checked exactly: its distance
+    /// to that grid point is at most the tolerance, and the point is one or two after the last.
+    /// That is exactly where the reference rule puts it (with a tolerance under half the grid,
+    /// the next two grid points' tolerance windows are apart), and such a pulse is never a pause
+    /// (see [`Grid::recip`]); so the pulses hold no chain from one to the next but the check
+    /// of the step. The signs are only collected in order; where they alternate (as on any
+    /// sound line) the positive pulses are every other one of the masks'.
+    #[inline]
+    fn scan(&mut self, pulses: &[Pulse], grid: &Grid) -> (usize, bool) {
+        let base = self.t0.wrapping_sub(grid.tol);
+        let (h, recip, two_tol) = (grid.h, grid.recip, grid.two_tol);
+        let mut q_prev = self.last_g;
+        let mut occupied = 0u64;
+        // The signs in order, the latest in bit 0 (1 = positive).
+        let mut signs = 0u64;
+        let mut n = 0;
+        while let Some(p) = pulses.get(n) {
+            // The distance from the grid point before the pulse's window, modulo 2⁶⁴.
+            let y = p.at.as_nanos().wrapping_sub(base);
+            let q = y.wrapping_mul(recip) >> RECIP_SHIFT;
+            let within = y.wrapping_sub(q.wrapping_mul(h)) <= two_tol;
+            let step = q.wrapping_sub(q_prev).wrapping_sub(1) <= 1;
+            if !(within && step) {
+                break;
+            }
+            occupied |= 1u64.wrapping_shl(q as u32);
+            signs = (signs << 1) | p.polarity as u64;
+            q_prev = q;
+            n += 1;
+        }
+        if n == 0 {
+            return (0, false);
+        }
+        // The run's last sign above the scanned ones (n ≤ 31): they alternate where every
+        // sign differs from the one before it.
+        let chain = signs | (self.last_positive as u64) << n;
+        let all = (1u64 << n) - 1;
+        let alternate = (chain ^ (chain >> 1)) & all == all;
+        let positive = if alternate {
+            // The prefix parity is 1 on the 1st, 3rd, .. scanned pulse; the 1st has the sign
+            // opposite to the run's last pulse.
+            let odd = prefix_parity(occupied);
+            occupied & if self.last_positive { !odd } else { odd }
+        } else {
+            scatter(signs, occupied)
+        };
+        self.occupied |= occupied;
+        self.positive |= positive;
+        self.last_g = q_prev;
+        self.last_t = pulses[n - 1].at.as_nanos();
+        self.last_positive = signs & 1 == 1;
+        (n, !alternate)
+    }
+
+    /// One pulse that does not come after a pause, by the reference rule: on the nearer of the
+    /// next two grid points if within the tolerance of it, else off the grid (a pause error).
+    /// Returns the run with it, whether it has the last pulse's sign and whether it is off the
+    /// grid. (By value, so that the caller's run need not live in memory.)
+    #[inline(never)]
+    fn step(mut self, p: Pulse, grid: &Grid) -> (Run, bool, bool) {
+        let h = grid.h;
+        let at = p.at.as_nanos();
+        let pos = p.polarity == Polarity::Positive;
+        // Wraps only past 584 years of grid points, where every pulse is a pause error.
+        let next_at = self.last_g.wrapping_add(1).wrapping_mul(h);
+        let dev1 = at.wrapping_sub(self.t0).wrapping_sub(next_at) as i64;
+        let two = dev1 > (h / 2) as i64;
+        let dev = dev1.wrapping_sub(if two { h as i64 } else { 0 });
+        let off = dev.unsigned_abs() > grid.tol;
+        let g = if off {
+            off_grid(h, at, self.t0, self.last_t, self.last_g)
+        } else {
+            self.last_g.wrapping_add(1 + two as u64)
+        };
+        let same = pos == self.last_positive;
+        if g < 64 {
+            self.occupied |= 1 << g;
+            self.positive |= (pos as u64) << g;
+        }
+        self.last_g = g;
+        self.last_t = at;
+        self.last_positive = pos;
+        self.on_grid = at
+            .wrapping_sub(self.t0)
+            .wrapping_sub(g.wrapping_mul(h))
+            .wrapping_add(grid.tol)
+            <= grid.two_tol;
+        (self, same, off)
+    }
+
+    #[inline(always)]
     fn finish(&self) -> Frame {
         let g = self.last_g;
         let n = g.div_ceil(2);
         let mut failed = self.failed;
         let cells = n.min(32) as u32;
+        let mids = mid_mask(cells);
         let raw = match self.clean {
             Some(raw) => raw,
-            None => {
-                let mids = mid_mask(cells);
-                let raw = if self.occupied & mids == mids {
-                    // Bit i is 1 where the mid pulse of cell i is negative.
-                    compact((!self.positive & mids) >> 1)
+            None if self.occupied & mids == mids => {
+                // Bit i is 1 where the mid pulse of cell i (point 2i + 1) is negative.
+                let ones = !self.positive & mids;
+                if cells <= 16 {
+                    // Every telegram of the bus: 32 bits to compact and 16 to reverse.
+                    reverse_low16(compact32((ones >> 1) as u32), cells)
                 } else {
-                    failed = failed.with(Check::Information);
-                    level_bits(self.occupied, self.positive, cells)
-                };
-                // Bit i is in position i; turn it into transmission order, first bit highest.
-                if cells == 0 {
-                    0
-                } else {
-                    reverse_low(raw, cells)
+                    // Reversed, point 2i + 1 is point 62 − 2i, which compacts to bit 31 − i:
+                    // the bits in transmission order, first bit highest, in the top `cells`.
+                    let top = compact(ones.reverse_bits());
+                    (u64::from(top) >> (32 - cells)) as u32
                 }
+            }
+            None => {
+                failed = failed.with(Check::Information);
+                level_raw(self.occupied, self.positive, cells)
             }
         };
         if cells >= 1 && raw >> (cells - 1) & 1 == 1 {
@@ -377,14 +554,40 @@ impl Run {
     }
 }
 
-/// `true` if `x` has an odd number of ones (without relying on a popcount instruction).
+/// Bit j is the parity of the bits of `x` at j and below.
+const fn prefix_parity(x: u64) -> u64 {
+    let mut x = x;
+    x ^= x << 1;
+    x ^= x << 2;
+    x ^= x << 4;
+    x ^= x << 8;
+    x ^= x << 16;
+    x ^= x << 32;
+    x
+}
+
+/// The signs of a scan that do not alternate on the grid points in `occupied`: the latest
+/// sign (bit 0 of `signs`) on the highest point, and so on down.
+#[cold]
+fn scatter(signs: u64, occupied: u64) -> u64 {
+    let mut positive = 0;
+    let mut rest = occupied;
+    let mut signs = signs;
+    while rest != 0 {
+        let top = 63 - rest.leading_zeros();
+        positive |= (signs & 1) << top;
+        signs >>= 1;
+        rest &= !(1 << top);
+    }
+    positive
+}
+
+/// `true` if `x` has an odd number of ones (without relying on a popcount instruction): the
+/// parity of each nibble in its low bit, then their sum in the top nibble by one multiplication.
 const fn odd_parity(x: u32) -> bool {
-    let mut x = x ^ (x >> 16);
-    x ^= x >> 8;
-    x ^= x >> 4;
+    let mut x = x ^ (x >> 1);
     x ^= x >> 2;
-    x ^= x >> 1;
-    x & 1 == 1
+    (x & 0x1111_1111).wrapping_mul(0x1111_1111) >> 28 & 1 == 1
 }
 
 /// The grid point of a pulse at `at` off the next two grid points of its run: the nearest one,
@@ -407,6 +610,16 @@ const fn mid_mask(cells: u32) -> u64 {
     }
 }
 
+/// [`level_bits`] in transmission order, first bit highest.
+#[cold]
+fn level_raw(occupied: u64, positive: u64, cells: u32) -> u32 {
+    if cells == 0 {
+        0
+    } else {
+        reverse_low(level_bits(occupied, positive, cells), cells)
+    }
+}
+
 /// Bits read from line levels when some mid pulses are missing: a cell reads 1 where the line
 /// is low during its second half (the level left by the last pulse at or before its middle).
 fn level_bits(occupied: u64, positive: u64, cells: u32) -> u32 {
@@ -421,4 +634,70 @@ fn level_bits(occupied: u64, positive: u64, cells: u32) -> u32 {
         }
     }
     bits
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::receiver::Expect;
+    use crate::telegram::Request;
+    use crate::timing::BusTiming;
+
+    /// Every request's pulses, each after the first off its grid point by exactly the
+    /// tolerance (late, early, alternately), and a pulse exactly a pause after the last.
+    fn on_the_borders() -> impl Iterator<Item = (u16, Vec<Pulse>)> {
+        let timing = BusTiming::default();
+        let tol = timing.tolerance().as_nanos();
+        (0u16..1 << 11).map(move |body| {
+            let bits = (body << 2) | (((body.count_ones() & 1) as u16) << 1) | 1;
+            let req = Request::from_bits(bits).expect("valid");
+            let t0 = SimTime::from_micros(7);
+            let mut pulses: Vec<Pulse> = PulseTrain::request(req, t0, timing.half_bit())
+                .iter()
+                .collect();
+            for (i, p) in pulses.iter_mut().enumerate().skip(1) {
+                let at = p.at.as_nanos();
+                p.at = SimTime::from_nanos(if i % 2 == 1 { at + tol } else { at - tol });
+            }
+            let last = pulses.last().expect("pulses").at;
+            pulses.push(Pulse::new(last + timing.min_pause(), Polarity::Negative));
+            (bits, pulses)
+        })
+    }
+
+    /// The fast paths take pulses exactly on the tolerance's borders and end a run exactly a
+    /// pause after its last pulse (that they give the same frames as the reference decoder is
+    /// the equivalence property tests' part; this is that they are taken).
+    #[test]
+    fn the_fast_paths_take_pulses_on_the_tolerance_borders() {
+        let grid = Grid::new(&BusTiming::default().receiver(Expect::Both));
+        assert_ne!(grid.recip, 0);
+        for (bits, pulses) in on_the_borders() {
+            let n = pulses.len();
+            let (frame, after) = Run::whole(&pulses[0], &pulses[1..], &grid).expect("at once");
+            assert_eq!(after, &pulses[n - 1..], "{bits:#06x}");
+            assert_eq!(
+                (frame.raw, frame.line_failed, frame.pulses),
+                (u32::from(bits), Checks::NONE, n as u32 - 1)
+            );
+            let mut run = Run::begin(pulses[0]);
+            let (taken, same) = run.scan(&pulses[1..n - 1], &grid);
+            assert_eq!((taken, same), (n - 2, false), "{bits:#06x}");
+            // (The count is extend's to keep.)
+            run.count += taken as u32;
+            assert_eq!(run.finish(), frame);
+        }
+    }
+
+    #[test]
+    fn odd_parity_counts_the_ones() {
+        let mut x = 0x9E37_79B9u32;
+        for k in 0..200_000u32 {
+            for v in [k, x, !k, k << 16] {
+                assert_eq!(odd_parity(v), v.count_ones() % 2 == 1, "{v:#x}");
+            }
+            x = x.rotate_left(5) ^ k.wrapping_mul(0x85EB_CA6B);
+        }
+        assert!(!odd_parity(0) && odd_parity(u32::MAX >> 1) && !odd_parity(u32::MAX));
+    }
 }

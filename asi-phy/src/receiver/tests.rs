@@ -481,6 +481,129 @@ mod equivalence {
             })
     }
 
+    /// Settings on the borders of the fast scan's conditions (see `Grid::recip` in `line.rs`):
+    /// a tolerance at zero, just under, at and over half the grid; a pause just under, at and
+    /// over two half-bits plus twice the tolerance; the largest grid the scan takes and the
+    /// next one; and the bus's own.
+    fn border_config() -> impl Strategy<Value = ReceiverConfig> {
+        let bordered = (
+            prop_oneof![
+                2 => Just(3_000u64),
+                1 => 1u64..10,
+                2 => 10u64..8_000,
+                1 => Just(1u64 << 24),
+                1 => Just((1u64 << 24) + 1),
+            ],
+            0u32..6,
+            -2i64..=2,
+            0u64..40_000,
+            0u64..100_000,
+        )
+            .prop_map(|(h, t, dp, async_pause, response_window)| {
+                let tolerance = match t {
+                    0 => 0,
+                    1 => (h / 2).saturating_sub(1),
+                    2 => (h - 1) / 2,
+                    3 => h / 2,
+                    4 => h.div_ceil(2),
+                    _ => h / 6,
+                };
+                ReceiverConfig {
+                    half_bit: h,
+                    tolerance,
+                    pause: (2 * h + 2 * tolerance).saturating_add_signed(dp).max(1),
+                    async_pause,
+                    response_window,
+                    expect: Expect::Both,
+                }
+            });
+        (
+            prop_oneof![
+                1 => Just(timing().receiver(Expect::Both)),
+                4 => bordered,
+            ],
+            prop_oneof![
+                Just(Expect::Requests),
+                Just(Expect::Responses),
+                Just(Expect::Both)
+            ],
+        )
+            .prop_map(|(cfg, expect)| ReceiverConfig { expect, ..cfg })
+    }
+
+    /// Runs of pulses on the grid anchored at each run's first pulse, as the receiver places
+    /// them: mostly one or two grid points apart and alternating, each off its grid point by
+    /// nothing, by exactly the tolerance, by one more, or at random; now and then a pulse on
+    /// the same point, three or more points on, or with the last one's sign; runs longer than
+    /// the masks; each next run just under, at or over the pause after the last pulse, or
+    /// later. Times wrap past the clock's end where the origin is near it.
+    fn grid_line(cfg: ReceiverConfig) -> impl Strategy<Value = Vec<Pulse>> {
+        let h = cfg.half_bit;
+        let tol = cfg.tolerance as i64;
+        let pause = cfg.pause;
+        let pulse = (
+            prop_oneof![
+                12 => Just(1u64),
+                6 => Just(2u64),
+                1 => Just(0u64),
+                1 => Just(3u64),
+                1 => 4u64..40,
+            ],
+            prop_oneof![
+                6 => Just(0i64),
+                2 => Just(tol),
+                2 => Just(-tol),
+                1 => Just(tol + 1),
+                1 => Just(-tol - 1),
+                3 => -tol..=tol,
+                1 => any::<i64>().prop_map(move |d| d % (2 * h as i64 + 1)),
+            ],
+            prop_oneof![24 => Just(false), 1 => Just(true)],
+        );
+        let run = (
+            prop_oneof![
+                4 => prop::collection::vec(pulse.clone(), 0..30),
+                1 => prop::collection::vec(pulse, 30..90),
+            ],
+            prop_oneof![6 => Just(false), 1 => Just(true)],
+            prop_oneof![
+                1 => Just(-1i64),
+                1 => Just(0i64),
+                1 => Just(1i64),
+                2 => 0i64..(3 * pause.min(1 << 40)) as i64,
+            ],
+        );
+        (
+            prop::collection::vec(run, 1..10),
+            prop_oneof![
+                Just(0u64),
+                Just(1u64 << 40),
+                Just(u64::MAX - 200_000),
+                any::<u64>()
+            ],
+        )
+            .prop_map(move |(runs, origin)| {
+                let mut pulses = Vec::new();
+                let mut start = origin;
+                for (rest, first_positive, gap) in runs {
+                    let mut positive = first_positive;
+                    pulses.push(Pulse::new(SimTime::from_nanos(start), polarity(positive)));
+                    let mut last = start;
+                    let mut g = 0u64;
+                    for (step, dev, same_sign) in rest {
+                        g += step;
+                        positive ^= !same_sign;
+                        last = start
+                            .wrapping_add(g.wrapping_mul(h))
+                            .wrapping_add_signed(dev);
+                        pulses.push(Pulse::new(SimTime::from_nanos(last), polarity(positive)));
+                    }
+                    start = last.wrapping_add(pause).wrapping_add_signed(gap);
+                }
+                pulses
+            })
+    }
+
     /// How the pulses reach the decoder.
     #[derive(Clone, Debug)]
     enum Feed {
@@ -495,6 +618,7 @@ mod equivalence {
         prop::collection::vec(
             prop_oneof![
                 6 => (1usize..64).prop_map(Feed::Slice),
+                2 => (64usize..400).prop_map(Feed::Slice),
                 3 => Just(Feed::One),
                 1 => (0u64..40_000).prop_map(Feed::Poll),
                 1 => Just(Feed::Flush),
@@ -647,6 +771,20 @@ mod equivalence {
             ),
         ) {
             check_trains(cfg, &trains)?;
+        }
+    }
+
+    proptest! {
+        // The fast scan's borders are narrow: more cases.
+        #![proptest_config(ProptestConfig::with_cases(4_000))]
+
+        #[test]
+        fn the_line_decoder_equals_its_reference_on_grid_borders(
+            (cfg, pulses) in border_config().prop_flat_map(|cfg| (Just(cfg), grid_line(cfg))),
+            feeds in feeds(),
+        ) {
+            check_feeds(cfg, &pulses, &feeds)?;
+            check_receiver(cfg, &pulses)?;
         }
     }
 }
