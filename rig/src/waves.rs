@@ -139,7 +139,7 @@ struct DriveIds {
 fn declare_drive(w: &mut VcdWriter<Box<dyn Write>>) -> DriveIds {
     const DRIVE: &[&str] = &["rig", "drive_safety"];
     // In the order of `Function::ALL`.
-    const CONTROL: [&str; 14] = [
+    const CONTROL: [&str; 15] = [
         "control_sto",
         "control_sbc",
         "control_ss1",
@@ -154,8 +154,9 @@ fn declare_drive(w: &mut VcdWriter<Box<dyn Write>>) -> DriveIds {
         "control_sdi_n",
         "control_sli",
         "control_sla",
+        "control_slt",
     ];
-    const STATUS: [&str; 14] = [
+    const STATUS: [&str; 15] = [
         "status_sto",
         "status_sbc",
         "status_ss1",
@@ -170,6 +171,7 @@ fn declare_drive(w: &mut VcdWriter<Box<dyn Write>>) -> DriveIds {
         "status_sdi_n",
         "status_sli",
         "status_sla",
+        "status_slt",
     ];
     DriveIds {
         control: CONTROL

@@ -26,7 +26,7 @@ use asi_phy::{SimDuration, SimTime};
 use crate::drive::{
     AxisFeedback, ControlBits, DriveConfigError, DriveSafetyConfig, DriveSafetyInputs,
     DriveSafetyOutputs, Encoder, Function, SafeDrive, SlaLimits, SliLimit, SlpLimits, SlsLevel,
-    SlsLimit, StopRamp, Violation,
+    SlsLimit, SltLimit, StopRamp, Violation,
 };
 
 /// The SLS level the safety logic requests during initialisation.
@@ -103,6 +103,11 @@ impl LiftDriveConfig {
                     decel_pos: 50.0,
                     accel_neg: 50.0,
                     decel_neg: 50.0,
+                    enable_delay: SimDuration::ZERO,
+                },
+                // Never requested on the lift (the lab converter reports no torque).
+                slt: SltLimit {
+                    torque_limit: 1000.0,
                     enable_delay: SimDuration::ZERO,
                 },
             },
@@ -198,6 +203,8 @@ impl LiftDriveSafety {
             &DriveSafetyInputs {
                 control: self.control,
                 feedback,
+                // The lab converter reports no torque; SLT is never requested here.
+                torque: None,
             },
         );
         self.last.insert(out)

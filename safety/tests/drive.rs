@@ -26,6 +26,8 @@ struct Stand {
     speed: f64,
     control: ControlBits,
     encoder: bool,
+    /// The drive's torque, mNm, as its current shows it (`None`: not reported).
+    torque: Option<f64>,
     last: Option<DriveSafetyOutputs>,
     trips: Vec<(u64, Violation)>,
 }
@@ -40,6 +42,7 @@ impl Stand {
             speed: 0.0,
             control: ControlBits::idle(),
             encoder,
+            torque: Some(0.0),
             last: None,
             trips: Vec::new(),
         }
@@ -57,6 +60,7 @@ impl Stand {
                 position: self.position,
                 speed: self.speed,
             }),
+            torque: self.torque,
         };
         let out = self.drive.scan(SimTime::from_millis(self.now_ms), &inputs);
         for e in &out.events {
@@ -576,6 +580,60 @@ fn sla_trips_on_too_fast_a_speed_change() {
     ));
 }
 
+/// SLT (seed 000 §3.10): after its enable delay the status is TRUE while the torque stays at
+/// most the limit either way; a torque above it trips (decision: like every other violation,
+/// the seed states no reaction), and so does a scan without a valid torque.
+#[test]
+fn slt_holds_its_status_within_the_limit_and_trips_above_it_either_way() {
+    let mut config = DriveSafetyConfig::demo();
+    config.slt.enable_delay = SimDuration::from_millis(500);
+    for sign in [1.0, -1.0] {
+        let mut s = Stand::new(config);
+        s.speed = 2.0;
+        s.run_until(T0_MS);
+        s.request(Function::Slt);
+        // Above the limit during the enable delay: nothing is checked yet.
+        s.torque = Some(sign * 1500.0);
+        s.run_until(at(0.5));
+        assert!(s.trips.is_empty() && !s.status(Function::Slt));
+        // Within it after the delay: the safe state, torque on.
+        s.torque = Some(sign * 1000.0);
+        s.scan();
+        assert!(s.status(Function::Slt) && s.out().torque_enabled);
+        s.run_until(at(2.0));
+        assert!(s.trips.is_empty());
+        // One scan above it: torque off at once, the violation names SLT.
+        s.torque = Some(sign * 1000.5);
+        s.scan();
+        assert!(!s.out().torque_enabled && !s.out().status.not_err_func);
+        assert!(matches!(
+            s.trips[..],
+            [(t, Violation::TorqueAbove { torque, limit })]
+                if t == at(2.0) && torque == sign * 1000.5 && limit == 1000.0
+        ));
+        assert_eq!(s.trips[0].1.function(), Some(Function::Slt));
+    }
+}
+
+#[test]
+fn slt_counts_a_missing_torque_as_above_the_limit() {
+    for missing in [None, Some(f64::NAN), Some(f64::INFINITY)] {
+        let mut s = Stand::demo();
+        s.run_until(T0_MS);
+        // Not requested: a missing torque is nobody's business.
+        s.torque = missing;
+        s.run_until(at(1.0));
+        assert!(s.trips.is_empty(), "{missing:?}");
+        s.request(Function::Slt);
+        s.scan();
+        assert!(!s.out().torque_enabled, "{missing:?}");
+        assert!(
+            matches!(s.trips[..], [(_, Violation::TorqueLost)]),
+            "{missing:?}"
+        );
+    }
+}
+
 /// **Decision** (ramp monitoring): the envelope starts at the end of the enable delay from the
 /// speed measured then and falls at the deceleration limit.
 #[test]
@@ -837,6 +895,7 @@ fn config_errors_name_the_field_and_the_rule() {
         "below slp.upper",
     );
     check(|c| c.sli.position_limit = 0.0, "sli.position_limit", "> 0");
+    check(|c| c.slt.torque_limit = -5.0, "slt.torque_limit", "> 0");
     check(
         |c| c.sla.decel_neg = f64::INFINITY,
         "sla.decel_neg",
@@ -953,6 +1012,27 @@ proptest! {
 
     /// SOS: any trajectory within 2 rev/s that stays within 100 rev of the request's position
     /// never trips (40 s at ≤ 2 rev/s is at most 80 rev).
+    #[test]
+    fn slt_inside_the_limit_never_trips_and_one_scan_above_always_does(
+        torques in prop::collection::vec(-1000.0f64..=1000.0, 1..200),
+        over in 1000.001f64..5000.0,
+        sign in prop::bool::ANY,
+    ) {
+        let mut s = Stand::demo();
+        s.run_until(T0_MS);
+        s.request(Function::Slt);
+        for &t in &torques {
+            s.torque = Some(t);
+            s.scan();
+        }
+        prop_assert!(s.trips.is_empty());
+        prop_assert!(s.status(Function::Slt));
+        s.torque = Some(if sign { over } else { -over });
+        s.scan();
+        prop_assert!(!s.out().torque_enabled);
+        prop_assert_eq!(s.trips.len(), 1);
+    }
+
     #[test]
     fn sos_inside_the_tolerances_never_trips(p in profile()) {
         let mut s = Stand::demo();

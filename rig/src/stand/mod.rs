@@ -425,6 +425,8 @@ impl Stand {
                     position: self.position,
                     speed: self.speed,
                 }),
+                // The stand's HMI has no SLT page: SLT is never requested here.
+                torque: None,
             },
         );
         for e in &out.events {

@@ -76,6 +76,15 @@ pub struct SlaLimits {
     pub enable_delay: SimDuration,
 }
 
+/// SLT (seed 000 table 3.10).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SltLimit {
+    /// "SLT - Torque limit" in mNm: the torque the drive must not exceed, either way.
+    pub torque_limit: f64,
+    /// "SLT - Enable delay time".
+    pub enable_delay: SimDuration,
+}
+
 /// The parameters of one safe axis. Speeds in rev/s, positions in rev (seed 000's "units" are
 /// revolutions on its stand), times as [`SimDuration`].
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -117,6 +126,8 @@ pub struct DriveSafetyConfig {
     pub sbc_enable_delay: SimDuration,
     /// SLA.
     pub sla: SlaLimits,
+    /// SLT.
+    pub slt: SltLimit,
 }
 
 /// A parameter that breaks a rule: the field, its value and the rule.
@@ -195,6 +206,12 @@ impl DriveSafetyConfig {
                 decel_pos: 100.0,
                 accel_neg: 100.0,
                 decel_neg: 100.0,
+                enable_delay: SimDuration::ZERO,
+            },
+            // Seed 000 gives no SLT value for its stand (its HMI has no SLT page): 1 N·m is
+            // asi-lift's, a little above what its ramps need of a small servo.
+            slt: SltLimit {
+                torque_limit: 1000.0,
                 enable_delay: SimDuration::ZERO,
             },
         }
@@ -283,6 +300,7 @@ impl DriveSafetyConfig {
         positive("sla.decel_pos", self.sla.decel_pos)?;
         positive("sla.accel_neg", self.sla.accel_neg)?;
         positive("sla.decel_neg", self.sla.decel_neg)?;
+        positive("slt.torque_limit", self.slt.torque_limit)?;
         if !self.encoder.is_safe() {
             if self.early_limit_enabled {
                 return Err(err(

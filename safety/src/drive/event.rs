@@ -79,6 +79,15 @@ pub enum Violation {
         /// The limit that applied, rev/s².
         limit: f64,
     },
+    /// SLT: the drive's torque is above its limit.
+    TorqueAbove {
+        /// The drive's torque (signed), mNm.
+        torque: f64,
+        /// The limit, mNm.
+        limit: f64,
+    },
+    /// SLT is active but the scan brought no valid torque: it counts as above the limit.
+    TorqueLost,
     /// A function that needs a safe encoder was requested on an axis without one.
     NeedsEncoder {
         /// The function.
@@ -105,6 +114,7 @@ impl Violation {
                 Some(Function::Slp)
             }
             Violation::AccelerationAbove { .. } => Some(Function::Sla),
+            Violation::TorqueAbove { .. } | Violation::TorqueLost => Some(Function::Slt),
             Violation::FeedbackLost => None,
         }
     }
@@ -175,6 +185,13 @@ impl fmt::Display for Violation {
             } => write!(
                 f,
                 "SLA: the axis changes speed at {acceleration:.3} rev/s², more than the allowed {limit} rev/s²"
+            ),
+            Violation::TorqueAbove { torque, limit } => write!(
+                f,
+                "SLT: the drive produces {torque:.1} mNm, more than the allowed {limit} mNm"
+            ),
+            Violation::TorqueLost => f.write_str(
+                "SLT: the drive gave no valid torque in this scan (counted as above the limit)",
             ),
             Violation::NeedsEncoder { function } => write!(
                 f,

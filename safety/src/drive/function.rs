@@ -28,6 +28,9 @@ pub enum Function {
     Sli,
     /// Safely Limited Acceleration: four limits, by direction (seed 000 §3.8).
     Sla,
+    /// Safely Limited Torque: the drive's torque at most the limit, either way (seed 000
+    /// §3.10).
+    Slt,
 }
 
 /// One of the four SLS levels.
@@ -60,7 +63,7 @@ impl SlsLevel {
 
 impl Function {
     /// Every function, in the order of the status word.
-    pub const ALL: [Function; 14] = [
+    pub const ALL: [Function; 15] = [
         Function::Sto,
         Function::Sbc,
         Function::Ss1,
@@ -75,6 +78,7 @@ impl Function {
         Function::SdiNeg,
         Function::Sli,
         Function::Sla,
+        Function::Slt,
     ];
 
     /// The number of functions.
@@ -94,6 +98,7 @@ impl Function {
             Function::SdiNeg => 11,
             Function::Sli => 12,
             Function::Sla => 13,
+            Function::Slt => 14,
         }
     }
 
@@ -123,6 +128,7 @@ impl fmt::Display for Function {
             Function::SdiNeg => f.write_str("SDI-N"),
             Function::Sli => f.write_str("SLI"),
             Function::Sla => f.write_str("SLA"),
+            Function::Slt => f.write_str("SLT"),
         }
     }
 }

@@ -39,7 +39,12 @@
 //! - **SDI** counts the travel against the permitted direction from the furthest point reached in
 //!   the permitted direction since the monitoring began.
 //! - **SLA** (seed 000 §3.8, reaction not stated): the acceleration is the speed's change between
-//!   two scans; a violation trips like any other. **SLT** is not modelled (no torque input).
+//!   two scans; a violation trips like any other.
+//! - **SLT** (seed 000 §3.10, reaction not stated): the drive's own torque (mNm, from its
+//!   current) is an input of the scan; above the limit either way it trips like any other, and
+//!   a scan without a valid torque while SLT is monitored counts as above it. The lift and the
+//!   stand never request it (the lab converter reports no torque; the stand's HMI has no SLT
+//!   page).
 //! - **Two-channel activation** (seed 001): [`TwoChannelActivation`], see its module.
 
 mod config;
@@ -49,7 +54,7 @@ mod two_channel;
 
 pub use config::{
     DriveConfigError, DriveSafetyConfig, Encoder, SlaLimits, SliLimit, SlpLimits, SlsLimit,
-    StopRamp,
+    SltLimit, StopRamp,
 };
 pub use event::{DriveEvent, DriveEventKind, Violation};
 pub use function::{ControlBits, Function, SlsLevel, StatusBits};
@@ -74,6 +79,9 @@ pub struct DriveSafetyInputs {
     /// The safe encoder's reading; `None` without an encoder. An axis configured with a safe
     /// encoder that gets `None` (or a value that is not a number) trips.
     pub feedback: Option<AxisFeedback>,
+    /// The torque the drive produces, mNm (signed), for SLT; `None` if it reports none (SLT
+    /// then trips once monitored).
+    pub torque: Option<f64>,
 }
 
 /// What the safe drive gives back each scan.
@@ -144,6 +152,8 @@ pub struct SafeDrive {
     torque: bool,
     status: StatusBits,
     last_speed: Option<(SimTime, f64)>,
+    /// The drive's torque in this scan, mNm, if valid (SLT).
+    torque_now: Option<f64>,
 }
 
 impl SafeDrive {
@@ -158,6 +168,7 @@ impl SafeDrive {
             torque: false,
             status: StatusBits::default(),
             last_speed: None,
+            torque_now: None,
         })
     }
 
@@ -218,6 +229,7 @@ impl SafeDrive {
         };
         self.last_speed = feedback.map(|fb| (now, fb.speed));
 
+        self.torque_now = inputs.torque.filter(|t| t.is_finite());
         if !c.activate {
             for f in Function::ALL {
                 self.release(f, now, &mut events);
@@ -389,6 +401,23 @@ impl SafeDrive {
                         }
                     }
                     _ => Ok(()),
+                }
+            }
+            Function::Slt => {
+                delayed(&mut t, now, cfg.slt.enable_delay);
+                if t.phase == Phase::Reached {
+                    match self.torque_now {
+                        Some(tq) if tq.abs() > cfg.slt.torque_limit => {
+                            Err(Violation::TorqueAbove {
+                                torque: tq,
+                                limit: cfg.slt.torque_limit,
+                            })
+                        }
+                        Some(_) => Ok(()),
+                        None => Err(Violation::TorqueLost),
+                    }
+                } else {
+                    Ok(())
                 }
             }
             Function::Sla => {
