@@ -652,6 +652,44 @@ mod command {
         let _ = std::fs::remove_dir_all(&dir);
     }
 
+    /// With the safe drive the plot gains a panel of its functions: a row for each the run
+    /// requested (SOS at the open door here), its trip, and none without the safe drive.
+    #[test]
+    fn the_plot_of_a_run_with_the_safe_drive_shows_its_functions() {
+        let dir = temp("plot-drive");
+        let path = |n: &str| dir.join(n).to_string_lossy().to_string();
+        let (svg, report) = (path("drive.svg"), path("drive.json"));
+        let args = [
+            "safe-drive-runaway",
+            "--until",
+            "35s",
+            "--plot",
+            &svg,
+            "--report",
+            &report,
+        ];
+        assert_eq!(run_cli(&args), Ok(0));
+        let svg = std::fs::read_to_string(&svg).expect("output");
+        for label in [
+            "Safe drive: functions requested and safe states reached",
+            "\nSOS\n",
+            "\nSDI-N\n",
+            "trip: torque off (1)",
+        ] {
+            assert!(svg.contains(label), "no {label:?} in the plot");
+        }
+        // SLT, never requested, has no row.
+        assert!(!svg.contains("\nSLT\n"));
+        let plain = path("plain.svg");
+        let args = [
+            "demo", "--until", "5s", "--plot", &plain, "--report", &report, "--force",
+        ];
+        assert_eq!(run_cli(&args), Ok(0));
+        let plain = std::fs::read_to_string(&plain).expect("output");
+        assert!(!plain.contains("Safe drive"));
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
     #[test]
     fn a_plot_never_replaces_a_file_and_a_bad_path_is_named_before_the_run() {
         let dir = temp("plot-refused");

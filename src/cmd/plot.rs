@@ -4,7 +4,10 @@
 //! 1. the cabin position with the floor levels, the vanes' long sensor tracks, the overtravel
 //!    trip points, and the passengers' calls: pressed (triangle) and served (circle);
 //! 2. the cabin velocity, contactor K1 (closed/open) and the safety trips;
-//! 3. the bus's repeats per transaction, in windows of one second.
+//! 3. with the safe drive (`[drive] safe = true`), each of its functions the run requested:
+//!    when its control bit was FALSE (requested), when its status was TRUE (safe state
+//!    reached), and its trips;
+//! 4. the bus's repeats per transaction, in windows of one second.
 //!
 //! The series are sampled by stepping the rig through its public [`Rig::step_until`] at a
 //! fixed simulated step ([`sample_step`]) and reading the plant and the bus between moments;
@@ -17,6 +20,7 @@ use lift_model::LiftConfig;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use rig::{Report, Rig};
+use safety::drive::Function;
 
 /// The width and height of the picture, pixels.
 const SIZE: (u32, u32) = (1400, 1000);
@@ -38,6 +42,31 @@ struct Sample {
     transactions: u64,
     /// Repeats so far.
     repeats: u64,
+    /// The safe drive's functions, if the lift has one.
+    drive: Option<DriveBits>,
+}
+
+/// The safe drive's functions at one moment: bit `Function::index` set when requested
+/// (control bit FALSE) and when its safe state is reached (status TRUE).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct DriveBits {
+    requested: u32,
+    reached: u32,
+}
+
+impl DriveBits {
+    fn of(d: &rig::waves::DriveSample) -> DriveBits {
+        let mask = |on: &dyn Fn(Function) -> bool| {
+            Function::ALL
+                .iter()
+                .filter(|&&f| on(f))
+                .fold(0u32, |m, f| m | 1 << f.index())
+        };
+        DriveBits {
+            requested: mask(&|f| d.control.requested(f)),
+            reached: mask(&|f| d.status.of(f)),
+        }
+    }
 }
 
 impl Sample {
@@ -51,6 +80,7 @@ impl Sample {
             k1: lift.k1_closed(),
             transactions: stats.transactions,
             repeats: stats.repeats,
+            drive: rig.drive_sample().map(|d| DriveBits::of(&d)),
         }
     }
 }
@@ -114,6 +144,7 @@ impl Samples {
                 k1: rep.final_state.contactor_closed,
                 transactions: rep.bus.transactions,
                 repeats: rep.bus.repeats,
+                drive: last.drive,
             });
         }
     }
@@ -258,16 +289,25 @@ fn draw_on(root: &Area<'_>, s: &Samples, rep: &Report) -> DrawResult {
     let root = root.titled(&title, ("sans-serif", 22))?;
     let (w, h) = root.dim_in_pixel();
     let (w, h) = (i32::try_from(w)?, i32::try_from(h)?);
-    let areas =
-        root.split_by_breakpoints([w - i32::try_from(LEGEND_W)?], [h * 46 / 100, h * 77 / 100]);
     let t_end = s
         .samples
         .last()
         .map_or(rep.simulated_s, |l| l.t_s)
         .max(1e-3);
-    position_panel(&areas[0], &areas[1], s, rep, t_end)?;
-    velocity_panel(&areas[2], &areas[3], s, rep, t_end)?;
-    bus_panel(&areas[4], &areas[5], s, rep, t_end)?;
+    let legend_x = w - i32::try_from(LEGEND_W)?;
+    if s.samples.iter().any(|p| p.drive.is_some()) {
+        let rows = [h * 36 / 100, h * 60 / 100, h * 82 / 100];
+        let areas = root.split_by_breakpoints([legend_x], rows);
+        position_panel(&areas[0], &areas[1], s, rep, t_end)?;
+        velocity_panel(&areas[2], &areas[3], s, rep, t_end)?;
+        drive_panel(&areas[4], &areas[5], s, rep, t_end)?;
+        bus_panel(&areas[6], &areas[7], s, rep, t_end)?;
+    } else {
+        let areas = root.split_by_breakpoints([legend_x], [h * 46 / 100, h * 77 / 100]);
+        position_panel(&areas[0], &areas[1], s, rep, t_end)?;
+        velocity_panel(&areas[2], &areas[3], s, rep, t_end)?;
+        bus_panel(&areas[4], &areas[5], s, rep, t_end)?;
+    }
     Ok(())
 }
 
@@ -486,7 +526,107 @@ fn velocity_panel(
     )
 }
 
-/// Panel 3: repeats per transaction.
+const REQUESTED: RGBColor = RGBColor(250, 200, 120);
+const REACHED: RGBColor = RGBColor(40, 150, 60);
+
+/// The intervals over which `on` holds for a sample, merged, as `(from, to)` seconds.
+fn spans(s: &Samples, on: impl Fn(&Sample) -> bool) -> Vec<(f64, f64)> {
+    let mut out: Vec<(f64, f64)> = Vec::new();
+    for w in s.samples.windows(2) {
+        if !on(&w[0]) {
+            continue;
+        }
+        match out.last_mut() {
+            Some(last) if last.1 == w[0].t_s => last.1 = w[1].t_s,
+            _ => out.push((w[0].t_s, w[1].t_s)),
+        }
+    }
+    out
+}
+
+/// Panel 3 (with the safe drive): each function the run requested, one row each.
+fn drive_panel(
+    area: &Area<'_>,
+    key: &Area<'_>,
+    s: &Samples,
+    rep: &Report,
+    t_end: f64,
+) -> DrawResult {
+    let ever = s
+        .samples
+        .iter()
+        .filter_map(|p| p.drive)
+        .fold(0u32, |m, d| m | d.requested | d.reached);
+    let rows: Vec<Function> = Function::ALL
+        .into_iter()
+        .filter(|f| ever & 1 << f.index() != 0)
+        .collect();
+    let n = rows.len().max(1) as f64;
+    let mut chart = panel(
+        area,
+        "Safe drive: functions requested and safe states reached",
+    )
+    .build_cartesian_2d(0.0..t_end, 0.0..n)?;
+    chart
+        .configure_mesh()
+        .x_desc("time (s)")
+        .x_label_formatter(&tick)
+        .y_labels(0)
+        .disable_y_mesh()
+        .label_style(("sans-serif", 13))
+        .draw()?;
+    for (k, f) in rows.iter().enumerate() {
+        // The first function on top.
+        let y = n - 1.0 - k as f64;
+        let bit = 1u32 << f.index();
+        let requested = spans(s, |p| p.drive.is_some_and(|d| d.requested & bit != 0));
+        let reached = spans(s, |p| p.drive.is_some_and(|d| d.reached & bit != 0));
+        chart.draw_series(
+            requested
+                .into_iter()
+                .map(|(a, b)| Rectangle::new([(a, y + 0.15), (b, y + 0.85)], REQUESTED.filled())),
+        )?;
+        chart.draw_series(
+            reached
+                .into_iter()
+                .map(|(a, b)| Rectangle::new([(a, y + 0.32), (b, y + 0.68)], REACHED.filled())),
+        )?;
+        chart.draw_series([Text::new(
+            f.to_string(),
+            (t_end * 0.005, y + 0.78),
+            ("sans-serif", 13).into_font(),
+        )])?;
+    }
+    let trips = rep.safety.drive.as_ref().map_or(&[][..], |d| &d.trips[..]);
+    chart.draw_series(
+        trips
+            .iter()
+            .map(|t| PathElement::new([(t.at_s, 0.0), (t.at_s, n)], TRIP.stroke_width(2))),
+    )?;
+    let mut entries = vec![
+        (
+            Swatch::Band(REQUESTED),
+            "requested (control bit FALSE)".to_string(),
+        ),
+        (
+            Swatch::Band(REACHED),
+            "safe state reached (status TRUE)".into(),
+        ),
+        (
+            Swatch::Mark(TRIP),
+            match trips.len() {
+                0 => "trip: torque off (none)".into(),
+                k => format!("trip: torque off ({k})"),
+            },
+        ),
+    ];
+    if rows.is_empty() {
+        entries.push((Swatch::None, "no function was requested".into()));
+    }
+    legend(key, &entries)
+}
+
+/// Panel 4: repeats per transaction.
 fn bus_panel(area: &Area<'_>, key: &Area<'_>, s: &Samples, rep: &Report, t_end: f64) -> DrawResult {
     let rate = s.bus_rate();
     let max = rate.iter().fold(0.0_f64, |m, r| m.max(r.2));

@@ -1058,6 +1058,12 @@ impl Rig {
         &self.plc
     }
 
+    /// The safe drive's control and status bits now (`[drive] safe = true`), as the VCD's
+    /// scope `rig.drive_safety` has them; `None` without the safe drive.
+    pub fn drive_sample(&self) -> Option<crate::waves::DriveSample> {
+        self.drive.as_ref().map(|d| d.sample())
+    }
+
     /// The lift plant.
     pub fn lift(&self) -> &Lift {
         &self.lift
