@@ -422,6 +422,31 @@ mod command {
     use rig::Scenario;
     use std::path::PathBuf;
 
+    /// Each command's help is its own: the first words of every subcommand's description,
+    /// as `asi-lift --help` lists them.
+    #[test]
+    fn every_command_has_its_own_description() {
+        use clap::CommandFactory;
+        let cli = Cli::command();
+        let about = |name: &str| {
+            cli.find_subcommand(name)
+                .and_then(|c| c.get_about())
+                .map(|a| a.to_string())
+                .unwrap_or_else(|| panic!("{name} has no description"))
+        };
+        for (name, start) in [
+            ("run", "Run the lab lift"),
+            ("stand", "The teaching stand of seed 000"),
+            ("campaign", "Run many random valid scenarios"),
+            ("serve", ""),
+            ("timing", "Timing analysis"),
+        ] {
+            let a = about(name);
+            assert!(a.starts_with(start), "{name}: {a}");
+        }
+        assert!(!about("stand").contains("Campaigns"));
+    }
+
     fn timing(args: &[&str]) -> Result<u8, String> {
         let cli = Cli::try_parse_from(["asi-lift", "timing"].iter().chain(args))
             .map_err(|e| e.to_string())?;

@@ -53,15 +53,15 @@ enum Command {
     /// repeats, handshake word times and end-to-end latencies, analytic and simulated side by
     /// side, compared with the textbook cycle time T = (n + 2) · 154 µs.
     Timing(cmd::timing::TimingArgs),
-    /// Run many random valid scenarios on the whole rig (README.md, "Campaigns"): one JSON
-    /// line per run, every failure shrunk to a scenario file that reproduces it; or merge
-    /// result files with `campaign summarize`.
     /// The teaching stand of seed 000 (README.md, "The teaching stand"): a servo axis whose
     /// safe drive (STO, SOS, SS1, SS2, SLS, SLI, SDI) is requested by a light curtain. Runs a
     /// stand scenario (a file or a built-in name: one per test guide) and prints what a
     /// student sees: the HMI page's states, the stopwatch, torque and speed, with times.
     /// Without an argument it lists the built-in ones.
     Stand(cmd::stand::StandArgs),
+    /// Run many random valid scenarios on the whole rig (README.md, "Campaigns"): one JSON
+    /// line per run, every failure shrunk to a scenario file that reproduces it; or merge
+    /// result files with `campaign summarize`.
     #[command(args_conflicts_with_subcommands = true)]
     Campaign {
         #[command(subcommand)]
