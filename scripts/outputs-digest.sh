@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # Prints one line per output of the asi-lift command, `sha256  name`, for a fixed set of runs:
 # every scenario of scenarios/ (report as text and JSON, trace as text and JSON lines), the VCD
-# and CSV of the demo's first 10 s, their decoding, `encode`, `timing` of three buses (text,
-# JSON, SVG) and a short campaign. Comparing the lists of two builds shows whether a change
+# and CSV of the demo's first 10 s, their decoding, the plots of the demo and of the safe
+# drive, every stand guide (text and JSON), a live run at full speed (`serve`), `encode`,
+# `timing` of three buses (text, JSON, SVG) and a short campaign. Comparing the lists of two builds shows whether a change
 # altered any output:
 #
 #   scripts/outputs-digest.sh OLD_BINARY > old.txt
@@ -34,6 +35,17 @@ for f in demo.vcd demo.csv demo10.txt demo-late.vcd; do digest "$f" "$f"; done
 "$bin" decode "demo.vcd" --signal rig.bus.manchester --json > "decode-vcd.jsonl" 2>&1 || true
 "$bin" decode "demo-late.vcd" --signal rig.bus.line_voltage > "decode-late.txt" 2>&1 || true
 for f in decode-csv.txt decode-vcd.jsonl decode-late.txt; do digest "$f" "$f"; done
+"$bin" run --until 20s --plot "demo.svg" --report /dev/null >/dev/null 2>&1 || true
+"$bin" run scenarios/safe-drive-runaway.toml --until 35s --plot "safe-drive.svg" --report /dev/null >/dev/null 2>&1 || true
+for f in demo.svg safe-drive.svg; do digest "$f" "$f"; done
+for sc in scenarios/stand/*.toml; do
+  name="stand-$(basename "$sc" .toml)"
+  "$bin" stand "$sc" > "$name.txt" 2>&1 || true
+  "$bin" stand "$sc" --format json > "$name.json" 2>&1 || true
+  for f in "$name.txt" "$name.json"; do digest "$f" "$f"; done
+done
+"$bin" serve scenarios/fifo.toml --speed max --until 30s --listen 127.0.0.1:0 --format json --report "serve.json" >/dev/null 2>&1 || true
+digest serve.json serve.json
 "$bin" encode dexg 5 1010 > "encode-request.txt" 2>&1 || true
 "$bin" encode --csv "encode.csv" --noise-rms 0.2 --seed 3 rdst 7B > /dev/null 2>&1 || true
 for f in encode-request.txt encode.csv; do digest "$f" "$f"; done
