@@ -390,10 +390,10 @@ pub enum ViolationKind {
     /// The cabin hits a mechanical end of the shaft.
     #[serde(rename = "mechanical-end")]
     MechanicalEnd,
-    /// The car moved at a floor with the door open, further than a few mm (watched with the
-    /// safe drive only; README "Violations").
-    #[serde(rename = "moved-at-floor")]
-    MovedAtFloor,
+    /// Unintended movement: the car that stood at rest with the door open moved further than
+    /// a few mm (watched with the safe drive only; README "Violations").
+    #[serde(rename = "unintended-movement")]
+    UnintendedMovement,
     /// The cabin moves overloaded beyond the reaction budget.
     #[serde(rename = "overloaded-moving")]
     OverloadedMoving,
@@ -408,7 +408,7 @@ impl ViolationKind {
         ViolationKind::DoorOpenMoving,
         ViolationKind::K1InOvertravel,
         ViolationKind::MechanicalEnd,
-        ViolationKind::MovedAtFloor,
+        ViolationKind::UnintendedMovement,
         ViolationKind::OverloadedMoving,
         ViolationKind::StopIgnored,
     ];
@@ -420,7 +420,7 @@ impl ViolationKind {
             ViolationKind::OverloadedMoving => "overloaded-moving",
             ViolationKind::K1InOvertravel => "k1-in-overtravel",
             ViolationKind::MechanicalEnd => "mechanical-end",
-            ViolationKind::MovedAtFloor => "moved-at-floor",
+            ViolationKind::UnintendedMovement => "unintended-movement",
             ViolationKind::StopIgnored => "stop-ignored",
         }
     }

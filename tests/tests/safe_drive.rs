@@ -9,7 +9,7 @@ use rig::campaign::generate::generate;
 use rig::campaign::profile::Profile;
 use rig::campaign::{execute, Execution};
 use rig::report::{Report, ViolationKind};
-use rig::scenario::Scenario;
+use rig::scenario::{Action, Fault, Scenario};
 
 /// The STOP circuit's fixed delay before K1 drops (docs/safety.md §6.2).
 const STOP_DELAY_S: f64 = 9.1;
@@ -145,7 +145,7 @@ fn the_option_off_changes_nothing_in_a_run() {
     assert!(plain.safety.drive.is_none());
     let json = plain.to_json().expect("json");
     assert!(!json.contains("\"drive\""));
-    assert!(!json.contains("moved-at-floor"));
+    assert!(!json.contains("unintended-movement"));
 }
 
 #[test]
@@ -192,6 +192,45 @@ fn a_campaign_with_the_safe_drive_has_no_violations() {
     // The default profile leaves it off.
     let g = generate(17, 0, &Profile::built_in("default").expect("default"));
     assert!(!g.scenario.safe_drive);
+}
+
+/// The safe-drive profile lets the converter run away (the `runaway` activity), each time
+/// repaired by the recovery at the latest; the first two runs with one end without a
+/// violation, a drive trip among their safety trips. The default profile never draws one.
+#[test]
+fn the_safe_drive_campaign_lets_the_converter_run_away_and_stays_safe() {
+    let runaway = |a: &Action| matches!(a, Action::Fault(Fault::ConverterRunaway { .. }));
+    let repaired = |a: &Action| matches!(a, Action::Fault(Fault::ConverterRepaired));
+    let profile = Profile::built_in("safe-drive").expect("built in");
+    let mut with = Vec::new();
+    for index in 0..200 {
+        let g = generate(17, index, &profile);
+        let events = &g.scenario.events;
+        if let Some(last) = events.iter().rposition(|e| runaway(&e.action)) {
+            assert!(
+                events[last..].iter().any(|e| repaired(&e.action)),
+                "run {index}: a runaway never repaired"
+            );
+            with.push((index, g));
+        }
+    }
+    assert!(with.len() > 20, "{} runs of 200 with a runaway", with.len());
+    for (index, g) in with.iter().take(2) {
+        let Execution::Report(r) = execute(&g.scenario) else {
+            panic!("run {index} did not run");
+        };
+        assert!(
+            r.violations.is_empty(),
+            "run {index}:\n{}\n{}",
+            g.scenario.to_toml(),
+            r.to_text()
+        );
+    }
+    let default = Profile::built_in("default").expect("default");
+    for index in 0..200 {
+        let g = generate(17, index, &default);
+        assert!(!g.scenario.events.iter().any(|e| runaway(&e.action)));
+    }
 }
 
 /// The times (ns) and values of the 1-bit VCD variable `name` of scope `rig.drive_safety`.

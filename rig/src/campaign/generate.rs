@@ -107,6 +107,7 @@ struct Touched {
     vanes: BTreeSet<u8>,
     load: bool,
     door: bool,
+    converter: bool,
     /// The sizes of the first cranks so far, mm.
     crank_sum_mm: f64,
 }
@@ -239,6 +240,14 @@ impl Builder<'_> {
             ActivityKind::SafeLinkDrop => {
                 let duration = SimDuration::from_millis(self.rng.random_range(50..=2000));
                 self.push(t, Action::Fault(Fault::SafeLinkDrop { duration }));
+            }
+            ActivityKind::Runaway => {
+                let up = self.rng.random_bool(0.5);
+                self.touched.converter = true;
+                self.push(t, Action::Fault(Fault::ConverterRunaway { up }));
+                if let Some(r) = self.later(t, 1_000, 20_000) {
+                    self.push(r, Action::Fault(Fault::ConverterRepaired));
+                }
             }
             ActivityKind::Vane => {
                 let (sensor, fault) = self.vane_fault();
@@ -397,6 +406,9 @@ pub fn generate(campaign_seed: u64, index: u64, profile: &Profile) -> Generated 
     }
     if b.touched.door {
         tail.push((recovery, Action::Door { closed: true }));
+    }
+    if b.touched.converter {
+        tail.push((recovery, Action::Fault(Fault::ConverterRepaired)));
     }
     // The attendant answers every safety stop from the repairs on: a cabin left on an
     // overtravel sensor (a vane sensor fault can take it there, or a restart from a vane

@@ -43,11 +43,14 @@ pub enum ActivityKind {
     SafeLinkDrop,
     /// A vane sensor sticks on or off, repaired 1..30 s later.
     Vane,
+    /// The converter runs away (up or down, against its commands), repaired 1..20 s later:
+    /// only the safe drive stops that at a floor (weight 0 but in `safe-drive`).
+    Runaway,
 }
 
 impl ActivityKind {
     /// Every kind, in the order of the profile format.
-    pub const ALL: [ActivityKind; 13] = [
+    pub const ALL: [ActivityKind; 14] = [
         ActivityKind::Cabin,
         ActivityKind::Hall,
         ActivityKind::Stop,
@@ -61,6 +64,7 @@ impl ActivityKind {
         ActivityKind::PowerFail,
         ActivityKind::SafeLinkDrop,
         ActivityKind::Vane,
+        ActivityKind::Runaway,
     ];
 
     /// The name in a profile's `[event]` table.
@@ -79,6 +83,7 @@ impl ActivityKind {
             ActivityKind::PowerFail => "power-fail",
             ActivityKind::SafeLinkDrop => "safe-link-drop",
             ActivityKind::Vane => "vane",
+            ActivityKind::Runaway => "runaway",
         }
     }
 
@@ -90,6 +95,7 @@ impl ActivityKind {
                 | ActivityKind::PowerFail
                 | ActivityKind::SafeLinkDrop
                 | ActivityKind::Vane
+                | ActivityKind::Runaway
         )
     }
 }
@@ -218,6 +224,7 @@ impl Profile {
             "safe-drive" => {
                 p.name = "safe-drive".into();
                 p.safe_drive_chance = 1.0;
+                p.event.set(ActivityKind::Runaway, 1);
             }
             _ => return None,
         }
@@ -262,6 +269,8 @@ impl Profile {
                 (K::PowerFail, 1),
                 (K::SafeLinkDrop, 1),
                 (K::Vane, 1),
+                // Last and 0: the draws of the other kinds stay as they were.
+                (K::Runaway, 0),
             ]),
             extra_slaves_chance: 0.1,
             start_level_chance: 0.25,

@@ -14,7 +14,7 @@ const STOP_MARGIN: SimDuration = SimDuration::from_millis(200);
 /// How far the car may move at a floor with the door open before the watch calls it a
 /// violation (with the safe drive; README "Violations"): the safe drive's SOS holds it within
 /// 0.5 motor revolutions (5.0 mm), and its brake needs a little more.
-pub(super) const MOVED_AT_FLOOR_MM: f64 = 10.0;
+pub(super) const UNINTENDED_MOVEMENT_MM: f64 = 10.0;
 
 /// What the watch looks at, at one moment.
 #[derive(Clone, Copy, Debug)]
@@ -34,8 +34,9 @@ pub(super) struct Observed {
     pub position_mm: f64,
     /// The floor whose level window the cabin is in, if any.
     pub level_floor: Option<u8>,
-    /// Watch "moved at a floor with the door open" (the safe drive is on).
-    pub watch_moved_at_floor: bool,
+    /// Watch "unintended movement": a car at rest with the door open that moves (the safe
+    /// drive is on).
+    pub watch_unintended_movement: bool,
 }
 
 /// Watches the invariants.
@@ -48,9 +49,9 @@ pub(super) struct InvariantWatch {
     stop_since: Option<(SimTime, bool)>,
     /// The cabin moves by the hand crank (from the turn's start to the next rest).
     by_hand: bool,
-    /// Where the car stood at rest at a floor when the door was open there (floor, mm).
-    door_open_at: Option<(u8, f64)>,
-    /// Reported once per episode: door, overload, overtravel, moved at a floor.
+    /// Where the car stood at rest with the door open (its floor, if level at one; mm).
+    door_open_at: Option<(Option<u8>, f64)>,
+    /// Reported once per episode: door, overload, overtravel, unintended movement.
     reported: [bool; 4],
 }
 
@@ -89,10 +90,11 @@ impl InvariantWatch {
                 found.push((kind, detail));
             }
         };
-        // With the safe drive, a car that rested at a floor with the door open is judged by
-        // how far it moves there (below), not by whether it moves at all.
-        let judged_at_floor = o.watch_moved_at_floor && self.door_open_at.is_some();
-        if moving && !judged_at_floor && over(self.door_open_since, DOOR_BUDGET) {
+        // With the safe drive, a car that rested with the door open (at a floor or between
+        // floors: SOS holds it wherever the door is open) is judged by how far it moves from
+        // there (below), not by whether it moves at all.
+        let judged_at_rest = o.watch_unintended_movement && self.door_open_at.is_some();
+        if moving && !judged_at_rest && over(self.door_open_since, DOOR_BUDGET) {
             once(
                 0,
                 ViolationKind::DoorOpenMoving,
@@ -115,17 +117,19 @@ impl InvariantWatch {
                 ),
             );
         }
-        if o.watch_moved_at_floor && o.door_open && !self.by_hand && !o.hand_cranking {
+        if o.watch_unintended_movement && o.door_open && !self.by_hand && !o.hand_cranking {
             match self.door_open_at {
                 None if velocity == 0.0 => {
-                    self.door_open_at = o.level_floor.map(|f| (f, o.position_mm));
+                    self.door_open_at = Some((o.level_floor, o.position_mm));
                 }
-                Some((floor, x0)) if (o.position_mm - x0).abs() > MOVED_AT_FLOOR_MM => {
+                Some((floor, x0)) if (o.position_mm - x0).abs() > UNINTENDED_MOVEMENT_MM => {
+                    let place =
+                        floor.map_or("between floors".to_string(), |f| format!("at floor {f}"));
                     once(
                         3,
-                        ViolationKind::MovedAtFloor,
+                        ViolationKind::UnintendedMovement,
                         format!(
-                            "the car moved {:+.1} mm at floor {floor} with the door open, more than {MOVED_AT_FLOOR_MM} mm",
+                            "the car moved {:+.1} mm {place} with the door open, more than {UNINTENDED_MOVEMENT_MM} mm",
                             o.position_mm - x0
                         ),
                     );
@@ -184,7 +188,7 @@ mod tests {
             stop: false,
             position_mm,
             level_floor: ((390.0..=410.0).contains(&position_mm)).then_some(2),
-            watch_moved_at_floor: true,
+            watch_unintended_movement: true,
         }
     }
 
@@ -205,7 +209,7 @@ mod tests {
             (2_500, seen(410.5, 5.0)),
             (3_000, seen(412.0, 5.0)),
         ]);
-        assert_eq!(found, [ViolationKind::MovedAtFloor]);
+        assert_eq!(found, [ViolationKind::UnintendedMovement]);
     }
 
     #[test]
@@ -223,7 +227,7 @@ mod tests {
     #[test]
     fn without_the_safe_drive_the_watch_is_as_it_was() {
         let off = |mut o: Observed| {
-            o.watch_moved_at_floor = false;
+            o.watch_unintended_movement = false;
             o
         };
         let found = watch(&[(0, off(seen(400.0, 0.0))), (2_000, off(seen(420.0, 5.0)))]);
@@ -244,9 +248,22 @@ mod tests {
             (3_100, seen(421.0, 0.0)),
         ]);
         assert!(found.is_empty(), "{found:?}");
-        // Door opened between floors, car at rest: no floor, no reference.
-        let found = watch(&[(0, seen(250.0, 0.0)), (500, seen(262.0, 0.0))]);
+    }
+
+    /// SOS holds the car wherever the door is open, so a car at rest between floors with the
+    /// door open (a power-on there, a door opened by hand) is judged by how far it moves too
+    /// (campaign 18 of the safe-drive profile, runs 49 and 206: a runaway stopped by SOS
+    /// after 0.1 mm was judged by `door-open-moving`, any movement at all).
+    #[test]
+    fn a_car_at_rest_between_floors_with_the_door_open_is_judged_by_how_far_it_moves() {
+        let found = watch(&[
+            (0, seen(250.0, 0.0)),
+            (2_000, seen(250.0, 3.0)),
+            (2_100, seen(250.2, 0.0)),
+        ]);
         assert!(found.is_empty(), "{found:?}");
+        let found = watch(&[(0, seen(250.0, 0.0)), (2_000, seen(262.0, 20.0))]);
+        assert_eq!(found, [ViolationKind::UnintendedMovement]);
     }
 
     #[test]
@@ -263,7 +280,10 @@ mod tests {
         ]);
         assert_eq!(
             found,
-            [ViolationKind::MovedAtFloor, ViolationKind::MovedAtFloor]
+            [
+                ViolationKind::UnintendedMovement,
+                ViolationKind::UnintendedMovement
+            ]
         );
     }
 }

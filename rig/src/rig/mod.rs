@@ -858,7 +858,7 @@ impl Rig {
             stop: l.stop_channels() != [true, true],
             position_mm: l.position_mm(),
             level_floor: l.config().level_floor(l.position_mm()),
-            watch_moved_at_floor: self.drive.is_some(),
+            watch_unintended_movement: self.drive.is_some(),
         };
         for (kind, detail) in self.watch.check(t, seen, self.estop_delay) {
             self.violation(t, kind, detail);
