@@ -185,41 +185,32 @@ impl Viewer {
 /// wall time and serves the page's commands ([`ToRig::Web`]). The live view takes the rig's
 /// transaction observer ([`Rig::on_transaction`]) for its list of the last telegrams.
 pub fn run_with_view(
-    mut rig: Rig,
+    rig: Rig,
     cfg: LiveConfig,
     rx: &Receiver<ToRig>,
     status: &Sender<Status>,
     view: Option<ViewOut>,
 ) -> Report {
-    let mut viewer = view.map(|out| Viewer {
-        telegrams: view::observe(&mut rig),
-        out,
-        last: None,
-        commands: 0,
-    });
-    let mut gw = Gateway::new(cfg.owner, cfg.watchdog);
-    let mut ttk = Ttk::default();
-    let mut connections = 0u64;
+    let mut t = RigThread::new(rig, cfg, view);
     let mut max_lag = Duration::ZERO;
     let mut lag_warned = false;
     let start = Instant::now();
-    let sim0 = rig.now();
-    let mut at = rig.now();
+    let sim0 = t.rig.now();
+    let mut at = t.rig.now();
     let mut last_status = Instant::now();
     let mut stopped = false;
-    'run: while !stopped && at < rig.end() {
+    'run: while !stopped && at < t.rig.end() {
         match cfg.speed {
             Speed::Factor(x) => {
                 let wall = start.elapsed();
                 let target = sim0 + sim_of(wall.mul_f64(x));
-                let target = target.min(rig.end());
-                at = advance(&mut rig, &mut gw, &mut ttk, at, target);
+                at = t.advance(at, target);
                 let lag = behind(start, sim0, at, x);
                 if lag > LAG_REPORTED {
                     max_lag = max_lag.max(lag);
                     if !lag_warned && lag > Duration::from_millis(100) {
                         lag_warned = true;
-                        rig.log_now(
+                        t.rig.log_now(
                             "live",
                             format!(
                                 "the machine cannot keep up at speed {x}: {:.0} ms behind the wall clock",
@@ -231,79 +222,59 @@ pub fn run_with_view(
                 // Wait for a request until the next millisecond of simulated time is due.
                 let next = Duration::from_secs_f64(1e-3 / x).min(Duration::from_millis(1));
                 match rx.recv_timeout(next) {
-                    Ok(m) => {
-                        stopped |= handle(
-                            m,
-                            &mut rig,
-                            &mut gw,
-                            &mut ttk,
-                            at,
-                            &mut connections,
-                            viewer.as_mut(),
-                        )
-                    }
+                    Ok(m) => stopped |= t.handle(m, at),
                     Err(RecvTimeoutError::Timeout) => {}
                     Err(RecvTimeoutError::Disconnected) => break 'run,
                 }
             }
             Speed::Max if cfg.owner == Owner::Builtin => {
-                let target = (at + FREE_RUN_SLICE).min(rig.end());
-                at = advance(&mut rig, &mut gw, &mut ttk, at, target);
+                at = t.advance(at, at + FREE_RUN_SLICE);
             }
-            Speed::Max => match rx.recv_timeout(if viewer.is_some() {
-                VIEW_EVERY
-            } else {
-                STATUS_EVERY
-            }) {
-                Ok(m) => {
-                    let call = matches!(m, ToRig::Call(_) | ToRig::Ttk(_));
-                    stopped |= handle(
-                        m,
-                        &mut rig,
-                        &mut gw,
-                        &mut ttk,
-                        at,
-                        &mut connections,
-                        viewer.as_mut(),
-                    );
-                    if call {
-                        let target = (at + cfg.step).min(rig.end());
-                        at = advance(&mut rig, &mut gw, &mut ttk, at, target);
+            Speed::Max => {
+                let wait = if t.viewer.is_some() {
+                    VIEW_EVERY
+                } else {
+                    STATUS_EVERY
+                };
+                match rx.recv_timeout(wait) {
+                    Ok(m) => {
+                        let call = matches!(m, ToRig::Call(_) | ToRig::Ttk(_));
+                        stopped |= t.handle(m, at);
+                        if call {
+                            at = t.advance(at, at + cfg.step);
+                        }
                     }
+                    Err(RecvTimeoutError::Timeout) => {}
+                    Err(RecvTimeoutError::Disconnected) => break 'run,
                 }
-                Err(RecvTimeoutError::Timeout) => {}
-                Err(RecvTimeoutError::Disconnected) => break 'run,
-            },
+            }
         }
         // At a speed factor or running free, everything else waiting is served at the same
         // moment; in lockstep each request has its own step, and none is served at the end.
         let lockstep = cfg.speed == Speed::Max && cfg.owner == Owner::External;
-        while !lockstep && at < rig.end() {
+        while !lockstep && at < t.rig.end() {
             match rx.try_recv() {
-                Ok(m) => {
-                    stopped |= handle(
-                        m,
-                        &mut rig,
-                        &mut gw,
-                        &mut ttk,
-                        at,
-                        &mut connections,
-                        viewer.as_mut(),
-                    )
-                }
+                Ok(m) => stopped |= t.handle(m, at),
                 Err(TryRecvError::Empty) => break,
                 Err(TryRecvError::Disconnected) => break 'run,
             }
         }
         if last_status.elapsed() >= STATUS_EVERY {
             last_status = Instant::now();
-            let _ = status.try_send(status_of(&rig, &gw, at, start, sim0, cfg.speed, false));
+            let _ = status.try_send(status_of(&t.rig, &t.gw, at, start, sim0, cfg.speed, false));
         }
-        if let Some(v) = viewer.as_mut().filter(|v| v.due()) {
-            let s = status_of(&rig, &gw, at, start, sim0, cfg.speed, false);
-            v.publish(&rig, run_of(&s, cfg));
+        if let Some(v) = t.viewer.as_mut().filter(|v| v.due()) {
+            let s = status_of(&t.rig, &t.gw, at, start, sim0, cfg.speed, false);
+            v.publish(&t.rig, run_of(&s, cfg));
         }
     }
+    let RigThread {
+        mut rig,
+        gw,
+        ttk,
+        connections,
+        mut viewer,
+    } = t;
     if stopped {
         rig.log_now("live", "stopped by the operator (Ctrl-C)".into());
     }
@@ -329,6 +300,77 @@ pub fn run_with_view(
         lamps: ttk.lamps().clone(),
     });
     report
+}
+
+/// What the rig thread owns: the rig and everything that serves its clients.
+struct RigThread {
+    rig: Rig,
+    gw: Gateway,
+    ttk: Ttk,
+    connections: u64,
+    viewer: Option<Viewer>,
+}
+
+impl RigThread {
+    fn new(mut rig: Rig, cfg: LiveConfig, view: Option<ViewOut>) -> RigThread {
+        let viewer = view.map(|out| Viewer {
+            telegrams: view::observe(&mut rig),
+            out,
+            last: None,
+            commands: 0,
+        });
+        RigThread {
+            rig,
+            gw: Gateway::new(cfg.owner, cfg.watchdog),
+            ttk: Ttk::default(),
+            connections: 0,
+            viewer,
+        }
+    }
+
+    /// [`advance`] up to `target`, at most the run's end.
+    fn advance(&mut self, at: SimTime, target: SimTime) -> SimTime {
+        let target = target.min(self.rig.end());
+        advance(&mut self.rig, &mut self.gw, &mut self.ttk, at, target)
+    }
+
+    /// Serves one message at `at`; `true` if it ends the run.
+    fn handle(&mut self, m: ToRig, at: SimTime) -> bool {
+        let (rig, gw, ttk) = (&mut self.rig, &mut self.gw, &mut self.ttk);
+        match m {
+            ToRig::Web(c) => {
+                let answer = match self.viewer.as_mut() {
+                    Some(v) => {
+                        v.commands += 1;
+                        // Every change of the line noise draws from a seed of its own.
+                        let seed = 0x6c69_6e65 ^ v.commands;
+                        let floors = rig.lift().config().floors;
+                        command::parse(&c.command, floors)
+                            .and_then(|cmd| command::apply(rig, &cmd, seed))
+                    }
+                    None => Err("this run has no live view".into()),
+                };
+                let _ = c.reply.send(answer);
+                false
+            }
+            ToRig::Ttk(c) => {
+                let answer = ttk.serve(rig, gw, at, c.msg);
+                let _ = c.reply.send(answer);
+                false
+            }
+            ToRig::Call(c) => {
+                let answer = gw.serve(rig, at, &c.request);
+                // A client that has gone no longer waits for its answer.
+                let _ = c.reply.send(answer);
+                false
+            }
+            ToRig::Connected => {
+                self.connections += 1;
+                false
+            }
+            ToRig::Stop => true,
+        }
+    }
 }
 
 /// Runs the rig's moments up to `target`, then the watchdog and the TTK4145 front end's
@@ -360,51 +402,6 @@ fn run_of(s: &Status, cfg: LiveConfig) -> view::Run {
         },
         requests: s.requests,
         ended: s.ended,
-    }
-}
-
-/// Serves one message at `at`; `true` if it ends the run.
-fn handle(
-    m: ToRig,
-    rig: &mut Rig,
-    gw: &mut Gateway,
-    ttk: &mut Ttk,
-    at: SimTime,
-    connections: &mut u64,
-    viewer: Option<&mut Viewer>,
-) -> bool {
-    match m {
-        ToRig::Web(c) => {
-            let answer = match viewer {
-                Some(v) => {
-                    v.commands += 1;
-                    // Every change of the line noise draws from a seed of its own.
-                    let seed = 0x6c69_6e65 ^ v.commands;
-                    let floors = rig.lift().config().floors;
-                    command::parse(&c.command, floors)
-                        .and_then(|cmd| command::apply(rig, &cmd, seed))
-                }
-                None => Err("this run has no live view".into()),
-            };
-            let _ = c.reply.send(answer);
-            false
-        }
-        ToRig::Ttk(c) => {
-            let answer = ttk.serve(rig, gw, at, c.msg);
-            let _ = c.reply.send(answer);
-            false
-        }
-        ToRig::Call(c) => {
-            let answer = gw.serve(rig, at, &c.request);
-            // A client that has gone no longer waits for its answer.
-            let _ = c.reply.send(answer);
-            false
-        }
-        ToRig::Connected => {
-            *connections += 1;
-            false
-        }
-        ToRig::Stop => true,
     }
 }
 
