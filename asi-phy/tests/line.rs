@@ -23,32 +23,14 @@ fn both(trains: &[(PulseTrain, u32, u32)]) -> (Vec<Frame>, Vec<Frame>) {
 
 #[test]
 fn every_clean_telegram_decodes_as_the_line_decoder_decodes_it() {
-    let h = BusTiming::default().half_bit();
-    let mut trains = Vec::new();
-    let mut t = 0u64;
-    for body in 0u16..1 << 11 {
-        let bits = (body << 2) | (((body.count_ones() & 1) as u16) << 1) | 1;
-        let req = Request::from_bits(bits).expect("valid");
-        trains.push((
-            PulseTrain::request(req, SimTime::from_micros(t), h),
-            req.bits() as u32,
-            14,
-        ));
-        let resp = Response::new(Nibble::from_low_bits(body as u8));
-        trains.push((
-            PulseTrain::response(resp, SimTime::from_micros(t + 102), h),
-            resp.bits() as u32,
-            7,
-        ));
-        // Now and then a gap too short to end a telegram: the trains overlap.
-        t += if body % 13 == 0 { 146 } else { 154 };
-    }
+    let trains = all_telegrams();
     let (fast, slow) = both(&trains);
     assert_eq!(fast.len(), slow.len());
     assert_eq!(fast, slow);
 }
 
-/// Every request and response back to back, the trains of `every_clean_telegram_…`.
+/// Every request and response back to back; now and then a gap too short to end a telegram,
+/// so that the trains overlap.
 fn all_telegrams() -> Vec<(PulseTrain, u32, u32)> {
     let h = BusTiming::default().half_bit();
     let mut trains = Vec::new();
