@@ -306,27 +306,28 @@ fn serve_names_its_bad_arguments_and_a_busy_port() {
     assert!(err.contains(&format!("cannot listen on {addr}")), "{err}");
 }
 
-#[test]
-fn serve_with_the_live_view_gives_the_same_run_as_without() {
+/// `asi-lift serve --speed max --until 3s` on the demo with `extra` arguments: its standard
+/// error and its JSON report.
+fn serve_3s(extra: &[&str]) -> (String, serde_json::Value) {
     let d = temp();
     let report = d.path().join("r.json");
     let out = asi_lift()
         .args(["serve", "--speed", "max", "--until", "3s"])
-        .args(["--listen", "127.0.0.1:0", "--http", "127.0.0.1:0"])
+        .args(["--listen", "127.0.0.1:0"])
+        .args(extra)
         .args(["--format", "json", "--report"])
         .arg(&report)
         .output()
         .expect("asi-lift runs");
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("live view on http://127.0.0.1:"), "{err}");
+    let err = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert!(out.status.success(), "{err}");
     let text = std::fs::read_to_string(&report).expect("the report");
-    let mut live: serde_json::Value = serde_json::from_str(&text).expect("JSON");
-    // Watching does not change the run: the batch run's report but `live`.
+    (err, serde_json::from_str(&text).expect("JSON"))
+}
+
+/// Without clients a live run at `max` is the batch run: `asi-lift run --until 3s` gives the
+/// same report but `live`.
+fn assert_the_batch_run(mut live: serde_json::Value) {
     let run = asi_lift()
         .args(["run", "--until", "3s", "--format", "json"])
         .output()
@@ -338,45 +339,21 @@ fn serve_with_the_live_view_gives_the_same_run_as_without() {
 }
 
 #[test]
+fn serve_with_the_live_view_gives_the_same_run_as_without() {
+    let (err, live) = serve_3s(&["--http", "127.0.0.1:0"]);
+    assert!(err.contains("live view on http://127.0.0.1:"), "{err}");
+    // Watching does not change the run.
+    assert_the_batch_run(live);
+}
+
+#[test]
 fn serve_runs_free_to_its_end_and_writes_the_report_with_the_live_figures() {
-    let d = temp();
-    let report = d.path().join("r.json");
-    let out = asi_lift()
-        .args([
-            "serve",
-            "--speed",
-            "max",
-            "--until",
-            "3s",
-            "--listen",
-            "127.0.0.1:0",
-        ])
-        .args(["--format", "json", "--report"])
-        .arg(&report)
-        .output()
-        .expect("asi-lift runs");
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let err = String::from_utf8_lossy(&out.stderr);
+    let (err, json) = serve_3s(&[]);
     assert!(err.contains("Modbus TCP gateway on 127.0.0.1:"), "{err}");
-    let text = std::fs::read_to_string(&report).expect("the report");
-    let json: serde_json::Value = serde_json::from_str(&text).expect("JSON");
     assert_eq!(json["simulated_s"], 3.0);
     assert_eq!(json["live"]["controller"], "builtin");
     assert_eq!(json["live"]["speed"], "max");
-    // Without clients, a live run at `max` is the batch run: the same report but `live`.
-    let run = asi_lift()
-        .args(["run", "--until", "3s", "--format", "json"])
-        .output()
-        .expect("asi-lift runs");
-    let mut batch: serde_json::Value = serde_json::from_slice(&run.stdout).expect("JSON");
-    let mut live = json;
-    live.as_object_mut().expect("an object").remove("live");
-    batch.as_object_mut().expect("an object").remove("live");
-    assert_eq!(live, batch);
+    assert_the_batch_run(json);
 }
 
 #[test]
