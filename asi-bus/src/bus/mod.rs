@@ -406,14 +406,16 @@ impl Bus {
             .then(|| cur.line_end + self.timing.async_pause())
     }
 
-    /// Every receiver on the line hears frame `f` at `now`.
+    /// Every receiver on the line hears frame `f` at `now`. The transaction in progress is
+    /// updated in place: `respond` may hear the answer's frames before this returns.
     fn hear(&mut self, now: SimTime, f: &Frame, role: Role) {
-        let Some(mut cur) = self.cur else {
+        let Some(cur) = self.cur.as_mut() else {
             return;
         };
         let window_end = cur.req_end + self.timing.response_timeout();
         cur.line_end = cur.line_end.max(f.end);
-        if matches!(role, Role::Response) && f.start > cur.req_end && f.start <= window_end {
+        let is_request = matches!(role, Role::Request);
+        if !is_request && f.start > cur.req_end && f.start <= window_end {
             let r = self.master_rx.accept(f);
             cur.responses += 1;
             cur.line_error |= !r.is_valid();
@@ -424,15 +426,14 @@ impl Bus {
                 cur.response_failed = cur_checks(cur.response_failed, r.failed);
             }
         }
+        if !f.line_failed.is_empty() && !self.groups.is_empty() {
+            cur.line_error = true;
+        }
         let mut responders = 0u64;
         let mut request = None;
-        let ngroups = self.groups.len();
         for (gi, g) in self.groups.iter_mut().enumerate() {
             let r = g.listener.accept(f);
-            if gi == 0 && !f.line_failed.is_empty() {
-                cur.line_error = true;
-            }
-            if matches!(role, Role::Request) {
+            if is_request {
                 if gi == 0 {
                     cur.request_frames += 1;
                     cur.request_failed = cur_checks(cur.request_failed, r.failed);
@@ -447,20 +448,19 @@ impl Bus {
                 }
             }
         }
-        if ngroups > 1 {
-            self.merge_groups();
-        }
-        for m in &mut self.monitors {
-            m.on_frame(now, f);
-        }
-        if matches!(role, Role::Request) && cur.request_frames > 1 {
+        if is_request && cur.request_frames > 1 {
             // A request split in pieces is no request.
             request = None;
             cur.valid_request = None;
         } else if request.is_some() {
             cur.valid_request = request;
         }
-        self.cur = Some(cur);
+        if self.groups.len() > 1 {
+            self.merge_groups();
+        }
+        for m in &mut self.monitors {
+            m.on_frame(now, f);
+        }
         if let (Some(q), true) = (request, responders != 0 && self.slaves_powered) {
             self.respond(now, f.end, q, responders);
         }
