@@ -297,6 +297,14 @@ fn serve_names_its_bad_arguments_and_a_busy_port() {
         err.contains("--http localhost") && err.contains("127.0.0.1:8080"),
         "{err}"
     );
+    // A scenario after an optional-valued flag is read as its address: the error says so.
+    let err = fails(asi_lift().args(["serve", "--http", "fifo"]));
+    assert!(
+        err.contains("--http fifo") && err.contains("`fifo` is a scenario: put it before --http"),
+        "{err}"
+    );
+    let err = fails(asi_lift().args(["serve", "--ttk4145", "demo"]));
+    assert!(err.contains("put it before --ttk4145"), "{err}");
     // A port already taken is named.
     let taken = std::net::TcpListener::bind("127.0.0.1:0").expect("a port");
     let addr = taken.local_addr().expect("its address").to_string();
@@ -990,4 +998,48 @@ fn stand_lists_reports_json_and_names_errors() {
     );
     let err = fails(asi_lift().args(["stand", "nonesuch"]));
     assert!(err.contains("there are sto, sos, ss1"), "{err}");
+}
+
+/// `asi-lift stand --report FILE` writes what it would print; a file that exists is kept
+/// without `--force`, and the scenario file is never the report.
+#[test]
+fn stand_writes_its_report_to_a_file_and_keeps_what_exists() {
+    let d = temp();
+    let printed = asi_lift().args(["stand", "sos"]).output().expect("runs");
+    let rep = d.path().join("sos.txt");
+    let out = asi_lift()
+        .args(["stand", "sos", "--report"])
+        .arg(&rep)
+        .output()
+        .expect("runs");
+    assert!(out.status.success(), "{out:?}");
+    assert!(out.stdout.is_empty(), "{out:?}");
+    assert_eq!(std::fs::read(&rep).expect("the report"), printed.stdout);
+
+    std::fs::write(&rep, "mine").expect("write");
+    let err = fails(asi_lift().args(["stand", "sos", "--report"]).arg(&rep));
+    assert!(err.contains("--force"), "{err}");
+    assert_eq!(std::fs::read_to_string(&rep).expect("kept"), "mine");
+    let out = asi_lift()
+        .args(["stand", "sos", "--force", "--report"])
+        .arg(&rep)
+        .output()
+        .expect("runs");
+    assert!(out.status.success(), "{out:?}");
+    assert_eq!(std::fs::read(&rep).expect("the report"), printed.stdout);
+
+    let sc = d.path().join("mine.toml");
+    std::fs::write(&sc, "function = \"sos\"\nduration = \"10s\"\n").expect("write");
+    let err = fails(
+        asi_lift()
+            .arg("stand")
+            .arg(&sc)
+            .arg("--force")
+            .arg("--report")
+            .arg(&sc),
+    );
+    assert!(err.contains("the scenario and --report"), "{err}");
+    assert!(std::fs::read_to_string(&sc)
+        .expect("kept")
+        .starts_with("function"));
 }

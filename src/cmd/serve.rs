@@ -88,6 +88,22 @@ pub enum ControllerArg {
 /// How long a live run lasts without `--until`: until Ctrl-C, in practice.
 const OPEN_END: SimDuration = SimDuration::from_secs(365 * 24 * 3600);
 
+/// The address given to `flag`. `--ttk4145` and `--http` take an optional value, so a
+/// scenario written after them is read as their address: the error says so.
+fn address(flag: &str, value: &str, example: &str) -> Result<SocketAddr, String> {
+    value.parse().map_err(|e| {
+        let scenario = Path::new(value).exists() || super::scenarios::find(value).is_ok();
+        let hint = if scenario {
+            format!(
+                "; `{value}` is a scenario: put it before {flag}, or give the address as {flag}={example}"
+            )
+        } else {
+            String::new()
+        };
+        format!("{flag} {value}: {e} (expected an address such as {example}){hint}")
+    })
+}
+
 /// Serves the rig until `--until` or Ctrl-C and writes the report.
 pub fn run(args: ServeArgs) -> Result<u8, String> {
     let ServeArgs {
@@ -107,22 +123,12 @@ pub fn run(args: ServeArgs) -> Result<u8, String> {
         trace_format,
         force,
     } = args;
-    let listen: SocketAddr = listen.parse().map_err(|e| {
-        format!("--listen {listen}: {e} (expected an address such as 127.0.0.1:5020)")
-    })?;
+    let listen = address("--listen", &listen, "127.0.0.1:5020")?;
     let ttk = ttk4145
-        .map(|a| {
-            a.parse::<SocketAddr>().map_err(|e| {
-                format!("--ttk4145 {a}: {e} (expected an address such as 127.0.0.1:15657)")
-            })
-        })
+        .map(|a| address("--ttk4145", &a, "127.0.0.1:15657"))
         .transpose()?;
     let http = http
-        .map(|a| {
-            a.parse::<SocketAddr>().map_err(|e| {
-                format!("--http {a}: {e} (expected an address such as 127.0.0.1:8080)")
-            })
-        })
+        .map(|a| address("--http", &a, "127.0.0.1:8080"))
         .transpose()?;
     let controller = match (controller, ttk) {
         (Some(ControllerArg::Builtin), Some(_)) => {

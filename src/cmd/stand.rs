@@ -1,6 +1,7 @@
 //! `asi-lift stand`: seed 000's teaching stand (rig::stand): a stand scenario run and shown as a
 //! student at the stand sees it, or the list of the built-in ones (one per test guide).
 
+use super::output::Outputs;
 use super::{print_out, read_input};
 use rig::stand::builtin::{find, stand_scenario, STAND_BUILTINS};
 use rig::stand::{run as run_stand, StandScenario};
@@ -15,6 +16,12 @@ pub struct StandArgs {
     /// The form of what is printed.
     #[arg(long, value_enum, default_value_t = super::run::Format::Text)]
     pub format: super::run::Format,
+    /// Where the stand's log and page states go: a file, or `-` for standard output.
+    #[arg(long, value_name = "FILE|-", default_value = "-")]
+    pub report: PathBuf,
+    /// Overwrite the report file if it exists.
+    #[arg(long)]
+    pub force: bool,
 }
 
 /// Runs a stand scenario and prints its log and the page's states; the stand only shows,
@@ -34,6 +41,12 @@ pub fn run(args: StandArgs) -> Result<u8, String> {
         print_out(&text)?;
         return Ok(0);
     };
+    // Refuse a report file that exists, or that is the scenario itself, before running.
+    let mut outs = Outputs::new(args.force);
+    if scenario.exists() {
+        outs.input("the scenario", &scenario)?;
+    }
+    let sink = outs.add("--report", &args.report)?;
     let sc = load(&scenario)?;
     let report = run_stand(&sc);
     let body = match args.format {
@@ -45,7 +58,8 @@ pub fn run(args: StandArgs) -> Result<u8, String> {
                 + "\n"
         }
     };
-    print_out(&body)?;
+    outs.write_all(&sink, &body)?;
+    outs.commit()?;
     Ok(0)
 }
 
