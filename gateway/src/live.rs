@@ -182,8 +182,8 @@ impl Viewer {
 }
 
 /// As [`run`], and with `view` publishes a snapshot for the live view every [`VIEW_EVERY`] of
-/// wall time and serves the page's commands ([`ToRig::Web`]). The live view takes the rig's
-/// transaction observer ([`Rig::on_transaction`]) for its list of the last telegrams.
+/// wall time and serves the page's commands ([`ToRig::Web`]). The live view adds a transaction
+/// observer ([`Rig::on_transaction`]) for its list of the last telegrams.
 pub fn run_with_view(
     rig: Rig,
     cfg: LiveConfig,

@@ -24,8 +24,8 @@ pub const LOG_LINES: usize = 12;
 /// The last bus transactions, kept by the rig's transaction observer on the rig thread.
 pub type Telegrams = Rc<RefCell<VecDeque<TransactionRecord>>>;
 
-/// Attaches the observer that keeps the last [`TELEGRAMS`] transactions (it takes the rig's
-/// one observer slot) and returns the list it fills.
+/// Attaches an observer that keeps the last [`TELEGRAMS`] transactions and returns the list it
+/// fills.
 pub fn observe(rig: &mut Rig) -> Telegrams {
     let list: Telegrams = Rc::new(RefCell::new(VecDeque::with_capacity(TELEGRAMS + 1)));
     let keep = Rc::clone(&list);

@@ -26,6 +26,28 @@ fn traced(sc: Scenario) -> (Report, Vec<TransactionRecord>) {
     (report, records)
 }
 
+/// Two observers of one run (the live view's and an application's) each get every
+/// transaction, in order: adding the second does not take the first one's place.
+#[test]
+fn every_observer_gets_every_transaction() {
+    let sc = Scenario {
+        duration: SimDuration::from_secs(2),
+        ..Scenario::defaults()
+    };
+    let (_, alone) = traced(sc.clone());
+    let first = Rc::new(RefCell::new(Vec::new()));
+    let second = Rc::new(RefCell::new(Vec::new()));
+    let mut rig = Rig::new(sc).expect("rig");
+    for list in [&first, &second] {
+        let sink = Rc::clone(list);
+        rig.on_transaction(Box::new(move |r| sink.borrow_mut().push(*r)));
+    }
+    rig.run(None);
+    assert!(alone.len() > 10_000, "{} transactions", alone.len());
+    assert_eq!(*first.borrow(), alone);
+    assert_eq!(*second.borrow(), alone);
+}
+
 fn at(s: f64) -> SimTime {
     SimTime::ZERO + SimDuration::from_secs_f64(s).expect("time")
 }

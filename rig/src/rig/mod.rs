@@ -249,10 +249,11 @@ impl Rig {
         });
     }
 
-    /// Hands every bus transaction to `f` (at every PLC scan and at the end, in order).
+    /// Hands every bus transaction to `f` (at every PLC scan and at the end, in order),
+    /// besides the observers added before.
     pub fn on_transaction(&mut self, f: TransactionObserver) {
         self.enable_trace_ring();
-        self.outputs.observer = Some(f);
+        self.outputs.observers.push(f);
     }
 
     fn enable_trace_ring(&mut self) {

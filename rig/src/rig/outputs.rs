@@ -18,14 +18,14 @@ pub(super) struct Outputs {
     trace_error: Option<String>,
     /// The VCD and line-voltage outputs, if wanted.
     pub waves: Option<Waves>,
-    /// Who else wants every transaction.
-    pub observer: Option<TransactionObserver>,
+    /// Who else wants every transaction, in the order they were added.
+    pub observers: Vec<TransactionObserver>,
 }
 
 impl Outputs {
     /// Whether anything wants the transactions.
     pub(super) fn wanted(&self) -> bool {
-        self.trace.is_some() || self.waves.is_some() || self.observer.is_some()
+        self.trace.is_some() || self.waves.is_some() || !self.observers.is_empty()
     }
 
     /// The first error writing the trace or the waveforms, if any.
@@ -43,7 +43,7 @@ impl Outputs {
         pulses: &[Pulse],
         now: SimTime,
     ) {
-        if let Some(f) = self.observer.as_mut() {
+        for f in &mut self.observers {
             records.iter().for_each(f);
         }
         if let Some((out, format)) = self.trace.as_mut() {
