@@ -900,7 +900,7 @@ mod plot {
 
 /// The warnings of `run` before a run ([`asi_lift::cmd::run`]).
 mod run {
-    use asi_lift::cmd::run::vcd_size_warning;
+    use asi_lift::cmd::run::{csv_size_warning, vcd_size_warning};
     use asi_phy::SimTime;
 
     const MIN: u64 = 60;
@@ -926,6 +926,18 @@ mod run {
         // 10 s of line voltage is the bulk of a short run's VCD.
         let w = vcd_size_warning(secs(20), None, (SimTime::ZERO, secs(10))).expect("voltage");
         assert!(w.contains("--waveform-window"), "{w}");
+    }
+
+    #[test]
+    fn a_large_csv_is_warned_of_naming_the_window() {
+        // 10 s of voltage at 10 MS/s, 22-character lines: about 2.2 GB.
+        let w = csv_size_warning(secs(20), (SimTime::ZERO, secs(10))).expect("10 s");
+        assert!(w.contains("about 2.2 GB"), "{w}");
+        assert!(w.contains("--waveform-window"), "{w}");
+        // The default 10 ms, or a window mostly after the run's end, stays below 1 GB.
+        let ten_ms = (SimTime::ZERO, SimTime::from_millis(10));
+        assert_eq!(csv_size_warning(secs(12 * MIN), ten_ms), None);
+        assert_eq!(csv_size_warning(secs(20), (secs(19), secs(100))), None);
     }
 }
 

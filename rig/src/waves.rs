@@ -47,6 +47,19 @@ pub const VCD_VOLTAGE_BYTES_PER_S: u64 = 145_000_000;
 /// (0.64 MB measured: a 4 s run against a 2 s one, both with 1 ms of pulse wire).
 pub const VCD_REST_BYTES_PER_S: u64 = 650_000;
 
+/// The CSV's size, roughly, for line voltage over `voltage` (the part of the waveform window
+/// inside the run) ending at `end`: one line per sample of the default grid (10 MS/s), each
+/// the time with 9 decimals, a comma, the voltage with 5 decimals (at most 8 characters) and
+/// a newline. Measured: 100 ms of the demo's window at 0.5 s, 20.3 MB; estimated 21.0 MB.
+pub fn estimate_csv_bytes(voltage: SimDuration, end: SimTime) -> u64 {
+    let period = WaveformConfig::default().sample_period.as_nanos().max(1);
+    let samples = voltage.as_nanos() / period;
+    let whole_seconds = end.as_nanos() / 1_000_000_000;
+    let digits = whole_seconds.checked_ilog10().map_or(1, |d| d as u64 + 1);
+    let line = digits + 1 + 9 + 1 + 8 + 1;
+    samples.saturating_mul(line)
+}
+
 /// The VCD's size, roughly, for a run of `run` whose pulse wire covers `pulses` and line
 /// voltage `voltage` (each the part of its window inside the run).
 pub fn estimate_vcd_bytes(run: SimDuration, pulses: SimDuration, voltage: SimDuration) -> u64 {
@@ -607,6 +620,17 @@ mod tests {
             estimate_vcd_bytes(s(1000), s(1000), s(10)),
             VCD_REST_BYTES_PER_S + VCD_PULSE_BYTES_PER_S + VCD_VOLTAGE_BYTES_PER_S / 100
         );
+        // The CSV: 1,000,000 samples of 21-character lines for 100 ms ending before 10 s
+        // (the demo's 0.5..0.6 s window wrote 20,338,505 bytes), longer lines later.
+        assert_eq!(
+            estimate_csv_bytes(s(100), SimTime::from_millis(600)),
+            21_000_000
+        );
+        assert_eq!(
+            estimate_csv_bytes(s(100), SimTime::from_millis(720_000)),
+            23_000_000
+        );
+        assert_eq!(estimate_csv_bytes(s(0), SimTime::from_millis(600)), 0);
         // 12 minutes of everything but the voltage: about 3 GB, as issue 14 found.
         let twelve = estimate_vcd_bytes(s(720_000), s(720_000), s(0));
         assert!((2_500_000_000..3_500_000_000).contains(&twelve), "{twelve}");

@@ -160,6 +160,11 @@ pub fn run(args: RunArgs) -> Result<u8, String> {
             eprintln!("asi-lift: warning: {w}");
         }
     }
+    if csv.is_some() {
+        if let Some(w) = csv_size_warning(end, window) {
+            eprintln!("asi-lift: warning: {w}");
+        }
+    }
     let mut rig = Rig::new(sc).map_err(|e| e.to_string())?;
     rig.set_pulse_exact(pulse_exact);
     if let (Some(path), Some(sink)) = (&trace, &trace_sink) {
@@ -335,7 +340,7 @@ fn show_after(bar: &indicatif::ProgressBar, wall: std::time::Instant, terminal: 
     }
 }
 
-/// The VCD size above which `run` warns before the run.
+/// The VCD or CSV size above which `run` warns before the run.
 const VCD_WARN_BYTES: u64 = 1_000_000_000;
 
 /// A warning if the VCD of a run ending at `end` will be larger than [`VCD_WARN_BYTES`]: its
@@ -364,6 +369,21 @@ pub fn vcd_size_warning(
         "the VCD will be about {:.1} GB, mostly {what}: bound it with {option} START..END",
         bytes as f64 / 1e9
     ))
+}
+
+/// A warning if the CSV of a run ending at `end` will be larger than [`VCD_WARN_BYTES`]: its
+/// estimated size and the option that bounds it.
+pub fn csv_size_warning(end: SimTime, voltage_window: (SimTime, SimTime)) -> Option<String> {
+    let (a, b) = voltage_window;
+    let last = b.min(end);
+    let voltage = last.saturating_duration_since(a.min(end));
+    let bytes = rig::waves::estimate_csv_bytes(voltage, last);
+    (bytes > VCD_WARN_BYTES).then(|| {
+        format!(
+            "the CSV will be about {:.1} GB, {voltage} of line voltage: bound it with --waveform-window START..END",
+            bytes as f64 / 1e9
+        )
+    })
 }
 
 /// Parses `START..END` in simulated time.
