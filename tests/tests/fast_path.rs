@@ -99,7 +99,7 @@ fn agree(what: &str, sc: &Scenario, until: Option<SimDuration>, vcd: bool) {
     }
 }
 
-const SCENARIOS: [&str; 16] = [
+const SCENARIOS: [&str; 17] = [
     "busy",
     "demo",
     "door",
@@ -112,6 +112,7 @@ const SCENARIOS: [&str; 16] = [
     "overtravel",
     "power-fail",
     "safe-drive",
+    "safe-drive-encoder",
     "safe-drive-runaway",
     "safe-link-drop",
     "stop",

@@ -109,6 +109,38 @@ fn a_runaway_at_a_floor_with_the_door_open_ends_in_sos_then_sto_within_the_toler
     assert!(r.to_text().contains("SOS tripped"));
 }
 
+/// The encoder fails 2.76 s into a journey up: the monitor trips in the same scan (it counts a
+/// reading it cannot get as unsafe), K1 opens and the car stops between floors 1 and 2; it stays
+/// there while the encoder is broken, and after the repair and the operator's reset the lift
+/// finishes the journey and serves the next call, with no violation.
+#[test]
+fn a_failed_encoder_stops_the_car_between_floors_until_repaired_and_reset() {
+    let mut sc = scenario("safe-drive-encoder");
+    sc.duration = SimDuration::from_secs(29);
+    let broken = run(sc);
+    assert!(broken.violations.is_empty(), "{}", broken.to_text());
+    let d = drive(&broken);
+    assert_eq!(d.trips.len(), 1, "{:?}", d.trips);
+    assert_eq!(d.trips[0].function, "encoder");
+    assert_eq!(d.trips[0].at_s, 13.0);
+    assert!(d.trips[0].cause.contains("no valid position or speed"));
+    assert!(!broken.final_state.contactor_closed, "{}", broken.to_text());
+    assert!(!broken.final_state.moving, "{}", broken.to_text());
+    let x = broken.final_state.position_mm;
+    assert!(
+        x > 10.0 && x < 400.0,
+        "stopped at {x} mm, between floors 1 and 2"
+    );
+
+    let r = run(scenario("safe-drive-encoder"));
+    assert!(r.violations.is_empty(), "{}", r.to_text());
+    assert_eq!(drive(&r).trips.len(), 1, "{:?}", drive(&r).trips);
+    assert!(logged(&r, "drive", "error acknowledged by S_Control_Reset"));
+    let floors: Vec<u8> = r.arrivals.iter().map(|a| a.floor).collect();
+    assert_eq!(floors, [1, 4, 2], "{}", r.to_text());
+    assert!(r.final_state.contactor_closed);
+}
+
 #[test]
 fn the_same_runaway_without_the_safe_drive_runs_the_car_off_with_the_door_open() {
     let mut sc = scenario("safe-drive-runaway");
@@ -230,6 +262,54 @@ fn the_safe_drive_campaign_lets_the_converter_run_away_and_stays_safe() {
     for index in 0..200 {
         let g = generate(17, index, &default);
         assert!(!g.scenario.events.iter().any(|e| runaway(&e.action)));
+    }
+}
+
+/// The safe-drive profile also fails the encoder (the `encoder` activity), each time repaired
+/// by the recovery at the latest; the first two runs with one end without a violation, the
+/// encoder's trip among their safety trips. The default profile never draws one.
+#[test]
+fn the_safe_drive_campaign_fails_the_encoder_and_stays_safe() {
+    let failed = |a: &Action| matches!(a, Action::Fault(Fault::EncoderFailed));
+    let repaired = |a: &Action| matches!(a, Action::Fault(Fault::EncoderRepaired));
+    let profile = Profile::built_in("safe-drive").expect("built in");
+    let mut with = Vec::new();
+    for index in 0..200 {
+        let g = generate(17, index, &profile);
+        let events = &g.scenario.events;
+        if let Some(last) = events.iter().rposition(|e| failed(&e.action)) {
+            assert!(
+                events[last..].iter().any(|e| repaired(&e.action)),
+                "run {index}: an encoder never repaired"
+            );
+            with.push((index, g));
+        }
+    }
+    assert!(
+        with.len() > 20,
+        "{} runs of 200 with an encoder fault",
+        with.len()
+    );
+    for (index, g) in with.iter().take(2) {
+        let Execution::Report(r) = execute(&g.scenario) else {
+            panic!("run {index} did not run");
+        };
+        assert!(
+            r.violations.is_empty(),
+            "run {index}:\n{}\n{}",
+            g.scenario.to_toml(),
+            r.to_text()
+        );
+        assert!(
+            drive(&r).trips.iter().any(|t| t.function == "encoder"),
+            "run {index}: {:?}",
+            drive(&r).trips
+        );
+    }
+    let default = Profile::built_in("default").expect("default");
+    for index in 0..200 {
+        let g = generate(17, index, &default);
+        assert!(!g.scenario.events.iter().any(|e| failed(&e.action)));
     }
 }
 

@@ -108,6 +108,7 @@ struct Touched {
     load: bool,
     door: bool,
     converter: bool,
+    encoder: bool,
     /// The sizes of the first cranks so far, mm.
     crank_sum_mm: f64,
 }
@@ -247,6 +248,13 @@ impl Builder<'_> {
                 self.push(t, Action::Fault(Fault::ConverterRunaway { up }));
                 if let Some(r) = self.later(t, 1_000, 20_000) {
                     self.push(r, Action::Fault(Fault::ConverterRepaired));
+                }
+            }
+            ActivityKind::Encoder => {
+                self.touched.encoder = true;
+                self.push(t, Action::Fault(Fault::EncoderFailed));
+                if let Some(r) = self.later(t, 1_000, 20_000) {
+                    self.push(r, Action::Fault(Fault::EncoderRepaired));
                 }
             }
             ActivityKind::Vane => {
@@ -410,6 +418,9 @@ pub fn generate(campaign_seed: u64, index: u64, profile: &Profile) -> Generated 
     if b.touched.converter {
         tail.push((recovery, Action::Fault(Fault::ConverterRepaired)));
     }
+    if b.touched.encoder {
+        tail.push((recovery, Action::Fault(Fault::EncoderRepaired)));
+    }
     // The attendant answers every safety stop from the repairs on: a cabin left on an
     // overtravel sensor (a vane sensor fault can take it there, or a restart from a vane
     // reading taken before its repair reached the PLC, campaign 12 run 3764), a group error,
@@ -430,6 +441,18 @@ pub fn generate(campaign_seed: u64, index: u64, profile: &Profile) -> Generated 
             hold: crate::scenario::DEFAULT_HOLD,
         },
     ));
+    if !safe_drive {
+        // Without the safe drive there is no encoder to fail (a scenario file refuses the
+        // fault): the draws stay, the events go.
+        let encoder = |a: &Action| {
+            matches!(
+                a,
+                Action::Fault(Fault::EncoderFailed | Fault::EncoderRepaired)
+            )
+        };
+        b.events.retain(|(_, a)| !encoder(a));
+        tail.retain(|(_, a)| !encoder(a));
+    }
 
     // The start procedure is kept like the recovery; in a run too short for an activity after
     // it, the activity overlaps it (in time order; the procedure first at equal times).
@@ -636,7 +659,10 @@ mod tests {
                         format!("vane {sensor:?} {fault:?}")
                     }
                     Action::Fault(
-                        f @ (Fault::ConverterRunaway { .. } | Fault::ConverterRepaired),
+                        f @ (Fault::ConverterRunaway { .. }
+                        | Fault::ConverterRepaired
+                        | Fault::EncoderFailed
+                        | Fault::EncoderRepaired),
                     ) => {
                         format!("{f:?}")
                     }

@@ -46,11 +46,14 @@ pub enum ActivityKind {
     /// The converter runs away (up or down, against its commands), repaired 1..20 s later:
     /// only the safe drive stops that at a floor (weight 0 but in `safe-drive`).
     Runaway,
+    /// The safe drive's encoder fails, repaired 1..20 s later: its monitor trips to STO
+    /// (weight 0 but in `safe-drive`; drawn only in runs with the safe drive).
+    Encoder,
 }
 
 impl ActivityKind {
     /// Every kind, in the order of the profile format.
-    pub const ALL: [ActivityKind; 14] = [
+    pub const ALL: [ActivityKind; 15] = [
         ActivityKind::Cabin,
         ActivityKind::Hall,
         ActivityKind::Stop,
@@ -65,6 +68,7 @@ impl ActivityKind {
         ActivityKind::SafeLinkDrop,
         ActivityKind::Vane,
         ActivityKind::Runaway,
+        ActivityKind::Encoder,
     ];
 
     /// The name in a profile's `[event]` table.
@@ -84,6 +88,7 @@ impl ActivityKind {
             ActivityKind::SafeLinkDrop => "safe-link-drop",
             ActivityKind::Vane => "vane",
             ActivityKind::Runaway => "runaway",
+            ActivityKind::Encoder => "encoder",
         }
     }
 
@@ -96,6 +101,7 @@ impl ActivityKind {
                 | ActivityKind::SafeLinkDrop
                 | ActivityKind::Vane
                 | ActivityKind::Runaway
+                | ActivityKind::Encoder
         )
     }
 }
@@ -225,6 +231,7 @@ impl Profile {
                 p.name = "safe-drive".into();
                 p.safe_drive_chance = 1.0;
                 p.event.set(ActivityKind::Runaway, 1);
+                p.event.set(ActivityKind::Encoder, 1);
             }
             _ => return None,
         }
@@ -271,6 +278,7 @@ impl Profile {
                 (K::Vane, 1),
                 // Last and 0: the draws of the other kinds stay as they were.
                 (K::Runaway, 0),
+                (K::Encoder, 0),
             ]),
             extra_slaves_chance: 0.1,
             start_level_chance: 0.25,

@@ -18,6 +18,8 @@ pub(super) struct SafeDriveGuard {
     safety: LiftDriveSafety,
     /// At or below this set-point the converter creeps (SLS2).
     creep_ua: u16,
+    /// The encoder cannot be read (the scenario's `encoder-failed`).
+    encoder_failed: bool,
     report: DriveReport,
 }
 
@@ -37,6 +39,7 @@ impl SafeDriveGuard {
         Ok(SafeDriveGuard {
             safety: LiftDriveSafety::new(config)?,
             creep_ua: ControllerConfig::default().creep_ua,
+            encoder_failed: false,
             report: DriveReport::default(),
         })
     }
@@ -54,6 +57,12 @@ impl SafeDriveGuard {
     /// Why the torque is off, if it is.
     pub(super) fn torque_off_cause(&self) -> Option<String> {
         self.safety.torque_off_cause()
+    }
+
+    /// The encoder fails (`true`) or reads again: from the next scan on, the monitor gets no
+    /// position and speed, which it counts as unsafe and trips on.
+    pub(super) fn set_encoder_failed(&mut self, failed: bool) {
+        self.encoder_failed = failed;
     }
 
     /// The latched trip, if any.
@@ -104,7 +113,7 @@ impl SafeDriveGuard {
             init_down: s.initialising && s.run && !s.up,
             creeping: s.run && s.setpoint_ua > STANDSTILL_UA && s.setpoint_ua <= self.creep_ua,
             reset: s.reset,
-            encoder: Some((s.position_mm, s.velocity_mm_s)),
+            encoder: (!self.encoder_failed).then_some((s.position_mm, s.velocity_mm_s)),
         };
         let out = self.safety.scan(t, &inputs).clone();
         let position_mm = round3(s.position_mm);

@@ -614,6 +614,16 @@ impl Rig {
                 }
                 self.plant_dirty = true;
             }
+            Fault::EncoderFailed | Fault::EncoderRepaired => {
+                // The scenario reader takes these only with the safe drive.
+                match self.drive.as_mut() {
+                    Some(d) => d.set_encoder_failed(matches!(f, Fault::EncoderFailed)),
+                    None => self.log(
+                        "scenario",
+                        "no safe drive, so no encoder: the fault changes nothing".into(),
+                    ),
+                }
+            }
         }
     }
 

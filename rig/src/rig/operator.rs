@@ -38,6 +38,8 @@ pub(super) fn describe(a: &Action) -> String {
             Fault::ConverterRepaired => {
                 "fault cleared: the converter follows its commands again".into()
             }
+            Fault::EncoderFailed => "fault: the safe drive's encoder cannot be read".into(),
+            Fault::EncoderRepaired => "fault cleared: the safe drive's encoder reads again".into(),
         },
     }
 }

@@ -38,6 +38,7 @@ builtins!(
     "overtravel",
     "power-fail",
     "safe-drive",
+    "safe-drive-encoder",
     "safe-drive-runaway",
     "safe-link-drop",
     "stop",

@@ -142,6 +142,11 @@ pub enum Fault {
     },
     /// The converter's runaway is repaired: it follows its commands again.
     ConverterRepaired,
+    /// The safe drive's encoder cannot be read (a broken cable, a dead sensor): the drive
+    /// monitor trips to STO (docs/drive-safety.md §6.4). Only with `[drive] safe = true`.
+    EncoderFailed,
+    /// The encoder is repaired: it reads again (a trip stays until the operator's reset).
+    EncoderRepaired,
 }
 
 /// The PLC scan periods the program works with. The cabin's 32-bit word takes 14 handshake

@@ -307,7 +307,12 @@ fn button(
     }
 }
 
-fn fault(loc: &Locator<'_>, field: &str, f: &Spanned<RawFault>) -> Result<Fault, ScenarioError> {
+fn fault(
+    loc: &Locator<'_>,
+    field: &str,
+    f: &Spanned<RawFault>,
+    safe_drive: bool,
+) -> Result<Fault, ScenarioError> {
     let raw = f.get_ref();
     let kind = raw.kind.get_ref().as_str();
     let slave = || -> Result<u8, ScenarioError> {
@@ -424,12 +429,34 @@ fn fault(loc: &Locator<'_>, field: &str, f: &Spanned<RawFault>) -> Result<Fault,
             };
             Ok(Fault::ConverterRunaway { up })
         }
+        "encoder-failed" | "encoder-repaired" => {
+            unused(raw.slave.is_some(), "slave")?;
+            unused(raw.duration.is_some(), "duration")?;
+            unused(raw.sensor.is_some(), "sensor")?;
+            unused(raw.direction.is_some(), "direction")?;
+            if !safe_drive {
+                return Err(loc.error(
+                    Some(raw.kind.span()),
+                    format!("{field}.kind"),
+                    format!(
+                        "`{kind}` needs `[drive] safe = true`: the lab lift's only encoder is \
+                         the safe drive's"
+                    ),
+                ));
+            }
+            Ok(if kind == "encoder-failed" {
+                Fault::EncoderFailed
+            } else {
+                Fault::EncoderRepaired
+            })
+        }
         other => Err(loc.error(
             Some(raw.kind.span()),
             format!("{field}.kind"),
             format!(
                 "unknown fault `{other}`: use slave-offline, slave-online, power-fail, safe-link-drop, \
-                 vane-stuck-on, vane-stuck-off, vane-repaired, converter-runaway or converter-repaired"
+                 vane-stuck-on, vane-stuck-off, vane-repaired, converter-runaway, converter-repaired, \
+                 encoder-failed or encoder-repaired"
             ),
         )),
     }
@@ -458,7 +485,7 @@ impl Scenario {
             sc.safe_drive = d;
         }
         for (i, ev) in raw.event.iter().enumerate() {
-            let event = read_event(&loc, i + 1, ev, sc.floors)?;
+            let event = read_event(&loc, i + 1, ev, sc.floors, sc.safe_drive)?;
             sc.events.push(event);
         }
         // Stable: events at the same time keep the file's order.
@@ -597,6 +624,7 @@ fn read_event(
     n: usize,
     ev: &Spanned<RawEvent>,
     floors: u8,
+    safe_drive: bool,
 ) -> Result<ScenarioEvent, ScenarioError> {
     let field = |name: &str| format!("event[{n}].{name}");
     let span = ev.span();
@@ -654,7 +682,7 @@ fn read_event(
         }
     }
     if let Some(f) = &e.fault {
-        actions.push(Action::Fault(fault(loc, &field("fault"), f)?));
+        actions.push(Action::Fault(fault(loc, &field("fault"), f, safe_drive)?));
     }
     let action = loc.one_action(
         actions,

@@ -196,6 +196,8 @@ mod round_trip {
                 .prop_map(|(sensor, fault)| Action::Fault(Fault::Vane { sensor, fault })),
             any::<bool>().prop_map(|up| Action::Fault(Fault::ConverterRunaway { up })),
             Just(Action::Fault(Fault::ConverterRepaired)),
+            Just(Action::Fault(Fault::EncoderFailed)),
+            Just(Action::Fault(Fault::EncoderRepaired)),
         ]
     }
 
@@ -245,7 +247,17 @@ mod round_trip {
                 plc_scan: SimDuration::from_nanos(scan),
                 power_on_reset,
                 safe_drive,
-                events,
+                // Only the safe drive has an encoder to fail.
+                events: events
+                    .into_iter()
+                    .filter(|e| {
+                        safe_drive
+                            || !matches!(
+                                e.action,
+                                Action::Fault(Fault::EncoderFailed | Fault::EncoderRepaired)
+                            )
+                    })
+                    .collect(),
             }
         }
     }
@@ -305,6 +317,29 @@ fn the_demo_is_valid() {
 }
 
 #[test]
+fn the_encoder_faults_are_read_only_with_the_safe_drive() {
+    let sc = Scenario::from_toml(
+        "t.toml",
+        "[drive]\nsafe = true\n\n[[event]]\nat = \"5s\"\nfault = { kind = \"encoder-failed\" }\n\n[[event]]\nat = \"6s\"\nfault = { kind = \"encoder-repaired\" }\n",
+    )
+    .expect("reads");
+    assert_eq!(sc.events[0].action, Action::Fault(Fault::EncoderFailed));
+    assert_eq!(sc.events[1].action, Action::Fault(Fault::EncoderRepaired));
+    let ev = |fault: &str| format!("[[event]]\nat = \"5s\"\nfault = {fault}\n");
+    assert_eq!(
+        err(&ev("{ kind = \"encoder-failed\" }")),
+        "t.toml:3:18: event[1].fault.kind: `encoder-failed` needs `[drive] safe = true`: the lab lift's only encoder is the safe drive's"
+    );
+    assert_eq!(
+        err(&format!(
+            "[drive]\nsafe = true\n{}",
+            ev("{ kind = \"encoder-repaired\", slave = 3 }")
+        )),
+        "t.toml:5:9: event[1].fault.slave: `encoder-repaired` takes no `slave`"
+    );
+}
+
+#[test]
 fn the_safe_drive_and_the_converter_runaway_are_read_and_checked() {
     let sc = Scenario::from_toml(
         "t.toml",
@@ -349,5 +384,6 @@ fn the_safe_drive_and_the_converter_runaway_are_read_and_checked() {
     assert!(e.starts_with("t.toml:2:8: drive.safe: "), "{e}");
     let e = err("[drive]\nsafe = true\nsafety = true\n");
     assert!(e.contains("unknown field `safety`"), "{e}");
-    assert!(err(&ev("{ kind = \"runaway\" }")).contains("converter-runaway or converter-repaired"));
+    assert!(err(&ev("{ kind = \"runaway\" }"))
+        .contains("converter-runaway, converter-repaired, encoder-failed or encoder-repaired"));
 }

@@ -146,5 +146,7 @@ fn fault_text(f: &Fault) -> String {
             if *up { "up" } else { "down" }
         ),
         Fault::ConverterRepaired => "{ kind = \"converter-repaired\" }".into(),
+        Fault::EncoderFailed => "{ kind = \"encoder-failed\" }".into(),
+        Fault::EncoderRepaired => "{ kind = \"encoder-repaired\" }".into(),
     }
 }
