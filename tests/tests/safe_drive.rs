@@ -7,7 +7,8 @@ use asi_lift_tests::{logged, run, run_toml, scenario, stops};
 use asi_phy::SimDuration;
 use rig::campaign::generate::generate;
 use rig::campaign::profile::Profile;
-use rig::campaign::{execute, Execution};
+use rig::campaign::summary::summarize;
+use rig::campaign::{execute, judge, line, Execution, LineContext};
 use rig::report::{Report, ViolationKind};
 use rig::scenario::{Action, Fault, Scenario};
 
@@ -267,7 +268,8 @@ fn the_safe_drive_campaign_lets_the_converter_run_away_and_stays_safe() {
 
 /// The safe-drive profile also fails the encoder (the `encoder` activity), each time repaired
 /// by the recovery at the latest; the first two runs with one end without a violation, the
-/// encoder's trip among their safety trips. The default profile never draws one.
+/// encoder's trip among their safety trips, and their campaign lines and summary count the
+/// safe drive's trips apart. The default profile never draws one.
 #[test]
 fn the_safe_drive_campaign_fails_the_encoder_and_stays_safe() {
     let failed = |a: &Action| matches!(a, Action::Fault(Fault::EncoderFailed));
@@ -290,8 +292,11 @@ fn the_safe_drive_campaign_fails_the_encoder_and_stays_safe() {
         "{} runs of 200 with an encoder fault",
         with.len()
     );
+    let mut lines = String::new();
+    let mut drive_trips = 0;
     for (index, g) in with.iter().take(2) {
-        let Execution::Report(r) = execute(&g.scenario) else {
+        let exec = execute(&g.scenario);
+        let Execution::Report(r) = &exec else {
             panic!("run {index} did not run");
         };
         assert!(
@@ -301,11 +306,34 @@ fn the_safe_drive_campaign_fails_the_encoder_and_stays_safe() {
             r.to_text()
         );
         assert!(
-            drive(&r).trips.iter().any(|t| t.function == "encoder"),
+            drive(r).trips.iter().any(|t| t.function == "encoder"),
             "run {index}: {:?}",
-            drive(&r).trips
+            drive(r).trips
         );
+        drive_trips += drive(r).trips.len() as u64;
+        let ctx = LineContext {
+            index: *index,
+            runs: 200,
+            campaign_seed: 17,
+            profile: "safe-drive",
+            seed: g.scenario.seed,
+            digest: String::new(),
+        };
+        let l = line(ctx, &exec, &judge(&exec, g.probe.as_ref()));
+        assert_eq!(l.drive_trips, drive(r).trips.len());
+        assert!(l.safety_trips >= l.drive_trips);
+        lines += &(l.to_json_line().expect("a line") + "\n");
     }
+    let s = summarize(&[("lines".into(), lines)]).expect("a summary");
+    let d = s.drive_trips.as_ref().expect("the safe drive's trips");
+    assert_eq!((d.trips, d.runs), (drive_trips, 2));
+    let text = s.to_text();
+    assert!(
+        text.lines()
+            .any(|l| l.starts_with("  of them the safe drive's")
+                && l.ends_with(&format!(" {drive_trips} in 2 runs"))),
+        "{text}"
+    );
     let default = Profile::built_in("default").expect("default");
     for index in 0..200 {
         let g = generate(17, index, &default);

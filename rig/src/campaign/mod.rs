@@ -224,6 +224,9 @@ pub struct RunLine {
     pub waits_s: Vec<f64>,
     /// Safety trips and errors.
     pub safety_trips: usize,
+    /// Of those, the safe drive's trips (absent in runs without a trip of the safe drive).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub drive_trips: usize,
     /// Rounds of the attendant (rescue, acknowledge, reset) after the repairs (0 in the
     /// lines of campaigns before the attendant).
     #[serde(default)]
@@ -328,6 +331,7 @@ pub fn line(ctx: LineContext<'_>, exec: &Execution, verdict: &RunVerdict) -> Run
         },
         waits_s: Vec::new(),
         safety_trips: 0,
+        drive_trips: 0,
         attendant_rounds: 0,
         bus: LineBus {
             transactions: 0,
@@ -367,6 +371,7 @@ pub fn line(ctx: LineContext<'_>, exec: &Execution, verdict: &RunVerdict) -> Run
                 };
             }
             l.safety_trips = r.safety.trips.len();
+            l.drive_trips = r.safety.drive.as_ref().map_or(0, |d| d.trips.len());
             l.attendant_rounds = r.safety.attendant_rounds;
             l.bus = LineBus {
                 transactions: r.bus.transactions,
@@ -411,4 +416,9 @@ mod tests {
         let exec = Execution::Panic("boom".into());
         assert_eq!(judge(&exec, None).outcome, RunOutcome::Panic);
     }
+}
+
+/// For serde: a count of zero is left out of a line.
+fn is_zero(n: &usize) -> bool {
+    *n == 0
 }

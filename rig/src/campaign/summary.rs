@@ -39,6 +39,9 @@ pub struct Summary {
     pub waits: MergedWaits,
     /// Safety trips.
     pub safety_trips: u64,
+    /// Of those, the safe drive's trips, and the runs with one (absent when there are none).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub drive_trips: Option<TripCount>,
     /// The attendant's rounds after the repairs.
     pub attendant_rounds: u64,
     /// Runs in which the attendant made a round.
@@ -60,6 +63,15 @@ pub struct Summary {
 pub struct KindCount {
     /// Violations.
     pub violations: u64,
+    /// Runs with at least one.
+    pub runs: u64,
+}
+
+/// Trips of one kind.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct TripCount {
+    /// Trips.
+    pub trips: u64,
     /// Runs with at least one.
     pub runs: u64,
 }
@@ -166,6 +178,7 @@ pub fn summarize(files: &[(String, String)]) -> Result<Summary, String> {
             max_s: None,
         },
         safety_trips: 0,
+        drive_trips: None,
         attendant_rounds: 0,
         attended_runs: 0,
         transactions: 0,
@@ -195,6 +208,11 @@ pub fn summarize(files: &[(String, String)]) -> Result<Summary, String> {
         s.served += l.served as u64;
         waits.extend(&l.waits_s);
         s.safety_trips += l.safety_trips as u64;
+        if l.drive_trips > 0 {
+            let d = s.drive_trips.get_or_insert_with(TripCount::default);
+            d.trips += l.drive_trips as u64;
+            d.runs += 1;
+        }
         s.attendant_rounds += u64::from(l.attendant_rounds);
         s.attended_runs += u64::from(l.attendant_rounds > 0);
         s.transactions += l.bus.transactions;
@@ -305,6 +323,13 @@ impl Summary {
             ),
         );
         row(&mut t, "safety trips", self.safety_trips.to_string());
+        if let Some(d) = &self.drive_trips {
+            row(
+                &mut t,
+                "  of them the safe drive's",
+                format!("{} in {} runs", d.trips, d.runs),
+            );
+        }
         row(
             &mut t,
             "attendant rounds",
