@@ -384,6 +384,11 @@ pub fn line(ctx: LineContext<'_>, exec: &Execution, verdict: &RunVerdict) -> Run
     l
 }
 
+/// For serde: a count of zero is left out of a line.
+fn is_zero(n: &usize) -> bool {
+    *n == 0
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -416,9 +421,4 @@ mod tests {
         let exec = Execution::Panic("boom".into());
         assert_eq!(judge(&exec, None).outcome, RunOutcome::Panic);
     }
-}
-
-/// For serde: a count of zero is left out of a line.
-fn is_zero(n: &usize) -> bool {
-    *n == 0
 }
