@@ -74,6 +74,7 @@ impl Received {
     }
 
     /// The request, if this is a valid one.
+    #[inline]
     pub fn request(&self) -> Option<Request> {
         if self.is_valid() && self.kind == TelegramKind::Request {
             Request::from_bits(self.raw as u16).ok()
@@ -83,6 +84,7 @@ impl Received {
     }
 
     /// The response, if this is a valid one.
+    #[inline]
     pub fn response(&self) -> Option<Response> {
         if self.is_valid() && self.kind == TelegramKind::Response {
             Response::from_bits(self.raw as u8).ok()
