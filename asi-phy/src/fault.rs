@@ -11,7 +11,7 @@ use crate::pulse::{Polarity, Pulse, PulseTrain};
 use crate::time::{SimDuration, SimTime};
 use crate::waveform::{NoiseBurst, Waveform};
 use rand::distr::Bernoulli;
-use rand::{Rng, SeedableRng};
+use rand::{Rng, RngCore, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 /// One exact fault on a pulse sequence. Indices refer to the sequence before any fault.
@@ -309,7 +309,8 @@ impl FaultInjector {
     /// draw is a fault or the rates have jitter or a rate of 1; `corrupt` then does as ever.
     ///
     /// This is the noisy line's fast path: at realistic error rates most telegrams pass
-    /// untouched, and this takes their random numbers in bulk instead of pulse by pulse.
+    /// untouched, and this takes their random numbers without walking their pulses, building
+    /// an output or sampling through `Bernoulli`.
     pub fn pass_untouched(&mut self, pulses: u32) -> bool {
         if self.rates.is_clean() {
             // `corrupt` draws nothing and copies.
@@ -323,24 +324,21 @@ impl FaultInjector {
         // compared with its threshold (none is 1, so none answers without drawing). A pulse
         // none of them hits takes exactly these four draws, all misses, and nothing else (the
         // `half` draws follow hits only). So an untouched telegram is exactly the next
-        // 4 * `pulses` numbers of the stream all missing their thresholds in turn. `fill` of
-        // u64s yields the same numbers as as many `next_u64` (rand_core's `BlockRng`, also
-        // across its blocks and from an odd word position; a test checks it). If any is a hit,
-        // the stream goes back to where it was and `corrupt` draws the same numbers again.
-        let start = self.rng.get_word_pos();
-        let mut draws = [0u64; 32];
-        let mut left = pulses as usize * 4;
-        while left > 0 {
-            let batch = &mut draws[..left.min(32)];
-            self.rng.fill(batch);
-            let hit = batch.chunks_exact(4).fold(false, |hit, d| {
-                hit | (d[0] < t[0]) | (d[1] < t[1]) | (d[2] < t[2]) | (d[3] < t[3])
-            });
+        // 4 * `pulses` numbers of the stream all missing their thresholds in turn, which is
+        // what this draws and compares (`|`, not `||`: all four are drawn, as `corrupt` does
+        // for a pulse without a fault). If one is a hit, the stream goes back by the numbers
+        // drawn, two words each, and `corrupt` draws the same numbers again. The position is
+        // read only then: most telegrams pass, and reading it costs a little every time.
+        for k in 0..pulses as u128 {
+            let hit = (self.rng.next_u64() < t[0])
+                | (self.rng.next_u64() < t[1])
+                | (self.rng.next_u64() < t[2])
+                | (self.rng.next_u64() < t[3]);
             if hit {
-                self.rng.set_word_pos(start);
+                let end = self.rng.get_word_pos();
+                self.rng.set_word_pos(end.wrapping_sub(8 * (k + 1)));
                 return false;
             }
-            left -= batch.len();
         }
         true
     }
@@ -776,35 +774,6 @@ mod tests {
                     }
                     assert_eq!(sample(&b, u64::MAX), (false, 1), "p = {p:e}");
                     assert_eq!(sample(&b, 0), (t > 0, 1), "p = {p:e}");
-                }
-            }
-        }
-    }
-
-    /// Filling a slice of u64s takes the same numbers from the stream as drawing them one by
-    /// one with `next_u64` (which is what `random::<u64>()` and the odds do), from every word
-    /// position within and across ChaCha's 16-word blocks and its 64-word buffer, odd ones
-    /// too, whether the position was reached by drawing or by seeking.
-    #[test]
-    fn filling_u64s_draws_what_next_u64_draws() {
-        for start in 0..160u128 {
-            for len in [0, 1, 2, 3, 4, 7, 8, 31, 32, 33, 63, 64, 65, 100] {
-                for seek in [false, true] {
-                    let mut a = ChaCha8Rng::seed_from_u64(start as u64 ^ 0x5eed);
-                    if seek {
-                        a.set_word_pos(start);
-                    } else {
-                        for _ in 0..start {
-                            a.next_u32();
-                        }
-                    }
-                    let mut b = a.clone();
-                    let mut filled = vec![0u64; len];
-                    a.fill(&mut filled[..]);
-                    let drawn: Vec<u64> = (0..len).map(|_| b.next_u64()).collect();
-                    assert_eq!(filled, drawn, "from word {start}, {len} numbers");
-                    assert_eq!(a, b, "from word {start}, {len} numbers");
-                    assert_eq!(a.next_u64(), b.next_u64());
                 }
             }
         }
