@@ -452,7 +452,6 @@ fn clamp_rate(r: f64) -> f64 {
 mod tests {
     use super::*;
     use crate::waveform::{render, WaveformConfig};
-    use rand::RngCore;
 
     fn p(us: u64, pos: bool) -> Pulse {
         Pulse::new(
