@@ -11,7 +11,7 @@ use crate::pulse::{Polarity, Pulse, PulseTrain};
 use crate::time::{SimDuration, SimTime};
 use crate::waveform::{NoiseBurst, Waveform};
 use rand::distr::Bernoulli;
-use rand::{Rng, SeedableRng};
+use rand::{Rng, RngCore, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 /// One exact fault on a pulse sequence. Indices refer to the sequence before any fault.
@@ -231,6 +231,12 @@ struct Odds {
     shift: Bernoulli,
     insert: Bernoulli,
     half: Bernoulli,
+    /// The thresholds of the drop, flip, shift and insert draws, in the order `corrupt` draws
+    /// them for a pulse: a draw below its threshold is a fault. `None` where
+    /// [`FaultInjector::pass_untouched`] cannot tell an untouched telegram by its draws alone:
+    /// with jitter (a range draw of its own comes first for every pulse) or with a rate of 1
+    /// (that fault happens without a draw).
+    untouched: Option<[u64; 4]>,
 }
 
 impl Odds {
@@ -238,13 +244,33 @@ impl Odds {
         let b = |p: f64| {
             Bernoulli::new(clamp_probability(p)).expect("a clamped probability is in 0..=1")
         };
+        let t = |p: f64| hit_threshold(clamp_probability(p));
+        let untouched = match (t(r.drop), t(r.flip), t(r.shift), t(r.insert)) {
+            (Some(d), Some(f), Some(s), Some(i)) if r.jitter.is_zero() => Some([d, f, s, i]),
+            _ => None,
+        };
         Odds {
             drop: b(r.drop),
             flip: b(r.flip),
             shift: b(r.shift),
             insert: b(r.insert),
             half: b(0.5),
+            untouched,
         }
+    }
+}
+
+/// The number below which a draw from rand's `Bernoulli::new(p)` is a hit, for a clamped `p`:
+/// `Bernoulli` keeps it private, so it is worked out here as rand 0.9 does (`p` times 2^64,
+/// truncated) and a test pins the two together. `None` for `p = 1`, which `Bernoulli` answers
+/// with `true` without drawing a number at all.
+fn hit_threshold(p: f64) -> Option<u64> {
+    // 2^64; `p * SCALE` for the largest `p` below 1 is 2^64 - 2048, so the cast never saturates.
+    const SCALE: f64 = 2.0 * (1u64 << 63) as f64;
+    if p < 1.0 {
+        Some((p * SCALE) as u64)
+    } else {
+        None
     }
 }
 
@@ -274,6 +300,47 @@ impl FaultInjector {
     /// Faults injected so far.
     pub fn injected(&self) -> u64 {
         self.injected
+    }
+
+    /// Takes the draws of a telegram of `pulses` pulses if the injector leaves it untouched,
+    /// without looking at its pulses: returns `true` then, with the random stream and
+    /// [`injected`](Self::injected) where [`corrupt`](Self::corrupt) would have left them (its
+    /// output would have been the pulses as they are). Returns `false`, with nothing drawn, if a
+    /// draw is a fault or the rates have jitter or a rate of 1; `corrupt` then does as ever.
+    ///
+    /// This is the noisy line's fast path: at realistic error rates most telegrams pass
+    /// untouched, and this takes their random numbers without walking their pulses, building
+    /// an output or sampling through `Bernoulli`.
+    pub fn pass_untouched(&mut self, pulses: u32) -> bool {
+        if self.rates.is_clean() {
+            // `corrupt` draws nothing and copies.
+            return true;
+        }
+        let Some(t) = self.odds.untouched else {
+            return false;
+        };
+        // Why this is exact: without jitter, `corrupt` draws for every pulse from the four
+        // Bernoulli odds (drop, then flip and shift, then insert), each sample one `next_u64`
+        // compared with its threshold (none is 1, so none answers without drawing). A pulse
+        // none of them hits takes exactly these four draws, all misses, and nothing else (the
+        // `half` draws follow hits only). So an untouched telegram is exactly the next
+        // 4 * `pulses` numbers of the stream all missing their thresholds in turn, which is
+        // what this draws and compares (`|`, not `||`: all four are drawn, as `corrupt` does
+        // for a pulse without a fault). If one is a hit, the stream goes back by the numbers
+        // drawn, two words each, and `corrupt` draws the same numbers again. The position is
+        // read only then: most telegrams pass, and reading it costs a little every time.
+        for k in 0..pulses as u128 {
+            let hit = (self.rng.next_u64() < t[0])
+                | (self.rng.next_u64() < t[1])
+                | (self.rng.next_u64() < t[2])
+                | (self.rng.next_u64() < t[3]);
+            if hit {
+                let end = self.rng.get_word_pos();
+                self.rng.set_word_pos(end.wrapping_sub(8 * (k + 1)));
+                return false;
+            }
+        }
+        true
     }
 
     /// Corrupts one telegram's `pulses` into `out` (cleared first); returns the number of
@@ -483,6 +550,273 @@ mod tests {
                 want.sort_by_key(|p| (p.at, p.polarity == Polarity::Positive));
                 proptest::prop_assert_eq!(got, want);
             }
+        }
+    }
+
+    /// `corrupt` pulse by pulse, as it was before [`FaultInjector::pass_untouched`], with
+    /// `random_bool` (drawn as the odds draw, see above) instead of the injector's odds: the
+    /// reference the quick path must match, down to the order of the output.
+    fn corrupt_pulse_by_pulse(
+        rng: &mut ChaCha8Rng,
+        r: FaultRates,
+        h: i64,
+        pulses: impl IntoIterator<Item = Pulse>,
+    ) -> (Vec<Pulse>, u32) {
+        let mut out = Vec::new();
+        if r.is_clean() {
+            out.extend(pulses);
+            return (out, 0);
+        }
+        let j = r.jitter.as_nanos() as i64;
+        let mut faults = 0u32;
+        let mut sorted = true;
+        for p in pulses {
+            let mut p = p;
+            if j > 0 {
+                p.at = shift(p.at, rng.random_range(-j..=j));
+            }
+            if rng.random_bool(clamp_probability(r.drop)) {
+                faults += 1;
+            } else {
+                if rng.random_bool(clamp_probability(r.flip)) {
+                    p.polarity = p.polarity.flipped();
+                    faults += 1;
+                }
+                if rng.random_bool(clamp_probability(r.shift)) {
+                    let by = if rng.random_bool(0.5) { h } else { -h };
+                    p.at = shift(p.at, by);
+                    faults += 1;
+                    sorted = false;
+                }
+                out.push(p);
+            }
+            if rng.random_bool(clamp_probability(r.insert)) {
+                let polarity = if rng.random_bool(0.5) {
+                    Polarity::Positive
+                } else {
+                    Polarity::Negative
+                };
+                out.push(Pulse::new(
+                    p.at + SimDuration::from_nanos(h as u64),
+                    polarity,
+                ));
+                faults += 1;
+                sorted = false;
+            }
+        }
+        if !sorted {
+            out.sort_by_key(|p| p.at);
+        }
+        (out, faults)
+    }
+
+    /// A rate for the quick-path test: the edges (0, 1, NaN, the smallest and the largest
+    /// below 1), rates as low as a real line's, at which most telegrams pass untouched, and
+    /// any probability, at which most are hit.
+    fn any_rate() -> impl proptest::strategy::Strategy<Value = f64> {
+        proptest::prop_oneof![
+            Just(0.0),
+            Just(1.0),
+            Just(f64::NAN),
+            Just(f64::MIN_POSITIVE),
+            Just(1.0 - f64::EPSILON),
+            0.0..1e-12f64,
+            0.0..1e-2f64,
+            0.0..1.0f64,
+        ]
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(512))]
+        #[test]
+        fn the_quick_path_corrupts_as_pulse_by_pulse_does(
+            seed in proptest::prelude::any::<u64>(),
+            rates in proptest::collection::vec(any_rate(), 8),
+            jitter in proptest::prop_oneof![3 => Just(0u64), 1 => 1..500u64],
+            switch_at in 0..60usize,
+            telegrams in proptest::collection::vec(
+                (proptest::prelude::any::<u32>(), 0..=16u32, proptest::prelude::any::<bool>()),
+                1..60,
+            ),
+        ) {
+            let rates_of = |r: &[f64], jitter| FaultRates {
+                drop: r[0],
+                insert: r[1],
+                flip: r[2],
+                shift: r[3],
+                jitter: SimDuration::from_nanos(jitter),
+            };
+            // The rates change once, the second ones without jitter.
+            let (first, second) = (rates_of(&rates[..4], jitter), rates_of(&rates[4..], 0));
+            let h = SimDuration::from_nanos(3_000);
+            let mut inj = FaultInjector::new(seed, first, h);
+            let mut reference = ChaCha8Rng::seed_from_u64(seed);
+            let mut reference_injected = 0u64;
+            let mut out = Vec::new();
+            for (k, &(bits, n, odd)) in telegrams.iter().enumerate() {
+                if k == switch_at {
+                    inj.set_rates(second);
+                }
+                let r = if k < switch_at { first } else { second };
+                // Something else (noise bursts) may have left the stream at an odd word.
+                if odd {
+                    inj.rng.next_u32();
+                    reference.next_u32();
+                }
+                let train = PulseTrain::from_half_bits(
+                    crate::HalfBits::encode(bits, n),
+                    SimTime::from_micros(200 * k as u64),
+                    h,
+                );
+                let (got, got_faults) = if inj.pass_untouched(train.len()) {
+                    (train.iter().collect(), 0)
+                } else {
+                    let faults = inj.corrupt(train.iter(), &mut out);
+                    (out.clone(), faults)
+                };
+                let (want, want_faults) = corrupt_pulse_by_pulse(&mut reference, r, 3_000, train.iter());
+                reference_injected += want_faults as u64;
+                proptest::prop_assert_eq!(got, want);
+                proptest::prop_assert_eq!(got_faults, want_faults);
+                proptest::prop_assert_eq!(inj.injected(), reference_injected);
+                // The same stream from here on: same seed, stream and word position.
+                proptest::prop_assert_eq!(&inj.rng, &reference);
+            }
+            for _ in 0..8 {
+                proptest::prop_assert_eq!(inj.rng.next_u64(), reference.next_u64());
+            }
+        }
+    }
+
+    /// A source of random numbers that answers every draw with `value` and counts the draws.
+    struct Fixed {
+        value: u64,
+        draws: u32,
+    }
+
+    impl RngCore for Fixed {
+        fn next_u32(&mut self) -> u32 {
+            self.draws += 1;
+            self.value as u32
+        }
+        fn next_u64(&mut self) -> u64 {
+            self.draws += 1;
+            self.value
+        }
+        fn fill_bytes(&mut self, dst: &mut [u8]) {
+            for chunk in dst.chunks_mut(8) {
+                let v = self.next_u64().to_le_bytes();
+                chunk.copy_from_slice(&v[..chunk.len()]);
+            }
+        }
+    }
+
+    /// `hit_threshold` is exactly where rand's `Bernoulli` turns from a hit to a miss: a draw
+    /// one below it hits, a draw of it misses, and every sample takes one draw; for p = 1
+    /// there is no threshold and `Bernoulli` answers without a draw.
+    #[test]
+    fn the_hit_threshold_is_where_bernoulli_turns() {
+        let two_64 = 2f64.powi(64);
+        let mut ps = vec![
+            0.0,
+            -0.0,
+            f64::NAN,
+            -1.0,
+            2.0,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            5e-324,
+            f64::MIN_POSITIVE,
+            1e-300,
+            1e-20,
+            1.0 / two_64,
+            0.5 / two_64,
+            1.5 / two_64,
+            3.0 / two_64,
+            1e-3 / 4.0,
+            2.5e-4,
+            0.1,
+            1.0 / 3.0,
+            0.5,
+            0.5 + f64::EPSILON,
+            0.999,
+            1.0 - f64::EPSILON,
+            1.0 - f64::EPSILON / 2.0,
+            1.0,
+        ];
+        let mut rng = ChaCha8Rng::seed_from_u64(64);
+        for _ in 0..20_000 {
+            let u: f64 = rng.random();
+            // Uniform ones, and tiny ones spread over many magnitudes.
+            ps.push(u);
+            ps.push(u.powi(rng.random_range(2..200)));
+            ps.push((rng.random_range(0..1u64 << 20) as f64) / two_64);
+        }
+        let sample = |b: &Bernoulli, value: u64| {
+            let mut f = Fixed { value, draws: 0 };
+            let hit = f.sample(b);
+            (hit, f.draws)
+        };
+        for p in ps {
+            let p = clamp_probability(p);
+            let b = Bernoulli::new(p).expect("a clamped probability");
+            match hit_threshold(p) {
+                None => {
+                    assert_eq!(p, 1.0);
+                    assert_eq!(sample(&b, 0), (true, 0), "p = 1 draws nothing");
+                    assert_eq!(sample(&b, u64::MAX), (true, 0));
+                }
+                Some(t) => {
+                    assert_eq!(sample(&b, t), (false, 1), "p = {p:e}, threshold {t}");
+                    if t > 0 {
+                        assert_eq!(sample(&b, t - 1), (true, 1), "p = {p:e}, threshold {t}");
+                    }
+                    assert_eq!(sample(&b, u64::MAX), (false, 1), "p = {p:e}");
+                    assert_eq!(sample(&b, 0), (t > 0, 1), "p = {p:e}");
+                }
+            }
+        }
+    }
+
+    /// At a real line's rate most telegrams take the quick path, and one that is hit leaves
+    /// the stream where it was: the quick path is used, not merely harmless.
+    #[test]
+    fn most_telegrams_pass_untouched_at_a_low_rate() {
+        let h = SimDuration::from_micros(3);
+        let rates = FaultRates::uniform(PulseErrorRate::new(1e-3).expect("a probability"));
+        let mut inj = FaultInjector::new(3, rates, h);
+        let mut passed = 0;
+        let mut hit = 0;
+        for k in 0..2000u64 {
+            // A valid request: start bit 0, even parity, end bit 1.
+            let body = (k * 977 % 2048) as u16;
+            let bits = (body << 2) | (((body.count_ones() & 1) as u16) << 1) | 1;
+            let q = crate::Request::from_bits(bits).expect("a valid request");
+            let train = PulseTrain::request(q, SimTime::from_micros(200 * k), h);
+            let before = inj.rng.clone();
+            if inj.pass_untouched(train.len()) {
+                passed += 1;
+                assert_ne!(inj.rng, before);
+            } else {
+                hit += 1;
+                assert_eq!(inj.rng, before);
+                let mut out = Vec::new();
+                assert!(inj.corrupt(train.iter(), &mut out) > 0);
+            }
+        }
+        assert!(passed > 1800 && hit > 0, "{passed} passed, {hit} hit");
+        // With jitter or a certain fault the quick path stands aside.
+        for rates in [
+            FaultRates {
+                jitter: SimDuration::from_nanos(10),
+                ..rates
+            },
+            FaultRates { flip: 1.0, ..rates },
+        ] {
+            let mut inj = FaultInjector::new(3, rates, h);
+            let before = inj.rng.clone();
+            assert!(!inj.pass_untouched(14));
+            assert_eq!(inj.rng, before);
         }
     }
 
