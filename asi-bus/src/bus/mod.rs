@@ -331,8 +331,9 @@ impl Bus {
                 n += 1;
             }
         });
-        for f in frames.into_iter().flatten() {
-            self.hear(t, &f, Role::Request);
+        // Borrowed: moving the array out would copy all four slots for every request.
+        for f in frames[..n].iter().flatten() {
+            self.hear(t, f, Role::Request);
         }
         self.state = State::AwaitRequestFrame;
         self.next_event = self
