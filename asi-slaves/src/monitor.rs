@@ -331,6 +331,8 @@ pub struct SafetyMonitor {
     listener: Listener,
     asked: Option<Address>,
     channels: Vec<Channel>,
+    /// The monitored addresses, as a mask.
+    monitored: u32,
     /// No released channel can have been silent too long at or before this time (a lower
     /// bound of every released channel's last code + `max_silence`): [`SafetyMonitor::poll`]
     /// up to it has nothing to check. Polled at every transaction, that check was a loop
@@ -351,6 +353,7 @@ impl SafetyMonitor {
             listener: Listener::new(&timing.receiver(Expect::Both)),
             asked: None,
             channels: addresses.iter().map(|&a| Channel::new(a)).collect(),
+            monitored: addresses.iter().fold(0, |m, a| m | 1 << a.get()),
             quiet_until: SimTime::ZERO,
         }
     }
@@ -381,9 +384,15 @@ impl SafetyMonitor {
         let r = self.listener.accept(frame);
         match r.kind {
             TelegramKind::Request => {
-                self.asked = match r.request().map(|q| q.call()) {
-                    Some(Call::DataExchange { address, .. }) => Some(address),
-                    _ => None,
+                // A request to a slave it does not monitor leaves nothing to note: no need to
+                // tell which call it is.
+                self.asked = match r.request() {
+                    Some(q) if self.monitored >> q.address().get() & 1 == 0 => None,
+                    Some(q) => match q.call() {
+                        Call::DataExchange { address, .. } => Some(address),
+                        _ => None,
+                    },
+                    None => None,
                 };
                 if let Some(a) = self.asked {
                     let cfg = self.cfg;

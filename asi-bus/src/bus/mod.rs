@@ -470,10 +470,10 @@ impl Bus {
     /// Notes whether `req`, taken by a slave, can change what a watched slave drives: a
     /// Data_Exchange with a new output nibble, or any call that writes (parameter, address,
     /// reset), after which the next Data_Exchange counts as new too.
-    fn note_output(&mut self, req: Request) {
+    fn note_output(&mut self, req: Request, call: Call) {
         let a = req.address().get() as usize;
         let watched = self.watch >> a & 1 == 1;
-        match req.call() {
+        match call {
             Call::DataExchange { data, .. } => {
                 if watched && self.last_out[a] != data.get() {
                     self.last_out[a] = data.get();
@@ -541,8 +541,9 @@ impl Bus {
                 n += 1;
             }
         }
-        self.note_output(req);
-        if readdressed || matches!(req.call(), Call::BroadcastReset | Call::ResetSlave { .. }) {
+        let call = req.call();
+        self.note_output(req, call);
+        if readdressed || matches!(call, Call::BroadcastReset | Call::ResetSlave { .. }) {
             self.reindex();
         }
         let mut frames = core::mem::take(&mut self.response_frames);
