@@ -476,8 +476,12 @@ impl TwinSafeLogic {
         // 1. Inputs: one exchange per connection.
         for k in 0..self.connections.len() {
             let out = self.twinsafe_out[k];
-            let events = self.connections[k].exchange(now, out).to_vec();
-            self.push_connection_events(now, k, events);
+            // Almost every exchange reports nothing: copy its events only when there are some.
+            let events = self.connections[k].exchange(now, out);
+            if !events.is_empty() {
+                let events = events.to_vec();
+                self.push_connection_events(now, k, events);
+            }
         }
         for k in 0..self.local_faults.len() {
             let f = &mut self.local_faults[k];
@@ -708,8 +712,9 @@ impl TwinSafeLogic {
             let gated = v && (run || !cm.safety_outputs[k]);
             self.image[cm.outputs[k]] = gated;
         }
-        let events: Vec<FbEvent> = self.modules[m].events().to_vec();
-        for event in events {
+        // Events are rare: walk them in place rather than copying them every scan.
+        for k in 0..self.modules[m].events().len() {
+            let event = self.modules[m].events()[k];
             let kind = LogicEventKind::Module {
                 module: cm.name.clone(),
                 kind: cm.kind,
