@@ -433,17 +433,19 @@ impl Rig {
     }
 
     fn advance_plant(&mut self, t: SimTime) {
-        let events: Result<Vec<_>, _> = self.lift.advance_to(t).map(|ev| ev.collect());
+        // No edge at almost every moment: nothing to collect then.
+        let events = self
+            .lift
+            .advance_to(t)
+            .map(|ev| (ev.len() > 0).then(|| ev.collect::<Vec<_>>()));
         let events = match events {
-            Ok(ev) => ev,
+            Ok(Some(ev)) => ev,
+            Ok(None) => return,
             Err(e) => {
                 self.log("plant", format!("error: {e}"));
                 return;
             }
         };
-        if events.is_empty() {
-            return;
-        }
         self.plant_dirty = true;
         for e in events {
             match e.kind {
@@ -857,7 +859,9 @@ impl Rig {
             k1_closed: l.k1_closed(),
             stop: l.stop_channels() != [true, true],
             position_mm: l.position_mm(),
-            level_floor: l.config().level_floor(l.position_mm()),
+            level_floor: Observed::needs_level_floor(self.drive.is_some(), !l.door_closed())
+                .then(|| l.config().level_floor(l.position_mm()))
+                .flatten(),
             watch_unintended_movement: self.drive.is_some(),
         };
         for (kind, detail) in self.watch.check(t, seen, self.estop_delay) {
