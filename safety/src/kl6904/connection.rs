@@ -320,14 +320,18 @@ impl BlackChannel {
 
     /// Start of an exchange at `now`: activate due faults; `true` if the link is down.
     fn begin(&mut self, now: SimTime) -> bool {
-        let due = self.scheduled.partition_point(|(t, _)| *t <= now);
-        for (at, fault) in self.scheduled.drain(..due) {
-            match fault {
-                ChannelFault::Drop { duration } => {
-                    let until = at + duration;
-                    self.down_until = Some(self.down_until.map_or(until, |u| u.max(until)));
+        // The schedule is in time order: nothing is due unless its first fault is (almost
+        // every exchange has none scheduled at all).
+        if self.scheduled.first().is_some_and(|(t, _)| *t <= now) {
+            let due = self.scheduled.partition_point(|(t, _)| *t <= now);
+            for (at, fault) in self.scheduled.drain(..due) {
+                match fault {
+                    ChannelFault::Drop { duration } => {
+                        let until = at + duration;
+                        self.down_until = Some(self.down_until.map_or(until, |u| u.max(until)));
+                    }
+                    other => self.next_reply_fault.push_back(other),
                 }
-                other => self.next_reply_fault.push_back(other),
             }
         }
         match self.down_until {
@@ -795,6 +799,62 @@ mod tests {
                 crc16_continue(crc16(&[s[0], s[1]]), &[r[0], r[1], q[0], q[1], data, status]),
                 whole
             );
+        }
+    }
+
+    /// `BlackChannel::begin` as written first: the due faults looked for at every exchange.
+    fn begin_looking_every_time(c: &mut BlackChannel, now: SimTime) -> bool {
+        let due = c.scheduled.partition_point(|(t, _)| *t <= now);
+        for (at, fault) in c.scheduled.drain(..due) {
+            match fault {
+                ChannelFault::Drop { duration } => {
+                    let until = at + duration;
+                    c.down_until = Some(c.down_until.map_or(until, |u| u.max(until)));
+                }
+                other => c.next_reply_fault.push_back(other),
+            }
+        }
+        match c.down_until {
+            Some(until) if now < until => true,
+            _ => {
+                c.down_until = None;
+                false
+            }
+        }
+    }
+
+    fn channel_fault() -> impl proptest::strategy::Strategy<Value = ChannelFault> {
+        use proptest::prelude::*;
+        prop_oneof![
+            (0..20u64).prop_map(|ms| ChannelFault::Drop {
+                duration: SimDuration::from_millis(ms)
+            }),
+            Just(ChannelFault::CorruptCrc),
+            (0..4u8).prop_map(|age| ChannelFault::Replay { age }),
+            Just(ChannelFault::NullTelegram),
+        ]
+    }
+
+    proptest::proptest! {
+        /// Looking at the first scheduled fault only (the schedule is in time order) takes
+        /// the same faults at the same exchanges as searching the schedule every time.
+        #[test]
+        fn an_exchange_takes_the_faults_due_whether_or_not_it_searches(
+            faults in proptest::collection::vec((0..60u64, channel_fault()), 0..8),
+            steps in proptest::collection::vec(0..4u64, 0..60),
+        ) {
+            let mut fast = BlackChannel::default();
+            for &(ms, fault) in &faults {
+                fast.schedule(SimTime::from_millis(ms), fault);
+            }
+            let mut full = fast.clone();
+            let mut ms = 0;
+            for dt in steps {
+                ms += dt;
+                let now = SimTime::from_millis(ms);
+                proptest::prop_assert_eq!(fast.begin(now), begin_looking_every_time(&mut full, now));
+                proptest::prop_assert_eq!(&fast, &full);
+            }
         }
     }
 
