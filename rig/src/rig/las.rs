@@ -124,7 +124,7 @@ mod tests {
             let (mut fast, mut full) = (LasWatch::default(), LasWatch::default());
             let mut t = SimTime::ZERO;
             for (dt, las) in steps {
-                t = t + SimDuration::from_nanos(dt);
+                t += SimDuration::from_nanos(dt);
                 prop_assert_eq!(fast.update(t, las), update_every_address(&mut full, t, las));
                 prop_assert_eq!(format!("{fast:?}"), format!("{full:?}"));
             }
