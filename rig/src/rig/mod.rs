@@ -662,12 +662,17 @@ impl Rig {
     /// What the slaves drive, to the plant, at the moment they drive it.
     fn slaves_to_plant(&mut self, t: SimTime) {
         let new = wiring::slave_outputs(&self.lab);
+        // At most moments the slaves drive what they drove: the plant is handed only what
+        // changed, so nothing then.
+        if new == self.applied {
+            return;
+        }
         let result = wiring::apply_to_plant(&mut self.lift, t, &self.applied, &new, self.sc.floors);
         if let Err(e) = result {
             self.log("plant", format!("error: {e}"));
         }
         // What the plant shows the slaves can change with what it is given.
-        self.plant_dirty |= new != self.applied;
+        self.plant_dirty = true;
         self.applied = new;
     }
 
