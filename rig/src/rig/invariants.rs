@@ -32,11 +32,24 @@ pub(super) struct Observed {
     pub stop: bool,
     /// The cabin's height, mm.
     pub position_mm: f64,
-    /// The floor whose level window the cabin is in, if any.
+    /// The floor whose level window the cabin is in, if any. Only read when
+    /// [`Observed::needs_level_floor`]; the rig leaves it `None` otherwise.
     pub level_floor: Option<u8>,
     /// Watch "unintended movement": a car at rest with the door open that moves (the safe
     /// drive is on).
     pub watch_unintended_movement: bool,
+}
+
+impl Observed {
+    /// Whether [`InvariantWatch::check`] reads `level_floor`: only for the unintended-movement
+    /// watch with the door open. The rig works the floor out only then (a division and a
+    /// rounding at every moment otherwise).
+    pub(super) const fn needs_level_floor(
+        watch_unintended_movement: bool,
+        door_open: bool,
+    ) -> bool {
+        watch_unintended_movement && door_open
+    }
 }
 
 /// Watches the invariants.
@@ -199,6 +212,49 @@ mod tests {
             .flat_map(|(ms, o)| w.check(SimTime::from_millis(*ms), *o, DELAY))
             .map(|(k, _)| k)
             .collect()
+    }
+
+    /// Any moment of a lift near floor 2, with small steps in time and position.
+    fn observed() -> impl proptest::strategy::Strategy<Value = Observed> {
+        use proptest::prelude::*;
+        (
+            (prop_oneof![Just(0.0), -30.0..30.0f64], any::<[bool; 8]>()),
+            prop_oneof![Just(400.0), 370.0..430.0f64],
+        )
+            .prop_map(|((velocity_mm_s, b), position_mm)| Observed {
+                velocity_mm_s,
+                hand_cranking: b[0],
+                door_open: b[1],
+                overloaded: b[2],
+                overtravel_tripped: b[3],
+                k1_closed: b[4],
+                stop: b[5],
+                position_mm,
+                level_floor: b[6].then_some(2),
+                watch_unintended_movement: b[7],
+            })
+    }
+
+    proptest::proptest! {
+        /// The watch says and remembers the same whether it is given the level floor at every
+        /// moment or only when it needs it (as the rig gives it).
+        #[test]
+        fn the_level_floor_matters_only_when_the_watch_needs_it(
+            path in proptest::collection::vec((1..400u64, observed()), 0..120)
+        ) {
+            let (mut every, mut needed) = (InvariantWatch::default(), InvariantWatch::default());
+            let mut ms = 0;
+            for (dt, o) in path {
+                ms += dt;
+                let t = SimTime::from_millis(ms);
+                let mut only = o;
+                if !Observed::needs_level_floor(o.watch_unintended_movement, o.door_open) {
+                    only.level_floor = None;
+                }
+                proptest::prop_assert_eq!(every.check(t, o, DELAY), needed.check(t, only, DELAY));
+                proptest::prop_assert_eq!(format!("{every:?}"), format!("{needed:?}"));
+            }
+        }
     }
 
     #[test]

@@ -434,17 +434,19 @@ impl Rig {
     }
 
     fn advance_plant(&mut self, t: SimTime) {
-        let events: Result<Vec<_>, _> = self.lift.advance_to(t).map(|ev| ev.collect());
+        // No edge at almost every moment: nothing to collect then.
+        let events = self
+            .lift
+            .advance_to(t)
+            .map(|ev| (ev.len() > 0).then(|| ev.collect::<Vec<_>>()));
         let events = match events {
-            Ok(ev) => ev,
+            Ok(Some(ev)) => ev,
+            Ok(None) => return,
             Err(e) => {
                 self.log("plant", format!("error: {e}"));
                 return;
             }
         };
-        if events.is_empty() {
-            return;
-        }
         self.plant_dirty = true;
         for e in events {
             match e.kind {
@@ -671,12 +673,17 @@ impl Rig {
     /// What the slaves drive, to the plant, at the moment they drive it.
     fn slaves_to_plant(&mut self, t: SimTime) {
         let new = wiring::slave_outputs(&self.lab);
+        // At most moments the slaves drive what they drove: the plant is handed only what
+        // changed, so nothing then.
+        if new == self.applied {
+            return;
+        }
         let result = wiring::apply_to_plant(&mut self.lift, t, &self.applied, &new, self.sc.floors);
         if let Err(e) = result {
             self.log("plant", format!("error: {e}"));
         }
         // What the plant shows the slaves can change with what it is given.
-        self.plant_dirty |= new != self.applied;
+        self.plant_dirty = true;
         self.applied = new;
     }
 
@@ -868,7 +875,9 @@ impl Rig {
             k1_closed: l.k1_closed(),
             stop: l.stop_channels() != [true, true],
             position_mm: l.position_mm(),
-            level_floor: l.config().level_floor(l.position_mm()),
+            level_floor: Observed::needs_level_floor(self.drive.is_some(), !l.door_closed())
+                .then(|| l.config().level_floor(l.position_mm()))
+                .flatten(),
             watch_unintended_movement: self.drive.is_some(),
         };
         for (kind, detail) in self.watch.check(t, seen, self.estop_delay) {

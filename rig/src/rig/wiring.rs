@@ -112,3 +112,47 @@ pub(super) fn apply_to_plant(
     }
     result
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use lift_model::LiftConfig;
+    use proptest::prelude::*;
+
+    fn applied() -> impl Strategy<Value = Applied> {
+        (
+            any::<(bool, bool)>(),
+            prop_oneof![Just(4000u16), 0..24_000u16],
+            prop::array::uniform5(prop::option::of(0..0x400u16)),
+        )
+            .prop_map(|((run, up), setpoint_ua, displays)| Applied {
+                run,
+                up,
+                setpoint_ua,
+                displays,
+            })
+    }
+
+    proptest! {
+        /// The rig skips `apply_to_plant` when the slaves drive what they drove: handing the
+        /// plant the same outputs again must change nothing, and a change must reach it.
+        #[test]
+        fn the_same_outputs_again_leave_the_plant_as_it_is(
+            before in applied(),
+            new in applied(),
+            floors in 2..=4u8,
+        ) {
+            let t = SimTime::from_millis(5);
+            let mut lift = Lift::new(LiftConfig::default()).expect("the default lift");
+            let _ = apply_to_plant(&mut lift, SimTime::from_millis(1), &Applied::default(), &before, floors);
+            let was = format!("{lift:?}");
+            let mut again = lift.clone();
+            prop_assert!(apply_to_plant(&mut again, t, &before, &before, floors).is_ok());
+            prop_assert_eq!(format!("{again:?}"), was.clone());
+            let _ = apply_to_plant(&mut lift, t, &before, &new, floors);
+            if new.run != before.run || new.up != before.up || new.setpoint_ua != before.setpoint_ua {
+                prop_assert_ne!(format!("{lift:?}"), was);
+            }
+        }
+    }
+}

@@ -118,9 +118,25 @@ impl fmt::Display for ConnDiag {
 /// CRC-16 with polynomial 0x39B7, MSB first, initial value 0, no final XOR (the FSoE CRC of
 /// ETG.5100 §8.1.3.2; docs/safety-logic.md §6.3).
 pub fn crc16(bytes: &[u8]) -> u16 {
-    bytes.iter().fold(0u16, |crc, &b| {
+    crc16_continue(0, bytes)
+}
+
+/// The CRC register after `bytes`, starting from the register `crc`: `crc16(a ++ b)` is
+/// `crc16_continue(crc16(a), b)`, so a prefix that never changes is folded in once.
+pub fn crc16_continue(crc: u16, bytes: &[u8]) -> u16 {
+    bytes.iter().fold(crc, |crc, &b| {
         (crc << 8) ^ CRC16_TABLE[usize::from((crc >> 8) as u8 ^ b)]
     })
+}
+
+/// The CRC register after the two addresses of a telegram from `sender` to `receiver`: the
+/// first four bytes of every telegram's CRC ([`Telegram::crc_for`]). A connection's two
+/// directions each have one for good, so an exchange only runs the CRC over the four bytes
+/// that change (seq, data, status).
+pub fn address_crc(sender: u16, receiver: u16) -> u16 {
+    let s = sender.to_le_bytes();
+    let r = receiver.to_le_bytes();
+    crc16(&[s[0], s[1], r[0], r[1]])
 }
 
 /// The CRC of every byte value as the high byte of the register: a byte at a time instead of
@@ -186,6 +202,12 @@ impl Telegram {
 
     /// A telegram from `sender` to `receiver` with its CRC.
     pub fn new(sender: u16, receiver: u16, seq: u16, data: u8, status: u8) -> Self {
+        Telegram::with_address_crc(sender, address_crc(sender, receiver), seq, data, status)
+    }
+
+    /// A telegram from `sender` with its CRC, given the CRC of its addresses
+    /// ([`address_crc`] of `sender` and the receiver).
+    fn with_address_crc(sender: u16, addresses: u16, seq: u16, data: u8, status: u8) -> Self {
         let mut t = Telegram {
             data,
             status,
@@ -193,16 +215,20 @@ impl Telegram {
             sender,
             crc: 0,
         };
-        t.crc = t.crc_for(receiver);
+        t.crc = t.crc_after(addresses);
         t
     }
 
     /// The CRC this telegram must carry if it is meant for `receiver`.
     pub fn crc_for(&self, receiver: u16) -> u16 {
-        let s = self.sender.to_le_bytes();
-        let r = receiver.to_le_bytes();
+        self.crc_after(address_crc(self.sender, receiver))
+    }
+
+    /// The CRC this telegram must carry, given the CRC of its addresses ([`address_crc`] of
+    /// its sender and the receiver).
+    fn crc_after(&self, addresses: u16) -> u16 {
         let q = self.seq.to_le_bytes();
-        crc16(&[s[0], s[1], r[0], r[1], q[0], q[1], self.data, self.status])
+        crc16_continue(addresses, &[q[0], q[1], self.data, self.status])
     }
 
     /// The wire bytes.
@@ -294,14 +320,18 @@ impl BlackChannel {
 
     /// Start of an exchange at `now`: activate due faults; `true` if the link is down.
     fn begin(&mut self, now: SimTime) -> bool {
-        let due = self.scheduled.partition_point(|(t, _)| *t <= now);
-        for (at, fault) in self.scheduled.drain(..due) {
-            match fault {
-                ChannelFault::Drop { duration } => {
-                    let until = at + duration;
-                    self.down_until = Some(self.down_until.map_or(until, |u| u.max(until)));
+        // The schedule is in time order: nothing is due unless its first fault is (almost
+        // every exchange has none scheduled at all).
+        if self.scheduled.first().is_some_and(|(t, _)| *t <= now) {
+            let due = self.scheduled.partition_point(|(t, _)| *t <= now);
+            for (at, fault) in self.scheduled.drain(..due) {
+                match fault {
+                    ChannelFault::Drop { duration } => {
+                        let until = at + duration;
+                        self.down_until = Some(self.down_until.map_or(until, |u| u.max(until)));
+                    }
+                    other => self.next_reply_fault.push_back(other),
                 }
-                other => self.next_reply_fault.push_back(other),
             }
         }
         match self.down_until {
@@ -392,6 +422,9 @@ impl PartnerKind {
 struct Partner {
     address: u16,
     master: u16,
+    /// [`address_crc`] of requests (master to partner) and of replies (partner to master).
+    request_crc: u16,
+    reply_crc: u16,
     watchdog: SimDuration,
     inputs: u8,
     outputs: u8,
@@ -411,7 +444,12 @@ impl Partner {
             let t = Telegram::from_bytes(bytes);
             let seq_ok =
                 self.last_seq == 0 || t.seq == self.last_seq || t.seq == next_seq(self.last_seq);
-            if t.sender == self.master && t.crc == t.crc_for(self.address) && t.seq != 0 && seq_ok {
+            // The sender is checked first: `request_crc` is the CRC of the master's address.
+            if t.sender == self.master
+                && t.crc == t.crc_after(self.request_crc)
+                && t.seq != 0
+                && seq_ok
+            {
                 if t.status & control::ACK != 0 {
                     self.faults = 0;
                 }
@@ -422,7 +460,13 @@ impl Partner {
                 } else {
                     t.data
                 };
-                let r = Telegram::new(self.address, self.master, t.seq, self.inputs, self.faults);
+                let r = Telegram::with_address_crc(
+                    self.address,
+                    self.reply_crc,
+                    t.seq,
+                    self.inputs,
+                    self.faults,
+                );
                 reply = Some(r.to_bytes());
             } else {
                 self.faults |= status::COMM_FAULT;
@@ -458,6 +502,9 @@ pub enum ConnEvent {
 pub struct Connection {
     logic_address: u16,
     partner_address: u16,
+    /// [`address_crc`] of requests (logic to partner) and of replies (partner to logic).
+    request_crc: u16,
+    reply_crc: u16,
     watchdog: SimDuration,
     seq: u16,
     first_scan: Option<SimTime>,
@@ -474,9 +521,13 @@ pub struct Connection {
 impl Connection {
     /// A connection from the logic at `logic_address` to the partner at `partner_address`.
     pub fn new(logic_address: u16, partner_address: u16, watchdog: SimDuration) -> Self {
+        let request_crc = address_crc(logic_address, partner_address);
+        let reply_crc = address_crc(partner_address, logic_address);
         Connection {
             logic_address,
             partner_address,
+            request_crc,
+            reply_crc,
             watchdog,
             seq: 1,
             first_scan: None,
@@ -488,6 +539,8 @@ impl Connection {
             partner: Partner {
                 address: partner_address,
                 master: logic_address,
+                request_crc,
+                reply_crc,
                 watchdog,
                 inputs: 0,
                 outputs: 0,
@@ -527,13 +580,8 @@ impl Connection {
             ctrl |= control::ACK;
         }
         let data = if fail_safe { 0 } else { outputs };
-        let request = Telegram::new(
-            self.logic_address,
-            self.partner_address,
-            self.seq,
-            data,
-            ctrl,
-        );
+        let request =
+            Telegram::with_address_crc(self.logic_address, self.request_crc, self.seq, data, ctrl);
         let down = self.channel.begin(now);
         let delivered = if down { None } else { Some(request.to_bytes()) };
         let reply = self.partner.handle(now, delivered);
@@ -575,7 +623,8 @@ impl Connection {
             );
             return false;
         }
-        if t.crc != t.crc_for(self.logic_address) {
+        // The sender is the partner (checked above): `reply_crc` is the CRC of its address.
+        if t.crc != t.crc_after(self.reply_crc) {
             self.latch(
                 ConnDiag::CRC,
                 format!(
@@ -729,6 +778,94 @@ mod tests {
             t.crc_for(3),
             "a telegram for another receiver fails the CRC"
         );
+    }
+
+    proptest::proptest! {
+        /// The CRC with the addresses folded in beforehand is the CRC over all eight bytes
+        /// in their order (the definition), and differs from it only by where it starts.
+        #[test]
+        fn the_address_crc_gives_the_whole_telegram_crc(
+            sender: u16, receiver: u16, seq: u16, data: u8, status: u8,
+        ) {
+            let s = sender.to_le_bytes();
+            let r = receiver.to_le_bytes();
+            let q = seq.to_le_bytes();
+            let whole = crc16_bitwise(&[s[0], s[1], r[0], r[1], q[0], q[1], data, status]);
+            let t = Telegram::new(sender, receiver, seq, data, status);
+            proptest::prop_assert_eq!(t.crc, whole);
+            proptest::prop_assert_eq!(t.crc_for(receiver), whole);
+            proptest::prop_assert_eq!(t.crc_after(address_crc(sender, receiver)), whole);
+            proptest::prop_assert_eq!(
+                crc16_continue(crc16(&[s[0], s[1]]), &[r[0], r[1], q[0], q[1], data, status]),
+                whole
+            );
+        }
+    }
+
+    /// `BlackChannel::begin` as written first: the due faults looked for at every exchange.
+    fn begin_looking_every_time(c: &mut BlackChannel, now: SimTime) -> bool {
+        let due = c.scheduled.partition_point(|(t, _)| *t <= now);
+        for (at, fault) in c.scheduled.drain(..due) {
+            match fault {
+                ChannelFault::Drop { duration } => {
+                    let until = at + duration;
+                    c.down_until = Some(c.down_until.map_or(until, |u| u.max(until)));
+                }
+                other => c.next_reply_fault.push_back(other),
+            }
+        }
+        match c.down_until {
+            Some(until) if now < until => true,
+            _ => {
+                c.down_until = None;
+                false
+            }
+        }
+    }
+
+    fn channel_fault() -> impl proptest::strategy::Strategy<Value = ChannelFault> {
+        use proptest::prelude::*;
+        prop_oneof![
+            (0..20u64).prop_map(|ms| ChannelFault::Drop {
+                duration: SimDuration::from_millis(ms)
+            }),
+            Just(ChannelFault::CorruptCrc),
+            (0..4u8).prop_map(|age| ChannelFault::Replay { age }),
+            Just(ChannelFault::NullTelegram),
+        ]
+    }
+
+    proptest::proptest! {
+        /// Looking at the first scheduled fault only (the schedule is in time order) takes
+        /// the same faults at the same exchanges as searching the schedule every time.
+        #[test]
+        fn an_exchange_takes_the_faults_due_whether_or_not_it_searches(
+            faults in proptest::collection::vec((0..60u64, channel_fault()), 0..8),
+            steps in proptest::collection::vec(0..4u64, 0..60),
+        ) {
+            let mut fast = BlackChannel::default();
+            for &(ms, fault) in &faults {
+                fast.schedule(SimTime::from_millis(ms), fault);
+            }
+            let mut full = fast.clone();
+            let mut ms = 0;
+            for dt in steps {
+                ms += dt;
+                let now = SimTime::from_millis(ms);
+                proptest::prop_assert_eq!(fast.begin(now), begin_looking_every_time(&mut full, now));
+                proptest::prop_assert_eq!(&fast, &full);
+            }
+        }
+    }
+
+    #[test]
+    fn a_connection_keeps_the_crcs_of_its_two_directions() {
+        let c = Connection::new(1, 2, SimDuration::from_millis(100));
+        assert_eq!(c.request_crc, address_crc(1, 2));
+        assert_eq!(c.reply_crc, address_crc(2, 1));
+        assert_eq!(c.partner.request_crc, c.request_crc);
+        assert_eq!(c.partner.reply_crc, c.reply_crc);
+        assert_ne!(c.request_crc, c.reply_crc, "the two directions differ");
     }
 
     #[test]

@@ -476,8 +476,12 @@ impl TwinSafeLogic {
         // 1. Inputs: one exchange per connection.
         for k in 0..self.connections.len() {
             let out = self.twinsafe_out[k];
-            let events = self.connections[k].exchange(now, out).to_vec();
-            self.push_connection_events(now, k, events);
+            // Almost every exchange reports nothing: copy its events only when there are some.
+            let events = self.connections[k].exchange(now, out);
+            if !events.is_empty() {
+                let events = events.to_vec();
+                self.push_connection_events(now, k, events);
+            }
         }
         for k in 0..self.local_faults.len() {
             let f = &mut self.local_faults[k];
@@ -569,22 +573,22 @@ impl TwinSafeLogic {
     fn collect(&self, g: usize) -> (GroupErrors, bool) {
         let mut errors = GroupErrors::default();
         let mut cause = false;
-        for (m, cm) in self.c.modules.iter().enumerate() {
-            if cm.group == g && self.modules[m].has_error() {
+        for (cm, m) in self.c.modules.iter().zip(&self.modules) {
+            if cm.group == g && m.has_error() {
                 errors.fb_err = true;
-                cause |= self.modules[m].error_cause_active();
+                cause |= m.error_cause_active();
             }
         }
-        for (k, cc) in self.c.connections.iter().enumerate() {
-            if cc.group == g && self.connections[k].has_error() {
+        for (cc, c) in self.c.connections.iter().zip(&self.connections) {
+            if cc.group == g && c.has_error() {
                 errors.com_err = true;
-                cause |= self.connections[k].error_cause_active();
+                cause |= c.error_cause_active();
             }
         }
-        for (k, o) in self.c.local_outputs.iter().enumerate() {
-            if o.group == g && self.local_faults[k].latched {
+        for (o, f) in self.c.local_outputs.iter().zip(&self.local_faults) {
+            if o.group == g && f.latched {
                 errors.out_err = true;
-                cause |= self.local_faults[k].present;
+                cause |= f.present;
             }
         }
         (errors, cause)
@@ -708,8 +712,9 @@ impl TwinSafeLogic {
             let gated = v && (run || !cm.safety_outputs[k]);
             self.image[cm.outputs[k]] = gated;
         }
-        let events: Vec<FbEvent> = self.modules[m].events().to_vec();
-        for event in events {
+        // Events are rare: walk them in place rather than copying them every scan.
+        for k in 0..self.modules[m].events().len() {
+            let event = self.modules[m].events()[k];
             let kind = LogicEventKind::Module {
                 module: cm.name.clone(),
                 kind: cm.kind,
