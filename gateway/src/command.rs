@@ -24,9 +24,28 @@ pub enum Command {
     LineNoise(f64),
 }
 
-/// Checks one command (a JSON object) for a lift of `floors` floors; the error says which key
-/// is at fault and why, in the scenario reader's words.
-pub fn parse(value: &serde_json::Value, floors: u8) -> Result<Command, String> {
+/// The lift a command is checked for: what the scenario reader needs to know of it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct LiftShape {
+    /// Its floors.
+    pub floors: u8,
+    /// It has the safe drive (and so an encoder that can fail).
+    pub safe_drive: bool,
+}
+
+impl LiftShape {
+    /// The shape of the lift `rig` runs.
+    pub fn of(rig: &Rig) -> LiftShape {
+        LiftShape {
+            floors: rig.lift().config().floors,
+            safe_drive: rig.drive_sample().is_some(),
+        }
+    }
+}
+
+/// Checks one command (a JSON object) for a lift of `shape`; the error says which key is at
+/// fault and why, in the scenario reader's words.
+pub fn parse(value: &serde_json::Value, shape: LiftShape) -> Result<Command, String> {
     let obj = value
         .as_object()
         .ok_or("a command is a JSON object with one action, such as {\"press\": \"cabin:3\"}")?;
@@ -52,9 +71,15 @@ pub fn parse(value: &serde_json::Value, floors: u8) -> Result<Command, String> {
         table.extend(t);
     }
     let mut lift = toml::Table::new();
-    lift.insert("floors".into(), toml::Value::Integer(i64::from(floors)));
+    lift.insert(
+        "floors".into(),
+        toml::Value::Integer(i64::from(shape.floors)),
+    );
+    let mut drive = toml::Table::new();
+    drive.insert("safe".into(), toml::Value::Boolean(shape.safe_drive));
     let mut file = toml::Table::new();
     file.insert("lift".into(), toml::Value::Table(lift));
+    file.insert("drive".into(), toml::Value::Table(drive));
     file.insert(
         "event".into(),
         toml::Value::Array(vec![toml::Value::Table(table)]),
@@ -122,30 +147,56 @@ mod tests {
     use rig::scenario::Fault;
     use serde_json::json;
 
+    /// The lab lift without the safe drive.
+    const FOUR: LiftShape = LiftShape {
+        floors: 4,
+        safe_drive: false,
+    };
+
+    #[test]
+    fn the_encoder_fails_only_on_a_lift_with_the_safe_drive() {
+        let failed = json!({"fault": {"kind": "encoder-failed"}});
+        let safe = LiftShape {
+            safe_drive: true,
+            ..FOUR
+        };
+        assert_eq!(
+            parse(&failed, safe),
+            Ok(Command::Act(Action::Fault(Fault::EncoderFailed)))
+        );
+        assert_eq!(
+            parse(&failed, FOUR),
+            Err("fault.kind: `encoder-failed` needs `[drive] safe = true`: the lab lift's only encoder is the safe drive's".into())
+        );
+    }
+
     #[test]
     fn commands_are_scenario_events() {
         assert_eq!(
-            parse(&json!({"press": "cabin:3"}), 4),
+            parse(&json!({"press": "cabin:3"}), FOUR),
             Ok(Command::Act(Action::Press {
                 button: Button::Cabin(3),
                 hold: rig::scenario::DEFAULT_HOLD
             }))
         );
         assert_eq!(
-            parse(&json!({"fault": {"kind": "slave-offline", "slave": 7}}), 4),
+            parse(
+                &json!({"fault": {"kind": "slave-offline", "slave": 7}}),
+                FOUR
+            ),
             Ok(Command::Act(Action::Fault(Fault::SlaveOffline {
                 slave: 7
             })))
         );
         assert_eq!(
-            parse(&json!({"line_noise": 0.001}), 4),
+            parse(&json!({"line_noise": 0.001}), FOUR),
             Ok(Command::LineNoise(0.001))
         );
     }
 
     #[test]
     fn bad_commands_say_what_is_wrong() {
-        let err = |v| parse(&v, 4).expect_err("an error");
+        let err = |v| parse(&v, FOUR).expect_err("an error");
         assert_eq!(
             err(json!({"press": "cabin:9"})),
             "press: floor `9` does not exist: the lift has floors 1..4"

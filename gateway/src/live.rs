@@ -344,8 +344,7 @@ impl RigThread {
                         v.commands += 1;
                         // Every change of the line noise draws from a seed of its own.
                         let seed = 0x6c69_6e65 ^ v.commands;
-                        let floors = rig.lift().config().floors;
-                        command::parse(&c.command, floors)
+                        command::parse(&c.command, command::LiftShape::of(rig))
                             .and_then(|cmd| command::apply(rig, &cmd, seed))
                     }
                     None => Err("this run has no live view".into()),
