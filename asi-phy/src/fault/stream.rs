@@ -2,25 +2,29 @@
 //!
 //! The noisy line draws four numbers a pulse and compares each with a threshold; through
 //! `ChaCha8Rng` each draw pays for rand's general bookkeeping (index checks, putting a number
-//! together from two words, the end of the buffer). [`FaultStream`] keeps the words of the
-//! stream in a buffer of its own, so that the injector can compare a whole run of numbers
-//! straight out of it ([`FaultStream::all_miss`]), and draws everything else exactly as
-//! `ChaCha8Rng` does: the same words in the same order, the same stream position.
+//! together from two words, the end of the buffer). [`FaultStream`] generates the same words
+//! with the same generator (`ChaCha8Core`, four ChaCha blocks at a time, as `ChaCha8Rng` does)
+//! into a buffer of its own, so that the injector can compare a whole run of numbers straight
+//! out of it ([`FaultStream::all_miss`]), and draws everything else exactly as `ChaCha8Rng`
+//! does: the same words in the same order, the same stream position.
 //!
-//! The words come from a `ChaCha8Rng` a buffer at a time. Generating them with
-//! `rand_chacha::ChaCha8Core` directly would save copying a buffer, but rand_chacha 0.9 keeps
-//! the core's block counter private, and the injector must be able to go back in the stream
-//! by any number of words (a hit telegram is drawn again by `corrupt`): only `ChaCha8Rng`'s
-//! `set_word_pos` can do that.
+//! rand_chacha 0.9 keeps the generator's block counter private, so the stream cannot be set
+//! to any position as `ChaCha8Rng::set_word_pos` can. It need not be: the injector only ever
+//! goes back to where a run of draws began (a hit telegram is drawn again by `corrupt`), and
+//! for that it keeps the generator as it was before it made the buffer, and makes the buffer
+//! again from it.
 
+use rand::rand_core::block::BlockRngCore;
 use rand::{RngCore, SeedableRng};
-use rand_chacha::ChaCha8Rng;
+use rand_chacha::{ChaCha8Core, ChaCha8Rng};
 use std::fmt;
 
-/// Words in the buffer: as many as `ChaCha8Rng` generates at once (four ChaCha blocks).
+/// The buffer: four ChaCha blocks of 16 words, as `ChaCha8Rng` generates them at once.
+type Words = <ChaCha8Core as BlockRngCore>::Results;
+/// Words in the buffer.
 const WORDS: usize = 64;
-/// Words in a ChaCha block.
-const BLOCK_WORDS: u128 = 16;
+/// Blocks in the buffer.
+const BLOCKS: u64 = 4;
 /// A position in the stream, in words, is a 68-bit number: a 64-bit block counter and a word
 /// of the block. It wraps there, as `ChaCha8Rng::get_word_pos` does.
 const POSITION_MASK: u128 = (1 << 68) - 1;
@@ -28,54 +32,63 @@ const POSITION_MASK: u128 = (1 << 68) - 1;
 /// `ChaCha8Rng`'s random stream with a buffer the fault injector can read directly.
 ///
 /// Every draw takes the words `ChaCha8Rng` from the same seed takes, in the same order, with
-/// the same result, and [`word_pos`](Self::word_pos) / [`set_word_pos`](Self::set_word_pos)
-/// mean what they mean there: `next_u32` takes one word; `next_u64` takes two, the first as
-/// the low half (also across the end of a buffer, as rand_core's `BlockRng` does);
-/// `fill_bytes` takes a word for every four bytes or part of four, little-endian, and drops the
-/// unused bytes of a last partial word.
+/// the same result, and [`word_pos`](Self::word_pos) means what `get_word_pos` means there:
+/// `next_u32` takes one word; `next_u64` takes two, the first as the low half (also across
+/// the end of a buffer, as rand_core's `BlockRng` does); `fill_bytes` takes a word for every
+/// four bytes or part of four, little-endian, and drops the unused bytes of a last partial
+/// word.
 #[derive(Clone)]
 pub(crate) struct FaultStream {
-    /// The stream's words `[end - 64, end)` in little-endian bytes, where `end` is `source`'s
-    /// word position: `source` is always just past the buffer.
-    buf: [u8; 4 * WORDS],
+    /// Blocks `block .. block + 4` of the stream, as `buf_core` generated them.
+    buf: Words,
     /// The next word of `buf` to draw; `WORDS` when all are drawn.
     index: usize,
-    source: ChaCha8Rng,
+    /// The stream's block at the start of `buf` (the counter wraps at 2^64 blocks).
+    block: u64,
+    /// The generator, just past `buf`.
+    core: ChaCha8Core,
+    /// The generator as it was before it made `buf`: with it `buf` can be made again.
+    buf_core: ChaCha8Core,
+    /// The seed, for telling streams apart.
+    seed: [u8; 32],
 }
 
 impl FaultStream {
     /// The stream of `ChaCha8Rng::seed_from_u64(seed)`.
     pub(crate) fn seed_from_u64(seed: u64) -> FaultStream {
-        FaultStream {
-            buf: [0; 4 * WORDS],
-            index: WORDS,
-            source: ChaCha8Rng::seed_from_u64(seed),
-        }
+        // The seed exactly as ChaCha8Rng makes it from a number; ChaCha8Rng::from_seed is
+        // ChaCha8Core::from_seed behind a `BlockRng`.
+        let seed = ChaCha8Rng::seed_from_u64(seed).get_seed();
+        let core = ChaCha8Core::from_seed(seed);
+        let mut stream = FaultStream {
+            buf: Words::default(),
+            index: 0,
+            block: 0,
+            buf_core: core.clone(),
+            core,
+            seed,
+        };
+        // The first buffer now, so that `buf_core` always made `buf` (`ChaCha8Rng` makes its
+        // first on the first draw; the numbers are the same).
+        stream.core.generate(&mut stream.buf);
+        stream
     }
 
     /// The position in the stream, in words: `ChaCha8Rng::get_word_pos`.
     pub(crate) fn word_pos(&self) -> u128 {
-        (self.source.get_word_pos() + self.index as u128).wrapping_sub(WORDS as u128)
-            & POSITION_MASK
+        (u128::from(self.block) * 16 + self.index as u128) & POSITION_MASK
     }
 
-    /// Goes to position `pos` (in words) in the stream: `ChaCha8Rng::set_word_pos`, which
-    /// ignores the bits above the 68th.
-    pub(crate) fn set_word_pos(&mut self, pos: u128) {
-        // From the start of pos's block the source's own buffer is the next 64 words, so the
-        // refill below copies them without generating again.
-        self.source.set_word_pos(pos & !(BLOCK_WORDS - 1));
-        self.refill();
-        self.index = (pos % BLOCK_WORDS) as usize;
-    }
-
-    /// Goes back `words` words in the stream.
-    fn rewind(&mut self, words: u128) {
-        if words <= self.index as u128 {
-            self.index -= words as usize;
-        } else {
-            self.set_word_pos(self.word_pos().wrapping_sub(words));
+    /// Goes back to word `index` of the buffer of the stream's blocks from `block`, which
+    /// `core` generated: a place this stream was at before, with `buf_core` as it was then.
+    fn go_back(&mut self, core: &ChaCha8Core, block: u64, index: usize) {
+        if block != self.block {
+            self.core.clone_from(core);
+            self.buf_core.clone_from(core);
+            self.core.generate(&mut self.buf);
+            self.block = block;
         }
+        self.index = index;
     }
 
     /// Draws the next `groups` groups of four numbers (`next_u64` each) if every number is at
@@ -87,69 +100,82 @@ impl FaultStream {
     pub(crate) fn all_miss(&mut self, thresholds: &[u64; 4], groups: u32) -> bool {
         let t = thresholds;
         let mut left = groups as usize;
-        // Words drawn by this call, to go back by on a hit.
-        let mut drawn = 0u128;
+        // Where the call began, to go back to on a hit; the generator of that buffer is kept
+        // only when a new buffer is made (most calls stay in one buffer).
+        let (start_block, start_index) = (self.block, self.index);
+        let mut start_core = None;
         while left > 0 {
-            if self.index >= WORDS {
-                // `next_u64` would refill here too.
-                self.refill();
-            }
-            let room = (WORDS - self.index) / 8;
+            let room = WORDS.saturating_sub(self.index) / 8;
             if room == 0 {
+                // The next group crosses the end of the buffer, or the buffer is drawn out.
+                if start_core.is_none() {
+                    start_core = Some(self.buf_core.clone());
+                }
+                if self.index >= WORDS {
+                    // `next_u64` would make the next buffer here too.
+                    self.refill();
+                    continue;
+                }
                 let hit = (self.next_u64() < t[0])
                     | (self.next_u64() < t[1])
                     | (self.next_u64() < t[2])
                     | (self.next_u64() < t[3]);
-                drawn += 8;
-                left -= 1;
                 if hit {
-                    self.rewind(drawn);
+                    self.back_to_start(start_core.as_ref(), start_block, start_index);
                     return false;
                 }
+                left -= 1;
                 continue;
             }
             let n = room.min(left);
-            let start = 4 * self.index;
-            for (k, g) in self.buf[start..start + 32 * n].chunks_exact(32).enumerate() {
-                let hit = (u64_at(g, 0) < t[0])
-                    | (u64_at(g, 8) < t[1])
-                    | (u64_at(g, 16) < t[2])
-                    | (u64_at(g, 24) < t[3]);
-                if hit {
-                    self.index += 8 * (k + 1);
-                    self.rewind(drawn + 8 * (k as u128 + 1));
-                    return false;
-                }
+            let start = self.index;
+            let hit = self.buf.as_ref()[start..start + 8 * n]
+                .chunks_exact(8)
+                .any(|g| {
+                    (u64_of(g[0], g[1]) < t[0])
+                        | (u64_of(g[2], g[3]) < t[1])
+                        | (u64_of(g[4], g[5]) < t[2])
+                        | (u64_of(g[6], g[7]) < t[3])
+                });
+            if hit {
+                self.back_to_start(start_core.as_ref(), start_block, start_index);
+                return false;
             }
-            self.index += 8 * n;
-            drawn += 8 * n as u128;
+            self.index = start + 8 * n;
             left -= n;
         }
         true
     }
 
-    /// The next 64 words of the stream into the buffer.
+    /// Goes back to where [`all_miss`](Self::all_miss) began: word `index` of the buffer from
+    /// stream block `block`, made by `core` if the call has made a buffer since.
+    fn back_to_start(&mut self, core: Option<&ChaCha8Core>, block: u64, index: usize) {
+        match core {
+            Some(core) => self.go_back(core, block, index),
+            None => self.index = index,
+        }
+    }
+
+    /// The next four blocks of the stream into the buffer.
     fn refill(&mut self) {
-        self.source.fill_bytes(&mut self.buf);
+        self.buf_core.clone_from(&self.core);
+        self.core.generate(&mut self.buf);
+        self.block = self.block.wrapping_add(BLOCKS);
         self.index = 0;
     }
 
-    /// The word at `index` of the buffer (`index` < 64).
+    /// The word at `index` of the buffer.
     #[inline(always)]
     fn word(&self, index: usize) -> u32 {
-        u32::from_le_bytes(
-            self.buf[4 * index..4 * index + 4]
-                .try_into()
-                .unwrap_or_default(),
-        )
+        self.buf.as_ref()[index]
     }
 }
 
-/// The little-endian number of the eight bytes at `at` of `bytes`: two words of the stream,
-/// the first the low half, as `BlockRng::next_u64` puts them together.
+/// Two words of the stream as one number, the first the low half, as `BlockRng::next_u64`
+/// puts them together.
 #[inline(always)]
-fn u64_at(bytes: &[u8], at: usize) -> u64 {
-    u64::from_le_bytes(bytes[at..at + 8].try_into().unwrap_or_default())
+fn u64_of(low: u32, high: u32) -> u64 {
+    (u64::from(high) << 32) | u64::from(low)
 }
 
 impl RngCore for FaultStream {
@@ -168,32 +194,29 @@ impl RngCore for FaultStream {
         let i = self.index;
         if i < WORDS - 1 {
             self.index += 2;
-            u64_at(&self.buf, 4 * i)
+            u64_of(self.word(i), self.word(i + 1))
         } else if i >= WORDS {
             self.refill();
             self.index = 2;
-            u64_at(&self.buf, 0)
+            u64_of(self.word(0), self.word(1))
         } else {
             // The last word of this buffer is the low half, the first of the next the high.
             let low = self.word(WORDS - 1);
             self.refill();
             self.index = 1;
-            (u64::from(self.word(0)) << 32) | u64::from(low)
+            u64_of(low, self.word(0))
         }
     }
 
     fn fill_bytes(&mut self, dst: &mut [u8]) {
-        let mut filled = 0;
-        while filled < dst.len() {
+        // A word for every four bytes; a last partial word is used up all the same.
+        for chunk in dst.chunks_mut(4) {
             if self.index >= WORDS {
                 self.refill();
             }
-            let from = &self.buf[4 * self.index..];
-            let n = from.len().min(dst.len() - filled);
-            dst[filled..filled + n].copy_from_slice(&from[..n]);
-            // A partial word is used up all the same.
-            self.index += n.div_ceil(4);
-            filled += n;
+            let bytes = self.word(self.index).to_le_bytes();
+            chunk.copy_from_slice(&bytes[..chunk.len()]);
+            self.index += 1;
         }
     }
 }
@@ -201,9 +224,7 @@ impl RngCore for FaultStream {
 /// The same stream: the same seed and position (the stream number is always 0).
 impl PartialEq for FaultStream {
     fn eq(&self, other: &FaultStream) -> bool {
-        self.source.get_seed() == other.source.get_seed()
-            && self.source.get_stream() == other.source.get_stream()
-            && self.word_pos() == other.word_pos()
+        self.seed == other.seed && self.word_pos() == other.word_pos()
     }
 }
 
@@ -213,8 +234,8 @@ impl Eq for FaultStream {}
 /// numbers from here on.
 impl PartialEq<ChaCha8Rng> for FaultStream {
     fn eq(&self, other: &ChaCha8Rng) -> bool {
-        self.source.get_seed() == other.get_seed()
-            && self.source.get_stream() == other.get_stream()
+        self.seed == other.get_seed()
+            && other.get_stream() == 0
             && self.word_pos() == other.get_word_pos()
     }
 }
@@ -241,24 +262,14 @@ mod tests {
         U64,
         /// `fill_bytes` with this many bytes.
         Fill(usize),
-        /// `set_word_pos`.
-        Seek(u128),
-        /// Back by this many words (at most the position).
-        Back(u128),
+        /// This many `next_u32`, to get anywhere in a buffer quickly.
+        Skip(usize),
+        /// Remember the place.
+        Mark,
+        /// Go back to the place last remembered.
+        Back,
         /// `all_miss` with these thresholds and groups.
         AllMiss([u64; 4], u32),
-    }
-
-    /// Positions that matter: the start, block and buffer ends and the words either side of
-    /// them (odd ones among them), the end of the 68-bit range, anything.
-    fn position() -> impl Strategy<Value = u128> {
-        prop_oneof![
-            0..200u128,
-            (0..1000u128, -2..=2i32).prop_map(|(b, d)| (16 * b).saturating_add_signed(d as i128)),
-            (0..70u128).prop_map(|k| POSITION_MASK - k),
-            any::<u64>().prop_map(u128::from),
-            any::<u128>(),
-        ]
     }
 
     /// A threshold: none ever hit, all hit, a real line's odds, any.
@@ -279,8 +290,9 @@ mod tests {
             // Lengths of every remainder mod 4, within a buffer and across several.
             2 => (0..20usize).prop_map(Op::Fill),
             1 => (0..700usize).prop_map(Op::Fill),
-            1 => position().prop_map(Op::Seek),
-            1 => (0..300u128).prop_map(Op::Back),
+            1 => (0..300usize).prop_map(Op::Skip),
+            1 => Just(Op::Mark),
+            1 => Just(Op::Back),
             3 => (proptest::array::uniform4(threshold()), 0..40u32)
                 .prop_map(|(t, g)| Op::AllMiss(t, g)),
         ]
@@ -312,6 +324,7 @@ mod tests {
             let mut got = FaultStream::seed_from_u64(seed);
             let mut want = ChaCha8Rng::seed_from_u64(seed);
             prop_assert_eq!(&got, &want);
+            let mut mark = None;
             for op in ops {
                 match op {
                     Op::U32 => prop_assert_eq!(got.next_u32(), want.next_u32()),
@@ -324,14 +337,19 @@ mod tests {
                         want.fill_bytes(&mut b[..n]);
                         prop_assert_eq!(a, b);
                     }
-                    Op::Seek(pos) => {
-                        got.set_word_pos(pos);
-                        want.set_word_pos(pos);
+                    Op::Skip(n) => {
+                        for _ in 0..n {
+                            prop_assert_eq!(got.next_u32(), want.next_u32());
+                        }
                     }
-                    Op::Back(words) => {
-                        let words = words.min(want.get_word_pos());
-                        got.rewind(words);
-                        want.set_word_pos(want.get_word_pos() - words);
+                    Op::Mark => {
+                        mark = Some((got.buf_core.clone(), got.block, got.index, want.get_word_pos()));
+                    }
+                    Op::Back => {
+                        if let Some((core, block, index, pos)) = &mark {
+                            got.go_back(core, *block, *index);
+                            want.set_word_pos(*pos);
+                        }
                     }
                     Op::AllMiss(t, groups) => {
                         prop_assert_eq!(
