@@ -11,8 +11,15 @@ use crate::pulse::{Polarity, Pulse, PulseTrain};
 use crate::time::{SimDuration, SimTime};
 use crate::waveform::{NoiseBurst, Waveform};
 use rand::distr::Bernoulli;
-use rand::{Rng, RngCore, SeedableRng};
+use rand::Rng;
+// The tests draw the reference stream from `ChaCha8Rng` itself.
+#[cfg(test)]
+use rand::{RngCore, SeedableRng};
+#[cfg(test)]
 use rand_chacha::ChaCha8Rng;
+use stream::FaultStream;
+
+mod stream;
 
 /// One exact fault on a pulse sequence. Indices refer to the sequence before any fault.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -213,7 +220,8 @@ fn clamp_probability(p: f64) -> f64 {
 /// A seeded source of pulse faults: the same seed and traffic give the same corruption.
 #[derive(Clone, Debug)]
 pub struct FaultInjector {
-    rng: ChaCha8Rng,
+    /// `ChaCha8Rng::seed_from_u64(seed)`'s numbers (see [`stream`]).
+    rng: FaultStream,
     rates: FaultRates,
     odds: Odds,
     half_bit: SimDuration,
@@ -278,7 +286,7 @@ impl FaultInjector {
     /// An injector with `rates` on the `half_bit` grid, seeded with `seed`.
     pub fn new(seed: u64, rates: FaultRates, half_bit: SimDuration) -> FaultInjector {
         FaultInjector {
-            rng: ChaCha8Rng::seed_from_u64(seed),
+            rng: FaultStream::seed_from_u64(seed),
             rates,
             odds: Odds::of(&rates),
             half_bit,
@@ -325,22 +333,10 @@ impl FaultInjector {
         // none of them hits takes exactly these four draws, all misses, and nothing else (the
         // `half` draws follow hits only). So an untouched telegram is exactly the next
         // 4 * `pulses` numbers of the stream all missing their thresholds in turn, which is
-        // what this draws and compares (`|`, not `||`: all four are drawn, as `corrupt` does
-        // for a pulse without a fault). If one is a hit, the stream goes back by the numbers
-        // drawn, two words each, and `corrupt` draws the same numbers again. The position is
-        // read only then: most telegrams pass, and reading it costs a little every time.
-        for k in 0..pulses as u128 {
-            let hit = (self.rng.next_u64() < t[0])
-                | (self.rng.next_u64() < t[1])
-                | (self.rng.next_u64() < t[2])
-                | (self.rng.next_u64() < t[3]);
-            if hit {
-                let end = self.rng.get_word_pos();
-                self.rng.set_word_pos(end.wrapping_sub(8 * (k + 1)));
-                return false;
-            }
-        }
-        true
+        // what `all_miss` draws and compares (all four of a pulse, as `corrupt` does for a
+        // pulse without a fault). If one is a hit, the stream goes back to where it was, and
+        // `corrupt` draws the same numbers again.
+        self.rng.all_miss(&t, pulses)
     }
 
     /// Corrupts one telegram's `pulses` into `out` (cleared first); returns the number of
