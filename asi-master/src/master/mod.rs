@@ -54,6 +54,8 @@ mod host;
 mod outcomes;
 mod requests;
 mod schedule;
+#[cfg(test)]
+mod tests;
 
 /// The master's phase (docs/asi.md §5.1).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]

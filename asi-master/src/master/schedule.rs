@@ -131,13 +131,19 @@ impl Master {
                         }
                         self.cycle_start = Some(now);
                     }
-                    while self.cursor <= 31 {
-                        let n = self.cursor;
-                        self.cursor += 1;
+                    // The next slot at or after the cursor that holds an A or a B slave of
+                    // LAS, found in the list bits rather than by asking each address.
+                    let las = self.las.bits();
+                    let occupied = (las as u32 | (las >> 32) as u32) as u64;
+                    let ahead = occupied & (u64::MAX << self.cursor.min(32));
+                    if ahead != 0 {
+                        let n = ahead.trailing_zeros() as u8;
+                        self.cursor = n + 1;
                         if let Some(a) = self.slot(n) {
                             return Some(Tx::Exchange(a));
                         }
                     }
+                    self.cursor = 32;
                     self.stage = Stage::Management;
                 }
                 Stage::Management => {
@@ -167,16 +173,16 @@ impl Master {
         if self.las.is_empty() {
             return None;
         }
-        for _ in 0..64 {
-            let i = self.status_cursor;
-            self.status_cursor = (self.status_cursor + 1) % 64;
-            if let Some(a) = SlaveAddr::from_index(i) {
-                if self.las.contains(a) {
-                    return Some(Tx::Status(a));
-                }
-            }
+        // The first LAS bit at or after the cursor, going round after bit 63 (bit 32, 0B, is
+        // no address).
+        let bits = self.las.bits() & !(1 << 32);
+        if bits == 0 {
+            return None;
         }
-        None
+        let c = u32::from(self.status_cursor);
+        let i = (c + bits.rotate_right(c).trailing_zeros()) % 64;
+        self.status_cursor = ((i + 1) % 64) as u8;
+        SlaveAddr::from_index(i as u8).map(Tx::Status)
     }
 
     pub(super) fn is_inclusion_candidate(&self, a: SlaveAddr) -> bool {
