@@ -11,7 +11,10 @@ impl Master {
         if self.host.offline && !host.offline && self.phase == Phase::Offline {
             self.wake_at = self.wake_at.max(now);
         }
-        self.host = host;
+        if host != self.host {
+            self.host = host;
+            self.touch_inputs();
+        }
         if self.job.is_none() {
             if let Some(req) = self.mailbox.take(&self.image.output) {
                 self.start_job(req);
@@ -161,6 +164,7 @@ impl Master {
             }
         }
         self.projected = p;
+        self.touch_inputs();
         self.finish_job(&req, R::Ok, &[]);
     }
 
@@ -182,6 +186,7 @@ impl Master {
             }
         }
         self.projected = p;
+        self.touch_inputs();
         self.finish_job(&req, R::Ok, &[]);
     }
 
@@ -195,6 +200,7 @@ impl Master {
             _ => return self.finish_job(&req, R::InvalidArgument, &[]),
         };
         self.mode = mode;
+        self.touch_inputs();
         if mode == Mode::Protected {
             // Slaves that are active but not projected (or wrong) leave LAS.
             for a in self.las.iter() {
@@ -243,12 +249,14 @@ impl Master {
             JobStep::Status(a) => {
                 if self.las.contains(a) {
                     self.lpf.set(a, v.bit(1));
+                    self.touch_inputs();
                 }
                 self.finish_job(&req, JobResult::Ok, &[v.get()]);
             }
             JobStep::Delete(from, to) => {
                 self.deactivate(from);
                 self.lds.set(from, false);
+                self.touch_inputs();
                 if to.number() == 0 {
                     self.finish_job(&req, JobResult::Ok, &[]);
                 } else {

@@ -234,6 +234,15 @@ pub struct Master {
     offline_cursor: u8,
     stats: BusStats,
     flags: EcFlags,
+    /// The flags' inputs as they were when last looked at (at the start or end of a
+    /// transaction); up to date unless `inputs_touched`.
+    inputs_seen: Signature,
+    /// Set by every write to LDS, LAS, LPF, the projected configuration, the phase, the mode,
+    /// the power or the host flags: only then can the flags' inputs differ from
+    /// `inputs_seen`. Most transactions (a Data_Exchange that is answered) touch none of them,
+    /// so they skip building and comparing the signature. Debug builds (and so the tests)
+    /// check at every transaction that no write was left unmarked.
+    inputs_touched: bool,
 }
 
 /// What the flags depend on, to recompute them only when it changes.
@@ -283,6 +292,18 @@ impl Master {
             offline_cursor: 0,
             stats: BusStats::default(),
             flags: EcFlags::default(),
+            // Taken from the master itself at its first transaction.
+            inputs_seen: (
+                0,
+                0,
+                0,
+                0,
+                Phase::Offline,
+                Mode::Protected,
+                false,
+                HostFlags::default(),
+            ),
+            inputs_touched: true,
         };
         m.update_flags();
         Ok(m)
@@ -373,6 +394,43 @@ impl Master {
         )
     }
 
+    /// Brings `inputs_seen` up to date: the signature before a transaction.
+    #[inline]
+    fn inputs_before(&mut self) {
+        if self.inputs_touched {
+            self.inputs_touched = false;
+            self.inputs_seen = self.signature();
+        }
+        debug_assert_eq!(
+            self.inputs_seen,
+            self.signature(),
+            "a write missed touch_inputs"
+        );
+    }
+
+    /// Recomputes the flags if the signature differs from the one before the transaction.
+    #[inline]
+    fn inputs_after(&mut self) {
+        if self.inputs_touched {
+            self.inputs_touched = false;
+            let now = self.signature();
+            if now != self.inputs_seen {
+                self.inputs_seen = now;
+                self.update_flags();
+            }
+        }
+        debug_assert_eq!(
+            self.inputs_seen,
+            self.signature(),
+            "a write missed touch_inputs"
+        );
+    }
+
+    /// Notes a write to something the flags depend on (see `inputs_touched`).
+    fn touch_inputs(&mut self) {
+        self.inputs_touched = true;
+    }
+
     fn compute_flags(&self) -> EcFlags {
         let mut f = EcFlags::default();
         let found = self.lds.without_zero();
@@ -440,6 +498,7 @@ impl Master {
             return;
         }
         self.power_ok = ok;
+        self.touch_inputs();
         if ok {
             self.wake_at = now + self.cfg.startup_delay;
         } else {
@@ -479,12 +538,10 @@ impl Master {
             // An outcome was never delivered: forget the transaction.
             self.in_flight = None;
         }
-        let before = self.signature();
+        self.inputs_before();
         self.service_host(now);
         let t = self.next_transmit(now);
-        if self.signature() != before {
-            self.update_flags();
-        }
+        self.inputs_after();
         t
     }
 
@@ -537,11 +594,9 @@ impl Master {
             };
         }
         self.in_flight = None;
-        let before = self.signature();
+        self.inputs_before();
         self.apply(f.tx, resp);
-        if self.signature() != before {
-            self.update_flags();
-        }
+        self.inputs_after();
         Verdict {
             repeat: false,
             error: failed,

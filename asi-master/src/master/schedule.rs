@@ -50,6 +50,7 @@ impl Master {
         self.lds = SlaveList::EMPTY;
         self.las = SlaveList::EMPTY;
         self.lpf = SlaveList::EMPTY;
+        self.touch_inputs();
         self.update_flags();
     }
 
@@ -73,6 +74,7 @@ impl Master {
                 self.act_todo = self.lds.iter().filter(|&a| self.eligible(a)).collect();
                 self.act_param_done = false;
                 self.phase = Phase::Activation;
+                self.touch_inputs();
                 return None;
             }
             let i = self.det_cursor;
@@ -95,6 +97,7 @@ impl Master {
     pub(super) fn activation_next(&mut self) -> Option<Tx> {
         let Some(a) = self.act_todo.iter().next() else {
             self.phase = Phase::NormalOperation;
+            self.touch_inputs();
             self.stage = Stage::Data;
             self.cursor = 1;
             self.cycle_open = false;
@@ -248,6 +251,7 @@ impl Master {
         self.lds = SlaveList::EMPTY;
         self.las = SlaveList::EMPTY;
         self.lpf = SlaveList::EMPTY;
+        self.touch_inputs();
         for w in 0..16 {
             let keep = if w == 0 { 0xF000 } else { 0 };
             let v = self.image.input.word(w) & keep;
