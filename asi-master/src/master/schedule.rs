@@ -43,6 +43,7 @@ impl Master {
         None
     }
 
+    #[inline(never)]
     pub(super) fn start_detection(&mut self) {
         self.phase = Phase::Detection;
         self.det_cursor = 0;
@@ -61,6 +62,7 @@ impl Master {
         }
     }
 
+    #[inline(never)]
     pub(super) fn detect_next(&mut self) -> Option<Tx> {
         for _ in 0..=65 {
             if let Some(p) = self.det_probe {
@@ -94,6 +96,7 @@ impl Master {
         None
     }
 
+    #[inline(never)]
     pub(super) fn activation_next(&mut self) -> Option<Tx> {
         let Some(a) = self.act_todo.iter().next() else {
             self.phase = Phase::NormalOperation;
@@ -169,6 +172,7 @@ impl Master {
         None
     }
 
+    #[inline(never)]
     pub(super) fn management_next(&mut self) -> Option<Tx> {
         if let Some((_, step)) = self.job {
             return Some(Tx::Job(step));
@@ -201,6 +205,7 @@ impl Master {
         }
     }
 
+    #[inline(never)]
     pub(super) fn inclusion_next(&mut self) -> Option<Tx> {
         if let (Some(p), Some(step)) = (self.incl, self.incl_step) {
             return Some(Tx::Include(p.a, step));
@@ -230,6 +235,7 @@ impl Master {
         Tx::Include(a, InclStep::Read(Read::Io))
     }
 
+    #[inline(never)]
     pub(super) fn offline_next(&mut self) -> Option<Tx> {
         while self.offline_cursor < 64 {
             let i = self.offline_cursor;
@@ -244,6 +250,7 @@ impl Master {
         None
     }
 
+    #[inline(never)]
     pub(super) fn go_offline(&mut self) {
         self.phase = Phase::Offline;
         self.in_flight = None;
