@@ -234,6 +234,7 @@ impl Master {
         self.finish_job(&req, R::Ok, &f.to_be_bytes());
     }
 
+    #[inline(never)]
     pub(super) fn job_result(&mut self, step: JobStep, resp: Option<Nibble>) {
         let Some((req, _)) = self.job else {
             return;

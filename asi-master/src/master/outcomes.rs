@@ -36,6 +36,7 @@ impl Master {
         }
     }
 
+    #[inline(never)]
     pub(super) fn detect_result(&mut self, a: SlaveAddr, r: Read, resp: Option<Nibble>) {
         let Some(mut p) = self.det_probe.filter(|p| p.a == a) else {
             return;
@@ -69,6 +70,7 @@ impl Master {
         self.det_probe = Some(p);
     }
 
+    #[inline(never)]
     pub(super) fn activate(&mut self, a: SlaveAddr, inputs: Nibble) {
         let i = a.index() as usize;
         self.las.set(a, true);
@@ -171,6 +173,7 @@ impl Master {
         Some((target, (id1 != codes.id1).then_some(id1)))
     }
 
+    #[inline(never)]
     pub(super) fn include_result(&mut self, a: SlaveAddr, step: InclStep, resp: Option<Nibble>) {
         let Some(mut p) = self.incl.filter(|p| p.a == a) else {
             return;
