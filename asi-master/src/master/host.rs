@@ -7,11 +7,14 @@ impl Master {
     // ----- host interface -------------------------------------------------------------
 
     pub(super) fn service_host(&mut self, now: SimTime) {
-        let host = HostFlags::from_output_word0(self.image.output.word(0));
-        if self.host.offline && !host.offline && self.phase == Phase::Offline {
-            self.wake_at = self.wake_at.max(now);
-        }
-        if host != self.host {
+        // The host flags change only when their three bits of output word 0 do.
+        let bits = self.image.output.word(0) & HOST_FLAG_BITS;
+        if bits != self.host_bits {
+            self.host_bits = bits;
+            let host = HostFlags::from_output_word0(bits);
+            if self.host.offline && !host.offline && self.phase == Phase::Offline {
+                self.wake_at = self.wake_at.max(now);
+            }
             self.host = host;
             self.touch_inputs();
         }

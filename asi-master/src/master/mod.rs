@@ -191,6 +191,11 @@ enum AnalogEngine {
     Input(S73InputMaster),
 }
 
+/// The host flags' bits in output word 0.
+const HOST_FLAG_BITS: u16 = HostFlags::WORD0_LOCK_DATA_EXCHANGE
+    | HostFlags::WORD0_OFFLINE
+    | HostFlags::WORD0_NO_AUTO_ADDRESS;
+
 const UNKNOWN_CODES: SlaveCodes = SlaveCodes::new(0xF, 0xF, 0xF, 0xF);
 
 /// The AS-i master.
@@ -209,6 +214,8 @@ pub struct Master {
     fails: [u8; 64],
     image: ProcessImage,
     host: HostFlags,
+    /// The bits of output word 0 that `host` was read from.
+    host_bits: u16,
     power_ok: bool,
     wake_at: SimTime,
     in_flight: Option<InFlight>,
@@ -267,7 +274,8 @@ impl Master {
             pi: [Nibble::ALL; 64],
             fails: [0; 64],
             image: ProcessImage::default(),
-            host: HostFlags::default(),
+            host: HostFlags::from_output_word0(0),
+            host_bits: 0,
             power_ok: true,
             in_flight: None,
             repeat_pending: false,

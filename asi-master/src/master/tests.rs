@@ -219,6 +219,13 @@ fn drive(seed: u64, steps: usize) -> (u32, SlaveList) {
         let before = signature_of(&m);
         let t = m.poll_transmit(now);
         check_flags(&m, before);
+        if !t.is_some_and(|t| t.repeat) {
+            assert_eq!(
+                m.host_flags(),
+                HostFlags::from_output_word0(m.image().output.word(0)),
+                "host flags read from output word 0 at every call but a repeat"
+            );
+        }
         phases |= 1 << m.phase as u32;
         seen = SlaveList::from_bits(seen.bits() | m.las().bits());
         if t.is_none() || rng.chance(1) {
