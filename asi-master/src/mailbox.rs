@@ -176,12 +176,22 @@ pub(crate) struct Mailbox {
 
 impl Mailbox {
     /// A new job if the PLC toggled T and no job is running.
+    ///
+    /// Asked before every call the master sends, and nearly always the answer is no: that
+    /// check is inlined into the caller, copying the request out of the image is not.
+    #[inline]
     pub(crate) fn take(&mut self, output: &Image) -> Option<MailboxRequest> {
         let w = output.word(MAILBOX_WORD);
         let t = w & 0x80 != 0;
         if self.busy || t == self.last_t {
             return None;
         }
+        self.take_posted(output, w, t)
+    }
+
+    /// Takes the job the PLC has just posted (output word 32 = `w`, its T = `t`).
+    #[inline(never)]
+    fn take_posted(&mut self, output: &Image, w: u16, t: bool) -> Option<MailboxRequest> {
         self.busy = true;
         let mut bytes = [0u8; MAILBOX_BYTES];
         for (k, b) in bytes.iter_mut().enumerate() {

@@ -7,11 +7,17 @@ impl Master {
     // ----- host interface -------------------------------------------------------------
 
     pub(super) fn service_host(&mut self, now: SimTime) {
-        let host = HostFlags::from_output_word0(self.image.output.word(0));
-        if self.host.offline && !host.offline && self.phase == Phase::Offline {
-            self.wake_at = self.wake_at.max(now);
+        // The host flags change only when their three bits of output word 0 do.
+        let bits = self.image.output.word(0) & HOST_FLAG_BITS;
+        if bits != self.host_bits {
+            self.host_bits = bits;
+            let host = HostFlags::from_output_word0(bits);
+            if self.host.offline && !host.offline && self.phase == Phase::Offline {
+                self.wake_at = self.wake_at.max(now);
+            }
+            self.host = host;
+            self.touch_inputs();
         }
-        self.host = host;
         if self.job.is_none() {
             if let Some(req) = self.mailbox.take(&self.image.output) {
                 self.start_job(req);
@@ -161,6 +167,7 @@ impl Master {
             }
         }
         self.projected = p;
+        self.touch_inputs();
         self.finish_job(&req, R::Ok, &[]);
     }
 
@@ -182,6 +189,7 @@ impl Master {
             }
         }
         self.projected = p;
+        self.touch_inputs();
         self.finish_job(&req, R::Ok, &[]);
     }
 
@@ -195,6 +203,7 @@ impl Master {
             _ => return self.finish_job(&req, R::InvalidArgument, &[]),
         };
         self.mode = mode;
+        self.touch_inputs();
         if mode == Mode::Protected {
             // Slaves that are active but not projected (or wrong) leave LAS.
             for a in self.las.iter() {
@@ -228,6 +237,7 @@ impl Master {
         self.finish_job(&req, R::Ok, &f.to_be_bytes());
     }
 
+    #[inline(never)]
     pub(super) fn job_result(&mut self, step: JobStep, resp: Option<Nibble>) {
         let Some((req, _)) = self.job else {
             return;
@@ -243,12 +253,14 @@ impl Master {
             JobStep::Status(a) => {
                 if self.las.contains(a) {
                     self.lpf.set(a, v.bit(1));
+                    self.touch_inputs();
                 }
                 self.finish_job(&req, JobResult::Ok, &[v.get()]);
             }
             JobStep::Delete(from, to) => {
                 self.deactivate(from);
                 self.lds.set(from, false);
+                self.touch_inputs();
                 if to.number() == 0 {
                     self.finish_job(&req, JobResult::Ok, &[]);
                 } else {

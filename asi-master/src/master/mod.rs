@@ -54,6 +54,8 @@ mod host;
 mod outcomes;
 mod requests;
 mod schedule;
+#[cfg(test)]
+mod tests;
 
 /// The master's phase (docs/asi.md §5.1).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -189,6 +191,11 @@ enum AnalogEngine {
     Input(S73InputMaster),
 }
 
+/// The host flags' bits in output word 0.
+const HOST_FLAG_BITS: u16 = HostFlags::WORD0_LOCK_DATA_EXCHANGE
+    | HostFlags::WORD0_OFFLINE
+    | HostFlags::WORD0_NO_AUTO_ADDRESS;
+
 const UNKNOWN_CODES: SlaveCodes = SlaveCodes::new(0xF, 0xF, 0xF, 0xF);
 
 /// The AS-i master.
@@ -207,6 +214,8 @@ pub struct Master {
     fails: [u8; 64],
     image: ProcessImage,
     host: HostFlags,
+    /// The bits of output word 0 that `host` was read from.
+    host_bits: u16,
     power_ok: bool,
     wake_at: SimTime,
     in_flight: Option<InFlight>,
@@ -232,6 +241,15 @@ pub struct Master {
     offline_cursor: u8,
     stats: BusStats,
     flags: EcFlags,
+    /// The flags' inputs as they were when last looked at (at the start or end of a
+    /// transaction); up to date unless `inputs_touched`.
+    inputs_seen: Signature,
+    /// Set by every write to LDS, LAS, LPF, the projected configuration, the phase, the mode,
+    /// the power or the host flags: only then can the flags' inputs differ from
+    /// `inputs_seen`. Most transactions (a Data_Exchange that is answered) touch none of them,
+    /// so they skip building and comparing the signature. Debug builds (and so the tests)
+    /// check at every transaction that no write was left unmarked.
+    inputs_touched: bool,
 }
 
 /// What the flags depend on, to recompute them only when it changes.
@@ -256,7 +274,8 @@ impl Master {
             pi: [Nibble::ALL; 64],
             fails: [0; 64],
             image: ProcessImage::default(),
-            host: HostFlags::default(),
+            host: HostFlags::from_output_word0(0),
+            host_bits: 0,
             power_ok: true,
             in_flight: None,
             repeat_pending: false,
@@ -281,6 +300,18 @@ impl Master {
             offline_cursor: 0,
             stats: BusStats::default(),
             flags: EcFlags::default(),
+            // Taken from the master itself at its first transaction.
+            inputs_seen: (
+                0,
+                0,
+                0,
+                0,
+                Phase::Offline,
+                Mode::Protected,
+                false,
+                HostFlags::default(),
+            ),
+            inputs_touched: true,
         };
         m.update_flags();
         Ok(m)
@@ -371,6 +402,43 @@ impl Master {
         )
     }
 
+    /// Brings `inputs_seen` up to date: the signature before a transaction.
+    #[inline]
+    fn inputs_before(&mut self) {
+        if self.inputs_touched {
+            self.inputs_touched = false;
+            self.inputs_seen = self.signature();
+        }
+        debug_assert_eq!(
+            self.inputs_seen,
+            self.signature(),
+            "a write missed touch_inputs"
+        );
+    }
+
+    /// Recomputes the flags if the signature differs from the one before the transaction.
+    #[inline]
+    fn inputs_after(&mut self) {
+        if self.inputs_touched {
+            self.inputs_touched = false;
+            let now = self.signature();
+            if now != self.inputs_seen {
+                self.inputs_seen = now;
+                self.update_flags();
+            }
+        }
+        debug_assert_eq!(
+            self.inputs_seen,
+            self.signature(),
+            "a write missed touch_inputs"
+        );
+    }
+
+    /// Notes a write to something the flags depend on (see `inputs_touched`).
+    fn touch_inputs(&mut self) {
+        self.inputs_touched = true;
+    }
+
     fn compute_flags(&self) -> EcFlags {
         let mut f = EcFlags::default();
         let found = self.lds.without_zero();
@@ -438,6 +506,7 @@ impl Master {
             return;
         }
         self.power_ok = ok;
+        self.touch_inputs();
         if ok {
             self.wake_at = now + self.cfg.startup_delay;
         } else {
@@ -477,12 +546,10 @@ impl Master {
             // An outcome was never delivered: forget the transaction.
             self.in_flight = None;
         }
-        let before = self.signature();
+        self.inputs_before();
         self.service_host(now);
         let t = self.next_transmit(now);
-        if self.signature() != before {
-            self.update_flags();
-        }
+        self.inputs_after();
         t
     }
 
@@ -535,11 +602,9 @@ impl Master {
             };
         }
         self.in_flight = None;
-        let before = self.signature();
+        self.inputs_before();
         self.apply(f.tx, resp);
-        if self.signature() != before {
-            self.update_flags();
-        }
+        self.inputs_after();
         Verdict {
             repeat: false,
             error: failed,

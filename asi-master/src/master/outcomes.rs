@@ -27,6 +27,7 @@ impl Master {
             Tx::Status(a) => {
                 if let Some(s) = resp {
                     self.lpf.set(a, s.bit(1));
+                    self.touch_inputs();
                 }
             }
             Tx::Include(a, step) => self.include_result(a, step, resp),
@@ -35,6 +36,7 @@ impl Master {
         }
     }
 
+    #[inline(never)]
     pub(super) fn detect_result(&mut self, a: SlaveAddr, r: Read, resp: Option<Nibble>) {
         let Some(mut p) = self.det_probe.filter(|p| p.a == a) else {
             return;
@@ -59,6 +61,7 @@ impl Master {
             Read::Id2 => {
                 p.codes.id2 = v;
                 self.lds.set(a, true);
+                self.touch_inputs();
                 self.detected[a.index() as usize] = p.codes;
                 self.det_probe = None;
                 return;
@@ -67,9 +70,11 @@ impl Master {
         self.det_probe = Some(p);
     }
 
+    #[inline(never)]
     pub(super) fn activate(&mut self, a: SlaveAddr, inputs: Nibble) {
         let i = a.index() as usize;
         self.las.set(a, true);
+        self.touch_inputs();
         self.fails[i] = 0;
         self.image.input.set_nibble(a, inputs);
         let codes = self.detected[i];
@@ -90,6 +95,7 @@ impl Master {
         let i = a.index() as usize;
         self.las.set(a, false);
         self.lpf.set(a, false);
+        self.touch_inputs();
         self.image.input.set_nibble(a, Nibble::ZERO);
         self.analog[i] = None;
         self.fails[i] = 0;
@@ -137,6 +143,7 @@ impl Master {
                 if self.fails[i] >= self.cfg.max_failed_cycles {
                     self.deactivate(a);
                     self.lds.set(a, false);
+                    self.touch_inputs();
                     self.lcs.set(a, true);
                     self.stats.dropouts += 1;
                 }
@@ -166,6 +173,7 @@ impl Master {
         Some((target, (id1 != codes.id1).then_some(id1)))
     }
 
+    #[inline(never)]
     pub(super) fn include_result(&mut self, a: SlaveAddr, step: InclStep, resp: Option<Nibble>) {
         let Some(mut p) = self.incl.filter(|p| p.a == a) else {
             return;
@@ -177,6 +185,7 @@ impl Master {
         let Some(v) = resp else {
             if matches!(step, InclStep::Read(_)) && self.lds.contains(a) && !self.las.contains(a) {
                 self.lds.set(a, false);
+                self.touch_inputs();
                 self.lcs.set(a, true);
             }
             return end(self);
@@ -197,6 +206,7 @@ impl Master {
             InclStep::Read(Read::Id2) => {
                 p.codes.id2 = v;
                 self.lds.set(a, true);
+                self.touch_inputs();
                 self.detected[a.index() as usize] = p.codes;
                 if a.number() == 0 {
                     match self.auto_address_target(p.codes) {
@@ -222,6 +232,7 @@ impl Master {
             InclStep::AutoAssign(t) => {
                 if v == ACK_0110 {
                     self.lds.set(ZERO_A, false);
+                    self.touch_inputs();
                     self.incl_priority = Some(t);
                 }
                 return end(self);

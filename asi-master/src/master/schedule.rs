@@ -43,6 +43,7 @@ impl Master {
         None
     }
 
+    #[inline(never)]
     pub(super) fn start_detection(&mut self) {
         self.phase = Phase::Detection;
         self.det_cursor = 0;
@@ -50,6 +51,7 @@ impl Master {
         self.lds = SlaveList::EMPTY;
         self.las = SlaveList::EMPTY;
         self.lpf = SlaveList::EMPTY;
+        self.touch_inputs();
         self.update_flags();
     }
 
@@ -60,6 +62,7 @@ impl Master {
         }
     }
 
+    #[inline(never)]
     pub(super) fn detect_next(&mut self) -> Option<Tx> {
         for _ in 0..=65 {
             if let Some(p) = self.det_probe {
@@ -73,6 +76,7 @@ impl Master {
                 self.act_todo = self.lds.iter().filter(|&a| self.eligible(a)).collect();
                 self.act_param_done = false;
                 self.phase = Phase::Activation;
+                self.touch_inputs();
                 return None;
             }
             let i = self.det_cursor;
@@ -92,9 +96,11 @@ impl Master {
         None
     }
 
+    #[inline(never)]
     pub(super) fn activation_next(&mut self) -> Option<Tx> {
         let Some(a) = self.act_todo.iter().next() else {
             self.phase = Phase::NormalOperation;
+            self.touch_inputs();
             self.stage = Stage::Data;
             self.cursor = 1;
             self.cycle_open = false;
@@ -131,13 +137,19 @@ impl Master {
                         }
                         self.cycle_start = Some(now);
                     }
-                    while self.cursor <= 31 {
-                        let n = self.cursor;
-                        self.cursor += 1;
+                    // The next slot at or after the cursor that holds an A or a B slave of
+                    // LAS, found in the list bits rather than by asking each address.
+                    let las = self.las.bits();
+                    let occupied = (las as u32 | (las >> 32) as u32) as u64;
+                    let ahead = occupied & (u64::MAX << self.cursor.min(32));
+                    if ahead != 0 {
+                        let n = ahead.trailing_zeros() as u8;
+                        self.cursor = n + 1;
                         if let Some(a) = self.slot(n) {
                             return Some(Tx::Exchange(a));
                         }
                     }
+                    self.cursor = 32;
                     self.stage = Stage::Management;
                 }
                 Stage::Management => {
@@ -160,6 +172,7 @@ impl Master {
         None
     }
 
+    #[inline(never)]
     pub(super) fn management_next(&mut self) -> Option<Tx> {
         if let Some((_, step)) = self.job {
             return Some(Tx::Job(step));
@@ -167,16 +180,16 @@ impl Master {
         if self.las.is_empty() {
             return None;
         }
-        for _ in 0..64 {
-            let i = self.status_cursor;
-            self.status_cursor = (self.status_cursor + 1) % 64;
-            if let Some(a) = SlaveAddr::from_index(i) {
-                if self.las.contains(a) {
-                    return Some(Tx::Status(a));
-                }
-            }
+        // The first LAS bit at or after the cursor, going round after bit 63 (bit 32, 0B, is
+        // no address).
+        let bits = self.las.bits() & !(1 << 32);
+        if bits == 0 {
+            return None;
         }
-        None
+        let c = u32::from(self.status_cursor);
+        let i = (c + bits.rotate_right(c).trailing_zeros()) % 64;
+        self.status_cursor = ((i + 1) % 64) as u8;
+        SlaveAddr::from_index(i as u8).map(Tx::Status)
     }
 
     pub(super) fn is_inclusion_candidate(&self, a: SlaveAddr) -> bool {
@@ -192,6 +205,7 @@ impl Master {
         }
     }
 
+    #[inline(never)]
     pub(super) fn inclusion_next(&mut self) -> Option<Tx> {
         if let (Some(p), Some(step)) = (self.incl, self.incl_step) {
             return Some(Tx::Include(p.a, step));
@@ -221,6 +235,7 @@ impl Master {
         Tx::Include(a, InclStep::Read(Read::Io))
     }
 
+    #[inline(never)]
     pub(super) fn offline_next(&mut self) -> Option<Tx> {
         while self.offline_cursor < 64 {
             let i = self.offline_cursor;
@@ -235,6 +250,7 @@ impl Master {
         None
     }
 
+    #[inline(never)]
     pub(super) fn go_offline(&mut self) {
         self.phase = Phase::Offline;
         self.in_flight = None;
@@ -242,6 +258,7 @@ impl Master {
         self.lds = SlaveList::EMPTY;
         self.las = SlaveList::EMPTY;
         self.lpf = SlaveList::EMPTY;
+        self.touch_inputs();
         for w in 0..16 {
             let keep = if w == 0 { 0xF000 } else { 0 };
             let v = self.image.input.word(w) & keep;
