@@ -460,52 +460,6 @@ mod tests {
         )
     }
 
-    /// The injector as it was written first: `random_bool` with the probability at every
-    /// draw. The injector's odds, made once, must corrupt exactly as this does.
-    fn corrupt_by_random_bool(
-        rng: &mut ChaCha8Rng,
-        r: FaultRates,
-        h: i64,
-        pulses: &[Pulse],
-    ) -> (Vec<Pulse>, u32) {
-        let mut out = Vec::new();
-        let mut faults = 0;
-        let j = r.jitter.as_nanos() as i64;
-        for &p in pulses {
-            let mut p = p;
-            if j > 0 {
-                p.at = shift(p.at, rng.random_range(-j..=j));
-            }
-            if rng.random_bool(clamp_probability(r.drop)) {
-                faults += 1;
-            } else {
-                if rng.random_bool(clamp_probability(r.flip)) {
-                    p.polarity = p.polarity.flipped();
-                    faults += 1;
-                }
-                if rng.random_bool(clamp_probability(r.shift)) {
-                    p.at = shift(p.at, if rng.random_bool(0.5) { h } else { -h });
-                    faults += 1;
-                }
-                out.push(p);
-            }
-            if rng.random_bool(clamp_probability(r.insert)) {
-                let polarity = if rng.random_bool(0.5) {
-                    Polarity::Positive
-                } else {
-                    Polarity::Negative
-                };
-                out.push(Pulse::new(
-                    p.at + SimDuration::from_nanos(h as u64),
-                    polarity,
-                ));
-                faults += 1;
-            }
-        }
-        out.sort_by_key(|p| p.at);
-        (out, faults)
-    }
-
     use proptest::prelude::Just;
 
     proptest::proptest! {
@@ -537,7 +491,7 @@ mod tests {
                 let train = PulseTrain::request(q, SimTime::from_micros(200 * k), h);
                 let pulses: Vec<Pulse> = train.iter().collect();
                 let faults = inj.corrupt(pulses.iter().copied(), &mut out);
-                let (want, want_faults) = corrupt_by_random_bool(&mut reference, r, 3_000, &pulses);
+                let (want, want_faults) = corrupt_pulse_by_pulse(&mut reference, r, 3_000, pulses.iter().copied());
                 proptest::prop_assert_eq!(faults, want_faults);
                 // Pulses at the same time may come in either order; the line sorts them so.
                 let mut got = out.clone();
@@ -549,9 +503,10 @@ mod tests {
         }
     }
 
-    /// `corrupt` pulse by pulse, as it was before [`FaultInjector::pass_untouched`], with
-    /// `random_bool` (drawn as the odds draw, see above) instead of the injector's odds: the
-    /// reference the quick path must match, down to the order of the output.
+    /// `corrupt` pulse by pulse, as it was written first and before
+    /// [`FaultInjector::pass_untouched`], with `random_bool` at every draw instead of the
+    /// injector's odds: the reference both the odds (made once) and the quick path must match,
+    /// down to the order of the output.
     fn corrupt_pulse_by_pulse(
         rng: &mut ChaCha8Rng,
         r: FaultRates,
