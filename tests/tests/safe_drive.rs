@@ -5,7 +5,7 @@
 
 use asi_lift_tests::{logged, run, run_toml, scenario, stops};
 use asi_phy::SimDuration;
-use rig::campaign::generate::generate;
+use rig::campaign::generate::{generate, Generated};
 use rig::campaign::profile::Profile;
 use rig::campaign::summary::summarize;
 use rig::campaign::{execute, judge, line, Execution, LineContext};
@@ -227,42 +227,63 @@ fn a_campaign_with_the_safe_drive_has_no_violations() {
     assert!(!g.scenario.safe_drive);
 }
 
-/// The safe-drive profile lets the converter run away (the `runaway` activity), each time
-/// repaired by the recovery at the latest; the first two runs with one end without a
-/// violation, a drive trip among their safety trips. The default profile never draws one.
-#[test]
-fn the_safe_drive_campaign_lets_the_converter_run_away_and_stays_safe() {
-    let runaway = |a: &Action| matches!(a, Action::Fault(Fault::ConverterRunaway { .. }));
-    let repaired = |a: &Action| matches!(a, Action::Fault(Fault::ConverterRepaired));
+/// The runs of the safe-drive campaign (seed 17, 200 runs) in which `fault` happens, each one
+/// followed by a `repair` (the recovery's at the latest); more than 20 of them. The default
+/// profile draws the fault in none of its 200.
+fn safe_drive_runs_with(
+    what: &str,
+    fault: impl Fn(&Action) -> bool,
+    repair: impl Fn(&Action) -> bool,
+) -> Vec<(u64, Generated)> {
     let profile = Profile::built_in("safe-drive").expect("built in");
     let mut with = Vec::new();
     for index in 0..200 {
         let g = generate(17, index, &profile);
         let events = &g.scenario.events;
-        if let Some(last) = events.iter().rposition(|e| runaway(&e.action)) {
+        if let Some(last) = events.iter().rposition(|e| fault(&e.action)) {
             assert!(
-                events[last..].iter().any(|e| repaired(&e.action)),
-                "run {index}: a runaway never repaired"
+                events[last..].iter().any(|e| repair(&e.action)),
+                "run {index}: {what} never repaired"
             );
             with.push((index, g));
         }
     }
-    assert!(with.len() > 20, "{} runs of 200 with a runaway", with.len());
-    for (index, g) in with.iter().take(2) {
-        let Execution::Report(r) = execute(&g.scenario) else {
-            panic!("run {index} did not run");
-        };
-        assert!(
-            r.violations.is_empty(),
-            "run {index}:\n{}\n{}",
-            g.scenario.to_toml(),
-            r.to_text()
-        );
-    }
+    assert!(with.len() > 20, "{} runs of 200 with {what}", with.len());
     let default = Profile::built_in("default").expect("default");
     for index in 0..200 {
         let g = generate(17, index, &default);
-        assert!(!g.scenario.events.iter().any(|e| runaway(&e.action)));
+        assert!(!g.scenario.events.iter().any(|e| fault(&e.action)));
+    }
+    with
+}
+
+/// Runs the campaign run `index` and asserts it ends without a violation.
+fn execute_safely(index: u64, g: &Generated) -> Execution {
+    let exec = execute(&g.scenario);
+    let Execution::Report(r) = &exec else {
+        panic!("run {index} did not run");
+    };
+    assert!(
+        r.violations.is_empty(),
+        "run {index}:\n{}\n{}",
+        g.scenario.to_toml(),
+        r.to_text()
+    );
+    exec
+}
+
+/// The safe-drive profile lets the converter run away (the `runaway` activity), each time
+/// repaired by the recovery at the latest; the first two runs with one end without a
+/// violation, a drive trip among their safety trips. The default profile never draws one.
+#[test]
+fn the_safe_drive_campaign_lets_the_converter_run_away_and_stays_safe() {
+    let with = safe_drive_runs_with(
+        "a runaway",
+        |a| matches!(a, Action::Fault(Fault::ConverterRunaway { .. })),
+        |a| matches!(a, Action::Fault(Fault::ConverterRepaired)),
+    );
+    for (index, g) in with.iter().take(2) {
+        execute_safely(*index, g);
     }
 }
 
@@ -272,39 +293,18 @@ fn the_safe_drive_campaign_lets_the_converter_run_away_and_stays_safe() {
 /// safe drive's trips apart. The default profile never draws one.
 #[test]
 fn the_safe_drive_campaign_fails_the_encoder_and_stays_safe() {
-    let failed = |a: &Action| matches!(a, Action::Fault(Fault::EncoderFailed));
-    let repaired = |a: &Action| matches!(a, Action::Fault(Fault::EncoderRepaired));
-    let profile = Profile::built_in("safe-drive").expect("built in");
-    let mut with = Vec::new();
-    for index in 0..200 {
-        let g = generate(17, index, &profile);
-        let events = &g.scenario.events;
-        if let Some(last) = events.iter().rposition(|e| failed(&e.action)) {
-            assert!(
-                events[last..].iter().any(|e| repaired(&e.action)),
-                "run {index}: an encoder never repaired"
-            );
-            with.push((index, g));
-        }
-    }
-    assert!(
-        with.len() > 20,
-        "{} runs of 200 with an encoder fault",
-        with.len()
+    let with = safe_drive_runs_with(
+        "an encoder fault",
+        |a| matches!(a, Action::Fault(Fault::EncoderFailed)),
+        |a| matches!(a, Action::Fault(Fault::EncoderRepaired)),
     );
     let mut lines = String::new();
     let mut drive_trips = 0;
     for (index, g) in with.iter().take(2) {
-        let exec = execute(&g.scenario);
+        let exec = execute_safely(*index, g);
         let Execution::Report(r) = &exec else {
-            panic!("run {index} did not run");
+            unreachable!("execute_safely returns a report");
         };
-        assert!(
-            r.violations.is_empty(),
-            "run {index}:\n{}\n{}",
-            g.scenario.to_toml(),
-            r.to_text()
-        );
         assert!(
             drive(r).trips.iter().any(|t| t.function == "encoder"),
             "run {index}: {:?}",
@@ -334,11 +334,6 @@ fn the_safe_drive_campaign_fails_the_encoder_and_stays_safe() {
                 && l.ends_with(&format!(" {drive_trips} in 2 runs"))),
         "{text}"
     );
-    let default = Profile::built_in("default").expect("default");
-    for index in 0..200 {
-        let g = generate(17, index, &default);
-        assert!(!g.scenario.events.iter().any(|e| failed(&e.action)));
-    }
 }
 
 /// The times (ns) and values of the 1-bit VCD variable `name` of scope `rig.drive_safety`.
