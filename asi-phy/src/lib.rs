@@ -33,7 +33,7 @@ pub mod waveform;
 
 pub use fault::{FaultInjector, FaultRates, PulseErrorRate, PulseErrorRateError, PulseFault};
 pub use manchester::{HalfBits, Level};
-pub use pulse::{Polarity, Pulse, PulseTrain};
+pub use pulse::{Polarity, Pulse, PulseTrain, Transmission};
 pub use receiver::{
     Check, Checks, Expect, Frame, LineDecoder, Listener, Received, Receiver, ReceiverConfig,
     TelegramKind,

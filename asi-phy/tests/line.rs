@@ -4,17 +4,17 @@
 use asi_phy::line::{Line, Medium};
 use asi_phy::{
     BusTiming, Expect, FaultInjector, FaultRates, Frame, LineDecoder, Nibble, PulseErrorRate,
-    PulseTrain, Request, Response, SimDuration, SimTime,
+    Request, Response, SimDuration, SimTime, Transmission,
 };
 
-fn both(trains: &[(PulseTrain, u32, u32)]) -> (Vec<Frame>, Vec<Frame>) {
+fn both(trains: &[Transmission]) -> (Vec<Frame>, Vec<Frame>) {
     let t = BusTiming::default();
     let mut m = Medium::quiet(&t);
     let mut d = LineDecoder::new(&t.receiver(Expect::Both));
     let (mut fast, mut slow) = (Vec::new(), Vec::new());
-    for (tr, raw, bits) in trains {
-        m.transmit(tr, *raw, *bits, &mut |f| fast.push(f));
-        slow.extend(d.push_train(tr));
+    for tg in trains {
+        m.transmit(tg, &mut |f| fast.push(f));
+        slow.extend(d.push_train(&tg.train()));
     }
     fast.extend(m.poll(SimTime::MAX));
     slow.extend(d.flush());
@@ -31,23 +31,19 @@ fn every_clean_telegram_decodes_as_the_line_decoder_decodes_it() {
 
 /// Every request and response back to back; now and then a gap too short to end a telegram,
 /// so that the trains overlap.
-fn all_telegrams() -> Vec<(PulseTrain, u32, u32)> {
+fn all_telegrams() -> Vec<Transmission> {
     let h = BusTiming::default().half_bit();
     let mut trains = Vec::new();
     let mut t = 0u64;
     for body in 0u16..1 << 11 {
         let bits = (body << 2) | (((body.count_ones() & 1) as u16) << 1) | 1;
         let req = Request::from_bits(bits).expect("valid");
-        trains.push((
-            PulseTrain::request(req, SimTime::from_micros(t), h),
-            req.bits() as u32,
-            14,
-        ));
+        trains.push(Transmission::request(req, SimTime::from_micros(t), h));
         let resp = Response::new(Nibble::from_low_bits(body as u8));
-        trains.push((
-            PulseTrain::response(resp, SimTime::from_micros(t + 102), h),
-            resp.bits() as u32,
-            7,
+        trains.push(Transmission::response(
+            resp,
+            SimTime::from_micros(t + 102),
+            h,
         ));
         t += if body % 13 == 0 { 146 } else { 154 };
     }
@@ -77,8 +73,8 @@ fn a_noisy_line_gives_the_frames_of_the_pulse_exact_line() {
             rates.jitter = SimDuration::from_nanos(jitter_ns);
             m.set_faults(Some(FaultInjector::new(seed, rates, t.half_bit())));
             let mut out = Vec::new();
-            for (tr, raw, bits) in &trains {
-                m.transmit(tr, *raw, *bits, &mut |f| out.push(f));
+            for tg in &trains {
+                m.transmit(tg, &mut |f| out.push(f));
             }
             out.extend(m.poll(SimTime::MAX));
             (out, m.faults_injected())

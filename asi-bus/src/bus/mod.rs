@@ -36,7 +36,7 @@ use asi_master::record::{BusStats, TraceRing, TransactionRecord};
 use asi_phy::line::{Line, Medium};
 use asi_phy::{
     BusTiming, Call, Checks, Expect, FaultInjector, FaultRates, Frame, Listener, PulseFault,
-    PulseTrain, Request, Response, SimTime,
+    PulseTrain, Request, Response, SimTime, Transmission,
 };
 use asi_slaves::monitor::SafetyMonitor;
 use asi_slaves::slave::{Peripheral, Slave};
@@ -308,24 +308,24 @@ impl Bus {
             self.next_event = self.master.poll_at(t).unwrap_or(SimTime::MAX);
             return;
         };
-        let train = PulseTrain::request(tx.request, t, self.timing.half_bit());
+        let tg = Transmission::request(tx.request, t, self.timing.half_bit());
+        let req_end = tg.end();
         self.cur = Some(Current {
             tx,
             start: t,
-            req_end: train.end(),
+            req_end,
             request_failed: Checks::NONE,
             request_frames: 0,
             valid_request: None,
             responses: 0,
             response_failed: Checks::NONE,
             response: None,
-            line_end: train.end(),
+            line_end: req_end,
             line_error: false,
         });
         let mut frames: [Option<Frame>; 4] = [None; 4];
         let mut n = 0;
-        let raw = tx.request.bits() as u32;
-        self.medium.transmit(&train, raw, Request::BITS, &mut |f| {
+        self.medium.transmit(&tg, &mut |f| {
             if n < frames.len() {
                 frames[n] = Some(f);
                 n += 1;
@@ -339,7 +339,7 @@ impl Bus {
         self.next_event = self
             .medium
             .poll_at()
-            .unwrap_or(train.end() + self.timing.min_pause())
+            .unwrap_or(req_end + self.timing.min_pause())
             .max(t);
     }
 
@@ -515,7 +515,7 @@ impl Bus {
     fn respond(&mut self, now: SimTime, req_end: SimTime, req: Request, mut who: u64) {
         let start = req_end + self.timing.master_pause();
         let h = self.timing.half_bit();
-        let mut trains: [Option<(PulseTrain, Response)>; 4] = [None; 4];
+        let mut answers: [Option<Transmission>; 4] = [None; 4];
         let mut n = 0usize;
         let mut extra = Vec::new();
         let mut readdressed = false;
@@ -532,11 +532,11 @@ impl Bus {
             let answer = slot.slave.handle(now, req);
             readdressed |= slot.slave.addr() != before;
             if let Some(r) = answer {
-                let train = PulseTrain::response(r, start, h);
-                if n < trains.len() {
-                    trains[n] = Some((train, r));
+                let tg = Transmission::response(r, start, h);
+                if n < answers.len() {
+                    answers[n] = Some(tg);
                 } else {
-                    extra.push(train);
+                    extra.push(tg);
                 }
                 n += 1;
             }
@@ -552,17 +552,16 @@ impl Bus {
         match n {
             0 => {}
             1 => {
-                if let Some((t, r)) = trains[0] {
-                    self.medium
-                        .transmit(&t, r.bits() as u32, Response::BITS, &mut collect);
+                if let Some(tg) = &answers[0] {
+                    self.medium.transmit(tg, &mut collect);
                 }
             }
             _ => {
-                let all: Vec<PulseTrain> = trains
+                let all: Vec<PulseTrain> = answers
                     .iter()
                     .flatten()
-                    .map(|(t, _)| *t)
-                    .chain(extra)
+                    .chain(&extra)
+                    .map(Transmission::train)
                     .collect();
                 self.medium.transmit_merged(&all, &mut collect);
             }

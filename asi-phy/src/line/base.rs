@@ -1,14 +1,13 @@
 //! What every line and line wrapper is: the [`Line`] trait, and how simultaneous trains
 //! superimpose on the line.
 
-use crate::{Frame, Polarity, Pulse, PulseTrain, SimTime};
+use crate::{Frame, Polarity, Pulse, PulseTrain, SimTime, Transmission};
 
 /// A line that carries pulse trains to one decoder: the [`Wire`](super::Wire), or a wrapper around a line.
 pub trait Line {
-    /// Puts the encoded telegram `train` on the line; `raw` holds its `bits` bits (first bit
-    /// highest) as the transmitter sent them. `done` gets every frame the line completes on the
-    /// way.
-    fn transmit(&mut self, train: &PulseTrain, raw: u32, bits: u32, done: &mut impl FnMut(Frame));
+    /// Puts the telegram `tg` on the line, as its transmitter sent it. `done` gets every frame
+    /// the line completes on the way.
+    fn transmit(&mut self, tg: &Transmission, done: &mut impl FnMut(Frame));
 
     /// Puts `pulses` (in time order) on the line: pulses that are not one clean telegram
     /// (superimposed answers, or pulses a wrapper changed). A wrapper may change them in place.

@@ -3,7 +3,7 @@
 use super::base::Line;
 use super::tap::Tap;
 use crate::fault::apply_faults;
-use crate::{FaultInjector, FaultRates, Frame, Pulse, PulseFault, PulseTrain, SimTime};
+use crate::{FaultInjector, FaultRates, Frame, Pulse, PulseFault, SimTime, Transmission};
 
 /// A line whose pulses pass a seeded [`FaultInjector`] and a one-shot list of exact
 /// [`PulseFault`]s on their way (a wrapper, like smoltcp's fault injector). Without faults a
@@ -101,9 +101,9 @@ impl<L> Faulty<Tap<L>> {
 }
 
 impl<L: Line> Line for Faulty<L> {
-    fn transmit(&mut self, train: &PulseTrain, raw: u32, bits: u32, done: &mut impl FnMut(Frame)) {
+    fn transmit(&mut self, tg: &Transmission, done: &mut impl FnMut(Frame)) {
         if self.is_clean() {
-            self.inner.transmit(train, raw, bits, done);
+            self.inner.transmit(tg, done);
             return;
         }
         // Random faults only: the injector draws for every pulse as ever, and a train it left
@@ -113,14 +113,14 @@ impl<L: Line> Line for Faulty<L> {
         // alone; only if it cannot does the train go through `corrupt` pulse by pulse.
         if self.one_shot.is_empty() && !self.exact {
             if let Some(inj) = &mut self.injector {
-                if inj.pass_untouched(train.len()) {
-                    self.inner.transmit(train, raw, bits, done);
+                if inj.pass_untouched(tg.pulses()) {
+                    self.inner.transmit(tg, done);
                     return;
                 }
                 let mut pulses = core::mem::take(&mut self.pulses);
-                let faults = inj.corrupt(train.iter(), &mut pulses);
+                let faults = inj.corrupt(tg.train().iter(), &mut pulses);
                 if faults == 0 && inj.rates().jitter.is_zero() {
-                    self.inner.transmit(train, raw, bits, done);
+                    self.inner.transmit(tg, done);
                 } else {
                     self.inner.transmit_pulses(&mut pulses, done);
                 }
@@ -130,7 +130,7 @@ impl<L: Line> Line for Faulty<L> {
         }
         let mut pulses = core::mem::take(&mut self.pulses);
         pulses.clear();
-        pulses.extend(train.iter());
+        pulses.extend(tg.train().iter());
         self.transmit_pulses(&mut pulses, done);
         self.pulses = pulses;
     }

@@ -1,7 +1,7 @@
 //! The tap: records every pulse that goes on the line, as it is there.
 
 use super::base::Line;
-use crate::{Frame, Pulse, PulseTrain, SimTime};
+use crate::{Frame, Pulse, SimTime, Transmission};
 
 /// A line whose pulses are recorded while recording is on (a wrapper, like smoltcp's packet
 /// capture): inside [`Faulty`](super::Faulty) it records the pulses after faults, with
@@ -43,11 +43,11 @@ impl<L> Tap<L> {
 impl<L: Line> Line for Tap<L> {
     // A pass-through on every telegram: inlined, it costs nothing while nothing records.
     #[inline]
-    fn transmit(&mut self, train: &PulseTrain, raw: u32, bits: u32, done: &mut impl FnMut(Frame)) {
+    fn transmit(&mut self, tg: &Transmission, done: &mut impl FnMut(Frame)) {
         if let Some(rec) = self.recorded.as_mut() {
-            rec.extend(train.iter());
+            rec.extend(tg.train().iter());
         }
-        self.inner.transmit(train, raw, bits, done);
+        self.inner.transmit(tg, done);
     }
 
     fn transmit_pulses(&mut self, pulses: &mut Vec<Pulse>, done: &mut impl FnMut(Frame)) {

@@ -1,16 +1,16 @@
 //! The wire: pulses in, frames out, with the fast path for clean telegrams.
 
 use super::base::Line;
-use crate::{
-    BusTiming, Checks, Expect, Frame, LineDecoder, Pulse, PulseTrain, SimDuration, SimTime,
-};
+use crate::{BusTiming, Expect, Frame, LineDecoder, Pulse, SimDuration, SimTime, Transmission};
 
 /// The bare line with its decoder: no faults, nothing recorded.
 #[derive(Debug)]
 pub struct Wire {
     decoder: LineDecoder,
     pause: SimDuration,
-    pending: Option<(PulseTrain, Frame)>,
+    /// A clean telegram on a quiet line, and its frame: handed on whole at its end plus the
+    /// pause, or to the decoder if something comes on the line before.
+    pending: Option<(Transmission, Frame)>,
     exact: bool,
 }
 
@@ -37,16 +37,16 @@ impl Wire {
     /// The train through the decoder, after the clean frame kept for the fast path: kept out
     /// of line, so that the fast path of [`Line::transmit`] inlines into its callers.
     #[inline(never)]
-    fn transmit_decoded(&mut self, train: &PulseTrain, done: &mut impl FnMut(Frame)) {
+    fn transmit_decoded(&mut self, tg: &Transmission, done: &mut impl FnMut(Frame)) {
         self.flush_pending(done);
-        if let Some(f) = self.decoder.push_train(train) {
+        if let Some(f) = self.decoder.push_train(&tg.train()) {
             done(f);
         }
     }
 
     fn flush_pending(&mut self, done: &mut impl FnMut(Frame)) {
         if let Some((t, _)) = self.pending.take() {
-            if let Some(f) = self.decoder.push_train(&t) {
+            if let Some(f) = self.decoder.push_train(&t.train()) {
                 done(f);
             }
         }
@@ -55,31 +55,21 @@ impl Wire {
 
 impl Line for Wire {
     #[inline]
-    fn transmit(&mut self, train: &PulseTrain, raw: u32, bits: u32, done: &mut impl FnMut(Frame)) {
+    fn transmit(&mut self, tg: &Transmission, done: &mut impl FnMut(Frame)) {
         if !self.exact && self.decoder.poll_at().is_none() {
             let quiet = match &self.pending {
                 None => true,
-                Some((p, _)) => train.start() >= p.end() && train.start() - p.end() >= self.pause,
+                Some((_, p)) => tg.start() >= p.end && tg.start() - p.end >= self.pause,
             };
             if quiet {
                 if let Some((_, f)) = self.pending.take() {
                     done(f);
                 }
-                self.pending = Some((
-                    *train,
-                    Frame {
-                        start: train.start(),
-                        end: train.end(),
-                        pulses: train.len(),
-                        bit_count: bits,
-                        raw,
-                        line_failed: Checks::NONE,
-                    },
-                ));
+                self.pending = Some((*tg, tg.frame()));
                 return;
             }
         }
-        self.transmit_decoded(train, done);
+        self.transmit_decoded(tg, done);
     }
 
     fn transmit_pulses(&mut self, pulses: &mut Vec<Pulse>, done: &mut impl FnMut(Frame)) {
