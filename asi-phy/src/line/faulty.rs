@@ -87,25 +87,10 @@ impl<L> Faulty<L> {
     }
 }
 
-impl<L> Faulty<Tap<L>> {
-    /// Starts (`true`) or stops recording every pulse that goes on the line, as it is there:
-    /// after faults, with colliding answers superimposed.
-    pub fn record_pulses(&mut self, on: bool) {
-        self.inner.record_pulses(on);
-    }
-
-    /// Takes the pulses recorded since the last call (in the order they went on the line).
-    pub fn take_pulses(&mut self) -> Vec<Pulse> {
-        self.inner.take_pulses()
-    }
-}
-
-impl<L: Line> Line for Faulty<L> {
-    fn transmit(&mut self, tg: &Transmission, done: &mut impl FnMut(Frame)) {
-        if self.is_clean() {
-            self.inner.transmit(tg, done);
-            return;
-        }
+impl<L: Line> Faulty<L> {
+    /// [`Line::transmit`] with faults armed.
+    #[inline(never)]
+    fn transmit_faulty(&mut self, tg: &Transmission, done: &mut impl FnMut(Frame)) {
         // Random faults only: the injector draws for every pulse as ever, and a train it left
         // untouched (no fault, no jitter) is a clean train that may take the wire's fast path;
         // the rest go on as pulses. Same draws, same frames (tests/line.rs). Most trains are
@@ -133,6 +118,31 @@ impl<L: Line> Line for Faulty<L> {
         pulses.extend(tg.train().iter());
         self.transmit_pulses(&mut pulses, done);
         self.pulses = pulses;
+    }
+}
+
+impl<L> Faulty<Tap<L>> {
+    /// Starts (`true`) or stops recording every pulse that goes on the line, as it is there:
+    /// after faults, with colliding answers superimposed.
+    pub fn record_pulses(&mut self, on: bool) {
+        self.inner.record_pulses(on);
+    }
+
+    /// Takes the pulses recorded since the last call (in the order they went on the line).
+    pub fn take_pulses(&mut self) -> Vec<Pulse> {
+        self.inner.take_pulses()
+    }
+}
+
+impl<L: Line> Line for Faulty<L> {
+    // The clean line's pass-through inlines into the caller; the faulty path stays apart.
+    #[inline]
+    fn transmit(&mut self, tg: &Transmission, done: &mut impl FnMut(Frame)) {
+        if self.is_clean() {
+            self.inner.transmit(tg, done);
+        } else {
+            self.transmit_faulty(tg, done);
+        }
     }
 
     fn transmit_pulses(&mut self, pulses: &mut Vec<Pulse>, done: &mut impl FnMut(Frame)) {
