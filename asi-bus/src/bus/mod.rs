@@ -440,9 +440,10 @@ impl Bus {
                     cur.request_failed = cur_checks(cur.request_failed, r.failed);
                 }
                 if let Some(q) = r.request() {
-                    let mask = match q.call() {
-                        Call::BroadcastReset => u64::MAX,
-                        _ => self.addr_index[q.address().get() as usize],
+                    let mask = if q.is_broadcast_reset() {
+                        u64::MAX
+                    } else {
+                        self.addr_index[q.address().get() as usize]
                     };
                     responders |= g.members & mask;
                     request = Some(q);

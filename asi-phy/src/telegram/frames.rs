@@ -266,6 +266,12 @@ impl Request {
         Request::raw(true, 31, 0b10101)
     }
 
+    /// `true` for the broadcast reset: the one call every slave takes, told without decoding
+    /// the call (a request's bits determine its call, and this is the one request that is it).
+    pub const fn is_broadcast_reset(self) -> bool {
+        self.0 == Request::broadcast_reset().0
+    }
+
     /// A command call with I4 = 1; `inverted` for the calls that carry ~Sel in I3.
     const fn command(
         address: Address,

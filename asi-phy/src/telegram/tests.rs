@@ -150,6 +150,11 @@ fn every_request_classifies_and_rebuilds() {
             unknown += 1;
         }
         assert_eq!(call.request(), Some(req), "{call:?}");
+        assert_eq!(
+            req.is_broadcast_reset(),
+            call == Call::BroadcastReset,
+            "{call:?}"
+        );
     }
     // CB=1, I4=0, A≠0 with I2..I0 ≠ 0: 31·2·7 = 434; CB=1, I4=1: x111 at every address
     // (64), x101 except 31/I3=0 (63), Sel=B reads at address 0 (4), ~Sel=B at 0 (2).
