@@ -409,6 +409,8 @@ struct Ids {
     err_ack: StandardInput,
     controller_restart: StandardInput,
     estop_out: StandardOutput,
+    /// K1, local output 1 ([`TwinSafeLogic::local_output_position`]).
+    k1: Option<usize>,
 }
 
 /// The lift's safety logic: call [`LiftSafety::scan`] every [`SAFETY_SCAN_PERIOD`].
@@ -443,6 +445,7 @@ impl LiftSafety {
                 "controller_restart",
             )?,
             estop_out: find(logic.standard_output("estop_out"), "estop_out")?,
+            k1: logic.local_output_position(1),
         };
         Ok(LiftSafety {
             config,
@@ -512,14 +515,15 @@ impl LiftSafety {
                 | u8::from(i.overtravel_top_released) << 1
                 | u8::from(i.k1_aux) << 2,
         );
-        let mut events: Vec<LiftSafetyEvent> = self
-            .logic
-            .scan(now)
-            .iter()
-            .map(|e| describe(e, &self.config))
-            .collect();
+        let logged = self.logic.scan(now);
+        // Almost every scan logs nothing.
+        let mut events: Vec<LiftSafetyEvent> = if logged.is_empty() {
+            Vec::new()
+        } else {
+            logged.iter().map(|e| describe(e, &self.config)).collect()
+        };
 
-        let k1 = self.logic.local_output(1);
+        let k1 = ids.k1.is_some_and(|k| self.logic.local_output_at(k));
         let estop_out = self.logic.standard_output_value(ids.estop_out);
         let diag = LiftSafetyDiag {
             group: self.logic.group_status(ids.group),

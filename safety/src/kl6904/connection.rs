@@ -300,13 +300,47 @@ impl fmt::Display for ChannelFault {
     }
 }
 
+/// The items of a telegram that change from one to the next: sequence number, data and
+/// status (or control). The other two follow from the connection: the sender is the
+/// sender's address and the CRC is [`Telegram::crc_after`] the connection's address CRC for
+/// that direction, so the telegram's bytes are made only when a fault changes or replays them.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+struct Payload {
+    seq: u16,
+    data: u8,
+    status: u8,
+}
+
+impl Payload {
+    /// The wire bytes of the telegram from `sender`, given the CRC of its addresses.
+    fn to_bytes(self, sender: u16, addresses: u16) -> [u8; Telegram::LEN] {
+        Telegram::with_address_crc(sender, addresses, self.seq, self.data, self.status).to_bytes()
+    }
+}
+
+/// What the black channel delivers of a reply.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Carried {
+    /// Nothing arrives.
+    Lost,
+    /// The partner's reply as the partner made it.
+    Intact(Payload),
+    /// Bytes that a fault changed or put in the reply's place.
+    Altered([u8; Telegram::LEN]),
+}
+
 /// The untrusted channel between the logic and one partner, with scheduled faults.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 struct BlackChannel {
     scheduled: Vec<(SimTime, ChannelFault)>,
     down_until: Option<SimTime>,
     next_reply_fault: VecDeque<ChannelFault>,
-    history: VecDeque<[u8; Telegram::LEN]>,
+    /// The last [`BlackChannel::HISTORY`] replies carried (for a replay), in a ring: the one
+    /// `age` exchanges back (1 = the last) is at `(next + HISTORY - age) % HISTORY`, for
+    /// `age` up to `carried`.
+    history: [Payload; BlackChannel::HISTORY],
+    next: usize,
+    carried: usize,
 }
 
 impl BlackChannel {
@@ -343,33 +377,45 @@ impl BlackChannel {
         }
     }
 
-    /// Carry a reply: applies the next pending reply fault.
-    fn carry_reply(&mut self, reply: [u8; Telegram::LEN]) -> Option<[u8; Telegram::LEN]> {
-        let delivered = match self.next_reply_fault.pop_front() {
-            None => Some(reply),
-            Some(ChannelFault::CorruptCrc) => {
-                let mut r = reply;
-                r[Telegram::LEN - 1] ^= 0x01;
-                Some(r)
-            }
-            Some(ChannelFault::Replay { age }) => self
-                .history
-                .len()
-                .checked_sub(usize::from(age.max(1)))
-                .map(|k| self.history[k]),
-            Some(ChannelFault::WrongAddress { sender }) => {
-                let mut t = Telegram::from_bytes(reply);
-                t.sender = sender;
-                Some(t.to_bytes())
-            }
-            Some(ChannelFault::NullTelegram) => Some([0; Telegram::LEN]),
-            Some(ChannelFault::Drop { .. }) => None,
+    /// Carry a reply of the partner at `sender` (`addresses`: the CRC of the reply's
+    /// addresses): applies the next pending reply fault.
+    fn carry_reply(&mut self, reply: Payload, sender: u16, addresses: u16) -> Carried {
+        let carried = match self.next_reply_fault.pop_front() {
+            None => Carried::Intact(reply),
+            Some(fault) => self.apply(fault, reply, sender, addresses),
         };
-        if self.history.len() == Self::HISTORY {
-            self.history.pop_front();
+        self.history[self.next % Self::HISTORY] = reply;
+        self.next = (self.next + 1) % Self::HISTORY;
+        self.carried = (self.carried + 1).min(Self::HISTORY);
+        carried
+    }
+
+    /// What a reply fault makes of `reply`.
+    #[cold]
+    fn apply(&self, fault: ChannelFault, reply: Payload, sender: u16, addresses: u16) -> Carried {
+        match fault {
+            ChannelFault::CorruptCrc => {
+                let mut r = reply.to_bytes(sender, addresses);
+                r[Telegram::LEN - 1] ^= 0x01;
+                Carried::Altered(r)
+            }
+            ChannelFault::Replay { age } => {
+                let age = usize::from(age.max(1));
+                if age <= self.carried {
+                    let old = self.history[(self.next + Self::HISTORY - age) % Self::HISTORY];
+                    Carried::Altered(old.to_bytes(sender, addresses))
+                } else {
+                    Carried::Lost
+                }
+            }
+            ChannelFault::WrongAddress { sender: claimed } => {
+                let mut t = Telegram::from_bytes(reply.to_bytes(sender, addresses));
+                t.sender = claimed;
+                Carried::Altered(t.to_bytes())
+            }
+            ChannelFault::NullTelegram => Carried::Altered([0; Telegram::LEN]),
+            ChannelFault::Drop { .. } => Carried::Lost,
         }
-        self.history.push_back(reply);
-        delivered
     }
 }
 
@@ -418,13 +464,14 @@ impl PartnerKind {
 
 /// The simulated partner terminal (TwinSAFE slave): it checks the logic's requests, drives its
 /// safe outputs from them and answers with its safe inputs.
+///
+/// The black channel delivers a request as the logic made it or not at all (its faults act
+/// on replies), so a request that arrives always comes from the logic's address with the CRC
+/// made from the connection's request address CRC: of the partner's checks only the sequence
+/// number's can fail, and only it is run (the reference exchange in the tests runs all of
+/// them on the bytes, and gives the same results).
 #[derive(Clone, Debug, PartialEq, Eq)]
 struct Partner {
-    address: u16,
-    master: u16,
-    /// [`address_crc`] of requests (master to partner) and of replies (partner to master).
-    request_crc: u16,
-    reply_crc: u16,
     watchdog: SimDuration,
     inputs: u8,
     outputs: u8,
@@ -434,22 +481,13 @@ struct Partner {
 }
 
 impl Partner {
-    fn handle(
-        &mut self,
-        now: SimTime,
-        request: Option<[u8; Telegram::LEN]>,
-    ) -> Option<[u8; Telegram::LEN]> {
+    /// One request at `now` (`None`: lost on the way); the reply, if the partner sends one.
+    fn handle(&mut self, now: SimTime, request: Option<Payload>) -> Option<Payload> {
         let mut reply = None;
-        if let Some(bytes) = request {
-            let t = Telegram::from_bytes(bytes);
+        if let Some(t) = request {
             let seq_ok =
                 self.last_seq == 0 || t.seq == self.last_seq || t.seq == next_seq(self.last_seq);
-            // The sender is checked first: `request_crc` is the CRC of the master's address.
-            if t.sender == self.master
-                && t.crc == t.crc_after(self.request_crc)
-                && t.seq != 0
-                && seq_ok
-            {
+            if t.seq != 0 && seq_ok {
                 if t.status & control::ACK != 0 {
                     self.faults = 0;
                 }
@@ -460,14 +498,11 @@ impl Partner {
                 } else {
                     t.data
                 };
-                let r = Telegram::with_address_crc(
-                    self.address,
-                    self.reply_crc,
-                    t.seq,
-                    self.inputs,
-                    self.faults,
-                );
-                reply = Some(r.to_bytes());
+                reply = Some(Payload {
+                    seq: t.seq,
+                    data: self.inputs,
+                    status: self.faults,
+                });
             } else {
                 self.faults |= status::COMM_FAULT;
             }
@@ -502,8 +537,8 @@ pub enum ConnEvent {
 pub struct Connection {
     logic_address: u16,
     partner_address: u16,
-    /// [`address_crc`] of requests (logic to partner) and of replies (partner to logic).
-    request_crc: u16,
+    /// [`address_crc`] of replies (partner to logic). A request needs none: its bytes are
+    /// never made (see [`Partner`]).
     reply_crc: u16,
     watchdog: SimDuration,
     seq: u16,
@@ -521,12 +556,10 @@ pub struct Connection {
 impl Connection {
     /// A connection from the logic at `logic_address` to the partner at `partner_address`.
     pub fn new(logic_address: u16, partner_address: u16, watchdog: SimDuration) -> Self {
-        let request_crc = address_crc(logic_address, partner_address);
         let reply_crc = address_crc(partner_address, logic_address);
         Connection {
             logic_address,
             partner_address,
-            request_crc,
             reply_crc,
             watchdog,
             seq: 1,
@@ -537,10 +570,6 @@ impl Connection {
             cause_active: false,
             ack_pending: false,
             partner: Partner {
-                address: partner_address,
-                master: logic_address,
-                request_crc,
-                reply_crc,
                 watchdog,
                 inputs: 0,
                 outputs: 0,
@@ -580,33 +609,52 @@ impl Connection {
             ctrl |= control::ACK;
         }
         let data = if fail_safe { 0 } else { outputs };
-        let request =
-            Telegram::with_address_crc(self.logic_address, self.request_crc, self.seq, data, ctrl);
-        let down = self.channel.begin(now);
-        let delivered = if down { None } else { Some(request.to_bytes()) };
-        let reply = self.partner.handle(now, delivered);
-        let reply = match reply {
-            Some(r) if !down => self.channel.carry_reply(r),
-            _ => None,
+        let request = Payload {
+            seq: self.seq,
+            data,
+            status: ctrl,
         };
-        let valid = reply.is_some_and(|r| self.check(now, r));
+        let down = self.channel.begin(now);
+        let reply = self.partner.handle(now, (!down).then_some(request));
+        let reply = match reply {
+            Some(r) if !down => self
+                .channel
+                .carry_reply(r, self.partner_address, self.reply_crc),
+            _ => Carried::Lost,
+        };
+        let valid = match reply {
+            Carried::Lost => false,
+            // The partner's own reply to this request: not all zeros (its sequence number,
+            // this request's, is never 0), from the partner's address, with the CRC made from
+            // `reply_crc`, and echoing `self.seq`; every check of `check` passes up to the
+            // partner's status, which `accept` looks at.
+            Carried::Intact(r) => self.accept(now, r.data, r.status),
+            Carried::Altered(bytes) => self.check(now, bytes),
+        };
         let since = self.last_valid.unwrap_or(start);
         let silent = now.saturating_duration_since(since);
         let expired = silent > self.watchdog;
         if expired {
-            self.latch(
-                ConnDiag::WATCHDOG,
-                format!(
-                    "no valid telegram for {silent} (watchdog {})",
-                    self.watchdog
-                ),
-            );
+            self.watchdog_expired(silent);
         }
         self.cause_active = !valid || expired;
         &self.events
     }
 
-    /// Check a reply; `true` if it is valid. Latches the error bits of a bad one.
+    /// No valid telegram for `silent`, longer than the watchdog time.
+    #[cold]
+    fn watchdog_expired(&mut self, silent: SimDuration) {
+        self.latch(
+            ConnDiag::WATCHDOG,
+            format!(
+                "no valid telegram for {silent} (watchdog {})",
+                self.watchdog
+            ),
+        );
+    }
+
+    /// Check a reply's bytes; `true` if it is valid. Latches the error bits of a bad one.
+    #[cold]
     fn check(&mut self, now: SimTime, bytes: [u8; Telegram::LEN]) -> bool {
         if bytes == [0; Telegram::LEN] {
             self.latch(ConnDiag::NULL_TELEGRAM, "null telegram received".into());
@@ -646,21 +694,35 @@ impl Connection {
             );
             return false;
         }
-        if t.status & (status::COMM_FAULT | status::WD_FAULT) != 0 {
-            let what = match t.status & (status::COMM_FAULT | status::WD_FAULT) {
-                status::COMM_FAULT => "Comm_Fault",
-                status::WD_FAULT => "WD_Fault",
-                _ => "Comm_Fault and WD_Fault",
-            };
-            self.latch(ConnDiag::SLAVE_ERROR, format!("partner reports {what}"));
+        self.accept(now, t.data, t.status)
+    }
+
+    /// A reply that passed the checks, with the partner's `data` and status bits `flags`:
+    /// latch the partner's own faults, take the data and move to the next sequence number.
+    /// `true`.
+    #[inline]
+    fn accept(&mut self, now: SimTime, data: u8, flags: u8) -> bool {
+        if flags & (status::COMM_FAULT | status::WD_FAULT) != 0 {
+            self.partner_faulted(flags);
         }
         self.seq = next_seq(self.seq);
-        self.received = t.data;
+        self.received = data;
         if self.last_valid.is_none() {
             self.events.push(ConnEvent::Running);
         }
         self.last_valid = Some(now);
         true
+    }
+
+    /// The partner reports Comm_Fault or WD_Fault in its status bits `flags`.
+    #[cold]
+    fn partner_faulted(&mut self, flags: u8) {
+        let what = match flags & (status::COMM_FAULT | status::WD_FAULT) {
+            status::COMM_FAULT => "Comm_Fault",
+            status::WD_FAULT => "WD_Fault",
+            _ => "Comm_Fault and WD_Fault",
+        };
+        self.latch(ConnDiag::SLAVE_ERROR, format!("partner reports {what}"));
     }
 
     fn latch(&mut self, bit: ConnDiag, detail: String) {
@@ -717,6 +779,9 @@ impl Connection {
         }
     }
 }
+
+#[cfg(test)]
+mod reference;
 
 #[cfg(test)]
 mod tests {
@@ -859,13 +924,86 @@ mod tests {
     }
 
     #[test]
-    fn a_connection_keeps_the_crcs_of_its_two_directions() {
+    fn a_connection_keeps_the_crc_of_its_replies_addresses() {
         let c = Connection::new(1, 2, SimDuration::from_millis(100));
-        assert_eq!(c.request_crc, address_crc(1, 2));
         assert_eq!(c.reply_crc, address_crc(2, 1));
-        assert_eq!(c.partner.request_crc, c.request_crc);
-        assert_eq!(c.partner.reply_crc, c.reply_crc);
-        assert_ne!(c.request_crc, c.reply_crc, "the two directions differ");
+        assert_ne!(c.reply_crc, address_crc(1, 2), "the two directions differ");
+    }
+
+    /// One step of a connection's life in the property test below.
+    #[derive(Clone, Debug)]
+    enum Step {
+        /// An exchange `dt_ms` after the previous one, with these partner inputs and outputs.
+        Exchange { dt_ms: u64, inputs: u8, outputs: u8 },
+        /// A fault on the black channel, `in_ms` from the last exchange.
+        Fault { in_ms: u64, fault: ChannelFault },
+        /// The group's ERR_ACK.
+        Acknowledge,
+    }
+
+    fn step() -> impl proptest::strategy::Strategy<Value = Step> {
+        use proptest::prelude::*;
+        let fault = prop_oneof![
+            (0..300u64).prop_map(|ms| ChannelFault::Drop {
+                duration: SimDuration::from_millis(ms)
+            }),
+            Just(ChannelFault::CorruptCrc),
+            (0..20u8).prop_map(|age| ChannelFault::Replay { age }),
+            (1..5u16).prop_map(|sender| ChannelFault::WrongAddress { sender }),
+            Just(ChannelFault::NullTelegram),
+        ];
+        prop_oneof![
+            8 => (prop_oneof![3 => 0..3u64, 1 => 0..150u64], any::<u8>(), any::<u8>())
+                .prop_map(|(dt_ms, inputs, outputs)| Step::Exchange { dt_ms, inputs, outputs }),
+            2 => (0..20u64, fault).prop_map(|(in_ms, fault)| Step::Fault { in_ms, fault }),
+            1 => Just(Step::Acknowledge),
+        ]
+    }
+
+    proptest::proptest! {
+        /// The exchange on payloads, which makes a telegram's bytes only for a fault, gives
+        /// what the exchange on bytes gives (the reference, as first written): the same
+        /// events, inputs, diag byte, error cause and partner outputs after every step, under
+        /// every kind of channel fault, across the sequence number's wrap.
+        #[test]
+        fn the_exchange_on_payloads_is_the_exchange_on_bytes(
+            first_seq in proptest::prop_oneof![proptest::strategy::Just(1u16), 65_500..=u16::MAX],
+            steps in proptest::collection::vec(step(), 0..400),
+        ) {
+            let watchdog = SimDuration::from_millis(100);
+            let mut fast = Connection::new(1, 3, watchdog);
+            let mut bytes = reference::Connection::new(1, 3, watchdog);
+            fast.seq = first_seq;
+            bytes.seq = first_seq;
+            let mut now = SimTime::from_millis(5);
+            for step in steps {
+                match step {
+                    Step::Exchange { dt_ms, inputs, outputs } => {
+                        now += SimDuration::from_millis(dt_ms);
+                        fast.set_partner_inputs(inputs);
+                        bytes.set_partner_inputs(inputs);
+                        let a = fast.exchange(now, outputs).to_vec();
+                        let b = bytes.exchange(now, outputs).to_vec();
+                        proptest::prop_assert_eq!(a, b);
+                    }
+                    Step::Fault { in_ms, fault } => {
+                        let at = now + SimDuration::from_millis(in_ms);
+                        fast.inject(at, fault);
+                        bytes.inject(at, fault);
+                    }
+                    Step::Acknowledge => {
+                        fast.acknowledge();
+                        bytes.acknowledge();
+                    }
+                }
+                proptest::prop_assert_eq!(fast.inputs(), bytes.inputs());
+                proptest::prop_assert_eq!(fast.diag(), bytes.diag());
+                proptest::prop_assert_eq!(fast.has_error(), bytes.has_error());
+                proptest::prop_assert_eq!(fast.error_cause_active(), bytes.error_cause_active());
+                proptest::prop_assert_eq!(fast.partner_outputs(), bytes.partner_outputs());
+                proptest::prop_assert_eq!(fast.seq, bytes.seq);
+            }
+        }
     }
 
     #[test]

@@ -25,13 +25,13 @@ use core::fmt;
 
 use super::connection::{ChannelFault, ConnDiag, ConnEvent, Connection};
 use super::group::{Group, GroupErrors, GroupState};
-use super::modules::{
-    and, decouple, or, Core, Estop, EstopInputs, FbEvent, FbState, Mon, MonInputs, OpMode,
-    OpModeInputs,
-};
+use super::modules::{and_bits, or_bits, Core, Estop, FbEvent, FbState, Mon, OpMode};
 use super::project::{ModuleKind, Project};
-use super::signal::{ChannelRef, GroupOutput, SignalRef};
-use super::verify::{self, input_specs, output_specs, Compiled, ModuleConfig, Slot, VerifyError};
+use super::signal::{ChannelRef, Contact, GroupOutput, SignalRef};
+use super::verify::{
+    self, input_specs, output_specs, Compiled, CompiledGroup, CompiledLocalOutput, CompiledModule,
+    ModuleConfig, Slot, VerifyError,
+};
 
 /// A handle to a standard input of a logic (see [`TwinSafeLogic::standard_input`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -240,11 +240,37 @@ impl fmt::Display for LogicEvent {
     }
 }
 
-/// A module's runtime state.
+/// A module as the scan runs it: its state, and what the scan needs of its compiled form.
 #[derive(Clone, Debug)]
-enum ModuleRt {
-    And,
-    Or,
+struct ModuleRt {
+    kind: ModuleKind,
+    /// Its group.
+    group: usize,
+    /// (position, slot) of each linked input: bit `position` of the module's input mask
+    /// (positions in the order of [`input_specs`]) is the value of `slot`; an input not
+    /// linked reads 0.
+    links: Box<[(u32, Slot)]>,
+    /// The slot of each output in the order of [`output_specs`]: bit `k` of the module's
+    /// output mask goes to the `k`-th.
+    outputs: Box<[Slot]>,
+    /// Bit `k` set if output `k` is a safety output (0 unless the group runs).
+    safety: u16,
+    fb: Fb,
+}
+
+/// A module's function and state.
+#[derive(Clone, Debug)]
+enum Fb {
+    /// AND: the input positions linked, and those of them with a make contact.
+    And {
+        linked: u16,
+        make: u16,
+    },
+    /// OR: the same.
+    Or {
+        linked: u16,
+        make: u16,
+    },
     OpMode(OpMode),
     Estop(Estop),
     Mon(Mon),
@@ -252,24 +278,86 @@ enum ModuleRt {
 }
 
 impl ModuleRt {
-    fn new(config: &ModuleConfig) -> Self {
-        match config {
-            ModuleConfig::And => ModuleRt::And,
-            ModuleConfig::Or => ModuleRt::Or,
-            ModuleConfig::OpMode(c) => ModuleRt::OpMode(OpMode::new(c.clone())),
-            ModuleConfig::Estop(c) => ModuleRt::Estop(Estop::new(c.clone())),
-            ModuleConfig::Mon(c) => ModuleRt::Mon(Mon::new(c.clone())),
-            ModuleConfig::Decouple => ModuleRt::Decouple,
+    fn new(cm: &CompiledModule) -> Self {
+        let links = cm.inputs.iter().enumerate();
+        let links = links.filter_map(|(k, input)| input.map(|(slot, _)| (k as u32, slot)));
+        // Bit k set for each input position k that is linked, with `contact` if given.
+        let mask = |contact: Option<Contact>| {
+            let inputs = cm.inputs.iter().enumerate();
+            inputs.fold(0u16, |m, (k, input)| match input {
+                Some((_, c)) if contact.is_none_or(|want| *c == want) => m | 1 << k,
+                _ => m,
+            })
+        };
+        let fb = match &cm.config {
+            ModuleConfig::And => Fb::And {
+                linked: mask(None),
+                make: mask(Some(Contact::Make)),
+            },
+            ModuleConfig::Or => Fb::Or {
+                linked: mask(None),
+                make: mask(Some(Contact::Make)),
+            },
+            ModuleConfig::OpMode(c) => Fb::OpMode(OpMode::new(c.clone())),
+            ModuleConfig::Estop(c) => Fb::Estop(Estop::new(c.clone())),
+            ModuleConfig::Mon(c) => Fb::Mon(Mon::new(c.clone())),
+            ModuleConfig::Decouple => Fb::Decouple,
+        };
+        ModuleRt {
+            kind: cm.kind,
+            group: cm.group,
+            links: links.collect(),
+            outputs: cm.outputs.iter().copied().collect(),
+            safety: (cm.safety_outputs.iter().enumerate())
+                .fold(0, |m, (k, &safety)| m | u16::from(safety) << k),
+            fb,
         }
+    }
+
+    /// One scan at `now`: reads the inputs from `image`, runs the function and writes the
+    /// outputs (safety outputs 0 unless `run`). `true` if the module has events to report
+    /// ([`ModuleRt::events`]).
+    fn scan(&mut self, now: SimTime, run: bool, image: &mut [bool]) -> bool {
+        let inputs = self
+            .links
+            .iter()
+            .fold(0u16, |bits, &(k, slot)| bits | u16::from(image[slot]) << k);
+        let (outputs, events) = match &mut self.fb {
+            Fb::And { linked, make } => (u16::from(and_bits(inputs, *linked, *make)), false),
+            Fb::Or { linked, make } => (u16::from(or_bits(inputs, *linked, *make)), false),
+            // DECOUPLE: DecOut n = DecIn n (`decouple`).
+            Fb::Decouple => (inputs, false),
+            Fb::OpMode(fb) => {
+                let o = fb.scan_bits(now, run, inputs);
+                let outs = o.op_out.iter().enumerate();
+                let outs = outs.fold(0, |m, (k, &v)| m | u16::from(v) << k);
+                (outs | u16::from(o.error) << 8, !fb.events().is_empty())
+            }
+            Fb::Estop(fb) => {
+                let o = fb.scan_bits(now, run, inputs);
+                let outs = u16::from(o.estop_out) | u16::from(o.estop_del_out) << 1;
+                (outs | u16::from(o.error) << 2, !fb.events().is_empty())
+            }
+            Fb::Mon(fb) => {
+                let o = fb.scan_bits(now, run, inputs);
+                let outs = u16::from(o.mon_out) | u16::from(o.mon_del_out) << 1;
+                (outs | u16::from(o.error) << 2, !fb.events().is_empty())
+            }
+        };
+        let outputs = if run { outputs } else { outputs & !self.safety };
+        for (k, &slot) in self.outputs.iter().enumerate() {
+            image[slot] = outputs & 1 << k != 0;
+        }
+        events
     }
 
     /// The state machine of a stateful module; AND, OR and DECOUPLE have none.
     fn core(&self) -> Option<&Core> {
-        match self {
-            ModuleRt::OpMode(m) => Some(m.core()),
-            ModuleRt::Estop(m) => Some(m.core()),
-            ModuleRt::Mon(m) => Some(m.core()),
-            ModuleRt::And | ModuleRt::Or | ModuleRt::Decouple => None,
+        match &self.fb {
+            Fb::OpMode(m) => Some(m.core()),
+            Fb::Estop(m) => Some(m.core()),
+            Fb::Mon(m) => Some(m.core()),
+            Fb::And { .. } | Fb::Or { .. } | Fb::Decouple => None,
         }
     }
 
@@ -295,11 +383,11 @@ impl ModuleRt {
     }
 
     fn acknowledge(&mut self) {
-        let core = match self {
-            ModuleRt::OpMode(m) => m.core_mut(),
-            ModuleRt::Estop(m) => m.core_mut(),
-            ModuleRt::Mon(m) => m.core_mut(),
-            ModuleRt::And | ModuleRt::Or | ModuleRt::Decouple => return,
+        let core = match &mut self.fb {
+            Fb::OpMode(m) => m.core_mut(),
+            Fb::Estop(m) => m.core_mut(),
+            Fb::Mon(m) => m.core_mut(),
+            Fb::And { .. } | Fb::Or { .. } | Fb::Decouple => return,
         };
         core.acknowledge();
     }
@@ -345,7 +433,7 @@ impl TwinSafeLogic {
             image: vec![false; c.slots],
             groups: vec![Group::new(); c.groups.len()],
             connections,
-            modules: c.modules.iter().map(|m| ModuleRt::new(&m.config)).collect(),
+            modules: c.modules.iter().map(ModuleRt::new).collect(),
             local_faults: vec![LocalFault::default(); c.local_outputs.len()],
             local_values: vec![false; c.local_outputs.len()],
             twinsafe_out: vec![0; c.connections.len()],
@@ -446,6 +534,116 @@ impl TwinSafeLogic {
     /// One safety scan at `now`; returns what happened in it.
     pub fn scan(&mut self, now: SimTime) -> &[LogicEvent] {
         self.events.clear();
+        let backwards = self.last_now.is_some_and(|last| now < last);
+        if (self.fault.is_some() || self.pending_fault.is_some() || backwards) && self.stopped(now)
+        {
+            return &self.events;
+        }
+        self.last_now = Some(now);
+        // The parts one at a time: a write to the image then cannot change the others.
+        let TwinSafeLogic {
+            c,
+            image,
+            groups,
+            connections,
+            modules,
+            local_faults,
+            local_values,
+            twinsafe_out,
+            standard_values,
+            events,
+            ..
+        } = self;
+        let image: &mut [bool] = image;
+
+        // 1. Inputs: one exchange per connection.
+        for (k, (conn, &out)) in connections.iter_mut().zip(&*twinsafe_out).enumerate() {
+            let reported = conn.exchange(now, out);
+            // Almost every exchange reports nothing.
+            if !reported.is_empty() {
+                push_connection_events(events, now, k, &c.connections[k].name, reported);
+            }
+        }
+        for (f, o) in local_faults.iter_mut().zip(&c.local_outputs) {
+            if f.present && !f.latched {
+                f.latched = true;
+                push_local_output_fault(events, now, o);
+            }
+        }
+
+        // 2. Groups.
+        for (g, cg) in c.groups.iter().enumerate() {
+            let run = cg.run.is_none_or(|s| image[s]);
+            let ack = cg.err_ack.is_some_and(|s| image[s]);
+            let (errors, cause) = collect(g, c, modules, connections, local_faults);
+            let group = &mut groups[g];
+            let before = group.state();
+            if group.update(run, ack, errors, cause) {
+                let members = (&mut **modules, &mut **connections, &mut **local_faults);
+                acknowledge_group(events, now, g, run, c, group, members);
+            }
+            refresh_group(image, events, now, cg, group, before);
+        }
+        for (cc, conn) in c.connections.iter().zip(&*connections) {
+            let bits = conn.inputs();
+            for (ch, &slot) in cc.inputs.iter().enumerate() {
+                image[slot] = bits & 1 << ch != 0;
+            }
+        }
+
+        // 3. Modules in their order.
+        for (m, rt) in modules.iter_mut().enumerate() {
+            let run = groups[rt.group].running();
+            // Events are rare: walk them in place rather than copying them every scan.
+            if rt.scan(now, run, image) {
+                push_module_events(events, now, &c.modules[m], rt.events());
+            }
+        }
+
+        // 4. Errors found in this scan trip their group at once.
+        for (g, cg) in c.groups.iter().enumerate() {
+            let (errors, _) = collect(g, c, modules, connections, local_faults);
+            let group = &mut groups[g];
+            let before = group.state();
+            group.trip(errors);
+            refresh_group(image, events, now, cg, group, before);
+        }
+
+        // 5. Outputs.
+        for m in &*modules {
+            if !groups[m.group].running() {
+                for (k, &slot) in m.outputs.iter().enumerate() {
+                    if m.safety & 1 << k != 0 {
+                        image[slot] = false;
+                    }
+                }
+            }
+        }
+        let locals = c.local_outputs.iter().zip(&*local_faults);
+        for ((o, f), v) in locals.zip(local_values) {
+            *v = image[o.source] && groups[o.group].running() && !f.latched;
+        }
+        for ((_, slot), v) in c.standard_outputs.iter().zip(standard_values) {
+            *v = image[*slot];
+        }
+        for (cc, out) in c.connections.iter().zip(twinsafe_out) {
+            // A connection without TwinSAFE-Out channels (to an input terminal) sends 0.
+            *out = if !cc.outputs.is_empty() && groups[cc.group].running() {
+                cc.outputs
+                    .iter()
+                    .filter(|&&(_, slot)| image[slot])
+                    .fold(0, |bits, &(ch, _)| bits | 1 << (ch - 1))
+            } else {
+                0
+            };
+        }
+        &self.events
+    }
+
+    /// The start of a scan at `now` when the logic has stopped, or has to stop now on a
+    /// pending or detected fault; `true` if it is stopped (then every output is 0).
+    #[cold]
+    fn stopped(&mut self, now: SimTime) -> bool {
         if self.fault.is_none() {
             let backwards = self.last_now.filter(|&last| now < last);
             let cause = match (self.pending_fault.take(), backwards) {
@@ -456,12 +654,10 @@ impl TwinSafeLogic {
                 _ => None,
             };
             if let Some(cause) = cause {
-                self.push(
-                    now,
-                    LogicEventKind::LogicFault {
-                        cause: cause.clone(),
-                    },
-                );
+                let kind = LogicEventKind::LogicFault {
+                    cause: cause.clone(),
+                };
+                self.events.push(LogicEvent { at: now, kind });
                 self.fault = Some(cause);
             }
         }
@@ -469,270 +665,29 @@ impl TwinSafeLogic {
             self.local_values.iter_mut().for_each(|v| *v = false);
             self.standard_values.iter_mut().for_each(|v| *v = false);
             self.twinsafe_out.iter_mut().for_each(|v| *v = 0);
-            return &self.events;
+            return true;
         }
-        self.last_now = Some(now);
-
-        // 1. Inputs: one exchange per connection.
-        for k in 0..self.connections.len() {
-            let out = self.twinsafe_out[k];
-            // Almost every exchange reports nothing: copy its events only when there are some.
-            let events = self.connections[k].exchange(now, out);
-            if !events.is_empty() {
-                let events = events.to_vec();
-                self.push_connection_events(now, k, events);
-            }
-        }
-        for k in 0..self.local_faults.len() {
-            let f = &mut self.local_faults[k];
-            if f.present && !f.latched {
-                f.latched = true;
-                let o = &self.c.local_outputs[k];
-                let kind = LogicEventKind::LocalOutputFault {
-                    index: o.index,
-                    name: o.name.clone(),
-                };
-                self.push(now, kind);
-            }
-        }
-
-        // 2. Groups.
-        for g in 0..self.groups.len() {
-            self.update_group(now, g);
-        }
-        for k in 0..self.connections.len() {
-            let bits = self.connections[k].inputs();
-            for (ch, &slot) in self.c.connections[k].inputs.iter().enumerate() {
-                self.image[slot] = bits & 1 << ch != 0;
-            }
-        }
-
-        // 3. Modules in their order.
-        for m in 0..self.modules.len() {
-            self.scan_module(now, m);
-        }
-
-        // 4. Errors found in this scan trip their group at once.
-        for g in 0..self.groups.len() {
-            let (errors, _) = self.collect(g);
-            let before = self.groups[g].state();
-            self.groups[g].trip(errors);
-            self.after_group_change(now, g, before);
-        }
-
-        // 5. Outputs.
-        for m in 0..self.modules.len() {
-            if !self.groups[self.c.modules[m].group].running() {
-                let cm = &self.c.modules[m];
-                for (k, &slot) in cm.outputs.iter().enumerate() {
-                    if cm.safety_outputs[k] {
-                        self.image[slot] = false;
-                    }
-                }
-            }
-        }
-        for k in 0..self.c.local_outputs.len() {
-            let o = &self.c.local_outputs[k];
-            self.local_values[k] = self.image[o.source]
-                && self.groups[o.group].running()
-                && !self.local_faults[k].latched;
-        }
-        for k in 0..self.c.standard_outputs.len() {
-            self.standard_values[k] = self.image[self.c.standard_outputs[k].1];
-        }
-        for k in 0..self.c.connections.len() {
-            let cc = &self.c.connections[k];
-            self.twinsafe_out[k] = if self.groups[cc.group].running() {
-                cc.outputs
-                    .iter()
-                    .filter(|&&(_, slot)| self.image[slot])
-                    .fold(0, |bits, &(ch, _)| bits | 1 << (ch - 1))
-            } else {
-                0
-            };
-        }
-        &self.events
-    }
-
-    fn push(&mut self, at: SimTime, kind: LogicEventKind) {
-        self.events.push(LogicEvent { at, kind });
-    }
-
-    fn push_connection_events(&mut self, now: SimTime, k: usize, events: Vec<ConnEvent>) {
-        for event in events {
-            let kind = LogicEventKind::Connection {
-                number: k + 1,
-                connection: self.c.connections[k].name.clone(),
-                event,
-            };
-            self.push(now, kind);
-        }
-    }
-
-    /// The error classes latched by group `g`'s members, and whether any cause is present.
-    fn collect(&self, g: usize) -> (GroupErrors, bool) {
-        let mut errors = GroupErrors::default();
-        let mut cause = false;
-        for (cm, m) in self.c.modules.iter().zip(&self.modules) {
-            if cm.group == g && m.has_error() {
-                errors.fb_err = true;
-                cause |= m.error_cause_active();
-            }
-        }
-        for (cc, c) in self.c.connections.iter().zip(&self.connections) {
-            if cc.group == g && c.has_error() {
-                errors.com_err = true;
-                cause |= c.error_cause_active();
-            }
-        }
-        for (o, f) in self.c.local_outputs.iter().zip(&self.local_faults) {
-            if o.group == g && f.latched {
-                errors.out_err = true;
-                cause |= f.present;
-            }
-        }
-        (errors, cause)
-    }
-
-    fn update_group(&mut self, now: SimTime, g: usize) {
-        let cg = &self.c.groups[g];
-        let run = cg.run.is_none_or(|s| self.image[s]);
-        let ack = cg.err_ack.is_some_and(|s| self.image[s]);
-        let (errors, cause) = self.collect(g);
-        let before = self.groups[g].state();
-        if self.groups[g].update(run, ack, errors, cause) {
-            for m in 0..self.modules.len() {
-                if self.c.modules[m].group == g {
-                    self.modules[m].acknowledge();
-                }
-            }
-            for k in 0..self.connections.len() {
-                if self.c.connections[k].group == g && self.connections[k].has_error() {
-                    self.connections[k].acknowledge();
-                    self.push_connection_events(now, k, vec![ConnEvent::Acknowledged]);
-                }
-            }
-            for k in 0..self.local_faults.len() {
-                if self.c.local_outputs[k].group == g {
-                    self.local_faults[k].latched = false;
-                }
-            }
-            self.groups[g].acknowledged(run);
-            let group = self.c.groups[g].name.clone();
-            self.push(now, LogicEventKind::GroupAcknowledged { group });
-        }
-        self.after_group_change(now, g, before);
-    }
-
-    /// Log a state change of group `g` and refresh its output signals.
-    fn after_group_change(&mut self, now: SimTime, g: usize, before: GroupState) {
-        let group = &self.groups[g];
-        let (state, errors) = (group.state(), group.errors());
-        let [fb, com, out] = self.c.groups[g].outputs;
-        self.image[fb] = errors.fb_err;
-        self.image[com] = errors.com_err;
-        self.image[out] = errors.out_err;
-        let name = || self.c.groups[g].name.clone();
-        let entered_error =
-            state == GroupState::Error && !matches!(before, GroupState::Error | GroupState::Reset);
-        if entered_error {
-            self.push(
-                now,
-                LogicEventKind::GroupTripped {
-                    group: name(),
-                    errors,
-                },
-            );
-        } else if state != before
-            && matches!(state, GroupState::Run | GroupState::Stop)
-            && matches!(before, GroupState::Run | GroupState::Stop)
-        {
-            let running = state == GroupState::Run;
-            self.push(
-                now,
-                LogicEventKind::GroupRunning {
-                    group: name(),
-                    running,
-                },
-            );
-        }
-    }
-
-    fn scan_module(&mut self, now: SimTime, m: usize) {
-        let cm = &self.c.modules[m];
-        let run = self.groups[cm.group].running();
-        let value = |k: usize| -> bool { cm.inputs[k].is_some_and(|(s, _)| self.image[s]) };
-        let linked = |k: usize| cm.inputs[k].map(|(s, c)| (c, self.image[s]));
-        // At most 9 outputs (OPMODE: 8 and Error), kept on the stack: a scan runs every 1 ms.
-        let mut outputs = Outputs::default();
-        match &mut self.modules[m] {
-            ModuleRt::And => outputs.push(and((0..8).filter_map(linked))),
-            ModuleRt::Or => outputs.push(or((0..8).filter_map(linked))),
-            ModuleRt::Decouple => outputs.extend(decouple(core::array::from_fn(value))),
-            ModuleRt::OpMode(fb) => {
-                let o = fb.scan(
-                    now,
-                    run,
-                    &OpModeInputs {
-                        op_in: core::array::from_fn(value),
-                        restart: value(8),
-                    },
-                );
-                outputs.extend(o.op_out.iter().copied().chain([o.error]));
-            }
-            ModuleRt::Estop(fb) => {
-                let o = fb.scan(
-                    now,
-                    run,
-                    &EstopInputs {
-                        estop_in: core::array::from_fn(value),
-                        restart: value(8),
-                        edm1: value(9),
-                        edm2: value(10),
-                    },
-                );
-                outputs.extend([o.estop_out, o.estop_del_out, o.error]);
-            }
-            ModuleRt::Mon(fb) => {
-                let o = fb.scan(
-                    now,
-                    run,
-                    &MonInputs {
-                        mon_in: core::array::from_fn(value),
-                        secure: [value(4), value(5)],
-                        restart: value(6),
-                        edm1: value(7),
-                        edm2: value(8),
-                    },
-                );
-                outputs.extend([o.mon_out, o.mon_del_out, o.error]);
-            }
-        };
-        for (k, &v) in outputs.as_slice().iter().enumerate() {
-            let gated = v && (run || !cm.safety_outputs[k]);
-            self.image[cm.outputs[k]] = gated;
-        }
-        // Events are rare: walk them in place rather than copying them every scan.
-        for k in 0..self.modules[m].events().len() {
-            let event = self.modules[m].events()[k];
-            let kind = LogicEventKind::Module {
-                module: cm.name.clone(),
-                kind: cm.kind,
-                event,
-            };
-            self.events.push(LogicEvent { at: now, kind });
-        }
+        false
     }
 
     // ---- outputs and diagnostics -------------------------------------------------------------
 
     /// Local output `index` (1..4) as written by the last scan; `false` if not in the project.
     pub fn local_output(&self, index: u8) -> bool {
-        self.c
-            .local_outputs
-            .iter()
-            .position(|o| o.index == index)
-            .is_some_and(|k| self.local_values[k])
+        self.local_output_position(index)
+            .is_some_and(|k| self.local_output_at(k))
+    }
+
+    /// Where local output `index` (1..4) stands among the project's local outputs, for
+    /// [`TwinSafeLogic::local_output_at`].
+    pub(crate) fn local_output_position(&self, index: u8) -> Option<usize> {
+        self.c.local_outputs.iter().position(|o| o.index == index)
+    }
+
+    /// The local output at `position` ([`TwinSafeLogic::local_output_position`]) as written by
+    /// the last scan.
+    pub(crate) fn local_output_at(&self, position: usize) -> bool {
+        self.local_values[position]
     }
 
     /// A standard output as written by the last scan.
@@ -760,11 +715,12 @@ impl TwinSafeLogic {
 
     /// A module's state and diagnostic bits.
     pub fn module_status(&self, m: ModuleId) -> ModuleStatus {
-        let running = self.groups[self.c.modules[m.0].group].running();
+        let rt = &self.modules[m.0];
+        let running = self.groups[rt.group].running();
         ModuleStatus {
-            kind: self.c.modules[m.0].kind,
-            state: self.modules[m.0].state(running),
-            diag: self.modules[m.0].diag(),
+            kind: rt.kind,
+            state: rt.state(running),
+            diag: rt.diag(),
         }
     }
 
@@ -808,28 +764,167 @@ impl TwinSafeLogic {
     }
 }
 
-/// A module's outputs in one scan, in their order, on the stack.
-#[derive(Default)]
-struct Outputs {
-    values: [bool; 12],
-    len: usize,
-}
-
-impl Outputs {
-    fn push(&mut self, v: bool) {
-        // A module has at most 9 outputs (verify::output_specs); more would be a logic slip,
-        // and the outputs past the array would be lost rather than panic in a safety scan.
-        if let Some(slot) = self.values.get_mut(self.len) {
-            *slot = v;
-            self.len += 1;
+/// The error classes latched by group `g`'s members, and whether any cause is present.
+#[inline(always)]
+fn collect(
+    g: usize,
+    c: &Compiled,
+    modules: &[ModuleRt],
+    connections: &[Connection],
+    local_faults: &[LocalFault],
+) -> (GroupErrors, bool) {
+    let mut errors = GroupErrors::default();
+    let mut cause = false;
+    for m in modules {
+        if m.group == g && m.has_error() {
+            errors.fb_err = true;
+            cause |= m.error_cause_active();
         }
     }
-
-    fn extend(&mut self, vs: impl IntoIterator<Item = bool>) {
-        vs.into_iter().for_each(|v| self.push(v));
+    for (cc, conn) in c.connections.iter().zip(connections) {
+        if cc.group == g && conn.has_error() {
+            errors.com_err = true;
+            cause |= conn.error_cause_active();
+        }
     }
-
-    fn as_slice(&self) -> &[bool] {
-        &self.values[..self.len]
+    for (o, f) in c.local_outputs.iter().zip(local_faults) {
+        if o.group == g && f.latched {
+            errors.out_err = true;
+            cause |= f.present;
+        }
     }
+    (errors, cause)
+}
+
+/// Group `g`'s ERR_ACK acknowledged its errors: clear every member's (modules, connections,
+/// local outputs).
+#[cold]
+fn acknowledge_group(
+    events: &mut Vec<LogicEvent>,
+    now: SimTime,
+    g: usize,
+    run: bool,
+    c: &Compiled,
+    group: &mut Group,
+    (modules, connections, local_faults): (&mut [ModuleRt], &mut [Connection], &mut [LocalFault]),
+) {
+    for m in modules.iter_mut() {
+        if m.group == g {
+            m.acknowledge();
+        }
+    }
+    for (k, (cc, conn)) in c.connections.iter().zip(connections).enumerate() {
+        if cc.group == g && conn.has_error() {
+            conn.acknowledge();
+            push_connection_events(events, now, k, &cc.name, &[ConnEvent::Acknowledged]);
+        }
+    }
+    for (o, f) in c.local_outputs.iter().zip(local_faults) {
+        if o.group == g {
+            f.latched = false;
+        }
+    }
+    group.acknowledged(run);
+    let name = c.groups[g].name.clone();
+    let kind = LogicEventKind::GroupAcknowledged { group: name };
+    events.push(LogicEvent { at: now, kind });
+}
+
+/// Refresh a group's output signals after a possible change of its state from `before`, and
+/// log the change.
+fn refresh_group(
+    image: &mut [bool],
+    events: &mut Vec<LogicEvent>,
+    now: SimTime,
+    cg: &CompiledGroup,
+    group: &Group,
+    before: GroupState,
+) {
+    let errors = group.errors();
+    let [fb, com, out] = cg.outputs;
+    image[fb] = errors.fb_err;
+    image[com] = errors.com_err;
+    image[out] = errors.out_err;
+    if group.state() != before {
+        log_group_change(events, now, cg, group, before);
+    }
+}
+
+/// The event of a group's change of state from `before`, if it is one to report.
+#[cold]
+fn log_group_change(
+    events: &mut Vec<LogicEvent>,
+    now: SimTime,
+    cg: &CompiledGroup,
+    group: &Group,
+    before: GroupState,
+) {
+    let (state, errors) = (group.state(), group.errors());
+    let name = || cg.name.clone();
+    let entered_error =
+        state == GroupState::Error && !matches!(before, GroupState::Error | GroupState::Reset);
+    let kind = if entered_error {
+        LogicEventKind::GroupTripped {
+            group: name(),
+            errors,
+        }
+    } else if state != before
+        && matches!(state, GroupState::Run | GroupState::Stop)
+        && matches!(before, GroupState::Run | GroupState::Stop)
+    {
+        LogicEventKind::GroupRunning {
+            group: name(),
+            running: state == GroupState::Run,
+        }
+    } else {
+        return;
+    };
+    events.push(LogicEvent { at: now, kind });
+}
+
+/// Log a connection's events of a scan (rare: almost every exchange reports nothing).
+#[cold]
+fn push_connection_events(
+    out: &mut Vec<LogicEvent>,
+    now: SimTime,
+    k: usize,
+    name: &str,
+    events: &[ConnEvent],
+) {
+    for event in events {
+        let kind = LogicEventKind::Connection {
+            number: k + 1,
+            connection: name.to_owned(),
+            event: event.clone(),
+        };
+        out.push(LogicEvent { at: now, kind });
+    }
+}
+
+/// Log a module's events of a scan.
+#[cold]
+fn push_module_events(
+    out: &mut Vec<LogicEvent>,
+    now: SimTime,
+    cm: &CompiledModule,
+    events: &[FbEvent],
+) {
+    for &event in events {
+        let kind = LogicEventKind::Module {
+            module: cm.name.clone(),
+            kind: cm.kind,
+            event,
+        };
+        out.push(LogicEvent { at: now, kind });
+    }
+}
+
+/// Log a local output's error.
+#[cold]
+fn push_local_output_fault(out: &mut Vec<LogicEvent>, now: SimTime, o: &CompiledLocalOutput) {
+    let kind = LogicEventKind::LocalOutputFault {
+        index: o.index,
+        name: o.name.clone(),
+    };
+    out.push(LogicEvent { at: now, kind });
 }

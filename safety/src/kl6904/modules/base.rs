@@ -256,10 +256,3 @@ impl Core {
         )
     }
 }
-
-/// Bit `n` set for each `true` in `bits`.
-pub(crate) fn mask(bits: impl IntoIterator<Item = bool>) -> u8 {
-    bits.into_iter()
-        .enumerate()
-        .fold(0, |m, (n, b)| if b { m | 1 << n } else { m })
-}

@@ -2,7 +2,7 @@
 
 use asi_phy::{SimDuration, SimTime};
 
-use super::base::{mask, Core, FbError, FbEvent, FbState, PairMonitor};
+use super::base::{Core, FbError, FbEvent, FbState, PairMonitor};
 use crate::kl6904::signal::Contact;
 
 /// Parameters of an ESTOP module (the "Activated", contact, Delay-Time and discrepancy settings
@@ -67,14 +67,43 @@ pub struct EstopOutputs {
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct Estop {
     config: EstopConfig,
+    /// Bit `n` set for each activated EStopIn*n+1*, and for each of them with a make contact
+    /// (both from `config`, for the scan's bit masks).
+    active: u8,
+    make: u8,
     core: Core,
     pairs: [PairMonitor; 4],
+}
+
+/// Positions of the inputs after EStopIn1..8 in an input mask ([`Estop::scan_bits`]).
+const RESTART: u16 = 1 << 8;
+const EDM1: u16 = 1 << 9;
+const EDM2: u16 = 1 << 10;
+
+impl EstopInputs {
+    /// The inputs as a mask in the order of the module's inputs: bit `n` EStopIn*n+1*, bit 8
+    /// Restart, 9 EDM1, 10 EDM2.
+    fn bits(&self) -> u16 {
+        let ins = self.estop_in.iter().enumerate();
+        ins.fold(0, |m, (n, &v)| m | u16::from(v) << n)
+            | if self.restart { RESTART } else { 0 }
+            | if self.edm1 { EDM1 } else { 0 }
+            | if self.edm2 { EDM2 } else { 0 }
+    }
 }
 
 impl Estop {
     /// A module in STOP.
     pub fn new(config: EstopConfig) -> Self {
+        let mask = |f: fn(Contact) -> bool| {
+            (0..8).fold(0, |m, n| match config.inputs[n] {
+                Some(c) if f(c) => m | 1 << n,
+                _ => m,
+            })
+        };
         Estop {
+            active: mask(|_| true),
+            make: mask(|c| c == Contact::Make),
             config,
             ..Default::default()
         }
@@ -87,10 +116,21 @@ impl Estop {
 
     /// One scan at `now`; `run` is whether the module's group is in RUN.
     pub fn scan(&mut self, now: SimTime, run: bool, i: &EstopInputs) -> EstopOutputs {
+        self.scan_bits(now, run, i.bits())
+    }
+
+    /// [`Estop::scan`] with the inputs as a mask (bit `n` EStopIn*n+1*, bit 8 Restart, 9 EDM1,
+    /// 10 EDM2: the order of the module's inputs), as the logic reads them.
+    pub(crate) fn scan_bits(&mut self, now: SimTime, run: bool, inputs: u16) -> EstopOutputs {
         let cfg = &self.config;
-        let demands: [bool; 8] =
-            core::array::from_fn(|n| cfg.inputs[n].is_some_and(|c| c.demands(i.estop_in[n])));
-        let edm_bad = [cfg.edm1 && !i.edm1, cfg.edm2 && !i.edm2];
+        // Bit n: EStopIn n+1 is activated and demands the safe state (a break contact at 0,
+        // a make contact at 1).
+        let demands = self.active & !(inputs as u8 ^ self.make);
+        let demanding = |n: usize| demands & 1 << n != 0;
+        let edm_bad = [
+            cfg.edm1 && inputs & EDM1 == 0,
+            cfg.edm2 && inputs & EDM2 == 0,
+        ];
 
         let running = self.core.begin(run);
         if !running || self.core.state == FbState::Error {
@@ -99,16 +139,16 @@ impl Estop {
             for k in 0..4 {
                 let t = cfg.discrepancy[k];
                 if !t.is_zero()
-                    && self.pairs[k].exceeded(now, demands[2 * k], demands[2 * k + 1], t)
+                    && self.pairs[k].exceeded(now, demanding(2 * k), demanding(2 * k + 1), t)
                 {
                     self.core
                         .fail(k as u8, FbError::Discrepancy { pair: k as u8 + 1 });
                 }
             }
         }
-        let demand = mask(demands);
+        let demand = demands;
         let accept = running && self.core.state == FbState::Safe && demand == 0;
-        let restart = self.core.restart.call(i.restart, accept);
+        let restart = self.core.restart.call(inputs & RESTART != 0, accept);
         if running {
             match self.core.state {
                 FbState::Run | FbState::DelayOut => self.core.supervise(now, demand, cfg.delay),
@@ -118,7 +158,7 @@ impl Estop {
         }
         let diag = self.core.diag;
         self.core.cause_active = (0..4)
-            .any(|k| diag & 1 << k != 0 && demands[2 * k] != demands[2 * k + 1])
+            .any(|k| diag & 1 << k != 0 && demanding(2 * k) != demanding(2 * k + 1))
             || self.core.edm_cause_active(edm_bad);
         let (estop_out, estop_del_out, error) = self.core.outputs();
         EstopOutputs {

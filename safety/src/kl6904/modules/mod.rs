@@ -60,5 +60,6 @@ pub(crate) use base::Core;
 pub use base::{FbError, FbEvent, FbState};
 pub use estop::{Estop, EstopConfig, EstopInputs, EstopOutputs};
 pub use gates::{and, decouple, or};
+pub(crate) use gates::{and_bits, or_bits};
 pub use mon::{Mon, MonConfig, MonInputs, MonOutputs};
 pub use opmode::{OpMode, OpModeConfig, OpModeInputs, OpModeOutputs};

@@ -2,7 +2,7 @@
 
 use asi_phy::{SimDuration, SimTime};
 
-use super::base::{mask, Core, FbError, FbEvent, FbState, PairMonitor};
+use super::base::{Core, FbError, FbEvent, FbState, PairMonitor};
 use crate::kl6904::signal::Contact;
 
 /// Parameters of a MON module (seed 004 §4.5.3).
@@ -81,16 +81,51 @@ const SECURE_BIT: u8 = 2;
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct Mon {
     config: MonConfig,
+    /// Bit `n` set for each activated MonIn*n+1*, and for each of them with a make contact
+    /// (both from `config`, for the scan's bit masks).
+    active: u8,
+    make: u8,
     core: Core,
     pairs: [PairMonitor; 2],
     secure_pair: PairMonitor,
-    tested: [bool; 4],
+    /// Bit `n` set once MonIn*n+1* has demanded the safe state since the module started.
+    tested: u8,
+}
+
+/// Positions of the inputs after MonIn1..4 in an input mask ([`Mon::scan_bits`]).
+const SECURE1: u16 = 1 << 4;
+const SECURE2: u16 = 1 << 5;
+const RESTART: u16 = 1 << 6;
+const EDM1: u16 = 1 << 7;
+const EDM2: u16 = 1 << 8;
+
+impl MonInputs {
+    /// The inputs as a mask in the order of the module's inputs: bit `n` MonIn*n+1*, bits 4
+    /// and 5 Secure1 and Secure2, 6 Restart, 7 EDM1, 8 EDM2.
+    fn bits(&self) -> u16 {
+        let ins = self.mon_in.iter().enumerate();
+        let flag = |on: bool, bit: u16| if on { bit } else { 0 };
+        ins.fold(0, |m, (n, &v)| m | u16::from(v) << n)
+            | flag(self.secure[0], SECURE1)
+            | flag(self.secure[1], SECURE2)
+            | flag(self.restart, RESTART)
+            | flag(self.edm1, EDM1)
+            | flag(self.edm2, EDM2)
+    }
 }
 
 impl Mon {
     /// A module in STOP.
     pub fn new(config: MonConfig) -> Self {
+        let mask = |f: fn(Contact) -> bool| {
+            (0..4).fold(0, |m, n| match config.inputs[n] {
+                Some(c) if f(c) => m | 1 << n,
+                _ => m,
+            })
+        };
         Mon {
+            active: mask(|_| true),
+            make: mask(|c| c == Contact::Make),
             config,
             ..Default::default()
         }
@@ -103,31 +138,45 @@ impl Mon {
 
     /// One scan at `now`; `run` is whether the module's group is in RUN.
     pub fn scan(&mut self, now: SimTime, run: bool, i: &MonInputs) -> MonOutputs {
+        self.scan_bits(now, run, i.bits())
+    }
+
+    /// [`Mon::scan`] with the inputs as a mask (bit `n` MonIn*n+1*, bits 4 and 5 Secure1 and
+    /// Secure2, 6 Restart, 7 EDM1, 8 EDM2: the order of the module's inputs), as the logic
+    /// reads them.
+    pub(crate) fn scan_bits(&mut self, now: SimTime, run: bool, inputs: u16) -> MonOutputs {
         let cfg = &self.config;
-        let raw: [bool; 4] =
-            core::array::from_fn(|n| cfg.inputs[n].is_some_and(|c| c.demands(i.mon_in[n])));
-        let secure_on = cfg
-            .secure
-            .map(|c| [c.normalise(i.secure[0]), c.normalise(i.secure[1])]);
+        // Bit n: MonIn n+1 is activated and demands the safe state (a break contact at 0, a
+        // make contact at 1), muted or not.
+        let raw = self.active & !(inputs as u8 ^ self.make);
+        let raw_at = |n: usize| raw & 1 << n != 0;
+        let secure_on = cfg.secure.map(|c| {
+            [
+                c.normalise(inputs & SECURE1 != 0),
+                c.normalise(inputs & SECURE2 != 0),
+            ]
+        });
         let muted = secure_on.is_some_and(|[a, b]| a && b);
-        let demands = if muted { [false; 4] } else { raw };
-        let edm_bad = [cfg.edm1 && !i.edm1, cfg.edm2 && !i.edm2];
+        let demands = if muted { 0 } else { raw };
+        let edm_bad = [
+            cfg.edm1 && inputs & EDM1 == 0,
+            cfg.edm2 && inputs & EDM2 == 0,
+        ];
 
         let was_stopped = self.core.state == FbState::Stop;
         let running = self.core.begin(run);
         if running && was_stopped {
-            self.tested = [false; 4];
+            self.tested = 0;
         }
-        for (t, d) in self.tested.iter_mut().zip(raw) {
-            *t |= d;
-        }
+        self.tested |= raw;
         if !running || self.core.state == FbState::Error {
             self.pairs.iter_mut().for_each(PairMonitor::reset);
             self.secure_pair.reset();
         } else {
             for k in 0..2 {
                 let t = cfg.discrepancy[k];
-                if !t.is_zero() && self.pairs[k].exceeded(now, raw[2 * k], raw[2 * k + 1], t) {
+                if !t.is_zero() && self.pairs[k].exceeded(now, raw_at(2 * k), raw_at(2 * k + 1), t)
+                {
                     self.core
                         .fail(k as u8, FbError::Discrepancy { pair: k as u8 + 1 });
                 }
@@ -140,14 +189,14 @@ impl Mon {
             }
         }
 
-        let demand = mask(demands);
-        let tested =
-            !cfg.function_test || (0..4).all(|n| cfg.inputs[n].is_none() || self.tested[n]);
+        let demand = demands;
+        // Every activated input has demanded the safe state once.
+        let tested = !cfg.function_test || self.active & !self.tested == 0;
         let may_leave = running && self.core.state == FbState::Safe && demand == 0 && tested;
         let restart = self
             .core
             .restart
-            .call(i.restart, may_leave && cfg.manual_restart);
+            .call(inputs & RESTART != 0, may_leave && cfg.manual_restart);
         if running {
             match self.core.state {
                 FbState::Run | FbState::DelayOut => self.core.supervise(now, demand, cfg.delay),
@@ -162,7 +211,8 @@ impl Mon {
         }
 
         let diag = self.core.diag;
-        self.core.cause_active = (0..2).any(|k| diag & 1 << k != 0 && raw[2 * k] != raw[2 * k + 1])
+        self.core.cause_active = (0..2)
+            .any(|k| diag & 1 << k != 0 && raw_at(2 * k) != raw_at(2 * k + 1))
             || (diag & 1 << SECURE_BIT != 0 && secure_on.is_some_and(|[a, b]| a != b))
             || self.core.edm_cause_active(edm_bad);
         let (mon_out, mon_del_out, error) = self.core.outputs();

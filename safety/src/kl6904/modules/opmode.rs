@@ -52,16 +52,31 @@ pub struct OpModeOutputs {
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct OpMode {
     config: OpModeConfig,
+    /// Bit `n` set for each activated OpIn*n+1* (from `config`, for the scan's bit masks).
+    active: u8,
     core: Core,
     mode: usize,
     /// Times how long the selection has been invalid (a "pair" of invalid vs. FALSE).
     invalid: PairMonitor,
 }
 
+/// The position of Restart after OpIn1..8 in an input mask ([`OpMode::scan_bits`]).
+const RESTART: u16 = 1 << 8;
+
+impl OpModeInputs {
+    /// The inputs as a mask in the order of the module's inputs: bit `n` OpIn*n+1*, bit 8
+    /// Restart.
+    fn bits(&self) -> u16 {
+        let ins = self.op_in.iter().enumerate();
+        ins.fold(0, |m, (n, &v)| m | u16::from(v) << n) | if self.restart { RESTART } else { 0 }
+    }
+}
+
 impl OpMode {
     /// A module in STOP.
     pub fn new(config: OpModeConfig) -> Self {
         OpMode {
+            active: (0..8).fold(0, |m, n| if config.inputs[n] { m | 1 << n } else { m }),
             config,
             ..Default::default()
         }
@@ -74,13 +89,15 @@ impl OpMode {
 
     /// One scan at `now`; `run` is whether the module's group is in RUN.
     pub fn scan(&mut self, now: SimTime, run: bool, i: &OpModeInputs) -> OpModeOutputs {
-        let set: Vec<usize> = (0..8)
-            .filter(|&n| self.config.inputs[n] && i.op_in[n])
-            .collect();
-        let selected = match set.as_slice() {
-            [one] => Some(*one),
-            _ => None,
-        };
+        self.scan_bits(now, run, i.bits())
+    }
+
+    /// [`OpMode::scan`] with the inputs as a mask (bit `n` OpIn*n+1*, bit 8 Restart: the order
+    /// of the module's inputs), as the logic reads them.
+    pub(crate) fn scan_bits(&mut self, now: SimTime, run: bool, inputs: u16) -> OpModeOutputs {
+        // Bit n: OpIn n+1 is activated and set.
+        let set = self.active & inputs as u8;
+        let selected = (set.count_ones() == 1).then(|| set.trailing_zeros() as usize);
         let running = self.core.begin(run);
         let t = self.config.discrepancy;
         if !running {
@@ -95,15 +112,16 @@ impl OpMode {
         let restart = self
             .core
             .restart
-            .call(i.restart, accept && self.config.restart);
+            .call(inputs & RESTART != 0, accept && self.config.restart);
         if running {
             match (self.core.state, selected) {
                 (FbState::Run, Some(m)) if m == self.mode => {}
                 (FbState::Run, Some(m)) if !self.config.restart => self.mode = m,
                 (FbState::Run, _) => {
                     self.core.state = FbState::Safe;
-                    let inputs = set.iter().fold(0, |m, &n| m | 1 << n);
-                    self.core.events.push(FbEvent::SafeStateDemanded { inputs });
+                    self.core
+                        .events
+                        .push(FbEvent::SafeStateDemanded { inputs: set });
                 }
                 (FbState::Safe, Some(m)) if restart || !self.config.restart => {
                     self.mode = m;

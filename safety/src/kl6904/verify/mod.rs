@@ -19,7 +19,9 @@ mod specs;
 mod steps;
 
 pub use compiled::LOCAL_OUTPUTS;
-pub(crate) use compiled::{Compiled, ModuleConfig, Slot};
+pub(crate) use compiled::{
+    Compiled, CompiledGroup, CompiledLocalOutput, CompiledModule, ModuleConfig, Slot,
+};
 pub use error::{Item, PathStep, Rule, VerifyError};
 pub(crate) use specs::{input_specs, output_specs};
 
