@@ -70,12 +70,39 @@ pub struct LabLift {
     drive_changes: Arc<AtomicU64>,
 }
 
-/// What a device that drives the plant drives, as one number to compare (see [`Driving`]).
-type DriveOf<T> = fn(&T) -> u32;
+/// A device that drives the plant, and what it drives as one number to compare (see
+/// [`Driving`]).
+trait Drives: Peripheral {
+    fn drive(&self) -> u32;
+}
 
 /// A display word as a number to compare: the word, or 2^16 while blank.
 fn display_code(d: Option<u16>) -> u32 {
     d.map_or(1 << 16, u32::from)
+}
+
+impl Drives for FloorStation {
+    fn drive(&self) -> u32 {
+        display_code(self.display())
+    }
+}
+
+impl Drives for CabinDisplay {
+    fn drive(&self) -> u32 {
+        display_code(self.display())
+    }
+}
+
+impl Drives for Converter {
+    fn drive(&self) -> u32 {
+        self.outputs().get().into()
+    }
+}
+
+impl Drives for AnalogOutput {
+    fn drive(&self) -> u32 {
+        u32::from(self.current_ua(1)) | u32::from(self.current_ua(2)) << 16
+    }
 }
 
 /// A lab device whose outputs drive the plant (a floor or cabin display, the converter's run
@@ -91,25 +118,23 @@ fn display_code(d: Option<u16>) -> u32 {
 /// (`as_any` and `as_any_mut` hand out the wrapped device), and `Debug` shows it as it is.
 struct Driving<T> {
     device: T,
-    drive: DriveOf<T>,
     /// What the device drove after the last call, `None` after typed mutable access.
     last: Option<u32>,
     changes: Arc<AtomicU64>,
 }
 
-impl<T: Peripheral> Driving<T> {
-    fn boxed(device: T, drive: DriveOf<T>, changes: &Arc<AtomicU64>) -> Box<dyn Peripheral> {
+impl<T: Drives> Driving<T> {
+    fn boxed(device: T, changes: &Arc<AtomicU64>) -> Box<dyn Peripheral> {
         Box::new(Driving {
-            last: Some(drive(&device)),
+            last: Some(device.drive()),
             device,
-            drive,
             changes: Arc::clone(changes),
         })
     }
 
     /// Counts a change if what the device drives is not what it drove.
     fn note(&mut self) {
-        let now = (self.drive)(&self.device);
+        let now = self.device.drive();
         if self.last != Some(now) {
             self.last = Some(now);
             self.changes.fetch_add(1, Ordering::Relaxed);
@@ -123,7 +148,7 @@ impl<T: Peripheral> core::fmt::Debug for Driving<T> {
     }
 }
 
-impl<T: Peripheral> Peripheral for Driving<T> {
+impl<T: Drives> Peripheral for Driving<T> {
     fn exchange(&mut self, now: asi_phy::SimTime, outputs: Nibble) -> Nibble {
         let inputs = self.device.exchange(now, outputs);
         self.note();
@@ -251,16 +276,10 @@ impl LabLift {
     /// the changes of what it drives in `changes` ([`LabLift::drive_changes`]).
     fn driving_device(n: u8, changes: &Arc<AtomicU64>) -> Option<Box<dyn Peripheral>> {
         Some(match n {
-            1..=4 => Driving::boxed(FloorStation::new(), |s| display_code(s.display()), changes),
-            CABIN_DISPLAY => {
-                Driving::boxed(CabinDisplay::new(), |d| display_code(d.display()), changes)
-            }
-            CONVERTER => Driving::boxed(Converter::new(), |c| c.outputs().get().into(), changes),
-            SPEED_SETPOINT => Driving::boxed(
-                AnalogOutput::new(),
-                |a| u32::from(a.current_ua(1)) | u32::from(a.current_ua(2)) << 16,
-                changes,
-            ),
+            1..=4 => Driving::boxed(FloorStation::new(), changes),
+            CABIN_DISPLAY => Driving::boxed(CabinDisplay::new(), changes),
+            CONVERTER => Driving::boxed(Converter::new(), changes),
+            SPEED_SETPOINT => Driving::boxed(AnalogOutput::new(), changes),
             _ => return None,
         })
     }
