@@ -23,10 +23,12 @@ use asi_slaves::devices::{
 };
 use asi_slaves::monitor::{CodeTable, MonitorConfig, SafetyMonitor};
 use asi_slaves::slave::{Peripheral, Slave};
+use core::sync::atomic::{AtomicU64, Ordering};
 use lab::address::{
     CABIN_DISPLAY, CABIN_PANEL, CONVERTER, FREE, LOAD_SENSOR, SAFETY_BOTTOM, SAFETY_TOP,
     SPEED_SETPOINT,
 };
+use std::sync::Arc;
 
 /// Serial numbers that seed the two safety sensors' code tables.
 pub const SAFETY_SERIALS: [u64; 2] = [0x0505_0011, 0x0505_0012];
@@ -63,6 +65,115 @@ pub struct LabLift {
     pub ids: [Option<SlaveId>; 32],
     /// The Safety-at-Work monitor of addresses 11 and 12.
     pub monitor: MonitorId,
+    /// How often what the plant-driving devices drive may have changed
+    /// ([`LabLift::drive_changes`]).
+    drive_changes: Arc<AtomicU64>,
+}
+
+/// A device that drives the plant, and what it drives as one number to compare (see
+/// [`Driving`]).
+trait Drives: Peripheral {
+    fn drive(&self) -> u32;
+}
+
+/// A display word as a number to compare: the word, or 2^16 while blank.
+fn display_code(d: Option<u16>) -> u32 {
+    d.map_or(1 << 16, u32::from)
+}
+
+impl Drives for FloorStation {
+    fn drive(&self) -> u32 {
+        display_code(self.display())
+    }
+}
+
+impl Drives for CabinDisplay {
+    fn drive(&self) -> u32 {
+        display_code(self.display())
+    }
+}
+
+impl Drives for Converter {
+    fn drive(&self) -> u32 {
+        self.outputs().get().into()
+    }
+}
+
+impl Drives for AnalogOutput {
+    fn drive(&self) -> u32 {
+        u32::from(self.current_ua(1)) | u32::from(self.current_ua(2)) << 16
+    }
+}
+
+/// A lab device whose outputs drive the plant (a floor or cabin display, the converter's run
+/// and direction, the speed set-point), with a count of the changes of what it drives, shared
+/// with its [`LabLift`]: the rig reads the devices' outputs only when the count has moved
+/// ([`LabLift::drive_changes`]), instead of at every moment.
+///
+/// What it drives can change only through the device's [`Peripheral`] methods, all of which
+/// go through this wrapper: after `exchange`, `write_parameter` and `reset` it compares what
+/// the device drives with what it drove and counts a change; `as_any_mut` (the application's
+/// typed access, which may change anything) counts one at once and forgets what the device
+/// drove, so that the next call counts one too. Typed access sees the device itself
+/// (`as_any` and `as_any_mut` hand out the wrapped device), and `Debug` shows it as it is.
+struct Driving<T> {
+    device: T,
+    /// What the device drove after the last call, `None` after typed mutable access.
+    last: Option<u32>,
+    changes: Arc<AtomicU64>,
+}
+
+impl<T: Drives> Driving<T> {
+    fn boxed(device: T, changes: &Arc<AtomicU64>) -> Box<dyn Peripheral> {
+        Box::new(Driving {
+            last: Some(device.drive()),
+            device,
+            changes: Arc::clone(changes),
+        })
+    }
+
+    /// Counts a change if what the device drives is not what it drove.
+    fn note(&mut self) {
+        let now = self.device.drive();
+        if self.last != Some(now) {
+            self.last = Some(now);
+            self.changes.fetch_add(1, Ordering::Relaxed);
+        }
+    }
+}
+
+impl<T: Peripheral> core::fmt::Debug for Driving<T> {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        self.device.fmt(f)
+    }
+}
+
+impl<T: Drives> Peripheral for Driving<T> {
+    fn exchange(&mut self, now: asi_phy::SimTime, outputs: Nibble) -> Nibble {
+        let inputs = self.device.exchange(now, outputs);
+        self.note();
+        inputs
+    }
+    fn write_parameter(&mut self, now: asi_phy::SimTime, parameter: Nibble) -> Nibble {
+        let echo = self.device.write_parameter(now, parameter);
+        self.note();
+        echo
+    }
+    fn reset(&mut self) {
+        self.device.reset();
+        self.note();
+    }
+    fn periphery_fault(&self) -> bool {
+        self.device.periphery_fault()
+    }
+    fn as_any(&self) -> &dyn core::any::Any {
+        self.device.as_any()
+    }
+    fn as_any_mut(&mut self) -> &mut dyn core::any::Any {
+        self.last = None;
+        self.changes.fetch_add(1, Ordering::Relaxed);
+        self.device.as_any_mut()
+    }
 }
 
 fn addr(n: u8) -> Result<Address, ConfigError> {
@@ -127,11 +238,14 @@ impl LabLift {
         let extra = extra_addresses(extra)?;
         let mut bus = Bus::new(cfg, LabLift::projected_with(extra.len() as u8)?, Vec::new())?;
         let mut ids = [None; 32];
+        let drive_changes = Arc::new(AtomicU64::new(0));
         for &(n, name, codes) in &LAB_SLAVES {
-            let device = LabLift::device_for(n).ok_or_else(|| ConfigError::Slave {
-                name: name.into(),
-                why: "no device".into(),
-            })?;
+            let device = LabLift::driving_device(n, &drive_changes)
+                .or_else(|| LabLift::device_for(n))
+                .ok_or_else(|| ConfigError::Slave {
+                    name: name.into(),
+                    why: "no device".into(),
+                })?;
             let id = bus.add_slave(Slave::new(name, addr(n)?, codes, device))?;
             ids[n as usize] = Some(id);
         }
@@ -149,7 +263,38 @@ impl LabLift {
             MonitorConfig::default(),
             &[addr(SAFETY_BOTTOM)?, addr(SAFETY_TOP)?],
         ));
-        Ok(LabLift { bus, ids, monitor })
+        Ok(LabLift {
+            bus,
+            ids,
+            monitor,
+            drive_changes,
+        })
+    }
+
+    /// A fresh device for lab address `n` if its outputs drive the plant (the floor
+    /// stations, the cabin display, the converter I/O, the current-loop output), counting
+    /// the changes of what it drives in `changes` ([`LabLift::drive_changes`]).
+    fn driving_device(n: u8, changes: &Arc<AtomicU64>) -> Option<Box<dyn Peripheral>> {
+        Some(match n {
+            1..=4 => Driving::boxed(FloorStation::new(), changes),
+            CABIN_DISPLAY => Driving::boxed(CabinDisplay::new(), changes),
+            CONVERTER => Driving::boxed(Converter::new(), changes),
+            SPEED_SETPOINT => Driving::boxed(AnalogOutput::new(), changes),
+            _ => return None,
+        })
+    }
+
+    /// A count that moves whenever what the plant-driving devices drive may have changed:
+    /// their display words, the converter I/O's outputs, the current-loop output's currents
+    /// (and whenever the application takes one of them mutably, which may change anything).
+    /// While it stands still, [`LabLift::floor`]'s `display`, [`LabLift::cabin_display`]'s
+    /// `display`, [`LabLift::converter`]'s `outputs` and [`LabLift::analog_output`]'s
+    /// `current_ua` say what they said, so the rig reads them only when it has moved.
+    ///
+    /// It covers the lab's own devices while they stay on the bus: a device put in their
+    /// place through [`Bus::slave_mut`] is not counted.
+    pub fn drive_changes(&self) -> u64 {
+        self.drive_changes.load(Ordering::Relaxed)
     }
 
     fn id(&self, n: u8) -> Option<SlaveId> {
@@ -276,6 +421,76 @@ pub fn io_bus(n: u8, codes: SlaveCodes) -> Result<Bus, ConfigError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn ms(n: u64) -> asi_phy::SimTime {
+        asi_phy::SimTime::from_millis(n)
+    }
+
+    /// The converter's outputs and the set-point current as the rig reads them.
+    fn drives(lab: &LabLift) -> (Nibble, u16) {
+        let c = lab.converter().expect("the converter").outputs();
+        (c, lab.analog_output().expect("the set-point").current_ua(1))
+    }
+
+    /// Steps the bus event by event to `until`; at every step, what the devices drive
+    /// changed only where the count moved.
+    fn watch(lab: &mut LabLift, until: u64) -> u64 {
+        let mut moved = 0;
+        while lab.bus.poll_at() <= ms(until) {
+            let (count, seen) = (lab.drive_changes(), drives(lab));
+            lab.bus.advance_to(lab.bus.poll_at());
+            if lab.drive_changes() == count {
+                assert_eq!(drives(lab), seen, "at {}", lab.bus.now());
+            } else {
+                moved += 1;
+            }
+        }
+        moved
+    }
+
+    #[test]
+    fn the_drive_count_moves_with_what_the_plant_driving_devices_drive() {
+        let mut lab = LabLift::new().expect("the lab bus");
+        let run = SlaveAddr {
+            address: Address::new(CONVERTER).expect("7"),
+            select: asi_phy::Select::A,
+        };
+        lab.bus
+            .image_mut()
+            .output
+            .set_nibble(run, Nibble::from_low_bits(0b0011));
+        lab.bus
+            .image_mut()
+            .output
+            .set_analog(SPEED_SETPOINT, 1, 7000);
+        assert!(watch(&mut lab, 200) > 0);
+        assert_eq!(drives(&lab), (Nibble::from_low_bits(0b0011), 7000));
+        // Unplugged, the converter's outputs go off at once: counted.
+        let count = lab.drive_changes();
+        let id = lab.slave_id(CONVERTER).expect("the converter");
+        lab.bus.detach(id);
+        assert_ne!(lab.drive_changes(), count);
+        assert_eq!(drives(&lab).0, Nibble::ZERO);
+        lab.bus.attach(id);
+        watch(&mut lab, 400);
+        // A power fail resets every slave: counted.
+        let count = lab.drive_changes();
+        lab.bus.set_supply_voltage(0.0);
+        assert_ne!(lab.drive_changes(), count);
+        assert_eq!(drives(&lab), (Nibble::ZERO, 0));
+        lab.bus.set_supply_voltage(crate::bus::NOMINAL_VOLTS);
+        watch(&mut lab, 800);
+        assert_eq!(drives(&lab), (Nibble::from_low_bits(0b0011), 7000));
+        // Typed mutable access may change anything: counted too.
+        let count = lab.drive_changes();
+        let _ = lab.converter_mut();
+        assert_ne!(lab.drive_changes(), count);
+        // Stepping stays exact after it, and the count stands still while nothing changes.
+        watch(&mut lab, 900);
+        let count = lab.drive_changes();
+        watch(&mut lab, 1000);
+        assert_eq!(lab.drive_changes(), count);
+    }
 
     #[test]
     fn an_io_bus_has_at_most_31_modules() {

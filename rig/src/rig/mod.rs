@@ -110,6 +110,9 @@ pub struct Rig {
     next_event: usize,
     timers: Vec<(SimTime, Timer)>,
     applied: Applied,
+    /// The lab's count of drive changes when the rig last read what the slaves drive
+    /// ([`asi_bus::lab::LabLift::drive_changes`]); `None` when it must read them again.
+    drives_seen: Option<u64>,
     plant_dirty: bool,
     from_safety: FromSafety,
     to_safety: ToSafety,
@@ -179,6 +182,7 @@ impl Rig {
             next_event: 0,
             timers,
             applied: Applied::default(),
+            drives_seen: None,
             plant_dirty: true,
             from_safety: FromSafety::default(),
             to_safety: ToSafety::default(),
@@ -671,7 +675,22 @@ impl Rig {
     }
 
     /// What the slaves drive, to the plant, at the moment they drive it.
+    ///
+    /// The slaves' outputs are read only when the lab's count of drive changes has moved
+    /// since the last reading: until then they are what was read, which the plant has
+    /// (checked against a fresh reading at every moment in the rig's tests).
     fn slaves_to_plant(&mut self, t: SimTime) {
+        let changes = self.lab.drive_changes();
+        if self.drives_seen == Some(changes) {
+            #[cfg(test)]
+            assert_eq!(
+                wiring::slave_outputs(&self.lab),
+                self.applied,
+                "the slaves drive something new at {t} without a drive change counted"
+            );
+            return;
+        }
+        self.drives_seen = Some(changes);
         let new = wiring::slave_outputs(&self.lab);
         // At most moments the slaves drive what they drove: the plant is handed only what
         // changed, so nothing then.
@@ -1068,8 +1087,10 @@ impl Rig {
         &self.lab
     }
 
-    /// The lab bus, mutable (to trace it).
+    /// The lab bus, mutable (to trace it). The rig reads the slaves' outputs afresh at its
+    /// next moment, whatever the caller changes.
     pub fn lab_mut(&mut self) -> &mut LabLift {
+        self.drives_seen = None;
         &mut self.lab
     }
 
@@ -1092,5 +1113,44 @@ impl Rig {
     /// The safety logic's EStopOut as the controller last got it (`true` = no STOP demand).
     pub fn estop_out(&self) -> bool {
         self.from_safety.estop_out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::campaign::generate::generate;
+    use crate::campaign::profile::Profile;
+    use crate::scenario::builtin::BUILTINS;
+
+    /// Runs `sc` to its end; in the rig's tests every moment that skips reading the slaves'
+    /// outputs checks them against a fresh reading ([`Rig::slaves_to_plant`]).
+    fn run(sc: Scenario) -> Report {
+        Rig::new(sc).expect("a rig for the scenario").run(None)
+    }
+
+    /// The drive-change count covers every way the slaves' outputs change in the built-in
+    /// scenarios: handshakes and set-points, a slave off and back on the bus, a power fail,
+    /// line noise.
+    #[test]
+    fn the_slaves_outputs_are_read_whenever_they_change_in_the_builtin_scenarios() {
+        for b in BUILTINS {
+            let sc = b.scenario().expect("a built-in scenario");
+            let report = run(sc);
+            assert!(report.simulated_s > 0.0, "{}", b.name);
+        }
+    }
+
+    /// As above, for random campaign runs with faults (slaves off and on the bus, power
+    /// fails, noise, the safe drive).
+    #[test]
+    fn the_slaves_outputs_are_read_whenever_they_change_in_campaign_runs() {
+        for name in ["default", "noisy", "safe-drive"] {
+            let profile = Profile::built_in(name).expect("a built-in profile");
+            for index in 0..4 {
+                let sc = generate(7, index, &profile).scenario;
+                run(sc);
+            }
+        }
     }
 }
