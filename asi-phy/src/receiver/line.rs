@@ -262,6 +262,76 @@ impl LineDecoder {
     }
 }
 
+/// The pulses the fast scan placed on the grid ([`Placed::scan`]).
+#[derive(Clone, Copy, Debug)]
+struct Placed {
+    /// How many it took.
+    n: usize,
+    /// The grid point of the last one taken (the one before them if none).
+    last_g: u64,
+    /// Their grid points.
+    occupied: u64,
+    /// Their signs in order, the latest in bit 0 (1 = positive).
+    signs: u64,
+}
+
+impl Placed {
+    /// Takes the leading pulses of `pulses` that each lie within the tolerance of one of the
+    /// two grid points after the previous one's (the one before them on point `last_g`),
+    /// the grid's point 0 lying at `base` + the tolerance. The grid must have a fast scan
+    /// ([`Grid::recip`]) and `pulses` must hold at most `(63 - last_g) / 2` pulses, so that
+    /// every grid point stays under 64.
+    ///
+    /// Every pulse is placed by itself, from its distance to point 0 (a multiplication by the
+    /// reciprocal of the grid), and then checked exactly: its distance to that grid point is at
+    /// most the tolerance, and the point is one or two after the last. Two pulses go at a
+    /// time, which leaves one loop step and one register copy of the last point per pair.
+    #[inline(always)]
+    fn scan(pulses: &[Pulse], base: u64, last_g: u64, grid: &Grid) -> Placed {
+        let (h, recip, two_tol) = (grid.h, grid.recip, grid.two_tol);
+        // The grid point of a pulse if it takes one of the next two after `prev`.
+        let place = |p: &Pulse, prev: u64| -> Option<u64> {
+            // The distance from the grid point before the pulse's window, modulo 2⁶⁴.
+            let y = p.at.as_nanos().wrapping_sub(base);
+            let q = y.wrapping_mul(recip) >> RECIP_SHIFT;
+            let within = y.wrapping_sub(q.wrapping_mul(h)) <= two_tol;
+            let step = q.wrapping_sub(prev).wrapping_sub(1) <= 1;
+            (within && step).then_some(q)
+        };
+        let mut placed = Placed {
+            n: 0,
+            last_g,
+            occupied: 0,
+            signs: 0,
+        };
+        let take = |placed: &mut Placed, p: &Pulse, q: u64| {
+            placed.occupied |= 1u64.wrapping_shl(q as u32);
+            placed.signs = (placed.signs << 1) | p.polarity as u64;
+            placed.last_g = q;
+        };
+        let mut pairs = pulses.chunks_exact(2);
+        for pair in pairs.by_ref() {
+            let Some(q0) = place(&pair[0], placed.last_g) else {
+                return placed;
+            };
+            take(&mut placed, &pair[0], q0);
+            let Some(q1) = place(&pair[1], q0) else {
+                placed.n += 1;
+                return placed;
+            };
+            take(&mut placed, &pair[1], q1);
+            placed.n += 2;
+        }
+        if let [p] = pairs.remainder() {
+            if let Some(q) = place(p, placed.last_g) {
+                take(&mut placed, p, q);
+                placed.n += 1;
+            }
+        }
+        placed
+    }
+}
+
 impl Run {
     fn begin(p: Pulse) -> Run {
         let positive = p.polarity == Polarity::Positive;
@@ -295,28 +365,12 @@ impl Run {
             return None;
         }
         let t0 = first.at.as_nanos();
-        let base = t0.wrapping_sub(grid.tol);
-        let (h, recip, two_tol) = (grid.h, grid.recip, grid.two_tol);
-        let mut q_prev = 0u64;
-        let mut occupied = 1u64;
-        // The signs in order, the latest in bit 0 (1 = positive).
-        let mut signs = first.polarity as u64;
-        let mut n = 0;
         // At most 31 pulses after the first keep every grid point under 64.
         let scanned = &tail[..tail.len().min(31)];
-        while let Some(p) = scanned.get(n) {
-            let y = p.at.as_nanos().wrapping_sub(base);
-            let q = y.wrapping_mul(recip) >> RECIP_SHIFT;
-            let within = y.wrapping_sub(q.wrapping_mul(h)) <= two_tol;
-            let step = q.wrapping_sub(q_prev).wrapping_sub(1) <= 1;
-            if !(within && step) {
-                break;
-            }
-            occupied |= 1u64.wrapping_shl(q as u32);
-            signs = (signs << 1) | p.polarity as u64;
-            q_prev = q;
-            n += 1;
-        }
+        let placed = Placed::scan(scanned, t0.wrapping_sub(grid.tol), 0, grid);
+        let (n, q_prev) = (placed.n, placed.last_g);
+        let occupied = 1 | placed.occupied;
+        let signs = (first.polarity as u64) << n | placed.signs;
         let last_t = if n == 0 {
             t0
         } else {
@@ -423,27 +477,8 @@ impl Run {
     /// sound line) the positive pulses are every other one of the masks'.
     #[inline]
     fn scan(&mut self, pulses: &[Pulse], grid: &Grid) -> (usize, bool) {
-        let base = self.t0.wrapping_sub(grid.tol);
-        let (h, recip, two_tol) = (grid.h, grid.recip, grid.two_tol);
-        let mut q_prev = self.last_g;
-        let mut occupied = 0u64;
-        // The signs in order, the latest in bit 0 (1 = positive).
-        let mut signs = 0u64;
-        let mut n = 0;
-        while let Some(p) = pulses.get(n) {
-            // The distance from the grid point before the pulse's window, modulo 2⁶⁴.
-            let y = p.at.as_nanos().wrapping_sub(base);
-            let q = y.wrapping_mul(recip) >> RECIP_SHIFT;
-            let within = y.wrapping_sub(q.wrapping_mul(h)) <= two_tol;
-            let step = q.wrapping_sub(q_prev).wrapping_sub(1) <= 1;
-            if !(within && step) {
-                break;
-            }
-            occupied |= 1u64.wrapping_shl(q as u32);
-            signs = (signs << 1) | p.polarity as u64;
-            q_prev = q;
-            n += 1;
-        }
+        let placed = Placed::scan(pulses, self.t0.wrapping_sub(grid.tol), self.last_g, grid);
+        let (n, q_prev, occupied, signs) = (placed.n, placed.last_g, placed.occupied, placed.signs);
         if n == 0 {
             return (0, false);
         }
