@@ -60,34 +60,59 @@ struct Grid {
     two_tol: u64,
     /// The silence that ends a run, ns.
     pause: u64,
-    /// ⌈2^[`RECIP_SHIFT`] / h⌉ where the fast scan applies, else 0: where the grid is at most
-    /// 2²⁴ ns, the tolerance under half of it (so a pulse is within the tolerance of at most one
-    /// grid point) and two half-bits and twice the tolerance shorter than the pause (so two
-    /// pulses each within the tolerance of grid points one or two apart are never a pause).
+    /// ⌈2⁶⁴ / h⌉ where the fast scan applies, else 0: where the grid is 2 to 2²⁴ ns, the
+    /// tolerance under half of it (so a pulse is within the tolerance of at most one grid
+    /// point) and two half-bits and twice the tolerance shorter than the pause (so two pulses
+    /// each within the tolerance of grid points one or two apart are never a pause).
     recip: u64,
+    /// ⌈(2·tol + 1) · 2⁶⁴ / h⌉ − 1 where the fast scan applies: the largest low half of
+    /// `y · recip` of a pulse within the tolerance of its grid point ([`Grid::place`]).
+    within: u64,
 }
-
-/// The shift of the fast scan's reciprocal: for `y < 64·h` and `h ≤ 2²⁴`,
-/// `y · ⌈2⁵⁷ / h⌉ >> 57` is `y / h` exactly and the product stays below 2⁶⁴. (The scan checks
-/// every placement exactly, so a wrong quotient, for a pulse far off, only sends the pulse the
-/// reference way; the exactness is what lets every pulse on the grid take the fast way.)
-const RECIP_SHIFT: u32 = 57;
 
 impl Grid {
     fn new(cfg: &ReceiverConfig) -> Grid {
         let (h, tol, pause) = (cfg.half_bit, cfg.tolerance, cfg.pause);
-        let fast = h <= 1 << 24 && tol < h.div_ceil(2) && 2 * h + 2 * tol < pause;
+        let fast = (2..=1 << 24).contains(&h) && tol < h.div_ceil(2) && 2 * h + 2 * tol < pause;
+        let two_tol = tol.saturating_mul(2);
+        let (recip, within) = if fast {
+            // 2·tol + 1 ≤ h, so both fit in 64 bits.
+            let h = u128::from(h);
+            (
+                (1u128 << 64).div_ceil(h) as u64,
+                ((u128::from(two_tol) + 1) << 64).div_ceil(h) as u64 - 1,
+            )
+        } else {
+            (0, 0)
+        };
         Grid {
             h,
             tol,
-            two_tol: tol.saturating_mul(2),
+            two_tol,
             pause,
-            recip: if fast {
-                (1u64 << RECIP_SHIFT).div_ceil(h)
-            } else {
-                0
-            },
+            recip,
+            within,
         }
+    }
+
+    /// The grid point of a pulse `y` ns after the start of the tolerance window of point 0
+    /// (counted modulo 2⁶⁴), if it lies within the tolerance of one of the two points after
+    /// `prev` (< 2¹⁶); for a grid with a fast scan ([`Grid::recip`]).
+    ///
+    /// One widening multiplication by the reciprocal places it and measures it: with
+    /// `recip = 2⁶⁴/h + ε` (0 ≤ ε < 1) and `y = q·h + r` (0 ≤ r < h), `y · recip` is
+    /// `q·2⁶⁴ + r·2⁶⁴/h + y·ε`. Its high half is at most 2¹⁶ only for `y < 2¹⁶·h + h`, and
+    /// then `y·ε < 2⁴⁰ ≤ 2⁶⁴/h`, so the high half is `q` and the low half lies in
+    /// `[r·2⁶⁴/h, (r + 1)·2⁶⁴/h)`: it is at most [`Grid::within`] exactly where
+    /// `r ≤ 2·tol`. So this is exactly the check by division (`place_by_division` in the
+    /// tests keeps it as the reference), in one multiplication and two comparisons.
+    #[inline(always)]
+    fn place(&self, y: u64, prev: u64) -> Option<u64> {
+        let m = u128::from(y) * u128::from(self.recip);
+        let q = (m >> 64) as u64;
+        let within = m as u64 <= self.within;
+        let step = q.wrapping_sub(prev).wrapping_sub(1) <= 1;
+        (within && step).then_some(q)
     }
 }
 
@@ -262,6 +287,68 @@ impl LineDecoder {
     }
 }
 
+/// The pulses the fast scan placed on the grid ([`Placed::scan`]).
+#[derive(Clone, Copy, Debug)]
+struct Placed {
+    /// How many it took.
+    n: usize,
+    /// The grid point of the last one taken (the one before them if none).
+    last_g: u64,
+    /// Their grid points.
+    occupied: u64,
+    /// Their signs in order, the latest in bit 0 (1 = positive).
+    signs: u64,
+}
+
+impl Placed {
+    /// Takes the leading pulses of `pulses` that each lie within the tolerance of one of the
+    /// two grid points after the previous one's (the one before them on point `last_g`),
+    /// the grid's point 0 lying at `base` + the tolerance. The grid must have a fast scan
+    /// ([`Grid::recip`]) and `pulses` must hold at most `(63 - last_g) / 2` pulses, so that
+    /// every grid point stays under 64.
+    ///
+    /// Every pulse is placed by itself, from its distance to point 0 ([`Grid::place`]): its
+    /// distance to its grid point is at most the tolerance, and the point is one or two after
+    /// the last. Two pulses go at a time, which leaves one loop step and one register copy of
+    /// the last point per pair.
+    #[inline(always)]
+    fn scan(pulses: &[Pulse], base: u64, last_g: u64, grid: &Grid) -> Placed {
+        // The grid point of a pulse if it takes one of the next two after `prev`.
+        let place = |p: &Pulse, prev: u64| grid.place(p.at.as_nanos().wrapping_sub(base), prev);
+        let mut placed = Placed {
+            n: 0,
+            last_g,
+            occupied: 0,
+            signs: 0,
+        };
+        let take = |placed: &mut Placed, p: &Pulse, q: u64| {
+            placed.occupied |= 1u64.wrapping_shl(q as u32);
+            placed.signs = (placed.signs << 1) | p.polarity as u64;
+            placed.last_g = q;
+        };
+        let mut pairs = pulses.chunks_exact(2);
+        for pair in pairs.by_ref() {
+            let Some(q0) = place(&pair[0], placed.last_g) else {
+                return placed;
+            };
+            take(&mut placed, &pair[0], q0);
+            let Some(q1) = place(&pair[1], q0) else {
+                placed.n += 1;
+                return placed;
+            };
+            take(&mut placed, &pair[1], q1);
+            placed.n += 2;
+        }
+        if let [p] = pairs.remainder() {
+            if let Some(q) = place(p, placed.last_g) {
+                take(&mut placed, p, q);
+                placed.n += 1;
+            }
+        }
+        placed
+    }
+}
+
 impl Run {
     fn begin(p: Pulse) -> Run {
         let positive = p.polarity == Polarity::Positive;
@@ -295,28 +382,12 @@ impl Run {
             return None;
         }
         let t0 = first.at.as_nanos();
-        let base = t0.wrapping_sub(grid.tol);
-        let (h, recip, two_tol) = (grid.h, grid.recip, grid.two_tol);
-        let mut q_prev = 0u64;
-        let mut occupied = 1u64;
-        // The signs in order, the latest in bit 0 (1 = positive).
-        let mut signs = first.polarity as u64;
-        let mut n = 0;
         // At most 31 pulses after the first keep every grid point under 64.
         let scanned = &tail[..tail.len().min(31)];
-        while let Some(p) = scanned.get(n) {
-            let y = p.at.as_nanos().wrapping_sub(base);
-            let q = y.wrapping_mul(recip) >> RECIP_SHIFT;
-            let within = y.wrapping_sub(q.wrapping_mul(h)) <= two_tol;
-            let step = q.wrapping_sub(q_prev).wrapping_sub(1) <= 1;
-            if !(within && step) {
-                break;
-            }
-            occupied |= 1u64.wrapping_shl(q as u32);
-            signs = (signs << 1) | p.polarity as u64;
-            q_prev = q;
-            n += 1;
-        }
+        let placed = Placed::scan(scanned, t0.wrapping_sub(grid.tol), 0, grid);
+        let (n, q_prev) = (placed.n, placed.last_g);
+        let occupied = 1 | placed.occupied;
+        let signs = (first.polarity as u64) << n | placed.signs;
         let last_t = if n == 0 {
             t0
         } else {
@@ -423,27 +494,8 @@ impl Run {
     /// sound line) the positive pulses are every other one of the masks'.
     #[inline]
     fn scan(&mut self, pulses: &[Pulse], grid: &Grid) -> (usize, bool) {
-        let base = self.t0.wrapping_sub(grid.tol);
-        let (h, recip, two_tol) = (grid.h, grid.recip, grid.two_tol);
-        let mut q_prev = self.last_g;
-        let mut occupied = 0u64;
-        // The signs in order, the latest in bit 0 (1 = positive).
-        let mut signs = 0u64;
-        let mut n = 0;
-        while let Some(p) = pulses.get(n) {
-            // The distance from the grid point before the pulse's window, modulo 2⁶⁴.
-            let y = p.at.as_nanos().wrapping_sub(base);
-            let q = y.wrapping_mul(recip) >> RECIP_SHIFT;
-            let within = y.wrapping_sub(q.wrapping_mul(h)) <= two_tol;
-            let step = q.wrapping_sub(q_prev).wrapping_sub(1) <= 1;
-            if !(within && step) {
-                break;
-            }
-            occupied |= 1u64.wrapping_shl(q as u32);
-            signs = (signs << 1) | p.polarity as u64;
-            q_prev = q;
-            n += 1;
-        }
+        let placed = Placed::scan(pulses, self.t0.wrapping_sub(grid.tol), self.last_g, grid);
+        let (n, q_prev, occupied, signs) = (placed.n, placed.last_g, placed.occupied, placed.signs);
         if n == 0 {
             return (0, false);
         }
@@ -642,6 +694,7 @@ mod tests {
     use crate::receiver::Expect;
     use crate::telegram::Request;
     use crate::timing::BusTiming;
+    use proptest::prelude::Just;
 
     /// Every request's pulses, each after the first off its grid point by exactly the
     /// tolerance (late, early, alternately), and a pulse exactly a pause after the last.
@@ -686,6 +739,66 @@ mod tests {
             // (The count is extend's to keep.)
             run.count += taken as u32;
             assert_eq!(run.finish(), frame);
+        }
+    }
+
+    /// The reference of [`Grid::place`]: the grid point and the distance to it by division.
+    fn place_by_division(grid: &Grid, y: u64, prev: u64) -> Option<u64> {
+        let (q, r) = (y / grid.h, y % grid.h);
+        (r <= grid.two_tol && (prev + 1..=prev + 2).contains(&q)).then_some(q)
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(20_000))]
+
+        /// The placement by one widening multiplication is the placement by division, for
+        /// every grid the fast scan takes (grids from 2 ns to 2²⁴ ns, tolerances up to just
+        /// under half the grid) and pulses on, just inside and just outside the tolerance
+        /// windows of the points around the next two, and anywhere.
+        #[test]
+        fn the_placement_by_multiplication_is_the_placement_by_division(
+            h in proptest::prop_oneof![
+                Just(2u64), Just(3), Just(3_000), Just(1 << 24), Just((1 << 24) - 1),
+                2u64..64, 2u64..=1 << 24,
+            ],
+            t in 0u32..4,
+            prev in 0u64..62,
+            dq in 0u64..5,
+            r in 0u32..6,
+            any in proptest::prelude::any::<u64>(),
+            far in proptest::prelude::any::<bool>(),
+        ) {
+            let tol = match t {
+                0 => 0,
+                1 => h.div_ceil(2) - 1,
+                2 => (h.div_ceil(2) - 1) / 2,
+                _ => any % h.div_ceil(2),
+            };
+            let cfg = ReceiverConfig {
+                half_bit: h,
+                tolerance: tol,
+                pause: 2 * h + 2 * tol + 1,
+                ..BusTiming::default().receiver(Expect::Both)
+            };
+            let grid = Grid::new(&cfg);
+            proptest::prop_assert_ne!(grid.recip, 0);
+            let two_tol = 2 * tol;
+            let r = match r {
+                0 => 0,
+                1 => two_tol,
+                2 => two_tol + 1,
+                3 => h - 1,
+                4 => any % h,
+                _ => any % (two_tol + 1),
+            };
+            let y = if far { any } else { (prev + dq) * h + r.min(h - 1) };
+            for y in [y, y.wrapping_sub(1), y.wrapping_add(1)] {
+                proptest::prop_assert_eq!(
+                    grid.place(y, prev),
+                    place_by_division(&grid, y, prev),
+                    "h {} tol {} prev {} y {}", h, tol, prev, y
+                );
+            }
         }
     }
 
