@@ -131,13 +131,7 @@ impl Master {
         }
         let i = a.index() as usize;
         match resp {
-            Some(d) => {
-                self.fails[i] = 0;
-                self.image.input.set_nibble(a, d);
-                if self.analog[i].is_some() {
-                    self.step_analog(a, d);
-                }
-            }
+            Some(d) => self.exchange_answered(a, d),
             None => {
                 self.fails[i] = self.fails[i].saturating_add(1);
                 if self.fails[i] >= self.cfg.max_failed_cycles {
@@ -148,6 +142,22 @@ impl Master {
                     self.stats.dropouts += 1;
                 }
             }
+        }
+    }
+
+    /// Slave `a` answered its Data_Exchange with inputs `d`: its count of failures restarts
+    /// and `d` goes to the input image (through the analog engine's handshake if it has one).
+    /// Nothing for a slave no longer in LAS.
+    #[inline]
+    pub(super) fn exchange_answered(&mut self, a: SlaveAddr, d: Nibble) {
+        if !self.las.contains(a) {
+            return;
+        }
+        let i = a.index() as usize;
+        self.fails[i] = 0;
+        self.image.input.set_nibble(a, d);
+        if self.analog[i].is_some() {
+            self.step_analog(a, d);
         }
     }
 
