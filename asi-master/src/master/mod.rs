@@ -543,7 +543,7 @@ impl Master {
         }
         self.inputs_before();
         self.service_host(now);
-        let t = match self.next_exchange() {
+        let t = match self.next_exchange(now) {
             Some(t) => Some(t),
             None => self.next_transmit(now),
         };
@@ -569,22 +569,22 @@ impl Master {
         None
     }
 
-    /// The Data_Exchange the data stage of an open normal cycle sends next, or `None` when
-    /// the next call is anything else (the stage ends, another phase, host Offline): then
-    /// [`Master::next_transmit`] decides, from the same untouched state.
+    /// The Data_Exchange the data stage of a normal cycle sends next, or `None` when the next
+    /// call is anything else (the stage ends, another phase, host Offline): then
+    /// [`Master::next_transmit`] decides, from the same state (at most the cycle is opened,
+    /// as the general path would do first).
     ///
     /// This is [`Master::normal_next`]'s data stage, [`Master::slot`] and
     /// [`Master::request_for`] of `Tx::Exchange` in one, without the general dispatch; the
     /// telegram comes from [`DEXG`] instead of being assembled. The tests compare it with
     /// the general path transaction by transaction.
     #[inline]
-    fn next_exchange(&mut self) -> Option<Transmit> {
-        if self.phase != Phase::NormalOperation
-            || self.host.offline
-            || self.stage != Stage::Data
-            || !self.cycle_open
-        {
+    fn next_exchange(&mut self, now: SimTime) -> Option<Transmit> {
+        if self.phase != Phase::NormalOperation || self.host.offline || self.stage != Stage::Data {
             return None;
+        }
+        if !self.cycle_open {
+            self.open_cycle(now);
         }
         let las = self.las.bits();
         let occupied = (las as u32 | (las >> 32) as u32) as u64;
@@ -617,7 +617,8 @@ impl Master {
         let request = if ab {
             DEXG.ab[i][(out.get() & 7) as usize]
         } else {
-            DEXG.standard[n as usize][out.get() as usize]
+            // A nibble holds 4 bits; the mask only lets the compiler see it.
+            DEXG.standard[n as usize][(out.get() & 0xF) as usize]
         };
         self.in_flight = Some(InFlight {
             tx: Tx::Exchange(a),
