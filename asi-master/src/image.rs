@@ -128,6 +128,19 @@ impl Image {
         analog_word(address, channel).map_or(0, |i| self.words[i])
     }
 
+    /// The analog words of `address`, channels 1..=4: `analog` of each, read as one block
+    /// (all 0 outside 10..=31).
+    pub fn analog_channels(&self, address: u8) -> [u16; 4] {
+        match analog_word(address, 1) {
+            Some(i) => {
+                let mut v = [0; 4];
+                v.copy_from_slice(&self.words[i..i + 4]);
+                v
+            }
+            None => [0; 4],
+        }
+    }
+
     /// Sets the analog word of `address`, `channel` (ignored outside 10..=31, 1..=4).
     pub fn set_analog(&mut self, address: u8, channel: u8, v: u16) {
         if let Some(i) = analog_word(address, channel) {
@@ -265,6 +278,19 @@ mod tests {
         assert_eq!(analog_word(10, 0), None);
         assert_eq!(analog_word(10, 5), None);
         assert_eq!(analog_word(32, 1), None);
+    }
+
+    /// The block read of a slave's four analog words is the four single reads.
+    #[test]
+    fn analog_channels_are_the_four_analog_words() {
+        let mut img = Image::default();
+        for (i, w) in img.words.iter_mut().enumerate() {
+            *w = (i as u16).wrapping_mul(0x9E37) ^ 0x5A5A;
+        }
+        for address in 0..=40u8 {
+            let want = [1, 2, 3, 4].map(|ch| img.analog(address, ch));
+            assert_eq!(img.analog_channels(address), want, "slave {address}");
+        }
     }
 
     #[test]

@@ -403,7 +403,7 @@ impl Master {
     }
 
     /// Brings `inputs_seen` up to date: the signature before a transaction.
-    #[inline]
+    #[inline(always)]
     fn inputs_before(&mut self) {
         if self.inputs_touched {
             self.inputs_touched = false;
@@ -417,21 +417,28 @@ impl Master {
     }
 
     /// Recomputes the flags if the signature differs from the one before the transaction.
-    #[inline]
+    /// Only the check is inlined: most transactions touch nothing.
+    #[inline(always)]
     fn inputs_after(&mut self) {
         if self.inputs_touched {
-            self.inputs_touched = false;
-            let now = self.signature();
-            if now != self.inputs_seen {
-                self.inputs_seen = now;
-                self.update_flags();
-            }
+            self.inputs_changed();
         }
         debug_assert_eq!(
             self.inputs_seen,
             self.signature(),
             "a write missed touch_inputs"
         );
+    }
+
+    /// `inputs_after` when something was touched.
+    #[inline(never)]
+    fn inputs_changed(&mut self) {
+        self.inputs_touched = false;
+        let now = self.signature();
+        if now != self.inputs_seen {
+            self.inputs_seen = now;
+            self.update_flags();
+        }
     }
 
     /// Notes a write to something the flags depend on (see `inputs_touched`).

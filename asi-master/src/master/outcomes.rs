@@ -106,9 +106,7 @@ impl Master {
         let n = a.number();
         match &mut self.analog[i] {
             Some(AnalogEngine::Output(e)) => {
-                for ch in 1..=4 {
-                    e.set_value(ch, self.image.output.analog(n, ch));
-                }
+                e.set_values(self.image.output.analog_channels(n));
                 self.analog_out[i] = e.step(input);
             }
             Some(AnalogEngine::Input(e)) => {
