@@ -25,9 +25,13 @@ impl Master {
             }
             Tx::Exchange(a) => self.exchange_result(a, resp),
             Tx::Status(a) => {
+                // Nearly every status repeats the last one: LPF, and so the flags, change
+                // only when the peripheral-fault bit does.
                 if let Some(s) = resp {
-                    self.lpf.set(a, s.bit(1));
-                    self.touch_inputs();
+                    if self.lpf.contains(a) != s.bit(1) {
+                        self.lpf.set(a, s.bit(1));
+                        self.touch_inputs();
+                    }
                 }
             }
             Tx::Include(a, step) => self.include_result(a, step, resp),
