@@ -2,6 +2,7 @@
 //! recomputed exactly when their inputs changed (as when the signature was compared around
 //! every transaction), and the cycle picks the same slaves as asking every address in turn.
 
+use super::requests::READS;
 use super::*;
 use crate::mailbox::post;
 use asi_phy::SimDuration;
@@ -472,5 +473,28 @@ fn the_data_exchange_table_holds_the_requests() {
                 }
             }
         }
+    }
+}
+
+#[test]
+fn the_read_tables_hold_the_requests() {
+    for i in 0..64u8 {
+        let Some(a) = SlaveAddr::from_index(i) else {
+            assert_eq!(
+                (READS.status[i as usize], READS.io[i as usize]),
+                (None, None)
+            );
+            continue;
+        };
+        assert_eq!(
+            READS.status[i as usize],
+            Request::read_status(a.address, a.select).ok(),
+            "{a}"
+        );
+        assert_eq!(
+            READS.io[i as usize],
+            Request::read_io_configuration(a.address, a.select).ok(),
+            "{a}"
+        );
     }
 }
