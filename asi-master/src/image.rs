@@ -47,7 +47,9 @@ pub const F3_CONFIGURATION_NOT_ACTIVE: u16 = 1 << 15;
 /// lowest slot in the highest bits: word = n / 4 (+ 8 for B), shift = 12 − 4·(n mod 4).
 /// Address 0 has no nibble.
 pub const fn nibble_position(a: SlaveAddr) -> Option<(usize, u32)> {
-    let n = a.address.get() as usize;
+    // An address is 0..=31; the mask changes nothing but lets the compiler see that the
+    // word is in the image (no bounds check where the position is used).
+    let n = (a.address.get() & 31) as usize;
     if n == 0 {
         return None;
     }
@@ -124,6 +126,19 @@ impl Image {
     /// The analog word of `address`, `channel` (0 for positions outside 10..=31, 1..=4).
     pub fn analog(&self, address: u8, channel: u8) -> u16 {
         analog_word(address, channel).map_or(0, |i| self.words[i])
+    }
+
+    /// The analog words of `address`, channels 1..=4: `analog` of each, read as one block
+    /// (all 0 outside 10..=31).
+    pub fn analog_channels(&self, address: u8) -> [u16; 4] {
+        match analog_word(address, 1) {
+            Some(i) => {
+                let mut v = [0; 4];
+                v.copy_from_slice(&self.words[i..i + 4]);
+                v
+            }
+            None => [0; 4],
+        }
     }
 
     /// Sets the analog word of `address`, `channel` (ignored outside 10..=31, 1..=4).
@@ -263,6 +278,19 @@ mod tests {
         assert_eq!(analog_word(10, 0), None);
         assert_eq!(analog_word(10, 5), None);
         assert_eq!(analog_word(32, 1), None);
+    }
+
+    /// The block read of a slave's four analog words is the four single reads.
+    #[test]
+    fn analog_channels_are_the_four_analog_words() {
+        let mut img = Image::default();
+        for (i, w) in img.words.iter_mut().enumerate() {
+            *w = (i as u16).wrapping_mul(0x9E37) ^ 0x5A5A;
+        }
+        for address in 0..=40u8 {
+            let want = [1, 2, 3, 4].map(|ch| img.analog(address, ch));
+            assert_eq!(img.analog_channels(address), want, "slave {address}");
+        }
     }
 
     #[test]

@@ -57,6 +57,11 @@ impl S73OutputMaster {
         }
     }
 
+    /// The values to send on channels 1..=4 from the next transfer on: `set_value` of each.
+    pub fn set_values(&mut self, values: [u16; 4]) {
+        self.values = values;
+    }
+
     /// One step: the slave's last input nibble in, the output nibble for the next
     /// Data_Exchange out.
     pub fn step(&mut self, input: Nibble) -> Nibble {

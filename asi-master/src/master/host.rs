@@ -6,24 +6,39 @@ use super::*;
 impl Master {
     // ----- host interface -------------------------------------------------------------
 
+    /// Reads the host flags and takes a posted mailbox job, before every call but a repeat.
+    /// Both checks are inlined into the caller; what follows a change is not.
+    #[inline]
     pub(super) fn service_host(&mut self, now: SimTime) {
         // The host flags change only when their three bits of output word 0 do.
         let bits = self.image.output.word(0) & HOST_FLAG_BITS;
         if bits != self.host_bits {
-            self.host_bits = bits;
-            let host = HostFlags::from_output_word0(bits);
-            if self.host.offline && !host.offline && self.phase == Phase::Offline {
-                self.wake_at = self.wake_at.max(now);
-            }
-            self.host = host;
-            self.touch_inputs();
+            self.host_flags_changed(now, bits);
         }
         if self.job.is_none() {
             if let Some(req) = self.mailbox.take(&self.image.output) {
-                self.start_job(req);
-                self.update_flags();
+                self.take_job(req);
             }
         }
+    }
+
+    /// The host flags' bits of output word 0 are now `bits`.
+    #[inline(never)]
+    fn host_flags_changed(&mut self, now: SimTime, bits: u16) {
+        self.host_bits = bits;
+        let host = HostFlags::from_output_word0(bits);
+        if self.host.offline && !host.offline && self.phase == Phase::Offline {
+            self.wake_at = self.wake_at.max(now);
+        }
+        self.host = host;
+        self.touch_inputs();
+    }
+
+    /// Starts the job the PLC posted.
+    #[inline(never)]
+    fn take_job(&mut self, req: MailboxRequest) {
+        self.start_job(req);
+        self.update_flags();
     }
 
     fn finish_job(&mut self, req: &MailboxRequest, result: JobResult, response: &[u8]) {

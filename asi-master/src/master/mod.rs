@@ -403,7 +403,7 @@ impl Master {
     }
 
     /// Brings `inputs_seen` up to date: the signature before a transaction.
-    #[inline]
+    #[inline(always)]
     fn inputs_before(&mut self) {
         if self.inputs_touched {
             self.inputs_touched = false;
@@ -417,21 +417,28 @@ impl Master {
     }
 
     /// Recomputes the flags if the signature differs from the one before the transaction.
-    #[inline]
+    /// Only the check is inlined: most transactions touch nothing.
+    #[inline(always)]
     fn inputs_after(&mut self) {
         if self.inputs_touched {
-            self.inputs_touched = false;
-            let now = self.signature();
-            if now != self.inputs_seen {
-                self.inputs_seen = now;
-                self.update_flags();
-            }
+            self.inputs_changed();
         }
         debug_assert_eq!(
             self.inputs_seen,
             self.signature(),
             "a write missed touch_inputs"
         );
+    }
+
+    /// `inputs_after` when something was touched.
+    #[inline(never)]
+    fn inputs_changed(&mut self) {
+        self.inputs_touched = false;
+        let now = self.signature();
+        if now != self.inputs_seen {
+            self.inputs_seen = now;
+            self.update_flags();
+        }
     }
 
     /// Notes a write to something the flags depend on (see `inputs_touched`).
@@ -532,27 +539,108 @@ impl Master {
     }
 
     /// The request to start at `now`, or `None` if the master sends nothing now.
+    ///
+    /// The cycle's common call, a Data_Exchange with the next LAS slot, takes the short path
+    /// [`Master::next_exchange`]; every other call goes through the general scheduler.
     pub fn poll_transmit(&mut self, now: SimTime) -> Option<Transmit> {
-        if let Some(f) = self.in_flight {
-            if self.repeat_pending {
-                self.repeat_pending = false;
-                return Some(Transmit {
-                    request: f.request,
-                    kind: f.tx.kind(),
-                    repeat: true,
-                    ab: self.is_ab_call(f.tx),
-                });
+        if self.in_flight.is_some() {
+            if let Some(t) = self.repeat_or_forget() {
+                return Some(t);
             }
-            // An outcome was never delivered: forget the transaction.
-            self.in_flight = None;
         }
         self.inputs_before();
         self.service_host(now);
-        let t = self.next_transmit(now);
+        let t = match self.next_exchange(now) {
+            Some(t) => Some(t),
+            None => self.next_transmit(now),
+        };
         self.inputs_after();
         t
     }
 
+    /// With a transaction still in flight at the next poll: its repeat if one is pending,
+    /// else (its outcome was never delivered) it is forgotten and `None` is returned.
+    #[inline(never)]
+    fn repeat_or_forget(&mut self) -> Option<Transmit> {
+        let f = self.in_flight?;
+        if self.repeat_pending {
+            self.repeat_pending = false;
+            return Some(Transmit {
+                request: f.request,
+                kind: f.tx.kind(),
+                repeat: true,
+                ab: self.is_ab_call(f.tx),
+            });
+        }
+        self.in_flight = None;
+        None
+    }
+
+    /// The Data_Exchange the data stage of a normal cycle sends next, or `None` when the next
+    /// call is anything else (the stage ends, another phase, host Offline): then
+    /// [`Master::next_transmit`] decides, from the same state (at most the cycle is opened,
+    /// as the general path would do first).
+    ///
+    /// This is [`Master::normal_next`]'s data stage, [`Master::slot`] and
+    /// [`Master::request_for`] of `Tx::Exchange` in one, without the general dispatch; the
+    /// telegram comes from [`DEXG`] instead of being assembled. The tests compare it with
+    /// the general path transaction by transaction.
+    #[inline]
+    fn next_exchange(&mut self, now: SimTime) -> Option<Transmit> {
+        if self.phase != Phase::NormalOperation || self.host.offline || self.stage != Stage::Data {
+            return None;
+        }
+        if !self.cycle_open {
+            self.open_cycle(now);
+        }
+        let las = self.las.bits();
+        let occupied = (las as u32 | (las >> 32) as u32) as u64;
+        let ahead = occupied & (u64::MAX << self.cursor.min(32));
+        let n = ahead.trailing_zeros() as u8;
+        // Nothing ahead (n = 64) ends the stage; address 0 has no Data_Exchange (the
+        // general path fails the call). Both are left to the general path.
+        if !(1..=31).contains(&n) {
+            return None;
+        }
+        // `slot(n)`: the A slave, or the B slave if it is alone or it is an odd cycle.
+        let has_a = las >> n & 1 != 0;
+        let has_b = las >> (n + 32) & 1 != 0;
+        let index = if has_b && (!has_a || self.odd_cycle) {
+            n + 32
+        } else {
+            n
+        };
+        let a = SlaveAddr::from_index(index)?;
+        self.cursor = n + 1;
+        let i = index as usize;
+        let out = if !self.host.data_exchange_active {
+            Nibble::ALL
+        } else if self.analog[i].is_some() {
+            self.analog_out[i]
+        } else {
+            self.image.output.nibble(a)
+        };
+        let ab = self.detected[i].is_ab();
+        let request = if ab {
+            DEXG.ab[i][(out.get() & 7) as usize]
+        } else {
+            // A nibble holds 4 bits; the mask only lets the compiler see it.
+            DEXG.standard[n as usize][(out.get() & 0xF) as usize]
+        };
+        self.in_flight = Some(InFlight {
+            tx: Tx::Exchange(a),
+            request,
+            repeated: false,
+        });
+        Some(Transmit {
+            request,
+            kind: TxKind::DataExchange,
+            repeat: false,
+            ab,
+        })
+    }
+
+    #[inline(never)]
     fn next_transmit(&mut self, now: SimTime) -> Option<Transmit> {
         for _ in 0..4 {
             let tx = self.next_tx(now)?;
@@ -578,7 +666,35 @@ impl Master {
 
     /// What came back for the request in flight, known at `now` (part of the sans-IO
     /// interface; no decision depends on the time yet).
+    ///
+    /// The common outcome, a Data_Exchange answered, takes a short path; every other goes
+    /// through the general judgement and [`Master::apply`].
     pub fn handle_outcome(&mut self, now: SimTime, outcome: Outcome) -> Verdict {
+        if let (
+            Some(InFlight {
+                tx: Tx::Exchange(a),
+                ..
+            }),
+            Outcome::Response(r),
+        ) = (&self.in_flight, outcome)
+        {
+            // A valid response is no failure, repeat or not: what `apply` does with it.
+            let a = *a;
+            self.in_flight = None;
+            self.inputs_before();
+            self.exchange_answered(a, r.data());
+            self.inputs_after();
+            return Verdict {
+                repeat: false,
+                error: false,
+            };
+        }
+        self.judge_outcome(now, outcome)
+    }
+
+    /// [`Master::handle_outcome`] for every outcome but an answered Data_Exchange.
+    #[inline(never)]
+    fn judge_outcome(&mut self, now: SimTime, outcome: Outcome) -> Verdict {
         let _ = now;
         let Some(mut f) = self.in_flight else {
             return Verdict {
@@ -609,6 +725,56 @@ impl Master {
             repeat: false,
             error: failed,
         }
+    }
+}
+
+/// Every Data_Exchange request, built at compile time, so the cycle's most frequent call is
+/// a look-up instead of assembling the telegram and its parity bit.
+struct DexgTable {
+    /// `[n][d]`: standard slave `n` (any select), outputs `d`, as `Request::data_exchange`.
+    standard: [[Request; 16]; 32],
+    /// `[i][d]`: the A/B slave of list bit `i`, outputs D2..D0 = `d`, as
+    /// `Request::data_exchange_ab`.
+    ab: [[Request; 8]; 64],
+}
+
+/// The Data_Exchange requests (address 0 and bit 32, 0B, have none: they hold a placeholder
+/// that is never read).
+static DEXG: DexgTable = DexgTable::build();
+
+impl DexgTable {
+    const fn build() -> DexgTable {
+        const fn ok(r: Result<Request, asi_phy::TelegramError>) -> Request {
+            match r {
+                Ok(r) => r,
+                Err(_) => panic!("a Data_Exchange request in range"),
+            }
+        }
+        let none = ok(Request::from_fields(false, asi_phy::Address::ZERO, 0));
+        let mut t = DexgTable {
+            standard: [[none; 16]; 32],
+            ab: [[none; 8]; 64],
+        };
+        let mut n = 1;
+        while n < 32 {
+            let Some(address) = asi_phy::Address::new(n) else {
+                panic!("address in range")
+            };
+            let mut d = 0;
+            while d < 16 {
+                let out = Nibble::from_low_bits(d);
+                t.standard[n as usize][d as usize] = ok(Request::data_exchange(address, out));
+                if d < 8 {
+                    t.ab[n as usize][d as usize] =
+                        ok(Request::data_exchange_ab(address, Select::A, out));
+                    t.ab[32 + n as usize][d as usize] =
+                        ok(Request::data_exchange_ab(address, Select::B, out));
+                }
+                d += 1;
+            }
+            n += 1;
+        }
+        t
     }
 }
 

@@ -25,9 +25,13 @@ impl Master {
             }
             Tx::Exchange(a) => self.exchange_result(a, resp),
             Tx::Status(a) => {
+                // Nearly every status repeats the last one: LPF, and so the flags, change
+                // only when the peripheral-fault bit does.
                 if let Some(s) = resp {
-                    self.lpf.set(a, s.bit(1));
-                    self.touch_inputs();
+                    if self.lpf.contains(a) != s.bit(1) {
+                        self.lpf.set(a, s.bit(1));
+                        self.touch_inputs();
+                    }
                 }
             }
             Tx::Include(a, step) => self.include_result(a, step, resp),
@@ -106,9 +110,7 @@ impl Master {
         let n = a.number();
         match &mut self.analog[i] {
             Some(AnalogEngine::Output(e)) => {
-                for ch in 1..=4 {
-                    e.set_value(ch, self.image.output.analog(n, ch));
-                }
+                e.set_values(self.image.output.analog_channels(n));
                 self.analog_out[i] = e.step(input);
             }
             Some(AnalogEngine::Input(e)) => {
@@ -131,13 +133,7 @@ impl Master {
         }
         let i = a.index() as usize;
         match resp {
-            Some(d) => {
-                self.fails[i] = 0;
-                self.image.input.set_nibble(a, d);
-                if self.analog[i].is_some() {
-                    self.step_analog(a, d);
-                }
-            }
+            Some(d) => self.exchange_answered(a, d),
             None => {
                 self.fails[i] = self.fails[i].saturating_add(1);
                 if self.fails[i] >= self.cfg.max_failed_cycles {
@@ -148,6 +144,22 @@ impl Master {
                     self.stats.dropouts += 1;
                 }
             }
+        }
+    }
+
+    /// Slave `a` answered its Data_Exchange with inputs `d`: its count of failures restarts
+    /// and `d` goes to the input image (through the analog engine's handshake if it has one).
+    /// Nothing for a slave no longer in LAS.
+    #[inline]
+    pub(super) fn exchange_answered(&mut self, a: SlaveAddr, d: Nibble) {
+        if !self.las.contains(a) {
+            return;
+        }
+        let i = a.index() as usize;
+        self.fails[i] = 0;
+        self.image.input.set_nibble(a, d);
+        if self.analog[i].is_some() {
+            self.step_analog(a, d);
         }
     }
 

@@ -46,7 +46,7 @@ impl Master {
     pub(super) fn read(a: SlaveAddr, r: Read) -> Option<Request> {
         let (ad, s) = (a.address, a.select);
         match r {
-            Read::Io => Request::read_io_configuration(ad, s),
+            Read::Io => return READS.io[a.index() as usize],
             Read::Id => Request::read_id_code(ad, s),
             Read::Id1 => Request::read_id1(ad, s),
             Read::Id2 => Request::read_id2(ad, s),
@@ -73,9 +73,7 @@ impl Master {
                 };
                 self.data_exchange(a, out)
             }
-            Tx::Status(a) | Tx::Job(JobStep::Status(a)) => {
-                Request::read_status(a.address, a.select).ok()
-            }
+            Tx::Status(a) | Tx::Job(JobStep::Status(a)) => READS.status[a.index() as usize],
             Tx::Include(_, InclStep::AutoId1(_, id1)) => Some(Request::write_extended_id1(id1)),
             Tx::Include(_, InclStep::AutoAssign(t)) | Tx::Job(JobStep::Assign(t)) => {
                 Some(Request::address_assignment(t.address))
@@ -85,5 +83,42 @@ impl Master {
                 Request::delete_address(from.address, from.select).ok()
             }
         }
+    }
+}
+
+/// Read_Status and Read_IO_Configuration of every list bit (`None` where the call does not
+/// exist), built at compile time: the management call and the inclusion probe of every cycle
+/// are look-ups instead of assembling the telegram and its parity bit.
+pub(super) struct ReadTable {
+    /// `Request::read_status` of list bit `i`.
+    pub(super) status: [Option<Request>; 64],
+    /// `Request::read_io_configuration` of list bit `i`.
+    pub(super) io: [Option<Request>; 64],
+}
+
+/// The Read_Status and Read_IO_Configuration requests.
+pub(super) static READS: ReadTable = ReadTable::build();
+
+impl ReadTable {
+    const fn build() -> ReadTable {
+        let mut t = ReadTable {
+            status: [None; 64],
+            io: [None; 64],
+        };
+        let mut i = 0;
+        while i < 64 {
+            if let Some(a) = SlaveAddr::from_index(i) {
+                t.status[i as usize] = match Request::read_status(a.address, a.select) {
+                    Ok(r) => Some(r),
+                    Err(_) => None,
+                };
+                t.io[i as usize] = match Request::read_io_configuration(a.address, a.select) {
+                    Ok(r) => Some(r),
+                    Err(_) => None,
+                };
+            }
+            i += 1;
+        }
+        t
     }
 }

@@ -131,11 +131,7 @@ impl Master {
             match self.stage {
                 Stage::Data => {
                     if !self.cycle_open {
-                        self.cycle_open = true;
-                        if let Some(s) = self.cycle_start {
-                            self.stats.record_cycle(now.saturating_duration_since(s));
-                        }
-                        self.cycle_start = Some(now);
+                        self.open_cycle(now);
                     }
                     // The next slot at or after the cursor that holds an A or a B slave of
                     // LAS, found in the list bits rather than by asking each address.
@@ -170,6 +166,16 @@ impl Master {
             }
         }
         None
+    }
+
+    /// A cycle starts at `now`: the previous one's time goes to the statistics.
+    #[inline(never)]
+    pub(super) fn open_cycle(&mut self, now: SimTime) {
+        self.cycle_open = true;
+        if let Some(s) = self.cycle_start {
+            self.stats.record_cycle(now.saturating_duration_since(s));
+        }
+        self.cycle_start = Some(now);
     }
 
     #[inline(never)]

@@ -2,6 +2,7 @@
 //! recomputed exactly when their inputs changed (as when the signature was compared around
 //! every transaction), and the cycle picks the same slaves as asking every address in turn.
 
+use super::requests::READS;
 use super::*;
 use crate::mailbox::post;
 use asi_phy::SimDuration;
@@ -341,5 +342,159 @@ fn the_cycle_calls_the_slaves_asking_each_address_would() {
         let want = status_call_by_address(&mut by_address);
         assert_eq!(m.management_next(), want, "las {:#x}", bits);
         assert_eq!(m.status_cursor, by_address.status_cursor);
+    }
+}
+
+/// The reference for the short paths: every call and every outcome through the general path,
+/// as the master did before [`Master::next_exchange`] and the answered-Data_Exchange branch of
+/// [`Master::handle_outcome`] existed.
+impl Master {
+    fn poll_transmit_reference(&mut self, now: SimTime) -> Option<Transmit> {
+        if let Some(f) = self.in_flight {
+            if self.repeat_pending {
+                self.repeat_pending = false;
+                return Some(Transmit {
+                    request: f.request,
+                    kind: f.tx.kind(),
+                    repeat: true,
+                    ab: self.is_ab_call(f.tx),
+                });
+            }
+            self.in_flight = None;
+        }
+        self.inputs_before();
+        self.service_host(now);
+        let t = self.next_transmit(now);
+        self.inputs_after();
+        t
+    }
+
+    fn handle_outcome_reference(&mut self, now: SimTime, outcome: Outcome) -> Verdict {
+        self.judge_outcome(now, outcome)
+    }
+}
+
+/// Everything the master holds, for comparing two masters.
+fn state_of(m: &Master) -> String {
+    format!(
+        "{m:?} {:?} {:?}",
+        m.image.input.words(),
+        m.image.output.words()
+    )
+}
+
+/// Two masters, one with the short paths and one through the general path only, driven
+/// through the same random traffic (as `drive`): every call, verdict and all of their state
+/// must be the same after every step.
+fn lockstep(seed: u64, steps: usize) -> u64 {
+    let mut rng = Rng(seed | 1);
+    let mut cfg = MasterConfig::default();
+    if rng.chance(50) {
+        cfg.mode = Mode::Configuration;
+    }
+    let mut m = Master::new(cfg.clone(), projected()).expect("master");
+    let mut r = Master::new(cfg, projected()).expect("master");
+    let mut world = World::new();
+    let mut now = SimTime::ZERO;
+    let step = SimDuration::from_micros(154);
+    let mut exchanges = 0;
+    for k in 0..steps {
+        now += step;
+        if rng.chance(2) {
+            world.churn(&mut rng);
+        }
+        let mut twin = Rng(rng.0);
+        disturb(&mut m, now, &mut rng);
+        disturb(&mut r, now, &mut twin);
+        if m.phase == Phase::NormalOperation && m.stage == Stage::Data && m.cycle_open {
+            // Now and then a cursor from outside the cycle's order, to reach every slot and
+            // address 0.
+            if rng.chance(2) {
+                let c = rng.below(34) as u8;
+                m.cursor = c;
+                r.cursor = c;
+            }
+        }
+        let t = m.poll_transmit(now);
+        let want = r.poll_transmit_reference(now);
+        assert_eq!(t, want, "call at step {k}");
+        assert_eq!(
+            state_of(&m),
+            state_of(&r),
+            "state after the call at step {k}"
+        );
+        if t.is_some_and(|t| t.kind == TxKind::DataExchange && !t.repeat) {
+            exchanges += 1;
+        }
+        if t.is_none() || rng.chance(1) {
+            continue;
+        }
+        let outcome = world.answer(&m, &mut rng);
+        let v = m.handle_outcome(now, outcome);
+        let want = r.handle_outcome_reference(now, outcome);
+        assert_eq!(v, want, "verdict at step {k}");
+        assert_eq!(
+            state_of(&m),
+            state_of(&r),
+            "state after the outcome at step {k}"
+        );
+    }
+    exchanges
+}
+
+#[test]
+fn the_short_paths_do_what_the_general_path_does() {
+    let mut exchanges = 0;
+    for seed in 1..=12u64 {
+        exchanges += lockstep(seed.wrapping_mul(0xD1B5_4A32_D192_ED03), 10_000);
+    }
+    assert!(
+        exchanges > 5_000,
+        "the short path ran: {exchanges} Data_Exchanges"
+    );
+}
+
+#[test]
+fn the_data_exchange_table_holds_the_requests() {
+    for n in 1..32u8 {
+        let address = asi_phy::Address::new(n).expect("address");
+        for d in 0..16u8 {
+            let out = Nibble::from_low_bits(d);
+            assert_eq!(
+                Ok(DEXG.standard[n as usize][d as usize]),
+                Request::data_exchange(address, out)
+            );
+            if d < 8 {
+                for (base, select) in [(0, Select::A), (32, Select::B)] {
+                    assert_eq!(
+                        Ok(DEXG.ab[base + n as usize][d as usize]),
+                        Request::data_exchange_ab(address, select, out)
+                    );
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn the_read_tables_hold_the_requests() {
+    for i in 0..64u8 {
+        let Some(a) = SlaveAddr::from_index(i) else {
+            assert_eq!(
+                (READS.status[i as usize], READS.io[i as usize]),
+                (None, None)
+            );
+            continue;
+        };
+        assert_eq!(
+            READS.status[i as usize],
+            Request::read_status(a.address, a.select).ok(),
+            "{a}"
+        );
+        assert_eq!(
+            READS.io[i as usize],
+            Request::read_io_configuration(a.address, a.select).ok(),
+            "{a}"
+        );
     }
 }
