@@ -56,17 +56,19 @@ impl FloorStationSlave {
     }
 
     /// One step with the output nibble the master sent; returns the input nibble to present.
+    ///
+    /// A latched press is queued as the extra code unless one is pending already. The latches
+    /// are looked at first: without a press (almost every step) there is nothing to queue,
+    /// and the requester is not asked whether an extra is pending.
     pub fn step(&mut self, outputs: Nibble) -> Nibble {
-        if !self.requester.extra_pending() {
-            let code = match (self.up_latched, self.down_latched) {
-                (true, true) => Some(CODE_BOTH),
-                (true, false) => Some(CODE_UP),
-                (false, true) => Some(CODE_DOWN),
-                (false, false) => None,
-            };
-            if let Some(c) = code {
-                self.requester.queue_extra(c);
-            }
+        let code = match (self.up_latched, self.down_latched) {
+            (true, true) => Some(CODE_BOTH),
+            (true, false) => Some(CODE_UP),
+            (false, true) => Some(CODE_DOWN),
+            (false, false) => None,
+        };
+        if let Some(c) = code.filter(|_| !self.requester.extra_pending()) {
+            self.requester.queue_extra(c);
         }
         let (out, ev) = self.requester.step(outputs);
         match ev {
@@ -229,5 +231,68 @@ impl CabinPanelSlave {
         let s = self.signals;
         *self = CabinPanelSlave::new();
         self.signals = s;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    /// The floor station's step as it was: asks the requester first whether an extra code is
+    /// pending, then looks at the latches (the reference for [`FloorStationSlave::step`]).
+    fn reference_step(s: &mut FloorStationSlave, outputs: Nibble) -> Nibble {
+        if !s.requester.extra_pending() {
+            let code = match (s.up_latched, s.down_latched) {
+                (true, true) => Some(CODE_BOTH),
+                (true, false) => Some(CODE_UP),
+                (false, true) => Some(CODE_DOWN),
+                (false, false) => None,
+            };
+            if let Some(c) = code {
+                s.requester.queue_extra(c);
+            }
+        }
+        let (out, ev) = s.requester.step(outputs);
+        match ev {
+            Some(RequesterEvent::Word(bits)) => {
+                let w = (bits >> 2) as u16 & DISPLAY_BITS;
+                let ok = bits & 0b11 == OV_VALID && lab::display::parity_ok(w);
+                s.words.record(ok.then_some(w));
+            }
+            Some(RequesterEvent::Extra(c)) => {
+                if c == CODE_UP || c == CODE_BOTH {
+                    s.up_latched = s.up_pressed;
+                }
+                if c == CODE_DOWN || c == CODE_BOTH {
+                    s.down_latched = s.down_pressed;
+                }
+            }
+            _ => {}
+        }
+        out
+    }
+
+    proptest! {
+        /// Any run of output nibbles and button changes: the same inputs and the same state
+        /// after every step as the reference.
+        #[test]
+        fn the_floor_station_steps_as_the_reference(
+            run in proptest::collection::vec((0u8..16, 0u8..8), 1..400),
+        ) {
+            let mut fast = FloorStationSlave::new();
+            let mut slow = FloorStationSlave::new();
+            for (outputs, buttons) in run {
+                // One step in two changes nothing but the outputs; otherwise the buttons.
+                if buttons < 4 {
+                    let (up, down) = (buttons & 1 != 0, buttons & 2 != 0);
+                    fast.set_buttons(up, down);
+                    slow.set_buttons(up, down);
+                }
+                let outputs = Nibble::from_low_bits(outputs);
+                prop_assert_eq!(fast.step(outputs), reference_step(&mut slow, outputs));
+                prop_assert_eq!(format!("{fast:?}"), format!("{slow:?}"));
+            }
+        }
     }
 }

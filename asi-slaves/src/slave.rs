@@ -187,9 +187,25 @@ impl Slave {
         address == self.address && select == self.select()
     }
 
+    /// The output bits of `req` if it is a Data_Exchange this slave answers as a standard
+    /// (not A/B) slave: nearly every request a slave is handed, told from the request's bits
+    /// without decoding its call. Data_Exchange is CB 0, I4 0 at an address other than 0
+    /// (docs/master.md; at address 0 a CB 0 call is Address_Assignment), with the outputs in
+    /// I3..I0; a standard slave's select is always A, so the address alone says it is meant.
+    /// `None` sends the request the long way, through [`Slave::handle`]'s match of its call.
+    fn standard_data_exchange(&self, req: Request) -> Option<Nibble> {
+        let data_exchange = !req.cb() && req.info() & 0x10 == 0 && req.address().get() != 0;
+        let mine = req.address() == self.address && !self.codes.is_ab();
+        (data_exchange && mine && self.data_exchange_enabled)
+            .then(|| Nibble::from_low_bits(req.info()))
+    }
+
     /// The slave's answer to a valid request received at `now`, or `None` (not addressed, or a
     /// call it ignores). Broadcast reset resets the slave and gets no answer.
     pub fn handle(&mut self, now: SimTime, req: Request) -> Option<Response> {
+        if let Some(outputs) = self.standard_data_exchange(req) {
+            return Some(Response::new(self.device.exchange(now, outputs)));
+        }
         let ab = self.codes.is_ab();
         let data = match req.call() {
             Call::DataExchange { address, data } => {
@@ -262,5 +278,164 @@ impl Slave {
             _ => return None,
         };
         Some(Response::new(data))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A device that answers with its outputs turned round and notes every call.
+    #[derive(Debug, Default)]
+    struct Recorder {
+        calls: Vec<(SimTime, Nibble)>,
+        parameters: Vec<Nibble>,
+        resets: u32,
+    }
+
+    impl Peripheral for Recorder {
+        fn exchange(&mut self, now: SimTime, outputs: Nibble) -> Nibble {
+            self.calls.push((now, outputs));
+            Nibble::from_low_bits(!outputs.get())
+        }
+        fn write_parameter(&mut self, _now: SimTime, parameter: Nibble) -> Nibble {
+            self.parameters.push(parameter);
+            parameter
+        }
+        fn reset(&mut self) {
+            self.resets += 1;
+        }
+        fn as_any(&self) -> &dyn Any {
+            self
+        }
+        fn as_any_mut(&mut self) -> &mut dyn Any {
+            self
+        }
+    }
+
+    /// [`Slave::handle`] as it was, every request through the match of its call (the
+    /// reference for the Data_Exchange fast path).
+    fn reference_handle(s: &mut Slave, now: SimTime, req: Request) -> Option<Response> {
+        let ab = s.codes.is_ab();
+        let data = match req.call() {
+            Call::DataExchange { address, data } => {
+                let (sel, outputs) = if ab {
+                    req.ab_payload()?
+                } else {
+                    (Select::A, data)
+                };
+                if !s.is_me(address, sel) || !s.data_exchange_enabled {
+                    return None;
+                }
+                s.device.exchange(now, outputs)
+            }
+            Call::WriteParameter { address, parameter } => {
+                let (sel, p) = if ab {
+                    req.ab_payload()?
+                } else {
+                    (Select::A, parameter)
+                };
+                if !s.is_me(address, sel) {
+                    return None;
+                }
+                s.parameter = p;
+                s.data_exchange_enabled = true;
+                s.device.write_parameter(now, p)
+            }
+            Call::AddressAssignment { new_address } => {
+                if s.address.get() != 0 || new_address.get() == 0 {
+                    return None;
+                }
+                s.address = new_address;
+                s.nv_address = new_address;
+                s.eeprom_busy_until = now + s.eeprom_write_time;
+                ACK_0110
+            }
+            Call::WriteExtendedId1 { id1 } => {
+                if s.address.get() != 0 {
+                    return None;
+                }
+                s.codes.id1 = id1;
+                s.nv_id1 = id1;
+                s.eeprom_busy_until = now + s.eeprom_write_time;
+                Nibble::ZERO
+            }
+            Call::DeleteAddress { address, select } => {
+                if !s.is_me(address, select) {
+                    return None;
+                }
+                s.address = Address::ZERO;
+                Nibble::ZERO
+            }
+            Call::ResetSlave { address, select } => {
+                if !s.is_me(address, select) {
+                    return None;
+                }
+                s.reset();
+                ACK_0110
+            }
+            Call::ReadIoConfiguration { address, select } if s.is_me(address, select) => s.codes.io,
+            Call::ReadIdCode { address, select } if s.is_me(address, select) => s.codes.id,
+            Call::ReadId1 { address, select } if s.is_me(address, select) => s.codes.id1,
+            Call::ReadId2 { address, select } if s.is_me(address, select) => s.codes.id2,
+            Call::ReadStatus { address, select } if s.is_me(address, select) => s.status(now),
+            Call::BroadcastReset => {
+                s.reset();
+                return None;
+            }
+            _ => return None,
+        };
+        Some(Response::new(data))
+    }
+
+    /// Every field of the slave that a call may change, and its device's notes.
+    fn state(s: &Slave) -> String {
+        format!(
+            "{:?} {:?} {:?} {:?} {:?} {} {:?} {:?}",
+            s.address,
+            s.nv_address,
+            s.codes,
+            s.nv_id1,
+            s.parameter,
+            s.data_exchange_enabled,
+            s.eeprom_busy_until,
+            s.device
+        )
+    }
+
+    /// A valid request with the body CB A4..A0 I4..I0 `body` (11 bits), parity computed.
+    fn request(body: u16) -> Request {
+        let pb = (body.count_ones() & 1) as u16;
+        Request::from_bits((body << 2) | (pb << 1) | 1).expect("a valid request")
+    }
+
+    #[test]
+    fn every_request_gets_the_reference_answer_and_effect() {
+        let now = SimTime::from_millis(3);
+        let mut checked = 0;
+        for address in [0, 1, 7, 21, 31] {
+            for id in [0x0, 0x7, SlaveCodes::ID_AB] {
+                for id1 in [0x0, 0x7, 0x8, 0xF] {
+                    for enabled in [false, true] {
+                        let codes = SlaveCodes::new(7, id, id1, 0xF);
+                        let address = Address::new(address).expect("an address");
+                        let slave = || {
+                            let mut s = Slave::new("s", address, codes, Box::<Recorder>::default());
+                            s.data_exchange_enabled = enabled;
+                            s
+                        };
+                        let (mut fast, mut slow) = (slave(), slave());
+                        for body in 0..1u16 << 11 {
+                            let req = request(body);
+                            let answer = fast.handle(now, req);
+                            assert_eq!(answer, reference_handle(&mut slow, now, req), "{req:?}");
+                            assert_eq!(state(&fast), state(&slow), "{req:?}");
+                            checked += answer.is_some() as u32;
+                        }
+                    }
+                }
+            }
+        }
+        assert!(checked > 0);
     }
 }

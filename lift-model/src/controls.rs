@@ -153,6 +153,7 @@ impl SensorFault {
 
 impl ContactFault {
     /// What an NC contact reads (`true` = closed) when the button is `pressed`.
+    #[inline]
     pub(crate) fn nc_reads(self, pressed: bool) -> bool {
         match self {
             ContactFault::None => !pressed,
@@ -184,6 +185,7 @@ impl Buttons {
     }
 
     /// The slot of `button`, or `None` if the lift does not have it.
+    #[inline]
     pub fn index(&self, button: Button) -> Option<usize> {
         let n = self.floors;
         let floor = |f: u8| usize::from(f) - 1;
@@ -210,6 +212,7 @@ impl Buttons {
         }
     }
 
+    #[inline]
     pub fn is_pressed(&self, button: Button) -> bool {
         self.index(button)
             .is_some_and(|i| self.release_at[i].is_some())

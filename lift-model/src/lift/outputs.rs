@@ -108,12 +108,17 @@ impl Lift {
 
     /// The standard contact of STOP read by the cabin slave (`Stop_1`, docs/lab-bus.md D11):
     /// `true` pressed.
+    #[inline]
     pub fn stop_pressed(&self) -> bool {
         self.buttons.is_pressed(Button::Stop)
     }
 
     /// The two NC channels of STOP for the safety logic (docs/safety.md): `true` closed, i.e. not
     /// pressed, unless a channel fault is injected.
+    ///
+    /// Read at every rig moment and safety scan: inline (with the button lookup under it) so
+    /// that STOP's slot is worked out where it is called, not looked up through a call.
+    #[inline]
     pub fn stop_channels(&self) -> [bool; 2] {
         let pressed = self.stop_pressed();
         self.stop_faults.map(|fault| fault.nc_reads(pressed))
