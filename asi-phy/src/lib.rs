@@ -32,8 +32,9 @@ pub mod timing;
 pub mod waveform;
 
 pub use fault::{FaultInjector, FaultRates, PulseErrorRate, PulseErrorRateError, PulseFault};
+pub use line::Transmission;
 pub use manchester::{HalfBits, Level};
-pub use pulse::{Polarity, Pulse, PulseTrain, Transmission};
+pub use pulse::{Polarity, Pulse, PulseTrain};
 pub use receiver::{
     Check, Checks, Expect, Frame, LineDecoder, Listener, Received, Receiver, ReceiverConfig,
     TelegramKind,

@@ -23,11 +23,13 @@
 mod base;
 mod faulty;
 mod tap;
+mod transmission;
 mod wire;
 
 pub use base::{superimpose, Line};
 pub use faulty::Faulty;
 pub use tap::Tap;
+pub use transmission::Transmission;
 pub use wire::Wire;
 
 use crate::BusTiming;
