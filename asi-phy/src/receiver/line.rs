@@ -76,11 +76,12 @@ impl Grid {
         let fast = (2..=1 << 24).contains(&h) && tol < h.div_ceil(2) && 2 * h + 2 * tol < pause;
         let two_tol = tol.saturating_mul(2);
         let (recip, within) = if fast {
-            // 2·tol + 1 ≤ h, so both fit in 64 bits.
+            // 2·tol + 1 ≤ h, so both fit in 64 bits (the second is 2⁶⁴ − 1 when 2·tol + 1 = h:
+            // the one is taken off before the narrowing).
             let h = u128::from(h);
             (
                 (1u128 << 64).div_ceil(h) as u64,
-                ((u128::from(two_tol) + 1) << 64).div_ceil(h) as u64 - 1,
+                (((u128::from(two_tol) + 1) << 64).div_ceil(h) - 1) as u64,
             )
         } else {
             (0, 0)
