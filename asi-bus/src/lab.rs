@@ -212,13 +212,26 @@ impl LabLift {
 
     /// A fresh device for lab address `n`.
     pub fn device_for(n: u8) -> Option<Box<dyn Peripheral>> {
+        LabLift::device(n, None)
+    }
+
+    /// A fresh device for lab address `n`; one whose outputs drive the plant (the floor
+    /// stations, the cabin display, the converter I/O, the current-loop output) counts the
+    /// changes of what it drives in `changes` if given ([`LabLift::drive_changes`]).
+    fn device(n: u8, changes: Option<&Arc<AtomicU64>>) -> Option<Box<dyn Peripheral>> {
+        fn driving<T: Drives>(device: T, changes: Option<&Arc<AtomicU64>>) -> Box<dyn Peripheral> {
+            match changes {
+                Some(c) => Driving::boxed(device, c),
+                None => Box::new(device),
+            }
+        }
         Some(match n {
-            1..=4 => Box::new(FloorStation::new()),
-            CABIN_DISPLAY => Box::new(CabinDisplay::new()),
+            1..=4 => driving(FloorStation::new(), changes),
+            CABIN_DISPLAY => driving(CabinDisplay::new(), changes),
             CABIN_PANEL => Box::new(CabinPanel::new()),
-            CONVERTER => Box::new(Converter::new()),
+            CONVERTER => driving(Converter::new(), changes),
             LOAD_SENSOR => Box::new(LoadSensor::new()),
-            SPEED_SETPOINT => Box::new(AnalogOutput::new()),
+            SPEED_SETPOINT => driving(AnalogOutput::new(), changes),
             SAFETY_BOTTOM => Box::new(SafetySensor::new(CodeTable::from_serial(SAFETY_SERIALS[0]))),
             SAFETY_TOP => Box::new(SafetySensor::new(CodeTable::from_serial(SAFETY_SERIALS[1]))),
             _ => return None,
@@ -240,9 +253,8 @@ impl LabLift {
         let mut ids = [None; 32];
         let drive_changes = Arc::new(AtomicU64::new(0));
         for &(n, name, codes) in &LAB_SLAVES {
-            let device = LabLift::driving_device(n, &drive_changes)
-                .or_else(|| LabLift::device_for(n))
-                .ok_or_else(|| ConfigError::Slave {
+            let device =
+                LabLift::device(n, Some(&drive_changes)).ok_or_else(|| ConfigError::Slave {
                     name: name.into(),
                     why: "no device".into(),
                 })?;
@@ -268,19 +280,6 @@ impl LabLift {
             ids,
             monitor,
             drive_changes,
-        })
-    }
-
-    /// A fresh device for lab address `n` if its outputs drive the plant (the floor
-    /// stations, the cabin display, the converter I/O, the current-loop output), counting
-    /// the changes of what it drives in `changes` ([`LabLift::drive_changes`]).
-    fn driving_device(n: u8, changes: &Arc<AtomicU64>) -> Option<Box<dyn Peripheral>> {
-        Some(match n {
-            1..=4 => Driving::boxed(FloorStation::new(), changes),
-            CABIN_DISPLAY => Driving::boxed(CabinDisplay::new(), changes),
-            CONVERTER => Driving::boxed(Converter::new(), changes),
-            SPEED_SETPOINT => Driving::boxed(AnalogOutput::new(), changes),
-            _ => return None,
         })
     }
 
