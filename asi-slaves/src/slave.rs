@@ -189,15 +189,13 @@ impl Slave {
 
     /// The output bits of `req` if it is a Data_Exchange this slave answers as a standard
     /// (not A/B) slave: nearly every request a slave is handed, told from the request's bits
-    /// without decoding its call. Data_Exchange is CB 0, I4 0 at an address other than 0
-    /// (docs/master.md; at address 0 a CB 0 call is Address_Assignment), with the outputs in
-    /// I3..I0; a standard slave's select is always A, so the address alone says it is meant.
-    /// `None` sends the request the long way, through [`Slave::handle`]'s match of its call.
+    /// without decoding its call ([`Request::as_data_exchange`]); a standard slave's select is
+    /// always A, so the address alone says it is meant. `None` sends the request the long
+    /// way, through [`Slave::handle`]'s match of its call.
     fn standard_data_exchange(&self, req: Request) -> Option<Nibble> {
-        let data_exchange = !req.cb() && req.info() & 0x10 == 0 && req.address().get() != 0;
-        let mine = req.address() == self.address && !self.codes.is_ab();
-        (data_exchange && mine && self.data_exchange_enabled)
-            .then(|| Nibble::from_low_bits(req.info()))
+        let (address, outputs) = req.as_data_exchange()?;
+        (address == self.address && !self.codes.is_ab() && self.data_exchange_enabled)
+            .then_some(outputs)
     }
 
     /// The slave's answer to a valid request received at `now`, or `None` (not addressed, or a

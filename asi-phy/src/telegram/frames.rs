@@ -272,6 +272,18 @@ impl Request {
         self.0 == Request::broadcast_reset().0
     }
 
+    /// The address and the I3..I0 bits of a Data_Exchange (CB 0, I4 0, an address other than
+    /// 0: at 0 a CB 0 call is Address_Assignment), told from the bits without decoding the
+    /// whole call; `None` for every other call. For an A/B slave, I3 is the select bit
+    /// ([`Request::ab_payload`]).
+    pub const fn as_data_exchange(self) -> Option<(Address, Nibble)> {
+        let address = self.address();
+        if self.cb() || self.info() & 0x10 != 0 || address.0 == 0 {
+            return None;
+        }
+        Some((address, Nibble(self.info() & 0xF)))
+    }
+
     /// A command call with I4 = 1; `inverted` for the calls that carry ~Sel in I3.
     const fn command(
         address: Address,

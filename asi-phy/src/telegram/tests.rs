@@ -155,6 +155,11 @@ fn every_request_classifies_and_rebuilds() {
             call == Call::BroadcastReset,
             "{call:?}"
         );
+        let data_exchange = match call {
+            Call::DataExchange { address, data } => Some((address, data)),
+            _ => None,
+        };
+        assert_eq!(req.as_data_exchange(), data_exchange, "{call:?}");
     }
     // CB=1, I4=0, A≠0 with I2..I0 ≠ 0: 31·2·7 = 434; CB=1, I4=1: x111 at every address
     // (64), x101 except 31/I3=0 (63), Sel=B reads at address 0 (4), ~Sel=B at 0 (2).
