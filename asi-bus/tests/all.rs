@@ -12,6 +12,7 @@ mod handshakes;
 mod image;
 mod line_capture;
 mod mailbox;
+mod quick;
 mod robust;
 mod safety_noise;
 mod sampling;

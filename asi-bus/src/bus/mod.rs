@@ -100,6 +100,43 @@ struct Current {
     line_error: bool,
 }
 
+impl Current {
+    /// Transaction `tx`, its request from `start` to `req_end`, nothing heard yet.
+    fn new(tx: Transmit, start: SimTime, req_end: SimTime) -> Current {
+        Current {
+            tx,
+            start,
+            req_end,
+            request_failed: Checks::NONE,
+            request_frames: 0,
+            valid_request: None,
+            responses: 0,
+            response_failed: Checks::NONE,
+            response: None,
+            line_end: req_end,
+            line_error: false,
+        }
+    }
+
+    /// The master's receiver `rx` hears frame `f` of the answering side: a frame that starts
+    /// within the response window counts as a response (a second one makes the outcome
+    /// corrupt, as does any that fails a check).
+    fn master_hears(&mut self, rx: &mut Listener, timing: &BusTiming, f: &Frame) {
+        let window_end = self.req_end + timing.response_timeout();
+        if f.start > self.req_end && f.start <= window_end {
+            let r = rx.accept(f);
+            self.responses += 1;
+            self.line_error |= !r.is_valid();
+            if r.is_valid() && self.responses == 1 {
+                self.response = r.response();
+            } else {
+                self.response = None;
+                self.response_failed = cur_checks(self.response_failed, r.failed);
+            }
+        }
+    }
+}
+
 /// Callback sink for trace records.
 pub type TraceCallback = Box<dyn FnMut(&TransactionRecord) + Send>;
 
@@ -116,6 +153,10 @@ pub struct Bus {
     state: State,
     now: SimTime,
     next_event: SimTime,
+    /// The last time (inclusive) the current `advance_to`/`advance_before` call may process
+    /// events at: a transaction is taken whole ([`Bus::quick_transaction`]) only if all its
+    /// events fall within it.
+    horizon: SimTime,
     volts: f64,
     slaves_powered: bool,
     cur: Option<Current>,
@@ -164,6 +205,7 @@ impl Bus {
             state: State::Idle,
             now: SimTime::ZERO,
             next_event: SimTime::ZERO,
+            horizon: SimTime::ZERO,
             volts: NOMINAL_VOLTS,
             slaves_powered: true,
             cur: None,
@@ -240,6 +282,7 @@ impl Bus {
 
     /// Processes every event up to and including `now`.
     pub fn advance_to(&mut self, now: SimTime) {
+        self.horizon = now;
         while self.next_event <= now {
             self.event();
         }
@@ -265,6 +308,7 @@ impl Bus {
     /// so an application that drives the bus this way runs long stretches without stepping
     /// at every event, and still sees every output change at its moment.
     pub fn advance_before(&mut self, until: SimTime) -> Option<SimTime> {
+        self.horizon = SimTime::from_nanos(until.as_nanos().saturating_sub(1));
         while self.next_event < until {
             self.event();
             if core::mem::take(&mut self.output_taken) {
@@ -309,20 +353,11 @@ impl Bus {
             return;
         };
         let tg = Transmission::request(tx.request, t, self.timing.half_bit());
+        if self.quick_transaction(t, tx, &tg) {
+            return;
+        }
         let req_end = tg.end();
-        self.cur = Some(Current {
-            tx,
-            start: t,
-            req_end,
-            request_failed: Checks::NONE,
-            request_frames: 0,
-            valid_request: None,
-            responses: 0,
-            response_failed: Checks::NONE,
-            response: None,
-            line_end: req_end,
-            line_error: false,
-        });
+        self.cur = Some(Current::new(tx, t, req_end));
         let mut frames: [Option<Frame>; 4] = [None; 4];
         let mut n = 0;
         self.medium.transmit(&tg, &mut |f| {
@@ -368,6 +403,12 @@ impl Bus {
             self.hear(t, &f, Role::Response);
         }
         let cur = self.cur.take()?;
+        self.close(t, &cur)
+    }
+
+    /// The master judges transaction `cur` at `t`, and it is counted and traced; returns the
+    /// earliest start of the next request when the line carried an error.
+    fn close(&mut self, t: SimTime, cur: &Current) -> Option<SimTime> {
         let outcome = match (cur.responses, cur.response) {
             (0, _) => Outcome::NoResponse,
             (1, Some(r)) => Outcome::Response(r),
@@ -413,19 +454,10 @@ impl Bus {
         let Some(cur) = self.cur.as_mut() else {
             return;
         };
-        let window_end = cur.req_end + self.timing.response_timeout();
         cur.line_end = cur.line_end.max(f.end);
         let is_request = matches!(role, Role::Request);
-        if !is_request && f.start > cur.req_end && f.start <= window_end {
-            let r = self.master_rx.accept(f);
-            cur.responses += 1;
-            cur.line_error |= !r.is_valid();
-            if r.is_valid() && cur.responses == 1 {
-                cur.response = r.response();
-            } else {
-                cur.response = None;
-                cur.response_failed = cur_checks(cur.response_failed, r.failed);
-            }
+        if !is_request {
+            cur.master_hears(&mut self.master_rx, &self.timing, f);
         }
         if !f.line_failed.is_empty() && !self.groups.is_empty() {
             cur.line_error = true;
@@ -513,40 +545,21 @@ impl Bus {
         }
     }
 
-    fn respond(&mut self, now: SimTime, req_end: SimTime, req: Request, mut who: u64) {
+    fn respond(&mut self, now: SimTime, req_end: SimTime, req: Request, who: u64) {
         let start = req_end + self.timing.master_pause();
         let h = self.timing.half_bit();
         let mut answers: [Option<Transmission>; 4] = [None; 4];
         let mut n = 0usize;
         let mut extra = Vec::new();
-        let mut readdressed = false;
-        while who != 0 {
-            let i = who.trailing_zeros() as usize;
-            who &= who - 1;
-            let Some(slot) = self.slaves.get_mut(i) else {
-                continue;
-            };
-            if !slot.attached {
-                continue;
+        self.ask_slaves(now, req, who, |r| {
+            let tg = Transmission::response(r, start, h);
+            if n < answers.len() {
+                answers[n] = Some(tg);
+            } else {
+                extra.push(tg);
             }
-            let before = slot.slave.addr();
-            let answer = slot.slave.handle(now, req);
-            readdressed |= slot.slave.addr() != before;
-            if let Some(r) = answer {
-                let tg = Transmission::response(r, start, h);
-                if n < answers.len() {
-                    answers[n] = Some(tg);
-                } else {
-                    extra.push(tg);
-                }
-                n += 1;
-            }
-        }
-        let call = req.call();
-        self.note_output(req, call);
-        if readdressed || matches!(call, Call::BroadcastReset | Call::ResetSlave { .. }) {
-            self.reindex();
-        }
+            n += 1;
+        });
         let mut frames = core::mem::take(&mut self.response_frames);
         frames.clear();
         let mut collect = |f| frames.push(f);
@@ -571,6 +584,156 @@ impl Bus {
             self.hear(now, f, Role::Response);
         }
         self.response_frames = frames;
+    }
+
+    /// The attached slaves among `who` take request `req` at `now`; `answer` gets each
+    /// answer, in the order of the slaves. What the call changes on the bus's side follows:
+    /// the outputs noted for the plant, the address index after a new address or a reset.
+    fn ask_slaves(
+        &mut self,
+        now: SimTime,
+        req: Request,
+        mut who: u64,
+        mut answer: impl FnMut(Response),
+    ) {
+        let mut readdressed = false;
+        while who != 0 {
+            let i = who.trailing_zeros() as usize;
+            who &= who - 1;
+            let Some(slot) = self.slaves.get_mut(i) else {
+                continue;
+            };
+            if !slot.attached {
+                continue;
+            }
+            let before = slot.slave.addr();
+            let r = slot.slave.handle(now, req);
+            readdressed |= slot.slave.addr() != before;
+            if let Some(r) = r {
+                answer(r);
+            }
+        }
+        let call = req.call();
+        self.note_output(req, call);
+        if readdressed || matches!(call, Call::BroadcastReset | Call::ResetSlave { .. }) {
+            self.reindex();
+        }
+    }
+
+    /// `true` if request `req` may make [`Bus::note_output`] end [`Bus::advance_before`]:
+    /// it goes to a watched address and is not a Data_Exchange with the output nibble the
+    /// slave has, nor a call that only reads (or it is the broadcast reset).
+    fn may_take_output(&self, req: Request) -> bool {
+        if req.is_broadcast_reset() {
+            return self.watch != 0;
+        }
+        let a = req.address().get() as usize;
+        if self.watch >> a & 1 == 0 {
+            return false;
+        }
+        match req.as_data_exchange() {
+            Some((_, data)) => self.last_out[a] != data.get(),
+            None => !matches!(
+                req.call(),
+                Call::ReadIoConfiguration { .. }
+                    | Call::ReadIdCode { .. }
+                    | Call::ReadId1 { .. }
+                    | Call::ReadId2 { .. }
+                    | Call::ReadStatus { .. }
+            ),
+        }
+    }
+
+    /// Transaction `tx`, whose request `tg` starts at `t`, taken whole now, when it is alone
+    /// on a clean line and all its events fall within the horizon; `false`, with nothing done,
+    /// when it may not be.
+    ///
+    /// Taken whole, it is what its three events would have done, in their order and at their
+    /// times: the request's frame, at its end plus the pause, goes to the slaves' receivers,
+    /// the monitors and the slave asked; the answer's frame, at the end of the transaction, to
+    /// the master's receiver, the slaves' and the monitors'; then the master judges it. The
+    /// line is left untouched: a clean line ([`Medium::passes_clean`]) hands a telegram on as
+    /// its own frame at its end plus the pause and is idle again after it. What it may not
+    /// take: more than one receiver state among the slaves, a request more than one slave
+    /// answers (their answers collide on the line), the broadcast reset, a slave without
+    /// power, a request that may hand the plant a new output (the caller must see that
+    /// moment) or one after such an output not yet taken, and a transaction whose last event lies beyond the horizon (the caller must
+    /// find the bus mid-transaction then). Held to the three events by the equivalence of
+    /// the rig's fast and pulse-exact paths (tests/tests/fast_path.rs) and by
+    /// `tests::quick_transactions_are_the_three_events`.
+    fn quick_transaction(&mut self, t: SimTime, tx: Transmit, tg: &Transmission) -> bool {
+        let req = tx.request;
+        // A new output noted by `advance_to` and not yet taken by `advance_before` ends the
+        // next `advance_before` after its first event: this one.
+        if self.groups.len() != 1 || !self.slaves_powered || self.output_taken {
+            return false;
+        }
+        let who = self.groups[0].members & self.addr_index[req.address().get() as usize];
+        if who & who.wrapping_sub(1) != 0 || self.may_take_output(req) {
+            return false;
+        }
+        if !self.medium.passes_clean() {
+            return false;
+        }
+        let timing = self.timing;
+        let h = timing.half_bit();
+        let f = tg.frame();
+        let t2 = f.end + timing.min_pause();
+        let answer_start = f.end + timing.master_pause();
+        // The line's quiet after an answer: its end plus the pause, plus what the slave pause
+        // adds to that (as `request_frame` has it); an answer's last pulse is at most 14 half
+        // bits after its first.
+        let after_answer =
+            |end: SimTime| end + timing.min_pause() + (timing.slave_pause() - timing.min_pause());
+        let base = t + timing.transaction();
+        let latest = after_answer(answer_start + h.saturating_mul(14))
+            .max(base)
+            .max(t2);
+        if latest > self.horizon {
+            return false;
+        }
+        // The request's frame, at t2.
+        let mut cur = Current::new(tx, t, f.end);
+        let r = self.groups[0].listener.accept(&f);
+        cur.request_frames = 1;
+        cur.request_failed = r.failed;
+        cur.valid_request = r.request();
+        for m in &mut self.monitors {
+            m.on_frame(t2, &f);
+        }
+        let mut answer = None;
+        if let Some(q) = cur.valid_request {
+            let who = self.groups[0].members & self.addr_index[q.address().get() as usize];
+            if who != 0 {
+                self.ask_slaves(t2, q, who, |r| answer = Some(r));
+            }
+        }
+        debug_assert!(
+            !self.output_taken,
+            "a quick transaction handed on an output"
+        );
+        // The answer's frame, at the end of the transaction.
+        let t3 = match answer {
+            None => base.max(t2),
+            Some(r) => {
+                let rf = Transmission::response(r, answer_start, h).frame();
+                let t3 = after_answer(rf.end).max(base).max(t2);
+                cur.line_end = cur.line_end.max(rf.end);
+                cur.master_hears(&mut self.master_rx, &timing, &rf);
+                self.groups[0].listener.accept(&rf);
+                for m in &mut self.monitors {
+                    m.on_frame(t3, &rf);
+                }
+                t3
+            }
+        };
+        self.now = t3;
+        match self.close(t3, &cur) {
+            Some(resync) if resync > t3 => self.next_event = resync,
+            _ => self.next_event = t3,
+        }
+        self.state = State::Idle;
+        true
     }
 
     // ----- application access -----------------------------------------------------------

@@ -67,8 +67,13 @@ impl<L> Faulty<L> {
         self.faults_injected + self.injector.as_ref().map_or(0, |i| i.injected())
     }
 
+    /// The line inside.
+    pub fn inner(&self) -> &L {
+        &self.inner
+    }
+
     /// `true` while no fault is armed: telegrams pass unchanged.
-    fn is_clean(&self) -> bool {
+    pub fn is_clean(&self) -> bool {
         self.injector.is_none() && self.one_shot.is_empty()
     }
 

@@ -50,4 +50,13 @@ impl Medium {
         self.set_faults_pulse_exact(on);
         self.inner_mut().inner_mut().set_pulse_exact(on);
     }
+
+    /// `true` while a clean telegram put on the line now would be handed on as its own frame
+    /// ([`Transmission::frame`]) at its end plus the pause, with nothing else on the line: no
+    /// fault armed, nothing recorded, not pulse-exact, no telegram pending or in the decoder.
+    /// A telegram that passes such a line leaves it as it found it, so a caller that knows
+    /// its telegrams are alone on the line may take their frames directly instead.
+    pub fn passes_clean(&self) -> bool {
+        self.is_clean() && !self.inner().is_recording() && self.inner().inner().is_idle_fast()
+    }
 }

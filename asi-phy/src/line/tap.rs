@@ -26,6 +26,16 @@ impl<L> Tap<L> {
         self.recorded = on.then(|| self.recorded.take().unwrap_or_default());
     }
 
+    /// `true` while the tap records.
+    pub fn is_recording(&self) -> bool {
+        self.recorded.is_some()
+    }
+
+    /// The line inside.
+    pub fn inner(&self) -> &L {
+        &self.inner
+    }
+
     /// The line inside.
     pub fn inner_mut(&mut self) -> &mut L {
         &mut self.inner

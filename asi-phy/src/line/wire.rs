@@ -33,6 +33,13 @@ impl Wire {
         self.exact = on;
     }
 
+    /// `true` while the fast path is on and the line is idle: no telegram pending, none in
+    /// the decoder. A clean telegram transmitted now becomes the pending frame, which
+    /// [`Line::poll`] hands on at its end plus the pause, leaving the wire idle again.
+    pub fn is_idle_fast(&self) -> bool {
+        !self.exact && self.pending.is_none() && self.decoder.poll_at().is_none()
+    }
+
     /// Hands a pending clean train to the decoder (something else comes on the line).
     /// The train through the decoder, after the clean frame kept for the fast path: kept out
     /// of line, so that the fast path of [`Line::transmit`] inlines into its callers.
