@@ -1,13 +1,15 @@
-//! The bus takes a transaction whole when it is alone on a clean line and ends within the
-//! caller's horizon (`Bus::quick_transaction`); the pulse-exact bus never does, and takes every
+//! The bus holds a transaction's telegrams off the line when they are alone on a clean line,
+//! takes their frames directly and, where its events fall within the caller's horizon, runs
+//! them in one go (`Bus::may_run_quick`); the pulse-exact bus never does, and takes every
 //! transaction as its three events through the pulse decoder. Driven alike, the two must be
 //! indistinguishable at every step: what `advance_before` returns, the time, the next event,
 //! every trace record, the statistics, the process image, every slave and monitor, the pulses
 //! recorded on the line. The drive mixes what changes the quick path's conditions: steps of
 //! every length (horizons inside and between transactions), the PLC's output writes (new
 //! output nibbles for watched slaves, which must end `advance_before` at their moment),
-//! pulled slaves, power cuts, line noise switched on and off, one-shot pulse faults and the
-//! line recording.
+//! pulled slaves, power cuts, line noise switched on and off, one-shot pulse faults, the
+//! line recording, and buttons pressed on the floor stations and the cabin panel (inputs the
+//! slaves sample when a request reaches them).
 
 use crate::common::*;
 use asi_bus::lab::LabLift;
@@ -26,6 +28,8 @@ enum Act {
     Quiet,
     Corrupt(usize),
     Record(bool),
+    Buttons(u8, bool, bool),
+    CabinButton(u8, bool),
 }
 
 fn act() -> impl Strategy<Value = Act> {
@@ -39,6 +43,8 @@ fn act() -> impl Strategy<Value = Act> {
         1 => Just(Act::Quiet),
         1 => (0usize..20).prop_map(Act::Corrupt),
         1 => any::<bool>().prop_map(Act::Record),
+        2 => (1u8..5, any::<bool>(), any::<bool>()).prop_map(|(f, u, d)| Act::Buttons(f, u, d)),
+        2 => (1u8..5, any::<bool>()).prop_map(|(f, p)| Act::CabinButton(f, p)),
     ]
 }
 
@@ -93,6 +99,16 @@ fn step(lab: &mut LabLift, now: &mut SimTime, a: &Act) -> Option<SimTime> {
             .bus
             .corrupt_next_telegram(vec![PulseFault::Drop { index: i }]),
         Act::Record(on) => lab.bus.record_line(on),
+        Act::Buttons(floor, up, down) => {
+            if let Some(f) = lab.floor_mut(floor) {
+                f.set_buttons(up, down);
+            }
+        }
+        Act::CabinButton(floor, pressed) => {
+            if let Some(p) = lab.cabin_panel_mut() {
+                p.set_floor_button(floor, pressed);
+            }
+        }
     }
     None
 }
@@ -102,14 +118,16 @@ proptest! {
     #[test]
     fn quick_transactions_are_the_three_events(
         start_ms in 0u64..60,
+        watch in prop_oneof![Just(0b0100_1011_1110u32), Just(0), any::<u32>()],
         acts in proptest::collection::vec(act(), 1..300),
     ) {
         let mut quick = LabLift::new().expect("lab");
         let mut exact = LabLift::new().expect("lab");
         exact.bus.set_pulse_exact(true);
         for lab in [&mut quick, &mut exact] {
-            // The rig's watch: the floor stations, the cabin display, the converter, the set point.
-            lab.bus.watch_outputs(0b0100_1011_1110);
+            // The rig's watch (the floor stations, the cabin display, the converter, the set
+            // point), none, or any.
+            lab.bus.watch_outputs(watch);
             lab.bus.enable_trace(1 << 20);
             lab.bus.advance_to(ms(start_ms));
         }

@@ -5,6 +5,7 @@ use super::*;
 impl Bus {
     /// Takes slave `id` off the bus (unplugged: it hears nothing, answers nothing, loses power).
     pub fn detach(&mut self, id: SlaveId) {
+        self.release_held();
         if let Some(s) = self.slaves.get_mut(id.0) {
             if s.attached {
                 s.attached = false;
@@ -17,6 +18,7 @@ impl Bus {
 
     /// Puts slave `id` back on the bus: it powers up (reset) with a fresh receiver.
     pub fn attach(&mut self, id: SlaveId) {
+        self.release_held();
         let powered = self.slaves_powered;
         if let Some(s) = self.slaves.get_mut(id.0) {
             if !s.attached {
@@ -40,6 +42,7 @@ impl Bus {
     /// APF and goes offline; below [`SLAVE_MIN_VOLTS`] the slaves lose power and reset when it
     /// returns.
     pub fn set_supply_voltage(&mut self, volts: f64) {
+        self.release_held();
         let volts = if volts.is_finite() {
             volts.max(0.0)
         } else {
@@ -95,6 +98,7 @@ impl Bus {
 
     /// Random line faults from now on, seeded (`FaultRates::NONE` switches them off).
     pub fn set_line_faults(&mut self, seed: u64, rates: FaultRates) {
+        self.release_held();
         self.medium.set_faults(Some(FaultInjector::new(
             seed,
             rates,
@@ -106,6 +110,7 @@ impl Bus {
     /// line's fast path for clean telegrams (asi-phy `Wire::set_pulse_exact`). Every outcome
     /// is the same either way; the exact path is the reference for tests and benchmarks.
     pub fn set_pulse_exact(&mut self, on: bool) {
+        self.release_held();
         self.medium.set_pulse_exact(on);
     }
 
@@ -117,6 +122,7 @@ impl Bus {
     /// Exact pulse faults on the next telegram put on the line (asi-phy `PulseFault`, indices
     /// into its pulses).
     pub fn corrupt_next_telegram(&mut self, faults: Vec<PulseFault>) {
+        self.release_held();
         self.medium.corrupt_next(faults);
     }
 

@@ -46,6 +46,19 @@ mod hooks;
 /// No output nibble taken yet (or lost with a reset).
 const NO_OUTPUT: u8 = 0xFF;
 
+/// What a request taken by a slave does to what the watched slaves drive.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum OutputNote {
+    /// Nothing new.
+    Same,
+    /// A Data_Exchange hands the watched slave at this address a new output nibble.
+    New(usize, u8),
+    /// A call that writes to the watched slave at this address: its next nibble is new.
+    Forget(usize),
+    /// The broadcast reset: every next nibble is new.
+    ForgetAll,
+}
+
 /// A slave's place on the bus.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub struct SlaveId(pub usize);
@@ -98,11 +111,14 @@ struct Current {
     response: Option<Response>,
     line_end: SimTime,
     line_error: bool,
+    /// Its telegrams are held off the line ([`Bus::may_run_quick`]).
+    quick: bool,
 }
 
 impl Current {
-    /// Transaction `tx`, its request from `start` to `req_end`, nothing heard yet.
-    fn new(tx: Transmit, start: SimTime, req_end: SimTime) -> Current {
+    /// Transaction `tx`, its request from `start` to `req_end`, nothing heard yet; `quick`
+    /// if its telegrams are held off the line.
+    fn new(tx: Transmit, start: SimTime, req_end: SimTime, quick: bool) -> Current {
         Current {
             tx,
             start,
@@ -115,6 +131,7 @@ impl Current {
             response: None,
             line_end: req_end,
             line_error: false,
+            quick,
         }
     }
 
@@ -154,9 +171,11 @@ pub struct Bus {
     now: SimTime,
     next_event: SimTime,
     /// The last time (inclusive) the current `advance_to`/`advance_before` call may process
-    /// events at: a transaction is taken whole ([`Bus::quick_transaction`]) only if all its
-    /// events fall within it.
+    /// events at: a quick transaction goes on to its next event at once when it falls within.
     horizon: SimTime,
+    /// The frame of a quick transaction's telegram held off the line ([`Bus::may_run_quick`]):
+    /// the frame the clean line would hand on.
+    held: Option<Frame>,
     volts: f64,
     slaves_powered: bool,
     cur: Option<Current>,
@@ -206,6 +225,7 @@ impl Bus {
             now: SimTime::ZERO,
             next_event: SimTime::ZERO,
             horizon: SimTime::ZERO,
+            held: None,
             volts: NOMINAL_VOLTS,
             slaves_powered: true,
             cur: None,
@@ -226,6 +246,7 @@ impl Bus {
 
     /// Adds a slave, attached and powered (it gets a fresh receiver).
     pub fn add_slave(&mut self, mut slave: Slave) -> Result<SlaveId, ConfigError> {
+        self.release_held();
         if self.slaves.len() >= 64 {
             return Err(ConfigError::TooManyDevices(self.slaves.len() + 1));
         }
@@ -353,11 +374,21 @@ impl Bus {
             return;
         };
         let tg = Transmission::request(tx.request, t, self.timing.half_bit());
-        if self.quick_transaction(t, tx, &tg) {
+        if self.may_run_quick(tx.request) {
+            // As the clean line would: the frame at its end plus the pause.
+            let f = tg.frame();
+            self.cur = Some(Current::new(tx, t, f.end, true));
+            self.held = Some(f);
+            self.state = State::AwaitRequestFrame;
+            self.next_event = (f.end + self.timing.min_pause()).max(t);
+            if self.next_event <= self.horizon && !self.output_taken {
+                self.now = self.next_event;
+                self.quick_request(self.next_event);
+            }
             return;
         }
         let req_end = tg.end();
-        self.cur = Some(Current::new(tx, t, req_end));
+        self.cur = Some(Current::new(tx, t, req_end, false));
         let mut frames: [Option<Frame>; 4] = [None; 4];
         let mut n = 0;
         self.medium.transmit(&tg, &mut |f| {
@@ -379,6 +410,10 @@ impl Bus {
     }
 
     fn request_frame(&mut self, t: SimTime) {
+        if self.cur.is_some_and(|c| c.quick) {
+            self.quick_request(t);
+            return;
+        }
         if let Some(f) = self.medium.poll(t) {
             self.hear(t, &f, Role::Request);
         }
@@ -399,6 +434,9 @@ impl Bus {
     /// Ends the transaction; returns the earliest start of the next request when the line
     /// carried an error (the receivers need the asynchronous pause to resynchronise).
     fn finish_transaction(&mut self, t: SimTime) -> Option<SimTime> {
+        if self.cur.is_some_and(|c| c.quick) {
+            return self.quick_finish(t);
+        }
         if let Some(f) = self.medium.poll(t) {
             self.hear(t, &f, Role::Response);
         }
@@ -500,33 +538,51 @@ impl Bus {
         }
     }
 
-    /// Notes whether `req`, taken by a slave, can change what a watched slave drives: a
+    /// What request `req`, taken by a slave, does to what the watched slaves drive: a
     /// Data_Exchange with a new output nibble, or any call that writes (parameter, address,
-    /// reset), after which the next Data_Exchange counts as new too.
-    fn note_output(&mut self, req: Request, call: Call) {
-        let a = req.address().get() as usize;
-        let watched = self.watch >> a & 1 == 1;
-        match call {
-            Call::DataExchange { data, .. } => {
-                if watched && self.last_out[a] != data.get() {
-                    self.last_out[a] = data.get();
-                    self.output_taken = true;
-                }
+    /// reset), after which the next Data_Exchange counts as new too. A Data_Exchange is told
+    /// from its bits, without decoding the call.
+    fn output_note(&self, req: Request) -> OutputNote {
+        let exchange = |a: usize, data: u8| {
+            if self.watch >> a & 1 == 1 && self.last_out[a] != data {
+                OutputNote::New(a, data)
+            } else {
+                OutputNote::Same
             }
+        };
+        if let Some((address, data)) = req.as_data_exchange() {
+            return exchange(address.get() as usize, data.get());
+        }
+        let a = req.address().get() as usize;
+        match req.call() {
+            Call::DataExchange { data, .. } => exchange(a, data.get()),
             Call::ReadIoConfiguration { .. }
             | Call::ReadIdCode { .. }
             | Call::ReadId1 { .. }
             | Call::ReadId2 { .. }
-            | Call::ReadStatus { .. } => {}
-            Call::BroadcastReset => {
+            | Call::ReadStatus { .. } => OutputNote::Same,
+            Call::BroadcastReset => OutputNote::ForgetAll,
+            _ if self.watch >> a & 1 == 1 => OutputNote::Forget(a),
+            _ => OutputNote::Same,
+        }
+    }
+
+    /// Notes what request `req`, taken by a slave, does to what the watched slaves drive
+    /// ([`Bus::output_note`]): a change ends [`Bus::advance_before`] at this event.
+    fn note_output(&mut self, req: Request) {
+        match self.output_note(req) {
+            OutputNote::Same => {}
+            OutputNote::New(a, data) => {
+                self.last_out[a] = data;
+                self.output_taken = true;
+            }
+            OutputNote::Forget(a) => {
+                self.last_out[a] = NO_OUTPUT;
+                self.output_taken = true;
+            }
+            OutputNote::ForgetAll => {
                 self.last_out = [NO_OUTPUT; 32];
                 self.output_taken |= self.watch != 0;
-            }
-            _ => {
-                if watched {
-                    self.last_out[a] = NO_OUTPUT;
-                    self.output_taken = true;
-                }
             }
         }
     }
@@ -613,127 +669,114 @@ impl Bus {
                 answer(r);
             }
         }
-        let call = req.call();
-        self.note_output(req, call);
-        if readdressed || matches!(call, Call::BroadcastReset | Call::ResetSlave { .. }) {
+        self.note_output(req);
+        let reset = || matches!(req.call(), Call::BroadcastReset | Call::ResetSlave { .. });
+        if readdressed || (req.as_data_exchange().is_none() && reset()) {
             self.reindex();
         }
     }
 
-    /// `true` if request `req` may make [`Bus::note_output`] end [`Bus::advance_before`]:
-    /// it goes to a watched address and is not a Data_Exchange with the output nibble the
-    /// slave has, nor a call that only reads (or it is the broadcast reset).
-    fn may_take_output(&self, req: Request) -> bool {
-        if req.is_broadcast_reset() {
-            return self.watch != 0;
-        }
-        let a = req.address().get() as usize;
-        if self.watch >> a & 1 == 0 {
-            return false;
-        }
-        match req.as_data_exchange() {
-            Some((_, data)) => self.last_out[a] != data.get(),
-            None => !matches!(
-                req.call(),
-                Call::ReadIoConfiguration { .. }
-                    | Call::ReadIdCode { .. }
-                    | Call::ReadId1 { .. }
-                    | Call::ReadId2 { .. }
-                    | Call::ReadStatus { .. }
-            ),
-        }
-    }
-
-    /// Transaction `tx`, whose request `tg` starts at `t`, taken whole now, when it is alone
-    /// on a clean line and all its events fall within the horizon; `false`, with nothing done,
-    /// when it may not be.
+    /// `true` if the transaction of request `req` may run quick: its telegrams held off the
+    /// line and their frames taken directly ([`Bus::quick_request`], [`Bus::quick_finish`]).
     ///
-    /// Taken whole, it is what its three events would have done, in their order and at their
-    /// times: the request's frame, at its end plus the pause, goes to the slaves' receivers,
-    /// the monitors and the slave asked; the answer's frame, at the end of the transaction, to
-    /// the master's receiver, the slaves' and the monitors'; then the master judges it. The
-    /// line is left untouched: a clean line ([`Medium::passes_clean`]) hands a telegram on as
-    /// its own frame at its end plus the pause and is idle again after it. What it may not
-    /// take: more than one receiver state among the slaves, a request more than one slave
-    /// answers (their answers collide on the line), the broadcast reset, a slave without
-    /// power, a request that may hand the plant a new output (the caller must see that
-    /// moment) or one after such an output not yet taken, and a transaction whose last event lies beyond the horizon (the caller must
-    /// find the bus mid-transaction then). Held to the three events by the equivalence of
-    /// the rig's fast and pulse-exact paths (tests/tests/fast_path.rs) and by
-    /// `tests::quick_transactions_are_the_three_events`.
-    fn quick_transaction(&mut self, t: SimTime, tx: Transmit, tg: &Transmission) -> bool {
-        let req = tx.request;
-        // A new output noted by `advance_to` and not yet taken by `advance_before` ends the
-        // next `advance_before` after its first event: this one.
-        if self.groups.len() != 1 || !self.slaves_powered || self.output_taken {
+    /// A clean, idle line ([`Medium::passes_clean`]) hands a telegram on as its own frame at
+    /// its end plus the pause and is idle again after it, so a telegram alone on it needs no
+    /// line at all. What may not run quick: more than one receiver state among the slaves, a
+    /// request two slaves may answer (their answers collide on the line), the broadcast reset
+    /// (every slave takes it), a slave without power. A quick transaction goes on to its next
+    /// event at once only within the horizon and while no new output waits to be taken by
+    /// [`Bus::advance_before`], which must return at that event. Anything that changes the line, the slaves'
+    /// receivers or their power puts a held telegram on the line first ([`Bus::release_held`]),
+    /// and the transaction goes on as it would have. Held to the line's path by a lockstep
+    /// test against the pulse-exact bus (`tests/quick.rs`) and by the rig's fast-path
+    /// equivalence (tests/tests/fast_path.rs).
+    fn may_run_quick(&self, req: Request) -> bool {
+        if self.groups.len() != 1 || !self.slaves_powered || req.is_broadcast_reset() {
             return false;
         }
         let who = self.groups[0].members & self.addr_index[req.address().get() as usize];
-        if who & who.wrapping_sub(1) != 0 || self.may_take_output(req) {
-            return false;
-        }
-        if !self.medium.passes_clean() {
-            return false;
-        }
-        let timing = self.timing;
-        let h = timing.half_bit();
-        let f = tg.frame();
-        let t2 = f.end + timing.min_pause();
-        let answer_start = f.end + timing.master_pause();
-        // The line's quiet after an answer: its end plus the pause, plus what the slave pause
-        // adds to that (as `request_frame` has it); an answer's last pulse is at most 14 half
-        // bits after its first.
-        let after_answer =
-            |end: SimTime| end + timing.min_pause() + (timing.slave_pause() - timing.min_pause());
-        let base = t + timing.transaction();
-        let latest = after_answer(answer_start + h.saturating_mul(14))
-            .max(base)
-            .max(t2);
-        if latest > self.horizon {
-            return false;
-        }
-        // The request's frame, at t2.
-        let mut cur = Current::new(tx, t, f.end);
+        who & who.wrapping_sub(1) == 0 && self.medium.passes_clean()
+    }
+
+    /// A quick transaction's request frame, at `t`: what `request_frame` and `hear` do with
+    /// it, the slave's answer held off the line. When the transaction's end falls within the
+    /// horizon it ends here too.
+    fn quick_request(&mut self, t: SimTime) {
+        let (Some(cur), Some(f)) = (self.cur.as_mut(), self.held.take()) else {
+            // Nothing held: the line's path.
+            if let Some(c) = self.cur.as_mut() {
+                c.quick = false;
+            }
+            self.request_frame(t);
+            return;
+        };
         let r = self.groups[0].listener.accept(&f);
+        let request = r.request();
         cur.request_frames = 1;
         cur.request_failed = r.failed;
-        cur.valid_request = r.request();
+        cur.valid_request = request;
+        let base = cur.start + self.timing.transaction();
         for m in &mut self.monitors {
-            m.on_frame(t2, &f);
+            m.on_frame(t, &f);
         }
         let mut answer = None;
-        if let Some(q) = cur.valid_request {
+        if let Some(q) = request {
             let who = self.groups[0].members & self.addr_index[q.address().get() as usize];
             if who != 0 {
-                self.ask_slaves(t2, q, who, |r| answer = Some(r));
+                self.ask_slaves(t, q, who, |r| answer = Some(r));
             }
         }
-        debug_assert!(
-            !self.output_taken,
-            "a quick transaction handed on an output"
-        );
-        // The answer's frame, at the end of the transaction.
-        let t3 = match answer {
-            None => base.max(t2),
-            Some(r) => {
-                let rf = Transmission::response(r, answer_start, h).frame();
-                let t3 = after_answer(rf.end).max(base).max(t2);
-                cur.line_end = cur.line_end.max(rf.end);
-                cur.master_hears(&mut self.master_rx, &timing, &rf);
-                self.groups[0].listener.accept(&rf);
-                for m in &mut self.monitors {
-                    m.on_frame(t3, &rf);
-                }
-                t3
+        let timing = self.timing;
+        let quiet = answer.map(|r| {
+            let start = f.end + timing.master_pause();
+            let answer = Transmission::response(r, start, timing.half_bit()).frame();
+            self.held = Some(answer);
+            answer.end + timing.min_pause() + (timing.slave_pause() - timing.min_pause())
+        });
+        self.state = State::AwaitResponse;
+        self.next_event = quiet.map_or(base, |q| q.max(base)).max(t);
+        if self.next_event <= self.horizon && !self.output_taken {
+            let t3 = self.next_event;
+            self.now = t3;
+            self.next_event = match self.quick_finish(t3) {
+                Some(resync) if resync > t3 => resync,
+                _ => t3,
+            };
+            self.state = State::Idle;
+        }
+    }
+
+    /// A quick transaction's end, at `t`: the held answer's frame to the master's receiver,
+    /// the slaves' and the monitors', then the master's verdict ([`Bus::close`]).
+    fn quick_finish(&mut self, t: SimTime) -> Option<SimTime> {
+        let mut cur = self.cur.take()?;
+        if let Some(f) = self.held.take() {
+            cur.line_end = cur.line_end.max(f.end);
+            cur.master_hears(&mut self.master_rx, &self.timing, &f);
+            self.groups[0].listener.accept(&f);
+            for m in &mut self.monitors {
+                m.on_frame(t, &f);
             }
+        }
+        self.close(t, &cur)
+    }
+
+    /// Puts a quick transaction's held telegram on the line, where the line's path would
+    /// have it by now, and lets the transaction go on that path: called before anything
+    /// changes the line, the slaves' receivers or their power.
+    fn release_held(&mut self) {
+        let Some(cur) = self.cur.as_mut().filter(|c| c.quick) else {
+            return;
         };
-        self.now = t3;
-        match self.close(t3, &cur) {
-            Some(resync) if resync > t3 => self.next_event = resync,
-            _ => self.next_event = t3,
+        cur.quick = false;
+        if let Some(f) = self.held.take() {
+            // The telegram the frame was made of; an idle, clean line keeps it pending, so no
+            // frame comes out now.
+            let tg = Transmission::new(f.raw, f.bit_count, f.start, self.timing.half_bit());
+            self.medium.transmit(&tg, &mut |_| {
+                debug_assert!(false, "a held telegram went on a line that was not idle")
+            });
         }
-        self.state = State::Idle;
-        true
     }
 
     // ----- application access -----------------------------------------------------------
@@ -741,6 +784,7 @@ impl Bus {
     /// Starts (`true`) or stops recording the line: every pulse as it is on the line (after
     /// faults, colliding answers superimposed), for waveform and VCD export.
     pub fn record_line(&mut self, on: bool) {
+        self.release_held();
         self.medium.record_pulses(on);
     }
 

@@ -69,6 +69,7 @@ impl Transmission {
     /// has its mid-bit edge; the line idles high, so a first bit 0 adds an edge before it and
     /// a last bit 1 one after it (at point `2n`, else the last is the mid-bit edge at
     /// `2n - 1`); and between two bits the level changes where they are equal.
+    #[inline]
     const fn shape(&self) -> (u32, u32) {
         let n = if self.bits > 16 { 16 } else { self.bits };
         if n == 0 {
@@ -93,6 +94,8 @@ impl Transmission {
     }
 
     /// The frame a receiver's line decoder makes of the telegram alone on a quiet line.
+    /// Inlined, so that the shape of a request's or a response's known length folds.
+    #[inline]
     pub fn frame(&self) -> Frame {
         let (pulses, last) = self.shape();
         Frame {
