@@ -374,7 +374,7 @@ impl Bus {
             return;
         };
         let tg = Transmission::request(tx.request, t, self.timing.half_bit());
-        if self.may_run_quick(tx.request) {
+        if self.may_run_quick(tx.request) && self.medium.takes_clean(&tg) {
             // As the clean line would: the frame at its end plus the pause.
             let f = tg.frame();
             self.cur = Some(Current::new(tx, t, f.end, true));
@@ -604,35 +604,37 @@ impl Bus {
     fn respond(&mut self, now: SimTime, req_end: SimTime, req: Request, who: u64) {
         let start = req_end + self.timing.master_pause();
         let h = self.timing.half_bit();
-        let mut answers: [Option<Transmission>; 4] = [None; 4];
+        // Up to four answers without allocating; more are rare (a collision of many).
+        let mut answers = [Transmission::new(0, 0, start, h); 4];
         let mut n = 0usize;
         let mut extra = Vec::new();
         self.ask_slaves(now, req, who, |r| {
             let tg = Transmission::response(r, start, h);
-            if n < answers.len() {
-                answers[n] = Some(tg);
-            } else {
-                extra.push(tg);
+            match answers.get_mut(n) {
+                Some(slot) => *slot = tg,
+                None => extra.push(tg),
             }
             n += 1;
         });
+        if extra.is_empty() {
+            self.transmit_answers(now, &answers[..n]);
+        } else {
+            let all: Vec<Transmission> = answers.iter().copied().chain(extra).collect();
+            self.transmit_answers(now, &all);
+        }
+    }
+
+    /// The slaves' answers `answers` go on the line at once (superimposed when there is more
+    /// than one); the frames the line hands on now are heard at `now`.
+    fn transmit_answers(&mut self, now: SimTime, answers: &[Transmission]) {
         let mut frames = core::mem::take(&mut self.response_frames);
         frames.clear();
         let mut collect = |f| frames.push(f);
-        match n {
-            0 => {}
-            1 => {
-                if let Some(tg) = &answers[0] {
-                    self.medium.transmit(tg, &mut collect);
-                }
-            }
+        match answers {
+            [] => {}
+            [tg] => self.medium.transmit(tg, &mut collect),
             _ => {
-                let all: Vec<PulseTrain> = answers
-                    .iter()
-                    .flatten()
-                    .chain(&extra)
-                    .map(Transmission::train)
-                    .collect();
+                let all: Vec<PulseTrain> = answers.iter().map(Transmission::train).collect();
                 self.medium.transmit_merged(&all, &mut collect);
             }
         }
@@ -677,11 +679,11 @@ impl Bus {
     }
 
     /// `true` if the transaction of request `req` may run quick: its telegrams held off the
-    /// line and their frames taken directly ([`Bus::quick_request`], [`Bus::quick_finish`]).
-    ///
-    /// A clean, idle line ([`Medium::passes_clean`]) hands a telegram on as its own frame at
-    /// its end plus the pause and is idle again after it, so a telegram alone on it needs no
-    /// line at all. What may not run quick: more than one receiver state among the slaves, a
+    /// line and their frames taken directly ([`Bus::quick_request`], [`Bus::quick_finish`]),
+    /// each as long as the line takes it clean ([`Medium::takes_clean`]: an idle line whose
+    /// faults leave it untouched hands a telegram on as its own frame at its end plus the
+    /// pause, and is idle again after it, so a telegram alone on it needs no line at all).
+    /// What may not run quick: more than one receiver state among the slaves, a
     /// request two slaves may answer (their answers collide on the line), the broadcast reset
     /// (every slave takes it), a slave without power. A quick transaction goes on to its next
     /// event at once only within the horizon and while no new output waits to be taken by
@@ -695,7 +697,7 @@ impl Bus {
             return false;
         }
         let who = self.groups[0].members & self.addr_index[req.address().get() as usize];
-        who & who.wrapping_sub(1) == 0 && self.medium.passes_clean()
+        who & who.wrapping_sub(1) == 0
     }
 
     /// A quick transaction's request frame, at `t`: what `request_frame` and `hear` do with
@@ -727,15 +729,29 @@ impl Bus {
             }
         }
         let timing = self.timing;
-        let quiet = answer.map(|r| {
-            let start = f.end + timing.master_pause();
-            let answer = Transmission::response(r, start, timing.half_bit()).frame();
-            self.held = Some(answer);
-            answer.end + timing.min_pause() + (timing.slave_pause() - timing.min_pause())
-        });
+        let mut quiet = None;
+        if let Some(r) = answer {
+            let tg = Transmission::response(r, f.end + timing.master_pause(), timing.half_bit());
+            // The line is as the request found it (idle, nothing recorded: anything that
+            // changes that releases the held request first), so only its faults are left to ask.
+            if self.medium.pass_untouched(&tg) {
+                let answer = tg.frame();
+                self.held = Some(answer);
+                quiet = Some(answer.end + timing.min_pause());
+            } else {
+                // The line touches the answer: the transaction goes on the line's path.
+                if let Some(c) = self.cur.as_mut() {
+                    c.quick = false;
+                }
+                self.transmit_answers(t, &[tg]);
+                quiet = self.medium.poll_at();
+            }
+        }
+        let quiet = quiet.map(|p| p + (timing.slave_pause() - timing.min_pause()));
         self.state = State::AwaitResponse;
         self.next_event = quiet.map_or(base, |q| q.max(base)).max(t);
-        if self.next_event <= self.horizon && !self.output_taken {
+        let quick = self.cur.is_some_and(|c| c.quick);
+        if quick && self.next_event <= self.horizon && !self.output_taken {
             let t3 = self.next_event;
             self.now = t3;
             self.next_event = match self.quick_finish(t3) {
@@ -773,7 +789,7 @@ impl Bus {
             // The telegram the frame was made of; an idle, clean line keeps it pending, so no
             // frame comes out now.
             let tg = Transmission::new(f.raw, f.bit_count, f.start, self.timing.half_bit());
-            self.medium.transmit(&tg, &mut |_| {
+            self.medium.transmit_taken(&tg, &mut |_| {
                 debug_assert!(false, "a held telegram went on a line that was not idle")
             });
         }

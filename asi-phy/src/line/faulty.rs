@@ -72,8 +72,23 @@ impl<L> Faulty<L> {
         &self.inner
     }
 
+    /// `true` if telegram `tg` put on the line now would go on to the inner line as it is,
+    /// taking the injector's draws for it then (as [`Line::transmit`] would); `false`, with
+    /// nothing drawn, if a one-shot fault is armed, the line is pulse-exact or the injector
+    /// would touch it.
+    #[inline]
+    pub fn pass_untouched(&mut self, tg: &Transmission) -> bool {
+        if !self.one_shot.is_empty() {
+            return false;
+        }
+        match &mut self.injector {
+            None => true,
+            Some(inj) => !self.exact && inj.pass_untouched(tg.pulses()),
+        }
+    }
+
     /// `true` while no fault is armed: telegrams pass unchanged.
-    pub fn is_clean(&self) -> bool {
+    fn is_clean(&self) -> bool {
         self.injector.is_none() && self.one_shot.is_empty()
     }
 

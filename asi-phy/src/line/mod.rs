@@ -32,7 +32,7 @@ pub use tap::Tap;
 pub use transmission::Transmission;
 pub use wire::Wire;
 
-use crate::BusTiming;
+use crate::{BusTiming, Frame};
 
 /// The line as the bus sees it: the wire with its tap, inside the fault wrapper.
 pub type Medium = Faulty<Tap<Wire>>;
@@ -51,12 +51,25 @@ impl Medium {
         self.inner_mut().inner_mut().set_pulse_exact(on);
     }
 
-    /// `true` while a clean telegram put on the line now would be handed on as its own frame
-    /// ([`Transmission::frame`]) at its end plus the pause, with nothing else on the line: no
-    /// fault armed, nothing recorded, not pulse-exact, no telegram pending or in the decoder.
-    /// A telegram that passes such a line leaves it as it found it, so a caller that knows
-    /// its telegrams are alone on the line may take their frames directly instead.
-    pub fn passes_clean(&self) -> bool {
-        self.is_clean() && !self.inner().is_recording() && self.inner().inner().is_idle_fast()
+    /// `true` if telegram `tg`, put on the line now, would be handed on as its own frame
+    /// ([`Transmission::frame`]) at its end plus the pause, with nothing else on the line:
+    /// nothing recorded, not pulse-exact, no telegram pending or in the decoder, no one-shot
+    /// fault armed, and the fault injector (if any) leaves it untouched. The injector's draws
+    /// for it are taken then, as [`Line::transmit`] would take them ([`FaultInjector::
+    /// pass_untouched`](crate::FaultInjector::pass_untouched)); with `false` nothing is drawn.
+    /// A telegram that passes so leaves the line as it found it, so a caller that knows its
+    /// telegram is alone on the line may take the frame directly instead, and put the
+    /// telegram on the line later with [`Medium::transmit_taken`] if it must.
+    #[inline]
+    pub fn takes_clean(&mut self, tg: &Transmission) -> bool {
+        !self.inner().is_recording()
+            && self.inner().inner().is_idle_fast()
+            && self.pass_untouched(tg)
+    }
+
+    /// Puts telegram `tg`, which [`Medium::takes_clean`] passed, on the line past the faults
+    /// whose draws that took: where [`Line::transmit`] would have put it then.
+    pub fn transmit_taken(&mut self, tg: &Transmission, done: &mut impl FnMut(Frame)) {
+        self.inner_mut().transmit(tg, done);
     }
 }
