@@ -28,7 +28,7 @@ pub const OVERFLOW_VALUE: u16 = 0x7FFF;
 
 /// The master's side of an S-7.3 output slave: answers the slave's step requests with the
 /// channel values taken from the output image.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct S73OutputMaster {
     answerer: Answerer,
     channels: u8,
@@ -93,7 +93,7 @@ impl S73OutputMaster {
 }
 
 /// The master's side of an S-7.3 input slave: requests values step by step.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct S73InputMaster {
     requester: Requester,
     transfers: u32,

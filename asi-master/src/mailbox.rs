@@ -168,7 +168,7 @@ pub fn completed(input: &Image, output: &Image) -> Option<(u8, JobResult, [u8; M
 }
 
 /// The master's side of the mailbox: which job it has taken.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub(crate) struct Mailbox {
     last_t: bool,
     busy: bool,

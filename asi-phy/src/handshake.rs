@@ -68,7 +68,7 @@ pub enum RequesterEvent {
 }
 
 /// The requesting side of a handshake: puts step codes out, collects the answers.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Requester {
     steps: &'static [u8],
     pos: usize,
@@ -201,7 +201,7 @@ pub enum AnswererEvent {
 }
 
 /// The answering side of a handshake: answers each new code with K toggled and 3 data bits.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Answerer {
     steps: &'static [u8],
     last_code: Option<u8>,

@@ -164,14 +164,14 @@ impl Tx {
     }
 }
 
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 struct InFlight {
     tx: Tx,
     request: Request,
     repeated: bool,
 }
 
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 struct Probe {
     a: SlaveAddr,
     step: Read,
@@ -185,7 +185,7 @@ enum Stage {
     Inclusion,
 }
 
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 enum AnalogEngine {
     Output(S73OutputMaster),
     Input(S73InputMaster),
@@ -199,7 +199,7 @@ const HOST_FLAG_BITS: u16 = HostFlags::WORD0_LOCK_DATA_EXCHANGE
 const UNKNOWN_CODES: SlaveCodes = SlaveCodes::new(0xF, 0xF, 0xF, 0xF);
 
 /// The AS-i master.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Master {
     cfg: MasterConfig,
     projected: ProjectedConfig,

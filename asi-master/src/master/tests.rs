@@ -374,7 +374,18 @@ impl Master {
     }
 }
 
-/// Everything the master holds, for comparing two masters.
+/// Two masters hold the same state: everything they hold (compared field by field; the whole
+/// of both is printed only when they differ).
+fn assert_same(m: &Master, r: &Master, what: &str, k: usize) {
+    assert!(
+        m == r,
+        "{what} at step {k}:\n{}\n{}",
+        state_of(m),
+        state_of(r)
+    );
+}
+
+/// Everything the master holds, printed.
 fn state_of(m: &Master) -> String {
     format!(
         "{m:?} {:?} {:?}",
@@ -418,11 +429,7 @@ fn lockstep(seed: u64, steps: usize) -> u64 {
         let t = m.poll_transmit(now);
         let want = r.poll_transmit_reference(now);
         assert_eq!(t, want, "call at step {k}");
-        assert_eq!(
-            state_of(&m),
-            state_of(&r),
-            "state after the call at step {k}"
-        );
+        assert_same(&m, &r, "state after the call", k);
         if t.is_some_and(|t| t.kind == TxKind::DataExchange && !t.repeat) {
             exchanges += 1;
         }
@@ -433,11 +440,7 @@ fn lockstep(seed: u64, steps: usize) -> u64 {
         let v = m.handle_outcome(now, outcome);
         let want = r.handle_outcome_reference(now, outcome);
         assert_eq!(v, want, "verdict at step {k}");
-        assert_eq!(
-            state_of(&m),
-            state_of(&r),
-            "state after the outcome at step {k}"
-        );
+        assert_same(&m, &r, "state after the outcome", k);
     }
     exchanges
 }
