@@ -11,6 +11,12 @@
 //!    the response, the master decides (repeat, next call), and the next request starts — at
 //!    request start + 154 µs with the default timing, later if noise kept the line busy.
 //!
+//! **Quick transactions.** A telegram that the line takes clean ([`Medium::takes_clean`]: idle,
+//! nothing recorded, no fault armed or the injector leaves it untouched) is not put on the line:
+//! the bus holds its frame and hands it to the receivers at its event, and goes on to the next
+//! event at once where it falls before the caller's horizon (`Bus::may_run_quick`). The
+//! events, their times and their order are the same; only the line's bookkeeping is skipped.
+//!
 //! **Decision**: after a transaction whose line carried an erroneous frame (a corrupt request
 //! that still reached the slaves, a corrupt or colliding response) the master starts its next
 //! request no earlier than the asynchronous pause (18 µs) after the last pulse, instead of the
