@@ -166,6 +166,8 @@ pub struct Lift {
     displays: Vec<DisplayState>,
     crashes: Vec<Crash>,
     events: VecDeque<PlantEvent>,
+    /// Counts the inputs and the handled edges ([`Lift::changes`]).
+    changes: u64,
 }
 
 impl Lift {
@@ -210,6 +212,7 @@ impl Lift {
             displays: vec![DisplayState::Blank; usize::from(floors) + 1],
             crashes: Vec::new(),
             events: VecDeque::with_capacity(64),
+            changes: 0,
             config,
         })
     }
