@@ -10,6 +10,7 @@ use crate::motion::{Segment, SegmentEnd};
 use crate::sensor::End;
 
 /// The earlier of two times, where `None` is never (the other one, if any).
+#[inline]
 fn earliest(a: Option<SimTime>, b: Option<SimTime>) -> Option<SimTime> {
     match (a, b) {
         (Some(a), Some(b)) => Some(a.min(b)),
