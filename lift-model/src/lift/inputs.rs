@@ -135,6 +135,7 @@ impl Lift {
         }
         self.input_at(now)?;
         self.buttons.press(index, now + duration);
+        self.next_event_changed();
         Ok(())
     }
 
@@ -143,6 +144,7 @@ impl Lift {
         let index = self.button_index(button)?;
         self.input_at(now)?;
         self.buttons.release(index);
+        self.next_event_changed();
         Ok(())
     }
 

@@ -168,6 +168,9 @@ pub struct Lift {
     events: VecDeque<PlantEvent>,
     /// Counts the inputs and the handled edges ([`Lift::changes`]).
     changes: u64,
+    /// The next edge ([`Lift::next_event`]), kept up to date by
+    /// [`Lift::next_event_changed`].
+    next: Option<SimTime>,
 }
 
 impl Lift {
@@ -213,6 +216,7 @@ impl Lift {
             crashes: Vec::new(),
             events: VecDeque::with_capacity(64),
             changes: 0,
+            next: None,
             config,
         })
     }

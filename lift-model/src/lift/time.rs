@@ -25,12 +25,32 @@ impl Lift {
     /// change until an input does. May equal [`Lift::now`] right after an input.
     #[inline]
     pub fn next_event(&self) -> Option<SimTime> {
-        // Asked at every moment of a run (here and by the rig): two plain comparisons of
-        // the three times rather than an iterator over them.
+        // Asked at every moment of a run, twice (here and by the rig): kept rather than
+        // worked out each time, and checked against the working-out in debug builds.
+        debug_assert_eq!(
+            self.next,
+            self.work_out_next_event(),
+            "the plant's next edge is stale at {}",
+            self.now
+        );
+        self.next
+    }
+
+    /// The earliest of the next button release, the next crossing and the end of the motion
+    /// segment: what [`Lift::next_event`] keeps.
+    fn work_out_next_event(&self) -> Option<SimTime> {
+        // Two plain comparisons of the three times rather than an iterator over them.
         earliest(
             earliest(self.buttons.next_release(), self.next_crossing),
             self.motion.end.map(|(t, _)| t),
         )
+    }
+
+    /// Works the next edge out again after the buttons, the next crossing or the motion
+    /// changed: at the end of [`Lift::start_motion`], after every edge handled and after a
+    /// press or a release.
+    pub(super) fn next_event_changed(&mut self) {
+        self.next = self.work_out_next_event();
     }
 
     /// Moves the plant to `t` and returns every edge since the last call (including those
@@ -96,7 +116,9 @@ impl Lift {
         self.changes = self.changes.wrapping_add(1);
         while let Some(next) = self.next_event().filter(|&next| next <= t) {
             self.now = next;
-            if !self.step() {
+            let stepped = self.step();
+            self.next_event_changed();
+            if !stepped {
                 // Unreachable: `next_event` is the earliest of the three `step` handles.
                 // Stopping here rather than spinning keeps a logic slip from hanging a run.
                 break;
@@ -276,6 +298,7 @@ impl Lift {
         };
         self.search_from = now;
         self.next_crossing = self.find_crossing();
+        self.next_event_changed();
     }
 
     pub(super) fn find_crossing(&self) -> Option<SimTime> {
