@@ -781,18 +781,14 @@ impl Rig {
 
     /// The master's LAS and the safety monitor's drops since the last look, to the report
     /// and the log (every safety scan, 1 ms).
+    #[inline]
     fn watch_bus(&mut self, t: SimTime) {
         let m = self.lab.bus.master();
         let las = (m.phase() == asi_master::Phase::NormalOperation).then(|| m.las().bits() as u32);
         let (left, back) = self.las_watch.update(t, las);
         // Nothing to say in almost every scan.
-        for i in (1..32u8).take_while(|_| left | back != 0) {
-            if left & (1 << i) != 0 {
-                self.log_at(t, "bus", format!("slave {i} dropped out of LAS"));
-            }
-            if back & (1 << i) != 0 {
-                self.log_at(t, "bus", format!("slave {i} back in LAS"));
-            }
+        if left | back != 0 {
+            self.log_las(t, left, back);
         }
         let id = self.lab.monitor;
         let drops = self
@@ -801,6 +797,27 @@ impl Rig {
             .monitor_mut(id)
             .map(|m| m.take_drops())
             .unwrap_or_default();
+        if !drops.is_empty() {
+            self.log_drops(drops);
+        }
+    }
+
+    /// The addresses that `left` LAS and came `back` at `t`, to the log.
+    #[inline(never)]
+    fn log_las(&mut self, t: SimTime, left: u32, back: u32) {
+        for i in 1..32u8 {
+            if left & (1 << i) != 0 {
+                self.log_at(t, "bus", format!("slave {i} dropped out of LAS"));
+            }
+            if back & (1 << i) != 0 {
+                self.log_at(t, "bus", format!("slave {i} back in LAS"));
+            }
+        }
+    }
+
+    /// The safety monitor's drops, to the log and the report.
+    #[inline(never)]
+    fn log_drops(&mut self, drops: Vec<asi_slaves::monitor::MonitorDrop>) {
         for d in drops {
             let (cause, text) = words::monitor_drop(d.why);
             let address = d.address.get();
