@@ -18,7 +18,7 @@ impl Lift {
     /// the still-moving motor at its present speed (flying restart), so the velocity never
     /// jumps. Closing it also ends a hand-crank turn in progress.
     pub fn set_contactor(&mut self, now: SimTime, energised: bool) -> Result<(), PlantError> {
-        self.catch_up(now)?;
+        self.input_at(now)?;
         self.k1.coil = energised;
         self.k1.main_closed = energised || (self.k1.main_closed && self.k1.weld_fault);
         self.power_changed();
@@ -32,7 +32,7 @@ impl Lift {
     /// under current, at closing). `false` repairs the contactor: the contacts follow the coil
     /// again at once. The auxiliary contact is a mirror contact, see [`Lift::k1_aux_closed`].
     pub fn set_contactor_welded(&mut self, now: SimTime, welded: bool) -> Result<(), PlantError> {
-        self.catch_up(now)?;
+        self.input_at(now)?;
         self.k1.weld_fault = welded;
         if !welded {
             self.k1.main_closed = self.k1.coil;
@@ -63,7 +63,7 @@ impl Lift {
         up: bool,
         setpoint_ua: u16,
     ) -> Result<(), PlantError> {
-        self.catch_up(now)?;
+        self.input_at(now)?;
         self.converter.run = run;
         self.converter.up = up;
         self.converter.setpoint_ua = setpoint_ua;
@@ -91,7 +91,7 @@ impl Lift {
     /// Fault injection: the converter reports a fault and stops driving (the brake stops the
     /// cabin) until the fault is cleared with `false`; it survives a power cycle.
     pub fn set_converter_fault(&mut self, now: SimTime, fault: bool) -> Result<(), PlantError> {
-        self.catch_up(now)?;
+        self.input_at(now)?;
         self.converter.injected_fault = fault;
         self.update_goal();
         Ok(())
@@ -108,7 +108,7 @@ impl Lift {
         now: SimTime,
         runaway: Option<bool>,
     ) -> Result<(), PlantError> {
-        self.catch_up(now)?;
+        self.input_at(now)?;
         self.converter.runaway = runaway;
         self.update_goal();
         Ok(())
@@ -133,16 +133,18 @@ impl Lift {
         if duration.is_zero() {
             return Err(PlantError::EmptyPress { button });
         }
-        self.catch_up(now)?;
+        self.input_at(now)?;
         self.buttons.press(index, now + duration);
+        self.next_event_changed();
         Ok(())
     }
 
     /// Lets go of `button` at `now`, ending any press early (not reported as an event).
     pub fn release(&mut self, now: SimTime, button: Button) -> Result<(), PlantError> {
         let index = self.button_index(button)?;
-        self.catch_up(now)?;
+        self.input_at(now)?;
         self.buttons.release(index);
+        self.next_event_changed();
         Ok(())
     }
 
@@ -161,7 +163,7 @@ impl Lift {
         channel: StopChannel,
         fault: ContactFault,
     ) -> Result<(), PlantError> {
-        self.catch_up(now)?;
+        self.input_at(now)?;
         self.stop_faults[channel as usize] = fault;
         Ok(())
     }
@@ -175,14 +177,14 @@ impl Lift {
         sensor: VaneSensor,
         fault: SensorFault,
     ) -> Result<(), PlantError> {
-        self.catch_up(now)?;
+        self.input_at(now)?;
         self.vane_faults[sensor as usize] = fault;
         Ok(())
     }
 
     /// The lab door, moved by hand (docs/lift-plant.md): `true` closed.
     pub fn set_door(&mut self, now: SimTime, closed: bool) -> Result<(), PlantError> {
-        self.catch_up(now)?;
+        self.input_at(now)?;
         self.door_closed = closed;
         Ok(())
     }
@@ -190,7 +192,7 @@ impl Lift {
     /// The load in the cabin (docs/lab-bus.md slave 8). It does not change the drive's speed: the
     /// seed's slip is a constant 0.1.
     pub fn set_load(&mut self, now: SimTime, load: LoadLevel) -> Result<(), PlantError> {
-        self.catch_up(now)?;
+        self.input_at(now)?;
         self.load = load;
         Ok(())
     }
@@ -208,7 +210,7 @@ impl Lift {
         if !distance_mm.is_finite() {
             return Err(PlantError::CrankDistance { distance_mm });
         }
-        self.catch_up(now)?;
+        self.input_at(now)?;
         if self.k1.main_closed {
             return Err(PlantError::CrankWhilePowered);
         }
@@ -248,7 +250,7 @@ impl Lift {
             },
             floors: self.config.floors,
         })?;
-        self.catch_up(now)?;
+        self.input_at(now)?;
         self.displays[index] = DisplayState::from_raw(raw);
         Ok(())
     }

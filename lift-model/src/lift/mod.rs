@@ -166,6 +166,11 @@ pub struct Lift {
     displays: Vec<DisplayState>,
     crashes: Vec<Crash>,
     events: VecDeque<PlantEvent>,
+    /// Counts the inputs and the handled edges ([`Lift::changes`]).
+    changes: u64,
+    /// The next edge ([`Lift::next_event`]), kept up to date by
+    /// [`Lift::next_event_changed`].
+    next: Option<SimTime>,
 }
 
 impl Lift {
@@ -210,6 +215,8 @@ impl Lift {
             displays: vec![DisplayState::Blank; usize::from(floors) + 1],
             crashes: Vec::new(),
             events: VecDeque::with_capacity(64),
+            changes: 0,
+            next: None,
             config,
         })
     }

@@ -10,6 +10,7 @@ use crate::motion::{Segment, SegmentEnd};
 use crate::sensor::End;
 
 /// The earlier of two times, where `None` is never (the other one, if any).
+#[inline]
 fn earliest(a: Option<SimTime>, b: Option<SimTime>) -> Option<SimTime> {
     match (a, b) {
         (Some(a), Some(b)) => Some(a.min(b)),
@@ -22,13 +23,34 @@ impl Lift {
     /// When the next edge happens under the present inputs (vane edge, overtravel trip or
     /// clear, end of a ramp, stop, mechanical end, button release); `None` when nothing will
     /// change until an input does. May equal [`Lift::now`] right after an input.
+    #[inline]
     pub fn next_event(&self) -> Option<SimTime> {
-        // Asked at every moment of a run (here and by the rig): two plain comparisons of
-        // the three times rather than an iterator over them.
+        // Asked at every moment of a run, twice (here and by the rig): kept rather than
+        // worked out each time, and checked against the working-out in debug builds.
+        debug_assert_eq!(
+            self.next,
+            self.work_out_next_event(),
+            "the plant's next edge is stale at {}",
+            self.now
+        );
+        self.next
+    }
+
+    /// The earliest of the next button release, the next crossing and the end of the motion
+    /// segment: what [`Lift::next_event`] keeps.
+    fn work_out_next_event(&self) -> Option<SimTime> {
+        // Two plain comparisons of the three times rather than an iterator over them.
         earliest(
             earliest(self.buttons.next_release(), self.next_crossing),
             self.motion.end.map(|(t, _)| t),
         )
+    }
+
+    /// Works the next edge out again after the buttons, the next crossing or the motion
+    /// changed: at the end of [`Lift::start_motion`], after every edge handled and after a
+    /// press or a release.
+    pub(super) fn next_event_changed(&mut self) {
+        self.next = self.work_out_next_event();
     }
 
     /// Moves the plant to `t` and returns every edge since the last call (including those
@@ -39,11 +61,41 @@ impl Lift {
         Ok(Events(self.events.drain(..)))
     }
 
+    /// Moves the plant to `t` as [`Lift::advance_to`] does, but leaves the edges queued;
+    /// returns whether there are any (which `advance_to(t)` then hands out).
+    ///
+    /// For a caller that moves the plant at every moment of a run: at almost every moment
+    /// there is no edge, and this tells so without handing out an empty drain.
+    #[inline]
+    pub fn catch_up_to(&mut self, t: SimTime) -> Result<bool, PlantError> {
+        self.catch_up(t)?;
+        Ok(!self.events.is_empty())
+    }
+
+    /// A count that moves at every input and at every handled edge: while it stays, the
+    /// plant's state changes only by time passing within one motion segment, so every output
+    /// but the position and the velocity stays as it is (K1, the converter, buttons, STOP,
+    /// sensors, door, load, the hand crank, displays, crashes). A caller that watches some
+    /// of those outputs at every moment looks again only when the count has moved.
+    #[inline]
+    pub fn changes(&self) -> u64 {
+        self.changes
+    }
+
+    /// Brings the plant to `now` for an input at `now`, which changes its state
+    /// ([`Lift::changes`]).
+    pub(super) fn input_at(&mut self, now: SimTime) -> Result<(), PlantError> {
+        self.catch_up(now)?;
+        self.changes = self.changes.wrapping_add(1);
+        Ok(())
+    }
+
     /// Moves the plant to `t`, handling every edge due by then in time order.
     ///
     /// At almost every moment of a run no edge is due: that is told by one look at
     /// [`Lift::next_event`], and the loop that handles edges ([`Lift::edges_until`], with
     /// [`Lift::step`] inlined into it) is entered only when one is.
+    #[inline]
     pub(super) fn catch_up(&mut self, t: SimTime) -> Result<(), PlantError> {
         if t < self.now {
             return Err(PlantError::TimeReversed {
@@ -61,9 +113,12 @@ impl Lift {
     /// Handles every edge due by `t` in time order, leaving [`Lift::now`] at the last one.
     #[inline(never)]
     fn edges_until(&mut self, t: SimTime) {
+        self.changes = self.changes.wrapping_add(1);
         while let Some(next) = self.next_event().filter(|&next| next <= t) {
             self.now = next;
-            if !self.step() {
+            let stepped = self.step();
+            self.next_event_changed();
+            if !stepped {
                 // Unreachable: `next_event` is the earliest of the three `step` handles.
                 // Stopping here rather than spinning keeps a logic slip from hanging a run.
                 break;
@@ -243,6 +298,7 @@ impl Lift {
         };
         self.search_from = now;
         self.next_crossing = self.find_crossing();
+        self.next_event_changed();
     }
 
     pub(super) fn find_crossing(&self) -> Option<SimTime> {
@@ -260,6 +316,209 @@ impl Lift {
 mod tests {
     use super::*;
     use proptest::prelude::*;
+
+    use crate::controls::{Button, ContactFault, LoadLevel, SensorFault, StopChannel};
+    use crate::display::DisplayId;
+    use crate::sensor::VaneSensor;
+    use crate::LiftConfig;
+    use asi_phy::SimDuration;
+
+    /// An input to the plant, or none.
+    #[derive(Clone, Debug)]
+    enum Input {
+        None,
+        Contactor(bool),
+        Welded(bool),
+        Converter(bool, bool, u16),
+        ConverterFault(bool),
+        Runaway(Option<bool>),
+        Press(u8, u64),
+        Release(u8),
+        StopFault(bool, u8),
+        VaneFault(bool, u8),
+        Door(bool),
+        Load(u8),
+        Crank(f64),
+        Display(u8, u16),
+    }
+
+    fn inputs() -> impl Strategy<Value = Vec<(u64, Input)>> {
+        let input = prop_oneof![
+            8 => Just(Input::None),
+            2 => any::<bool>().prop_map(Input::Contactor),
+            1 => any::<bool>().prop_map(Input::Welded),
+            3 => (any::<bool>(), any::<bool>(), 4_000..20_000u16)
+                .prop_map(|(r, u, s)| Input::Converter(r, u, s)),
+            1 => any::<bool>().prop_map(Input::ConverterFault),
+            1 => proptest::option::of(any::<bool>()).prop_map(Input::Runaway),
+            2 => (0..16u8, 1..3_000_000_000u64).prop_map(|(b, d)| Input::Press(b, d)),
+            1 => (0..16u8).prop_map(Input::Release),
+            1 => (any::<bool>(), 0..3u8).prop_map(|(c, f)| Input::StopFault(c, f)),
+            1 => (any::<bool>(), 0..3u8).prop_map(|(c, f)| Input::VaneFault(c, f)),
+            1 => any::<bool>().prop_map(Input::Door),
+            1 => (0..4u8).prop_map(Input::Load),
+            1 => (-500.0..500.0f64).prop_map(Input::Crank),
+            1 => (0..6u8, any::<u16>()).prop_map(|(d, w)| Input::Display(d, w)),
+        ];
+        let dt = prop_oneof![
+            Just(0u64),
+            1..1_000u64,
+            1..5_000_000u64,
+            1..2_000_000_000u64
+        ];
+        proptest::collection::vec((dt, input), 0..120)
+    }
+
+    fn button(b: u8) -> Button {
+        match b {
+            0..=3 => Button::Cabin(b + 1),
+            4..=6 => Button::HallUp(b - 3),
+            7..=9 => Button::HallDown(b - 5),
+            10 => Button::Bell,
+            _ => Button::Stop,
+        }
+    }
+
+    /// Applies `input` at `t`; a refused input is as good as any for these tests.
+    fn apply(lift: &mut Lift, t: SimTime, input: &Input) {
+        let fault = |f: u8| {
+            [
+                ContactFault::None,
+                ContactFault::StuckClosed,
+                ContactFault::StuckOpen,
+            ][usize::from(f)]
+        };
+        let sensor = |f: u8| {
+            [
+                SensorFault::None,
+                SensorFault::StuckOn,
+                SensorFault::StuckOff,
+            ][usize::from(f)]
+        };
+        let _ = match *input {
+            Input::None => Ok(()),
+            Input::Contactor(on) => lift.set_contactor(t, on),
+            Input::Welded(on) => lift.set_contactor_welded(t, on),
+            Input::Converter(run, up, sp) => lift.set_converter(t, run, up, sp),
+            Input::ConverterFault(on) => lift.set_converter_fault(t, on),
+            Input::Runaway(r) => lift.set_converter_runaway(t, r),
+            Input::Press(b, ns) => lift.press(t, button(b), SimDuration::from_nanos(ns)),
+            Input::Release(b) => lift.release(t, button(b)),
+            Input::StopFault(one, f) => {
+                let channel = if one {
+                    StopChannel::One
+                } else {
+                    StopChannel::Two
+                };
+                lift.set_stop_channel_fault(t, channel, fault(f))
+            }
+            Input::VaneFault(left, f) => {
+                let v = if left {
+                    VaneSensor::Left
+                } else {
+                    VaneSensor::Right
+                };
+                lift.set_vane_fault(t, v, sensor(f))
+            }
+            Input::Door(closed) => lift.set_door(t, closed),
+            Input::Load(l) => lift.set_load(t, LoadLevel::ALL[usize::from(l)]),
+            Input::Crank(mm) => lift.crank(t, mm),
+            Input::Display(d, w) => {
+                let id = if d == 0 {
+                    DisplayId::Cabin
+                } else {
+                    DisplayId::Floor(d)
+                };
+                lift.set_display(t, id, w)
+            }
+        };
+    }
+
+    /// Everything the plant shows but the position and the velocity, with the motion
+    /// segment and the next edge.
+    fn outputs(lift: &Lift) -> String {
+        let buttons: Vec<bool> = (0..16).map(|b| lift.is_pressed(button(b))).collect();
+        let displays: Vec<_> = std::iter::once(DisplayId::Cabin)
+            .chain((1..=lift.config.floors).map(DisplayId::Floor))
+            .map(|d| lift.display(d))
+            .collect();
+        format!(
+            "{:?}",
+            (
+                (
+                    lift.k1_closed(),
+                    lift.k1_aux_closed(),
+                    lift.converter_ready(),
+                    lift.converter_fault()
+                ),
+                (
+                    lift.stop_channels(),
+                    lift.stop_pressed(),
+                    lift.door_closed(),
+                    lift.load()
+                ),
+                (
+                    lift.overtravel_bottom_free(),
+                    lift.overtravel_top_free(),
+                    lift.vane_left(),
+                    lift.vane_right()
+                ),
+                (
+                    lift.in_level_zone(),
+                    lift.hand_cranking(),
+                    lift.converter_runaway(),
+                    lift.crashes().len()
+                ),
+                (buttons, displays, lift.motion, lift.next_event()),
+            )
+        )
+    }
+
+    proptest! {
+        /// [`Lift::catch_up_to`] and then [`Lift::advance_to`] only when it tells of edges
+        /// give what `advance_to` at every moment gives: the same edges at the same times,
+        /// the same state after every moment.
+        #[test]
+        fn catching_up_and_draining_only_when_told_is_advancing(steps in inputs()) {
+            let lift = Lift::new(LiftConfig { initial_position_mm: 20.0, ..LiftConfig::default() })
+                .expect("a lift");
+            let (mut every, mut told) = (lift.clone(), lift);
+            let mut t = SimTime::ZERO;
+            for (dt, input) in &steps {
+                t += SimDuration::from_nanos(*dt);
+                apply(&mut every, t, input);
+                apply(&mut told, t, input);
+                let reference: Vec<_> = every.advance_to(t).expect("forward").collect();
+                let events: Vec<_> = if told.catch_up_to(t).expect("forward") {
+                    told.advance_to(t).expect("forward").collect()
+                } else {
+                    Vec::new()
+                };
+                prop_assert_eq!(events, reference);
+                prop_assert_eq!(format!("{told:?}"), format!("{every:?}"));
+            }
+        }
+
+        /// While [`Lift::changes`] stays, every output but the position and the velocity
+        /// stays, and so do the motion segment and the next edge.
+        #[test]
+        fn while_the_count_of_changes_stays_only_time_passes(steps in inputs()) {
+            let mut lift = Lift::new(LiftConfig { initial_position_mm: 20.0, ..LiftConfig::default() })
+                .expect("a lift");
+            let mut t = SimTime::ZERO;
+            let mut last = (lift.changes(), outputs(&lift));
+            for (dt, input) in &steps {
+                t += SimDuration::from_nanos(*dt);
+                apply(&mut lift, t, input);
+                let _ = lift.advance_to(t).expect("forward").count();
+                let now = (lift.changes(), outputs(&lift));
+                if now.0 == last.0 {
+                    prop_assert_eq!(&now.1, &last.1, "at {}", t);
+                }
+                last = now;
+            }
+        }
+    }
 
     fn time(t: Option<u64>) -> Option<SimTime> {
         t.map(SimTime::from_nanos)

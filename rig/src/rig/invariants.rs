@@ -53,7 +53,7 @@ impl Observed {
 }
 
 /// Watches the invariants.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub(super) struct InvariantWatch {
     door_open_since: Option<SimTime>,
     overloaded_since: Option<SimTime>,
@@ -180,6 +180,71 @@ impl InvariantWatch {
         }
         found
     }
+
+    /// After a [`InvariantWatch::check`] that saw `o`: the last time through which another
+    /// check that sees the same finds nothing and changes nothing, or `None` if the next one
+    /// may. "The same" is every field of `o` but the velocity's magnitude (its being zero or
+    /// not is the same), the position and the level floor: the watch reads those only while
+    /// the door is open with the safe drive's watch on, and then this is `None`.
+    ///
+    /// Another check with the same booleans repeats what this one did (each field follows
+    /// them, or is set once and kept), except for what depends on the time: a budget running
+    /// out ([`DOOR_BUDGET`], [`OVERLOAD_BUDGET`], [`OVERTRAVEL_BUDGET`], each only while its
+    /// episode is not reported yet), the STOP watch ending, and a STOP still held after it
+    /// ended (which starts the next one).
+    pub(super) fn quiet_through(&self, o: &Observed, estop_delay: SimDuration) -> Option<SimTime> {
+        if o.watch_unintended_movement && o.door_open {
+            return None;
+        }
+        if o.stop && self.stop_since.is_none() {
+            return None;
+        }
+        let moving = o.velocity_mm_s != 0.0 && !self.by_hand;
+        let mut through = SimTime::MAX;
+        for (since, budget, slot, judged) in [
+            (self.door_open_since, DOOR_BUDGET, 0, moving),
+            (self.overloaded_since, OVERLOAD_BUDGET, 1, moving),
+            (self.overtravel_k1_since, OVERTRAVEL_BUDGET, 2, true),
+        ] {
+            if let Some(s) = since.filter(|_| judged && !self.reported[slot]) {
+                through = through.min(s + budget);
+            }
+        }
+        if let Some((since, _)) = self.stop_since {
+            through = through.min(since + (estop_delay + STOP_MARGIN));
+        }
+        Some(through)
+    }
+}
+
+/// What tells, at a moment, that the watch would see what it saw at its last check (in
+/// the sense of [`InvariantWatch::quiet_through`]): the plant's count of changes
+/// ([`lift_model::Lift::changes`]) and whether the cabin moves.
+pub(super) type PlantKey = (u64, bool);
+
+/// The checks the rig may skip: while the plant's key is the one of the last check and the
+/// time is not past what [`InvariantWatch::quiet_through`] said then, a check would find
+/// nothing and change nothing. Almost every moment of a run is such a one.
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct Quiet(Option<(PlantKey, SimTime)>);
+
+impl Quiet {
+    /// Whether the check at `t` of a plant with `key` can be skipped.
+    #[inline]
+    pub(super) fn holds(&self, key: PlantKey, t: SimTime) -> bool {
+        self.0.is_some_and(|(k, through)| k == key && t <= through)
+    }
+
+    /// After a check of the plant with `key` that saw `o`.
+    pub(super) fn after_check(
+        &mut self,
+        watch: &InvariantWatch,
+        key: PlantKey,
+        o: &Observed,
+        estop_delay: SimDuration,
+    ) {
+        self.0 = watch.quiet_through(o, estop_delay).map(|t| (key, t));
+    }
 }
 
 #[cfg(test)]
@@ -253,6 +318,84 @@ mod tests {
                 }
                 proptest::prop_assert_eq!(every.check(t, o, DELAY), needed.check(t, only, DELAY));
                 proptest::prop_assert_eq!(format!("{every:?}"), format!("{needed:?}"));
+            }
+        }
+    }
+
+    /// One moment of a run for the skipping watch: how far time moves, and what the plant
+    /// shows then.
+    #[derive(Clone, Debug)]
+    enum Moment {
+        /// `ms` and `ns` later, a plant that changed (a new key), showing this.
+        Changed(u64, u64, Observed),
+        /// `ms` and `ns` later, the plant unchanged: a new velocity if it moves (same
+        /// direction of zero), and then a new position and level floor too.
+        Same(u64, u64, f64, f64, bool),
+        /// Exactly at the end of the last quiet span, or one nanosecond after it, the plant
+        /// unchanged.
+        AtQuietEnd(bool),
+    }
+
+    fn moments() -> impl proptest::strategy::Strategy<Value = Vec<Moment>> {
+        use proptest::prelude::*;
+        let ns = prop_oneof![Just(0u64), Just(1), 0..1_000_000u64];
+        let ms = prop_oneof![0..60u64, 0..1_200u64, Just(50), Just(1_000), Just(9_300)];
+        proptest::collection::vec(
+            prop_oneof![
+                2 => (ms.clone(), ns.clone(), observed())
+                    .prop_map(|(ms, ns, o)| Moment::Changed(ms, ns, o)),
+                6 => (ms, ns, 1.0..30.0f64, 370.0..430.0f64, any::<bool>())
+                    .prop_map(|(ms, ns, v, x, f)| Moment::Same(ms, ns, v, x, f)),
+                2 => any::<bool>().prop_map(Moment::AtQuietEnd),
+            ],
+            0..150,
+        )
+    }
+
+    proptest::proptest! {
+        /// The watch that skips the checks [`Quiet`] allows finds what the watch that checks
+        /// at every moment finds, at the same moments, and is in the same state after every
+        /// moment: with repeated observations, budgets running out to the nanosecond, STOP
+        /// watches ending and starting again, the safe drive's watch on and off.
+        #[test]
+        fn skipping_the_quiet_checks_changes_nothing(path in moments()) {
+            let (mut every, mut skipping) = (InvariantWatch::default(), InvariantWatch::default());
+            let mut quiet = Quiet::default();
+            let mut t = SimTime::ZERO;
+            let mut o = seen(400.0, 0.0);
+            let mut changes = 0u64;
+            for m in path {
+                match m {
+                    Moment::Changed(ms, ns, new) => {
+                        t += SimDuration::from_nanos(ms * 1_000_000 + ns);
+                        o = new;
+                        changes += 1;
+                    }
+                    Moment::Same(ms, ns, v, x, floor) => {
+                        t += SimDuration::from_nanos(ms * 1_000_000 + ns);
+                        if o.velocity_mm_s != 0.0 {
+                            o.velocity_mm_s = v;
+                            o.position_mm = x;
+                            o.level_floor = floor.then_some(2);
+                        }
+                    }
+                    Moment::AtQuietEnd(after) => {
+                        if let Some((_, through)) = quiet.0.filter(|(_, e)| *e != SimTime::MAX) {
+                            t = t.max(through + SimDuration::from_nanos(u64::from(after)));
+                        }
+                    }
+                }
+                let key = (changes, o.velocity_mm_s != 0.0);
+                let reference = every.check(t, o, DELAY);
+                let found = if quiet.holds(key, t) {
+                    Vec::new()
+                } else {
+                    let found = skipping.check(t, o, DELAY);
+                    quiet.after_check(&skipping, key, &o, DELAY);
+                    found
+                };
+                proptest::prop_assert_eq!(found, reference, "at {}", t);
+                proptest::prop_assert_eq!(&skipping, &every, "at {}", t);
             }
         }
     }

@@ -26,6 +26,10 @@ impl LasWatch {
             self.las = None;
             return (0, 0);
         };
+        // The same LAS in almost every scan: nothing to count.
+        if self.las == Some(now) {
+            return (0, 0);
+        }
         let Some(before) = self.las.replace(now) else {
             return (0, 0);
         };

@@ -34,7 +34,7 @@ use asi_phy::{SimDuration, SimTime};
 use asi_trace::trace::TraceFormat;
 use controller::plc::{FromSafety, Plc, ToSafety};
 use controller::{ControllerConfig, ProgramEventKind as Ctl};
-use invariants::{InvariantWatch, Observed};
+use invariants::{InvariantWatch, Observed, Quiet};
 use lab::address::{SAFETY_BOTTOM, SAFETY_TOP};
 use lab::setpoint::STANDSTILL_UA;
 use las::LasWatch;
@@ -109,6 +109,13 @@ pub struct Rig {
     next_safety: SimTime,
     next_event: usize,
     timers: Vec<(SimTime, Timer)>,
+    /// The earliest of the next PLC scan, the next safety scan, the next scenario event and
+    /// the next timer ([`Rig::own_next_moment`]): what [`Rig::next_moment`] takes besides the
+    /// plant's next edge and the end. Those change only in a step, in an action between
+    /// moments and when an event is scheduled, so it is worked out again only then
+    /// ([`Rig::own_moments_changed`]) rather than at every moment (checked at every moment in
+    /// the rig's tests).
+    next_own: SimTime,
     applied: Applied,
     /// The lab's count of drive changes when the rig last read what the slaves drive
     /// ([`asi_bus::lab::LabLift::drive_changes`]); `None` when it must read them again.
@@ -124,6 +131,8 @@ pub struct Rig {
     /// Every press of a call button, for the passengers' waits and the served calls' requests.
     passengers: Passengers,
     watch: InvariantWatch,
+    /// When the invariant watch's check may be skipped.
+    quiet: Quiet,
     report: Report,
     /// The trace, the waveforms and the observer.
     outputs: Outputs,
@@ -181,6 +190,7 @@ impl Rig {
             next_safety: SimTime::ZERO,
             next_event: 0,
             timers,
+            next_own: SimTime::ZERO,
             applied: Applied::default(),
             drives_seen: None,
             plant_dirty: true,
@@ -192,6 +202,7 @@ impl Rig {
             attendant: Attendant::default(),
             passengers: Passengers::default(),
             watch: InvariantWatch::default(),
+            quiet: Quiet::default(),
             report,
             outputs: Outputs::default(),
             safety_out: None,
@@ -217,6 +228,7 @@ impl Rig {
                 rig.sc.pulse_error_rate
             ),
         );
+        rig.own_moments_changed();
         if rig.sc.safe_drive {
             rig.drive = Some(drive::SafeDriveGuard::new(&rig.lift)?);
             rig.log(
@@ -286,11 +298,17 @@ impl Rig {
     }
 
     /// The rig's state for the waveforms at `t`, if they are wanted.
+    #[inline]
     fn sample_waves(&mut self, t: SimTime) {
         if self.outputs.waves.is_some() {
-            let sample = self.sample();
-            self.outputs.sample(t, &sample);
+            self.sample_waves_now(t);
         }
+    }
+
+    #[inline(never)]
+    fn sample_waves_now(&mut self, t: SimTime) {
+        let sample = self.sample();
+        self.outputs.sample(t, &sample);
     }
 
     /// The rig's state for the VCD.
@@ -347,7 +365,7 @@ impl Rig {
             self.end = self.end.min(SimTime::ZERO + u);
         }
         let mut scans = self.next_plc;
-        while let Some(t) = self.advance(self.end) {
+        while let Some(t) = self.advance_to_step(self.end) {
             if self.next_plc != scans {
                 scans = self.next_plc;
                 if progress(t, self.end).is_break() {
@@ -362,24 +380,47 @@ impl Rig {
         self.finish()
     }
 
+    /// The rig's next moment: the earliest of the end, the plant's next edge and the rig's own
+    /// next moment, and not before the moment reached.
+    #[inline]
     fn next_moment(&self) -> SimTime {
-        let mut t = self.end;
+        #[cfg(test)]
+        assert_eq!(
+            self.next_own,
+            self.own_next_moment(),
+            "the rig's own next moment is stale at {}",
+            self.now
+        );
+        let mut t = self.end.min(self.next_own);
         if let Some(e) = self.lift.next_event() {
             t = t.min(e);
         }
-        t = t.min(self.next_plc).min(self.next_safety);
+        t.max(self.now)
+    }
+
+    /// The earliest of the next PLC scan, the next safety scan, the next scenario event and
+    /// the next timer.
+    fn own_next_moment(&self) -> SimTime {
+        let mut t = self.next_plc.min(self.next_safety);
         if let Some(e) = self.sc.events.get(self.next_event) {
             t = t.min(e.at);
         }
         if let Some((at, _)) = self.timers.iter().min_by_key(|(at, _)| *at) {
             t = t.min(*at);
         }
-        t.max(self.now)
+        t
+    }
+
+    /// Works [`Rig::next_own`] out again, after a scan, a scenario event or a timer may have
+    /// moved.
+    fn own_moments_changed(&mut self) {
+        self.next_own = self.own_next_moment();
     }
 
     /// Handles the rig's next moment, or a slave's new output before it, if it comes no later
     /// than `limit`; returns its time. The bus runs on its own up to the rig's next moment and
     /// stops where a slave takes a new output for the plant, which gets it at that moment.
+    #[inline]
     fn advance(&mut self, limit: SimTime) -> Option<SimTime> {
         let t = self.next_moment();
         if t > limit {
@@ -391,6 +432,26 @@ impl Rig {
         }
         self.step(t);
         Some(t)
+    }
+
+    /// As [`Rig::advance`], but goes on through the slaves' new outputs to the rig's next
+    /// moment, and returns only then (for [`Rig::run_observed`], which has nothing to do
+    /// after a new output: it is before the end, and no PLC scan has run). About half the
+    /// moments of a run are new outputs of the set-point slave's analog transfer.
+    fn advance_to_step(&mut self, limit: SimTime) -> Option<SimTime> {
+        loop {
+            let t = self.next_moment();
+            if t > limit {
+                return None;
+            }
+            match self.lab.bus.advance_before(t) {
+                Some(at) => self.output_taken(at),
+                None => {
+                    self.step(t);
+                    return Some(t);
+                }
+            }
+        }
     }
 
     /// A slave took a new output at `t` (before the rig's next moment): the plant gets it.
@@ -433,23 +494,43 @@ impl Rig {
             self.next_plc = t + self.sc.plc_scan;
             self.flush_trace();
         }
+        self.own_moments_changed();
         self.check_invariants(t);
         self.sample_waves(t);
     }
 
+    /// Brings the plant to `t` and handles its edges on the way.
+    #[inline]
     fn advance_plant(&mut self, t: SimTime) {
         // No edge at almost every moment: nothing to collect then.
-        let events = self
-            .lift
-            .advance_to(t)
-            .map(|ev| (ev.len() > 0).then(|| ev.collect::<Vec<_>>()));
-        let events = match events {
-            Ok(Some(ev)) => ev,
-            Ok(None) => return,
-            Err(e) => {
-                self.log("plant", format!("error: {e}"));
-                return;
+        match self.lift.catch_up_to(t) {
+            Ok(false) => {
+                // What it replaces: `advance_to`, whose drain is empty then.
+                #[cfg(test)]
+                assert_eq!(
+                    self.lift.advance_to(t).map(|ev| ev.len()),
+                    Ok(0),
+                    "the plant has edges at {t} that it did not tell"
+                );
             }
+            Ok(true) => self.plant_edges(t),
+            Err(e) => self.plant_error(e),
+        }
+    }
+
+    #[cold]
+    #[inline(never)]
+    fn plant_error(&mut self, e: lift_model::PlantError) {
+        self.log("plant", format!("error: {e}"));
+    }
+
+    /// The plant's edges up to `t`, which it has reached.
+    #[inline(never)]
+    fn plant_edges(&mut self, t: SimTime) {
+        let events = self.lift.advance_to(t).map(|ev| ev.collect::<Vec<_>>());
+        let events = match events {
+            Ok(ev) => ev,
+            Err(e) => return self.plant_error(e),
         };
         self.plant_dirty = true;
         for e in events {
@@ -634,6 +715,10 @@ impl Rig {
     }
 
     fn fire_timers(&mut self, t: SimTime) {
+        // None due at almost every step (no timer at all, mostly).
+        if self.timers.iter().all(|(at, _)| *at > t) {
+            return;
+        }
         let mut due: Vec<Timer> = Vec::new();
         self.timers.retain(|(at, timer)| {
             if *at <= t {
@@ -679,6 +764,7 @@ impl Rig {
     /// The slaves' outputs are read only when the lab's count of drive changes has moved
     /// since the last reading: until then they are what was read, which the plant has
     /// (checked against a fresh reading at every moment in the rig's tests).
+    #[inline]
     fn slaves_to_plant(&mut self, t: SimTime) {
         let changes = self.lab.drive_changes();
         if self.drives_seen == Some(changes) {
@@ -690,6 +776,13 @@ impl Rig {
             );
             return;
         }
+        self.read_slaves(t, changes);
+    }
+
+    /// Reads what the slaves drive (the lab's count of drive changes is `changes` now) and
+    /// hands the plant what changed.
+    #[inline(never)]
+    fn read_slaves(&mut self, t: SimTime, changes: u64) {
         self.drives_seen = Some(changes);
         let new = wiring::slave_outputs(&self.lab);
         // At most moments the slaves drive what they drove: the plant is handed only what
@@ -708,18 +801,14 @@ impl Rig {
 
     /// The master's LAS and the safety monitor's drops since the last look, to the report
     /// and the log (every safety scan, 1 ms).
+    #[inline]
     fn watch_bus(&mut self, t: SimTime) {
         let m = self.lab.bus.master();
         let las = (m.phase() == asi_master::Phase::NormalOperation).then(|| m.las().bits() as u32);
         let (left, back) = self.las_watch.update(t, las);
         // Nothing to say in almost every scan.
-        for i in (1..32u8).take_while(|_| left | back != 0) {
-            if left & (1 << i) != 0 {
-                self.log_at(t, "bus", format!("slave {i} dropped out of LAS"));
-            }
-            if back & (1 << i) != 0 {
-                self.log_at(t, "bus", format!("slave {i} back in LAS"));
-            }
+        if left | back != 0 {
+            self.log_las(t, left, back);
         }
         let id = self.lab.monitor;
         let drops = self
@@ -728,6 +817,27 @@ impl Rig {
             .monitor_mut(id)
             .map(|m| m.take_drops())
             .unwrap_or_default();
+        if !drops.is_empty() {
+            self.log_drops(drops);
+        }
+    }
+
+    /// The addresses that `left` LAS and came `back` at `t`, to the log.
+    #[inline(never)]
+    fn log_las(&mut self, t: SimTime, left: u32, back: u32) {
+        for i in 1..32u8 {
+            if left & (1 << i) != 0 {
+                self.log_at(t, "bus", format!("slave {i} dropped out of LAS"));
+            }
+            if back & (1 << i) != 0 {
+                self.log_at(t, "bus", format!("slave {i} back in LAS"));
+            }
+        }
+    }
+
+    /// The safety monitor's drops, to the log and the report.
+    #[inline(never)]
+    fn log_drops(&mut self, drops: Vec<asi_slaves::monitor::MonitorDrop>) {
         for d in drops {
             let (cause, text) = words::monitor_drop(d.why);
             let address = d.address.get();
@@ -883,9 +993,47 @@ impl Rig {
         }
     }
 
+    /// The invariant watch at `t`. Skipped while the watch would see what it saw at its last
+    /// check and no budget runs out ([`invariants::Quiet`]); in the rig's tests every skipped
+    /// check is run on a copy of the watch, which must find nothing and stay as it is.
+    #[inline]
     fn check_invariants(&mut self, t: SimTime) {
+        let key = (self.lift.changes(), self.lift.velocity_mm_s() != 0.0);
+        if self.quiet.holds(key, t) {
+            #[cfg(test)]
+            self.assert_quiet(t);
+        } else {
+            self.check_invariants_now(t, key);
+        }
+    }
+
+    /// What the shortcut replaces: the check at `t`, on a copy of the watch, which must find
+    /// nothing and leave the copy as the watch is.
+    #[cfg(test)]
+    fn assert_quiet(&self, t: SimTime) {
+        let mut full = self.watch.clone();
+        let found = full.check(t, self.observed(), self.estop_delay);
+        assert!(
+            found.is_empty() && full == self.watch,
+            "a check skipped at {t} finds {found:?} or changes the watch"
+        );
+    }
+
+    /// The invariant watch's check at `t` of the plant with `key`.
+    #[inline(never)]
+    fn check_invariants_now(&mut self, t: SimTime, key: invariants::PlantKey) {
+        let seen = self.observed();
+        for (kind, detail) in self.watch.check(t, seen, self.estop_delay) {
+            self.violation(t, kind, detail);
+        }
+        self.quiet
+            .after_check(&self.watch, key, &seen, self.estop_delay);
+    }
+
+    /// What the invariant watch looks at now.
+    fn observed(&self) -> Observed {
         let l = &self.lift;
-        let seen = Observed {
+        Observed {
             velocity_mm_s: l.velocity_mm_s(),
             hand_cranking: l.hand_cranking(),
             door_open: !l.door_closed(),
@@ -898,9 +1046,6 @@ impl Rig {
                 .then(|| l.config().level_floor(l.position_mm()))
                 .flatten(),
             watch_unintended_movement: self.drive.is_some(),
-        };
-        for (kind, detail) in self.watch.check(t, seen, self.estop_delay) {
-            self.violation(t, kind, detail);
         }
     }
 
@@ -1010,6 +1155,7 @@ impl Rig {
                 line: 0,
             },
         );
+        self.own_moments_changed();
     }
 
     /// Turns the built-in PLC program off: an outside controller (`asi-lift serve
@@ -1043,6 +1189,7 @@ impl Rig {
     /// Does `action` now, as a scenario event would; `who` names the actor in the log.
     pub fn act_now(&mut self, who: &'static str, action: &Action) {
         self.act(self.now, who, action);
+        self.own_moments_changed();
     }
 
     /// Adds a line to the run's log at the moment reached.
@@ -1127,6 +1274,68 @@ mod tests {
     /// outputs checks them against a fresh reading ([`Rig::slaves_to_plant`]).
     fn run(sc: Scenario) -> Report {
         Rig::new(sc).expect("a rig for the scenario").run(None)
+    }
+
+    /// What [`Rig::run`] did before it went through the slaves' new outputs in one call
+    /// ([`Rig::advance_to_step`]): one [`Rig::advance`] per moment, new outputs included.
+    fn run_moment_by_moment(sc: Scenario) -> Report {
+        let mut rig = Rig::new(sc).expect("a rig for the scenario");
+        let mut scans = rig.next_plc;
+        let mut progress_at = Vec::new();
+        while let Some(t) = rig.advance(rig.end) {
+            if rig.next_plc != scans {
+                scans = rig.next_plc;
+                progress_at.push(t);
+            }
+            if t == rig.end {
+                break;
+            }
+        }
+        let mut report = rig.finish();
+        report.log.push(LogLine {
+            at_s: 0.0,
+            who: "test",
+            text: format!("{progress_at:?}"),
+        });
+        report
+    }
+
+    /// [`Rig::run_observed`] with the progress it reports, as in `run_moment_by_moment`.
+    fn run_observed_with_progress(sc: Scenario) -> Report {
+        let mut progress_at = Vec::new();
+        let mut report =
+            Rig::new(sc)
+                .expect("a rig for the scenario")
+                .run_observed(None, &mut |t, _| {
+                    progress_at.push(t);
+                    std::ops::ControlFlow::Continue(())
+                });
+        report.log.push(LogLine {
+            at_s: 0.0,
+            who: "test",
+            text: format!("{progress_at:?}"),
+        });
+        report
+    }
+
+    /// Going through the slaves' new outputs in one call gives the report, and the
+    /// progress at the same moments, that a call per moment gives: for random campaign runs
+    /// with faults (slaves off and on the bus, power fails, noise, the safe drive).
+    #[test]
+    fn a_run_through_the_new_outputs_is_a_run_moment_by_moment() {
+        let mut scenarios = Vec::new();
+        for name in ["default", "noisy", "safe-drive"] {
+            let profile = Profile::built_in(name).expect("a built-in profile");
+            scenarios.extend((0..2).map(|index| generate(11, index, &profile).scenario));
+        }
+        for sc in scenarios {
+            let name = sc.name.clone();
+            assert_eq!(
+                run_observed_with_progress(sc.clone()),
+                run_moment_by_moment(sc),
+                "{name}"
+            );
+        }
     }
 
     /// The drive-change count covers every way the slaves' outputs change in the built-in
