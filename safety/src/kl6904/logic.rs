@@ -242,6 +242,7 @@ impl fmt::Display for LogicEvent {
 
 /// A module as the scan runs it: its state, and what the scan needs of its compiled form.
 #[derive(Clone, Debug)]
+#[cfg_attr(test, derive(PartialEq))]
 struct ModuleRt {
     kind: ModuleKind,
     /// Its group.
@@ -260,6 +261,7 @@ struct ModuleRt {
 
 /// A module's function and state.
 #[derive(Clone, Debug)]
+#[cfg_attr(test, derive(PartialEq))]
 enum Fb {
     /// AND: the input positions linked, and those of them with a make contact.
     And {
@@ -315,40 +317,48 @@ impl ModuleRt {
     }
 
     /// One scan at `now`: reads the inputs from `image`, runs the function and writes the
-    /// outputs (safety outputs 0 unless `run`). `true` if the module has events to report
-    /// ([`ModuleRt::events`]).
-    fn scan(&mut self, now: SimTime, run: bool, image: &mut [bool]) -> bool {
+    /// outputs (safety outputs 0 unless `run`). Returns whether the module has events to report
+    /// ([`ModuleRt::events`]), and whether it is quiet: another scan with the same inputs and
+    /// `run` would change nothing, whenever it came (the stateless modules always are; the
+    /// others as [`Estop::quiet`] says).
+    fn scan(&mut self, now: SimTime, run: bool, image: &mut [bool]) -> (bool, bool) {
         let inputs = self
             .links
             .iter()
             .fold(0u16, |bits, &(k, slot)| bits | u16::from(image[slot]) << k);
-        let (outputs, events) = match &mut self.fb {
-            Fb::And { linked, make } => (u16::from(and_bits(inputs, *linked, *make)), false),
-            Fb::Or { linked, make } => (u16::from(or_bits(inputs, *linked, *make)), false),
+        let (outputs, events, quiet) = match &mut self.fb {
+            Fb::And { linked, make } => (u16::from(and_bits(inputs, *linked, *make)), false, true),
+            Fb::Or { linked, make } => (u16::from(or_bits(inputs, *linked, *make)), false, true),
             // DECOUPLE: DecOut n = DecIn n (`decouple`).
-            Fb::Decouple => (inputs, false),
+            Fb::Decouple => (inputs, false, true),
             Fb::OpMode(fb) => {
+                let before = fb.state();
                 let o = fb.scan_bits(now, run, inputs);
                 let outs = o.op_out.iter().enumerate();
                 let outs = outs.fold(0, |m, (k, &v)| m | u16::from(v) << k);
-                (outs | u16::from(o.error) << 8, !fb.events().is_empty())
+                let events = !fb.events().is_empty();
+                (outs | u16::from(o.error) << 8, events, fb.quiet(before))
             }
             Fb::Estop(fb) => {
+                let before = fb.state();
                 let o = fb.scan_bits(now, run, inputs);
                 let outs = u16::from(o.estop_out) | u16::from(o.estop_del_out) << 1;
-                (outs | u16::from(o.error) << 2, !fb.events().is_empty())
+                let events = !fb.events().is_empty();
+                (outs | u16::from(o.error) << 2, events, fb.quiet(before))
             }
             Fb::Mon(fb) => {
+                let before = fb.state();
                 let o = fb.scan_bits(now, run, inputs);
                 let outs = u16::from(o.mon_out) | u16::from(o.mon_del_out) << 1;
-                (outs | u16::from(o.error) << 2, !fb.events().is_empty())
+                let events = !fb.events().is_empty();
+                (outs | u16::from(o.error) << 2, events, fb.quiet(before))
             }
         };
         let outputs = if run { outputs } else { outputs & !self.safety };
         for (k, &slot) in self.outputs.iter().enumerate() {
             image[slot] = outputs & 1 << k != 0;
         }
-        events
+        (events, quiet)
     }
 
     /// The state machine of a stateful module; AND, OR and DECOUPLE have none.
@@ -395,6 +405,7 @@ impl ModuleRt {
 
 /// A local output's error state (OUT_ERR).
 #[derive(Clone, Copy, Debug, Default)]
+#[cfg_attr(test, derive(PartialEq))]
 struct LocalFault {
     present: bool,
     latched: bool,
@@ -417,6 +428,17 @@ pub struct TwinSafeLogic {
     fault: Option<String>,
     pending_fault: Option<String>,
     events: Vec<LogicEvent>,
+    /// `true` while the last scan left the logic at rest for its inputs: a scan with the same
+    /// inputs (standard inputs, partner inputs, faults) changes nothing but the connections'
+    /// sequence numbers and times ([`TwinSafeLogic::quiet_scan`]). Set by a full scan that
+    /// finds so; cleared by every change of an input or a fault.
+    settled: bool,
+    /// While settled: when the first fault scheduled on a connection falls due (`None`: no
+    /// fault scheduled); a scan from then on is taken in full.
+    quiet_until: Option<SimTime>,
+    /// The image as a full scan found it, to tell whether the scan changed it (kept here so
+    /// that the comparison allocates nothing).
+    image_before: Vec<bool>,
 }
 
 impl TwinSafeLogic {
@@ -442,6 +464,9 @@ impl TwinSafeLogic {
             fault: None,
             pending_fault: None,
             events: Vec::new(),
+            settled: false,
+            quiet_until: None,
+            image_before: vec![false; c.slots],
             c,
         })
     }
@@ -502,18 +527,26 @@ impl TwinSafeLogic {
 
     /// Set a standard input for the next scan.
     pub fn set_standard_input(&mut self, input: StandardInput, value: bool) {
-        self.image[input.0] = value;
+        if self.image[input.0] != value {
+            self.image[input.0] = value;
+            self.settled = false;
+        }
     }
 
     /// Set the partner's safe inputs of connection `c` (bit `n-1` = channel `n`); they reach
     /// the logic with the next exchange.
     pub fn set_partner_inputs(&mut self, c: ConnectionId, bits: u8) {
-        self.connections[c.0].set_partner_inputs(bits);
+        let conn = &mut self.connections[c.0];
+        if conn.partner_inputs() != bits {
+            conn.set_partner_inputs(bits);
+            self.settled = false;
+        }
     }
 
     /// Schedule a fault on connection `c`'s black channel at `at`.
     pub fn inject(&mut self, c: ConnectionId, at: SimTime, fault: ChannelFault) {
         self.connections[c.0].inject(at, fault);
+        self.settled = false;
     }
 
     /// Make local output `index` (1..4) report an error (e.g. a cross-circuit seen on its
@@ -521,25 +554,77 @@ impl TwinSafeLogic {
     pub fn set_local_output_fault(&mut self, index: u8, faulty: bool) {
         if let Some(k) = self.c.local_outputs.iter().position(|o| o.index == index) {
             self.local_faults[k].present = faulty;
+            self.settled = false;
         }
     }
 
     /// Raise an internal logic fault at the next scan: the whole logic stops for good.
     pub fn inject_logic_fault(&mut self, cause: &str) {
         self.pending_fault = Some(cause.to_owned());
+        self.settled = false;
     }
 
     // ---- the scan ----------------------------------------------------------------------------
 
     /// One safety scan at `now`; returns what happened in it.
+    ///
+    /// Almost every scan finds the logic at rest with the inputs of the last one: then it is
+    /// taken the quiet way ([`TwinSafeLogic::quiet_scan`]), else in full
+    /// ([`TwinSafeLogic::full_scan`]). Both leave the same state and report the same.
     pub fn scan(&mut self, now: SimTime) -> &[LogicEvent] {
+        if self.quiet_scan(now) {
+            return &self.events;
+        }
+        self.full_scan(now)
+    }
+
+    /// The scan at `now` if it can change nothing but the connections' sequence numbers and
+    /// times, done directly; `true` if so (it then reported nothing), `false` with nothing
+    /// touched if a full scan is needed.
+    ///
+    /// Why this is the full scan's result: the last scan, at a time not after `now`, left the
+    /// logic settled ([`TwinSafeLogic::full_scan`] says when), and no input or fault changed
+    /// since. The full scan would then see the image it saw last time, every group and module
+    /// would do nothing (none has a timer running, none an edge to see), and every connection
+    /// would exchange one good telegram with the same data ([`Connection::rests`], which a
+    /// quiet exchange keeps true), unless a scheduled fault falls due by `now`: the one thing
+    /// time can bring, checked here. The logic's events are empty already (a settled scan
+    /// reported nothing).
+    pub(crate) fn quiet_scan(&mut self, now: SimTime) -> bool {
+        let quiet = self.settled
+            && self.last_now.is_some_and(|last| now >= last)
+            && self.quiet_until.is_none_or(|at| now < at);
+        if !quiet {
+            return false;
+        }
+        debug_assert!(self.events.is_empty());
+        self.last_now = Some(now);
+        for (conn, &out) in self.connections.iter_mut().zip(&self.twinsafe_out) {
+            debug_assert!(conn.is_quiet(now, out));
+            conn.quiet_exchange(now);
+        }
+        true
+    }
+
+    /// One safety scan at `now` with every step taken, whatever the state; returns what
+    /// happened in it. At its end it notes whether the logic is settled: it reported nothing,
+    /// no group or stateful module changed its state, no module has a delay or discrepancy
+    /// time running ([`Estop::quiet`]), the image is the one the scan started with (so a
+    /// module that reads another later in the order sees the same value next time), every
+    /// connection's next exchange would be a good one with nothing new
+    /// ([`Connection::rests`]), and every group would stay as it is with its members as they
+    /// are now ([`Group::stays`]).
+    pub(crate) fn full_scan(&mut self, now: SimTime) -> &[LogicEvent] {
         self.events.clear();
+        self.settled = false;
         let backwards = self.last_now.is_some_and(|last| now < last);
         if (self.fault.is_some() || self.pending_fault.is_some() || backwards) && self.stopped(now)
         {
             return &self.events;
         }
         self.last_now = Some(now);
+        self.image_before.copy_from_slice(&self.image);
+        let mut quiet = true;
         // The parts one at a time: a write to the image then cannot change the others.
         let TwinSafeLogic {
             c,
@@ -582,6 +667,7 @@ impl TwinSafeLogic {
                 let members = (&mut **modules, &mut **connections, &mut **local_faults);
                 acknowledge_group(events, now, g, run, c, group, members);
             }
+            quiet &= group.state() == before;
             refresh_group(image, events, now, cg, group, before);
         }
         for (cc, conn) in c.connections.iter().zip(&*connections) {
@@ -595,9 +681,11 @@ impl TwinSafeLogic {
         for (m, rt) in modules.iter_mut().enumerate() {
             let run = groups[rt.group].running();
             // Events are rare: walk them in place rather than copying them every scan.
-            if rt.scan(now, run, image) {
+            let (reported, at_rest) = rt.scan(now, run, image);
+            if reported {
                 push_module_events(events, now, &c.modules[m], rt.events());
             }
+            quiet &= at_rest;
         }
 
         // 4. Errors found in this scan trip their group at once.
@@ -606,6 +694,7 @@ impl TwinSafeLogic {
             let group = &mut groups[g];
             let before = group.state();
             group.trip(errors);
+            quiet &= group.state() == before;
             refresh_group(image, events, now, cg, group, before);
         }
 
@@ -637,7 +726,43 @@ impl TwinSafeLogic {
                 0
             };
         }
+        if quiet && events.is_empty() && *image == *self.image_before {
+            self.settled = self.connections_rest() && self.groups_stay();
+        }
         &self.events
+    }
+
+    /// `true` if every connection's next exchange, with the TwinSAFE-Out data this scan
+    /// wrote, would be a quiet one apart from time ([`Connection::rests`]); then notes when
+    /// the first scheduled fault falls due.
+    #[cold]
+    fn connections_rest(&mut self) -> bool {
+        let mut conns = self.connections.iter().zip(&self.twinsafe_out);
+        if !conns.all(|(conn, &out)| conn.rests(out)) {
+            return false;
+        }
+        let faults = self
+            .connections
+            .iter()
+            .filter_map(Connection::next_fault_at);
+        self.quiet_until = faults.min();
+        true
+    }
+
+    /// `true` if every group, seeing the image and its members as they are now, would stay as
+    /// it is in the next scan (for [`TwinSafeLogic::full_scan`]'s settled state).
+    #[cold]
+    fn groups_stay(&self) -> bool {
+        let (c, image) = (&self.c, &self.image);
+        (c.groups.iter().zip(&self.groups))
+            .enumerate()
+            .all(|(g, (cg, group))| {
+                let run = cg.run.is_none_or(|s| image[s]);
+                let ack = cg.err_ack.is_some_and(|s| image[s]);
+                let (errors, cause) =
+                    collect(g, c, &self.modules, &self.connections, &self.local_faults);
+                group.stays(run, ack, errors, cause)
+            })
     }
 
     /// The start of a scan at `now` when the logic has stopped, or has to stop now on a
@@ -761,6 +886,33 @@ impl TwinSafeLogic {
             }
         }?;
         self.image.get(slot).copied()
+    }
+}
+
+#[cfg(test)]
+impl TwinSafeLogic {
+    /// Whether the last scan left the logic settled (see the field).
+    pub(crate) fn settled(&self) -> bool {
+        self.settled
+    }
+
+    /// `true` if the two logics (of the same project) are in the same state: every field that
+    /// a scan or a setter changes.
+    pub(crate) fn same_state(&self, other: &TwinSafeLogic) -> bool {
+        self.image == other.image
+            && self.groups == other.groups
+            && self.connections == other.connections
+            && self.modules == other.modules
+            && self.local_faults == other.local_faults
+            && self.local_values == other.local_values
+            && self.twinsafe_out == other.twinsafe_out
+            && self.standard_values == other.standard_values
+            && self.last_now == other.last_now
+            && self.fault == other.fault
+            && self.pending_fault == other.pending_fault
+            && self.events == other.events
+            && self.settled == other.settled
+            && self.image_before == other.image_before
     }
 }
 

@@ -135,6 +135,12 @@ impl PairMonitor {
     pub(crate) fn reset(&mut self) {
         self.since = None;
     }
+
+    /// `true` while the two inputs differ: the time is running, so a later scan with the same
+    /// inputs may raise the error.
+    pub(crate) fn running(&self) -> bool {
+        self.since.is_some()
+    }
 }
 
 /// The state machine ESTOP and MON share: two outputs, one immediate and one delayed, a
@@ -245,6 +251,14 @@ impl Core {
     /// `true` while in ERROR and its cause was still present in the last scan.
     pub(crate) fn error_cause_active(&self) -> bool {
         self.state == FbState::Error && self.cause_active
+    }
+
+    /// `true` if the last scan left nothing for another scan with the same inputs to do: it
+    /// reported nothing and did not change the state (`before`, the state it started from),
+    /// and no delay is running. The module's own timers (its pair monitors) are the caller's to
+    /// check.
+    pub(crate) fn quiet(&self, before: FbState) -> bool {
+        self.events.is_empty() && self.state == before && self.state != FbState::DelayOut
     }
 
     /// (immediate output, delayed output, Error).

@@ -224,4 +224,14 @@ impl Mon {
     }
 }
 
+impl Mon {
+    /// `true` if the last scan, which started in state `before`, left nothing for another scan
+    /// with the same inputs and group state to do, at any later time: no event, no change of
+    /// state, no delay and no discrepancy time running (the logic's quiet scan relies on it).
+    pub(crate) fn quiet(&self, before: FbState) -> bool {
+        self.core.quiet(before)
+            && !(self.pairs.iter().any(PairMonitor::running) || self.secure_pair.running())
+    }
+}
+
 core_accessors!(Mon);
