@@ -228,6 +228,25 @@ pub struct LiftSafetyInputs {
 }
 
 impl LiftSafetyInputs {
+    /// `==`, as one comparison of every input at once rather than one branch per field (the
+    /// rig's inputs are compared with the last scan's every scan).
+    fn same_as(&self, other: &LiftSafetyInputs) -> bool {
+        let all = |i: &LiftSafetyInputs| {
+            [
+                i.stop_ch1,
+                i.stop_ch2,
+                i.overtravel_bottom_released,
+                i.overtravel_top_released,
+                i.overloaded,
+                i.k1_aux,
+                i.operator_reset,
+                i.err_ack,
+                i.controller_restart,
+            ]
+        };
+        all(self) == all(other)
+    }
+
     /// Everything healthy and at rest: STOP closed, sensors free, not overloaded, K1 released,
     /// no buttons.
     pub const fn healthy() -> Self {
@@ -515,8 +534,8 @@ impl LiftSafety {
     /// reads, and the outputs are the last scan's with no events (K1 did not change either).
     /// Every other scan is taken in full ([`LiftSafety::full_scan`]).
     pub fn scan(&mut self, now: SimTime, inputs: &LiftSafetyInputs) -> LiftSafetyOutputs {
-        if let Some(last) = self.last {
-            if last.inputs == *inputs && self.logic.quiet_scan(now) {
+        if let Some(last) = &self.last {
+            if last.inputs.same_as(inputs) && self.logic.quiet_scan(now) {
                 return LiftSafetyOutputs {
                     k1: last.k1,
                     estop_out: last.estop_out,
