@@ -319,13 +319,20 @@ impl ModuleRt {
     /// One scan at `now`: reads the inputs from `image`, runs the function and writes the
     /// outputs (safety outputs 0 unless `run`). Returns whether the module has events to report
     /// ([`ModuleRt::events`]), and whether it is quiet: another scan with the same inputs and
-    /// `run` would change nothing, whenever it came (the stateless modules always are; the
-    /// others as [`Estop::quiet`] says).
-    fn scan(&mut self, now: SimTime, run: bool, image: &mut [bool]) -> (bool, bool) {
+    /// `run` would change nothing if it came before the time returned last, if any (the
+    /// stateless modules always are; the others as [`Estop::quiet`] says; the time is the end
+    /// of a running delay, [`Estop::delay_ends`]).
+    fn scan(
+        &mut self,
+        now: SimTime,
+        run: bool,
+        image: &mut [bool],
+    ) -> (bool, bool, Option<SimTime>) {
         let inputs = self
             .links
             .iter()
             .fold(0u16, |bits, &(k, slot)| bits | u16::from(image[slot]) << k);
+        let mut until = None;
         let (outputs, events, quiet) = match &mut self.fb {
             Fb::And { linked, make } => (u16::from(and_bits(inputs, *linked, *make)), false, true),
             Fb::Or { linked, make } => (u16::from(or_bits(inputs, *linked, *make)), false, true),
@@ -344,6 +351,7 @@ impl ModuleRt {
                 let o = fb.scan_bits(now, run, inputs);
                 let outs = u16::from(o.estop_out) | u16::from(o.estop_del_out) << 1;
                 let events = !fb.events().is_empty();
+                until = fb.delay_ends();
                 (outs | u16::from(o.error) << 2, events, fb.quiet(before))
             }
             Fb::Mon(fb) => {
@@ -351,6 +359,7 @@ impl ModuleRt {
                 let o = fb.scan_bits(now, run, inputs);
                 let outs = u16::from(o.mon_out) | u16::from(o.mon_del_out) << 1;
                 let events = !fb.events().is_empty();
+                until = fb.delay_ends();
                 (outs | u16::from(o.error) << 2, events, fb.quiet(before))
             }
         };
@@ -358,7 +367,7 @@ impl ModuleRt {
         for (k, &slot) in self.outputs.iter().enumerate() {
             image[slot] = outputs & 1 << k != 0;
         }
-        (events, quiet)
+        (events, quiet, until)
     }
 
     /// The state machine of a stateful module; AND, OR and DECOUPLE have none.
@@ -433,8 +442,9 @@ pub struct TwinSafeLogic {
     /// sequence numbers and times ([`TwinSafeLogic::quiet_scan`]). Set by a full scan that
     /// finds so; cleared by every change of an input or a fault.
     settled: bool,
-    /// While settled: when the first fault scheduled on a connection falls due (`None`: no
-    /// fault scheduled); a scan from then on is taken in full.
+    /// While settled: when the first fault scheduled on a connection falls due or a module's
+    /// delay ends, whichever comes first (`None`: neither); a scan from then on is taken in
+    /// full.
     quiet_until: Option<SimTime>,
     /// The image as a full scan found it, to tell whether the scan changed it (kept here so
     /// that the comparison allocates nothing).
@@ -587,9 +597,9 @@ impl TwinSafeLogic {
     /// since. The full scan would then see the image it saw last time, every group and module
     /// would do nothing (none has a timer running, none an edge to see), and every connection
     /// would exchange one good telegram with the same data ([`Connection::rests`], which a
-    /// quiet exchange keeps true), unless a scheduled fault falls due by `now`: the one thing
-    /// time can bring, checked here. The logic's events are empty already (a settled scan
-    /// reported nothing).
+    /// quiet exchange keeps true), unless a scheduled fault falls due or a module's delay
+    /// ends by `now`: the things time can bring, checked here. The logic's events are empty
+    /// already (a settled scan reported nothing).
     pub(crate) fn quiet_scan(&mut self, now: SimTime) -> bool {
         let quiet = self.settled
             && self.last_now.is_some_and(|last| now >= last)
@@ -608,8 +618,8 @@ impl TwinSafeLogic {
 
     /// One safety scan at `now` with every step taken, whatever the state; returns what
     /// happened in it. At its end it notes whether the logic is settled: it reported nothing,
-    /// no group or stateful module changed its state, no module has a delay or discrepancy
-    /// time running ([`Estop::quiet`]), the image is the one the scan started with (so a
+    /// no group or stateful module changed its state, no module has a discrepancy time
+    /// running ([`Estop::quiet`]; a running delay only bounds the settled time), the image is the one the scan started with (so a
     /// module that reads another later in the order sees the same value next time), every
     /// connection's next exchange would be a good one with nothing new
     /// ([`Connection::rests`]), and every group would stay as it is with its members as they
@@ -625,6 +635,7 @@ impl TwinSafeLogic {
         self.last_now = Some(now);
         self.image_before.copy_from_slice(&self.image);
         let mut quiet = true;
+        let mut delays_end = None;
         // The parts one at a time: a write to the image then cannot change the others.
         let TwinSafeLogic {
             c,
@@ -681,11 +692,12 @@ impl TwinSafeLogic {
         for (m, rt) in modules.iter_mut().enumerate() {
             let run = groups[rt.group].running();
             // Events are rare: walk them in place rather than copying them every scan.
-            let (reported, at_rest) = rt.scan(now, run, image);
+            let (reported, at_rest, until) = rt.scan(now, run, image);
             if reported {
                 push_module_events(events, now, &c.modules[m], rt.events());
             }
             quiet &= at_rest;
+            delays_end = earliest(delays_end, until);
         }
 
         // 4. Errors found in this scan trip their group at once.
@@ -727,25 +739,22 @@ impl TwinSafeLogic {
             };
         }
         if quiet && events.is_empty() && *image == *self.image_before {
-            self.settled = self.connections_rest() && self.groups_stay();
+            self.settled = self.connections_rest(delays_end) && self.groups_stay();
         }
         &self.events
     }
 
     /// `true` if every connection's next exchange, with the TwinSAFE-Out data this scan
     /// wrote, would be a quiet one apart from time ([`Connection::rests`]); then notes when
-    /// the first scheduled fault falls due.
+    /// the first scheduled fault falls due or, if earlier, `delays_end`.
     #[cold]
-    fn connections_rest(&mut self) -> bool {
+    fn connections_rest(&mut self, delays_end: Option<SimTime>) -> bool {
         let mut conns = self.connections.iter().zip(&self.twinsafe_out);
         if !conns.all(|(conn, &out)| conn.rests(out)) {
             return false;
         }
-        let faults = self
-            .connections
-            .iter()
-            .filter_map(Connection::next_fault_at);
-        self.quiet_until = faults.min();
+        let faults = self.connections.iter().map(Connection::next_fault_at);
+        self.quiet_until = faults.fold(delays_end, earliest);
         true
     }
 
@@ -913,6 +922,15 @@ impl TwinSafeLogic {
             && self.events == other.events
             && self.settled == other.settled
             && self.image_before == other.image_before
+    }
+}
+
+/// The earlier of two times, where `None` is no time at all (never).
+fn earliest(a: Option<SimTime>, b: Option<SimTime>) -> Option<SimTime> {
+    match (a, b) {
+        (Some(a), Some(b)) => Some(a.min(b)),
+        (a, None) => a,
+        (None, b) => b,
     }
 }
 

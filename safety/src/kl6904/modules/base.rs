@@ -253,12 +253,23 @@ impl Core {
         self.state == FbState::Error && self.cause_active
     }
 
-    /// `true` if the last scan left nothing for another scan with the same inputs to do: it
-    /// reported nothing and did not change the state (`before`, the state it started from),
-    /// and no delay is running. The module's own timers (its pair monitors) are the caller's to
-    /// check.
+    /// `true` if the last scan left nothing for another scan with the same inputs to do before
+    /// [`Core::delay_ends`]: it reported nothing and did not change the state (`before`, the
+    /// state it started from), and a delay that runs has its start. The module's own timers
+    /// (its pair monitors) are the caller's to check.
     pub(crate) fn quiet(&self, before: FbState) -> bool {
-        self.events.is_empty() && self.state == before && self.state != FbState::DelayOut
+        let delay_known = self.state != FbState::DelayOut || self.delay_since.is_some();
+        self.events.is_empty() && self.state == before && delay_known
+    }
+
+    /// In DELAYOUT, when the delayed output goes off with the Delay Time `delay`: the first
+    /// scan at or after it ends the delay ([`Core::supervise`]); `None` in any other state
+    /// (or past the end of time).
+    pub(crate) fn delay_ends(&self, delay: SimDuration) -> Option<SimTime> {
+        match (self.state, self.delay_since) {
+            (FbState::DelayOut, Some(since)) => since.checked_add(delay),
+            _ => None,
+        }
     }
 
     /// (immediate output, delayed output, Error).
