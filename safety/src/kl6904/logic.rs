@@ -1098,3 +1098,264 @@ fn push_local_output_fault(out: &mut Vec<LogicEvent>, now: SimTime, o: &Compiled
     };
     out.push(LogicEvent { at: now, kind });
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::kl6904::connection::ChannelFault;
+    use asi_phy::SimDuration;
+
+    /// Every kind of module, two groups (one with RUN), connections to an input terminal, a
+    /// KL6904 partner and an output terminal with TwinSAFE-Out channels, modules that read
+    /// modules later in the order, delays, discrepancy times, EDM, muting and the function
+    /// test: for the quiet scan against the full scan on more than the lift's project.
+    const PLANT: &str = r#"
+[logic]
+name = "plant"
+address = 1
+
+[[group]]
+name = "main"
+err_ack = "std:ack"
+run = "std:run"
+
+[[group]]
+name = "aux"
+err_ack = "std:ack2"
+
+[[connection]]
+name = "inA"
+group = "main"
+partner = "KL1904"
+partner_address = 2
+watchdog = "30ms"
+
+[[connection]]
+name = "peer"
+group = "aux"
+partner = "KL6904"
+partner_address = 3
+watchdog = "40ms"
+outputs = [
+    { channel = 1, source = "fb:either.OrOut" },
+    { channel = 2, source = "fb:mode.OpOut1" },
+    { channel = 3, source = "fb:dec.DecOut1" },
+]
+
+[[connection]]
+name = "outB"
+group = "main"
+partner = "KL2904"
+partner_address = 4
+watchdog = "30ms"
+outputs = [{ channel = 1, source = "fb:guard.MonDelOut" }]
+
+[[module]]
+kind = "AND"
+name = "k"
+group = "main"
+inputs.AndIn1 = { signal = "std:blocked", contact = "make" }
+inputs.AndIn2 = "fb:stop.EStopDelOut"
+inputs.AndIn3 = "fb:guard.MonOut"
+
+[[module]]
+kind = "ESTOP"
+name = "stop"
+group = "main"
+delay = "40ms"
+pair_discrepancy = ["20ms"]
+inputs.EStopIn1 = "ts:inA.1"
+inputs.EStopIn2 = "ts:inA.2"
+inputs.Restart = "std:restart"
+inputs.EDM1 = "ts:inA.4"
+
+[[module]]
+kind = "MON"
+name = "guard"
+group = "main"
+delay = "30ms"
+pair_discrepancy = ["25ms"]
+secure_discrepancy = "15ms"
+manual_restart = false
+function_test = true
+inputs.MonIn1 = "ts:inA.3"
+inputs.MonIn2 = "fb:dec.DecOut2"
+inputs.Secure1 = "fb:dec.DecOut3"
+inputs.Secure2 = "fb:dec.DecOut4"
+inputs.EDM1 = "std:edm"
+
+[[module]]
+kind = "OPMODE"
+name = "mode"
+group = "aux"
+discrepancy = "10ms"
+inputs.OpIn1 = "ts:peer.4"
+inputs.OpIn2 = "ts:peer.5"
+inputs.OpIn3 = "ts:peer.6"
+inputs.Restart = "std:restart2"
+
+[[module]]
+kind = "OR"
+name = "either"
+group = "aux"
+inputs.OrIn1 = "fb:mode.OpOut1"
+inputs.OrIn2 = { signal = "fb:k.AndOut", contact = "make" }
+
+[[module]]
+kind = "DECOUPLE"
+name = "dec"
+group = "aux"
+inputs.DecIn1 = "fb:k.AndOut"
+inputs.DecIn2 = "ts:peer.1"
+inputs.DecIn3 = "ts:peer.2"
+inputs.DecIn4 = "ts:peer.3"
+
+[[local_output]]
+index = 1
+name = "K1"
+group = "main"
+source = "fb:k.AndOut"
+
+[[local_output]]
+index = 2
+name = "lamp"
+group = "aux"
+source = "fb:either.OrOut"
+
+[[standard_output]]
+name = "stop_ok"
+source = "fb:stop.EStopOut"
+
+[[standard_output]]
+name = "com_err"
+source = "group:aux.COM_ERR"
+"#;
+
+    /// A small seeded generator (xorshift64*).
+    struct Rng(u64);
+
+    impl Rng {
+        fn below(&mut self, n: u64) -> u64 {
+            self.0 ^= self.0 >> 12;
+            self.0 ^= self.0 << 25;
+            self.0 ^= self.0 >> 27;
+            self.0.wrapping_mul(0x2545_f491_4f6c_dd1d) % n
+        }
+    }
+
+    /// Two copies of the plant side by side over long random runs, one scanned with
+    /// [`TwinSafeLogic::scan`] (quiet when it can), one with [`TwinSafeLogic::full_scan`]
+    /// (the reference): the same events and the same whole state after every scan. The
+    /// inputs change now and then (a standard input toggled, a partner's channel flipped,
+    /// held for stretches), with channel faults of every kind, local output faults and
+    /// irregular scan times.
+    #[test]
+    fn a_quiet_scan_is_the_full_scan_on_every_kind_of_module() {
+        let project = Project::from_toml("plant.toml", PLANT).expect("the plant project");
+        let names = [
+            "ack", "ack2", "run", "restart", "restart2", "blocked", "edm",
+        ];
+        let mut settled = 0u64;
+        for seed in 1..=30u64 {
+            let mut rng = Rng(seed.wrapping_mul(0x9e37_79b9_7f4a_7c15) | 1);
+            let mut fast = TwinSafeLogic::new(&project).expect("valid");
+            let inputs: Vec<StandardInput> = names
+                .iter()
+                .map(|n| fast.standard_input(n).expect(n))
+                .collect();
+            let conns: Vec<ConnectionId> = ["inA", "peer", "outB"]
+                .iter()
+                .map(|n| fast.connection(n).expect(n))
+                .collect();
+            let mut values = [false, false, true, false, false, false, true];
+            let mut partner = [0b1111u8, 0b0000_1001, 0];
+            // When each held standard input (a button) is let go.
+            let mut release: [Option<SimTime>; 7] = [None; 7];
+            let mut full = fast.clone();
+            let mut now = SimTime::from_millis(rng.below(5));
+            for step in 0..3000 {
+                for (k, r) in release.iter_mut().enumerate() {
+                    if r.is_some_and(|at| at <= now) {
+                        values[k] = false;
+                        *r = None;
+                    }
+                }
+                match rng.below(400) {
+                    // ERR_ACK and restart pulses, the most common act.
+                    0..=11 => {
+                        let k = [0, 1, 3, 4][rng.below(4) as usize];
+                        values[k] = true;
+                        release[k] = Some(now + SimDuration::from_millis(1 + rng.below(10)));
+                    }
+                    12 => values[2] = !values[2] || rng.below(4) == 0,
+                    13 | 14 => values[5] = !values[5],
+                    15 => values[6] = !values[6],
+                    // The E-stop's two channels together, now and then one alone.
+                    16..=18 => {
+                        let both = 0b11 * u8::from(partner[0] & 0b11 == 0);
+                        partner[0] = partner[0] & !0b11 | both;
+                    }
+                    19 => partner[0] ^= 1 << rng.below(2),
+                    // MON's pair, on two connections: together, now and then one alone.
+                    20 | 21 => {
+                        partner[0] ^= 0b100;
+                        partner[1] ^= 1;
+                    }
+                    22 => partner[0] ^= 0b1000,
+                    23 if rng.below(4) == 0 => partner[1] ^= 1,
+                    // The KL6904 partner: the Secure pair (together or not), the mode.
+                    24 | 25 => partner[1] ^= 0b110,
+                    26 if rng.below(4) == 0 => partner[1] ^= 0b010,
+                    27..=29 => {
+                        let mode = [0b0000_1000, 0b0001_0000, 0b0010_0000, 0, 0b0011_0000];
+                        partner[1] = partner[1] & !0b11_1000 | mode[rng.below(5) as usize];
+                    }
+                    30 if rng.below(8) == 0 => {
+                        let c = conns[rng.below(3) as usize];
+                        let at = now + SimDuration::from_millis(rng.below(20));
+                        let fault = match rng.below(6) {
+                            0 | 1 => ChannelFault::Drop {
+                                duration: SimDuration::from_millis(rng.below(60)),
+                            },
+                            2 => ChannelFault::CorruptCrc,
+                            3 => ChannelFault::Replay {
+                                age: rng.below(5) as u8,
+                            },
+                            4 => ChannelFault::WrongAddress { sender: 9 },
+                            _ => ChannelFault::NullTelegram,
+                        };
+                        fast.inject(c, at, fault);
+                        full.inject(c, at, fault);
+                    }
+                    31 if rng.below(20) == 0 => {
+                        let (index, faulty) = (1 + rng.below(2) as u8, rng.below(3) == 0);
+                        fast.set_local_output_fault(index, faulty);
+                        full.set_local_output_fault(index, faulty);
+                    }
+                    _ => {}
+                }
+                for (k, &input) in inputs.iter().enumerate() {
+                    fast.set_standard_input(input, values[k]);
+                    full.set_standard_input(input, values[k]);
+                }
+                for (k, &c) in conns.iter().enumerate() {
+                    fast.set_partner_inputs(c, partner[k]);
+                    full.set_partner_inputs(c, partner[k]);
+                }
+                settled += u64::from(fast.settled);
+                let a = fast.scan(now).to_vec();
+                let b = full.full_scan(now).to_vec();
+                assert_eq!(a, b, "seed {seed} step {step} at {now}");
+                assert!(fast.same_state(&full), "seed {seed} step {step} at {now}");
+                now += match rng.below(100) {
+                    0 => SimDuration::ZERO,
+                    1 => SimDuration::from_millis(2 + rng.below(50)),
+                    2 => SimDuration::from_micros(1 + rng.below(3000)),
+                    _ => SimDuration::from_millis(1),
+                };
+            }
+        }
+        // The quiet way must be taken often, or the test shows nothing.
+        assert!(settled > 20_000, "{settled} settled scans");
+    }
+}
