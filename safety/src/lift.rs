@@ -228,6 +228,25 @@ pub struct LiftSafetyInputs {
 }
 
 impl LiftSafetyInputs {
+    /// `==`, as one comparison of every input at once rather than one branch per field (the
+    /// rig's inputs are compared with the last scan's every scan).
+    fn same_as(&self, other: &LiftSafetyInputs) -> bool {
+        let all = |i: &LiftSafetyInputs| {
+            [
+                i.stop_ch1,
+                i.stop_ch2,
+                i.overtravel_bottom_released,
+                i.overtravel_top_released,
+                i.overloaded,
+                i.k1_aux,
+                i.operator_reset,
+                i.err_ack,
+                i.controller_restart,
+            ]
+        };
+        all(self) == all(other)
+    }
+
     /// Everything healthy and at rest: STOP closed, sensors free, not overloaded, K1 released,
     /// no buttons.
     pub const fn healthy() -> Self {
@@ -420,6 +439,18 @@ pub struct LiftSafety {
     logic: TwinSafeLogic,
     ids: Ids,
     k1: bool,
+    /// The inputs and outputs of the last scan (its events aside), for a scan that changes
+    /// nothing ([`LiftSafety::scan`]).
+    last: Option<LastScan>,
+}
+
+/// What a scan was given and gave, its events aside.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct LastScan {
+    inputs: LiftSafetyInputs,
+    k1: bool,
+    estop_out: bool,
+    diag: LiftSafetyDiag,
 }
 
 impl LiftSafety {
@@ -452,6 +483,7 @@ impl LiftSafety {
             logic,
             ids,
             k1: false,
+            last: None,
         })
     }
 
@@ -496,7 +528,28 @@ impl LiftSafety {
     }
 
     /// One safety scan at `now` with `inputs`.
+    ///
+    /// Almost every scan has the inputs of the last one and finds the logic at rest: the logic
+    /// then takes it the quiet way ([`TwinSafeLogic::quiet_scan`]), which changes nothing this
+    /// reads, and the outputs are the last scan's with no events (K1 did not change either).
+    /// Every other scan is taken in full ([`LiftSafety::full_scan`]).
     pub fn scan(&mut self, now: SimTime, inputs: &LiftSafetyInputs) -> LiftSafetyOutputs {
+        if let Some(last) = &self.last {
+            if last.inputs.same_as(inputs) && self.logic.quiet_scan(now) {
+                return LiftSafetyOutputs {
+                    k1: last.k1,
+                    estop_out: last.estop_out,
+                    diag: last.diag,
+                    events: Vec::new(),
+                };
+            }
+        }
+        self.full_scan(now, inputs)
+    }
+
+    /// One safety scan at `now` with `inputs`, every step taken: the inputs set, the logic's
+    /// full scan ([`TwinSafeLogic::full_scan`]), the outputs read back.
+    fn full_scan(&mut self, now: SimTime, inputs: &LiftSafetyInputs) -> LiftSafetyOutputs {
         let i = inputs;
         let ids = self.ids;
         self.logic.set_standard_input(ids.overloaded, i.overloaded);
@@ -515,7 +568,7 @@ impl LiftSafety {
                 | u8::from(i.overtravel_top_released) << 1
                 | u8::from(i.k1_aux) << 2,
         );
-        let logged = self.logic.scan(now);
+        let logged = self.logic.full_scan(now);
         // Almost every scan logs nothing.
         let mut events: Vec<LiftSafetyEvent> = if logged.is_empty() {
             Vec::new()
@@ -549,6 +602,12 @@ impl LiftSafety {
             });
             self.k1 = k1;
         }
+        self.last = Some(LastScan {
+            inputs: *inputs,
+            k1,
+            estop_out,
+            diag,
+        });
         LiftSafetyOutputs {
             k1,
             estop_out,
@@ -664,5 +723,235 @@ fn describe(e: &LogicEvent, config: &LiftSafetyConfig) -> LiftSafetyEvent {
         at: e.at,
         kind,
         cause,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A small seeded generator (xorshift64*), so every run of the test is the same.
+    struct Rng(u64);
+
+    impl Rng {
+        fn next(&mut self) -> u64 {
+            self.0 ^= self.0 >> 12;
+            self.0 ^= self.0 << 25;
+            self.0 ^= self.0 >> 27;
+            self.0.wrapping_mul(0x2545_f491_4f6c_dd1d)
+        }
+
+        /// `true` once in `n` on average.
+        fn one_in(&mut self, n: u64) -> bool {
+            self.next() % n == 0
+        }
+
+        fn below(&mut self, n: u64) -> u64 {
+            self.next() % n
+        }
+    }
+
+    /// An input of [`LiftSafetyInputs`], for a change planned ahead.
+    #[derive(Clone, Copy)]
+    enum Field {
+        Stop1,
+        Stop2,
+        OperatorReset,
+        ErrAck,
+        Restart,
+    }
+
+    fn set(i: &mut LiftSafetyInputs, field: Field, value: bool) {
+        match field {
+            Field::Stop1 => i.stop_ch1 = value,
+            Field::Stop2 => i.stop_ch2 = value,
+            Field::OperatorReset => i.operator_reset = value,
+            Field::ErrAck => i.err_ack = value,
+            Field::Restart => i.controller_restart = value,
+        }
+    }
+
+    /// The rig around the safety logic, at random: the inputs held for stretches and changed
+    /// now and then as a lift would change them (buttons pulsed for a few scans, STOP pressed
+    /// and released on both channels with a skew that is now and then longer than the
+    /// discrepancy time, sensors tripped, overload, K1's auxiliary contact following K1 a few
+    /// scans late or sticking), link faults of every kind at random times, a faulty K1
+    /// output.
+    struct Driver {
+        rng: Rng,
+        planned: Vec<(SimTime, Field, bool)>,
+    }
+
+    impl Driver {
+        fn plan(&mut self, now: SimTime, in_ms: u64, field: Field, value: bool) {
+            let at = now + SimDuration::from_millis(in_ms);
+            self.planned.push((at, field, value));
+        }
+
+        /// Changes the inputs for the scan at `now` (`k1`: K1 after the last scan); returns
+        /// the faults to inject before it.
+        fn step(&mut self, i: &mut LiftSafetyInputs, k1: bool, now: SimTime) -> Vec<Fault> {
+            let mut k = 0;
+            while k < self.planned.len() {
+                let (at, field, value) = self.planned[k];
+                if at <= now {
+                    set(i, field, value);
+                    self.planned.swap_remove(k);
+                } else {
+                    k += 1;
+                }
+            }
+            let rng = &mut self.rng;
+            let pulse = match rng.below(if k1 { 2000 } else { 60 }) {
+                0 => Some(Field::Restart),
+                1 => Some(Field::OperatorReset),
+                2 => Some(Field::ErrAck),
+                _ => None,
+            };
+            if let Some(field) = pulse {
+                let len = 1 + rng.below(30);
+                set(i, field, true);
+                self.plan(now, len, field, false);
+            }
+            let rng = &mut self.rng;
+            let stop_closed = i.stop_ch1 && i.stop_ch2;
+            if rng.one_in(if stop_closed { 1500 } else { 300 }) {
+                let skew = if rng.one_in(4) { rng.below(80) } else { 0 };
+                let (first, second) = if rng.one_in(2) {
+                    (Field::Stop1, Field::Stop2)
+                } else {
+                    (Field::Stop2, Field::Stop1)
+                };
+                set(i, first, !stop_closed);
+                self.plan(now, skew, second, !stop_closed);
+            }
+            let rng = &mut self.rng;
+            if rng.one_in(if i.overtravel_bottom_released {
+                4000
+            } else {
+                200
+            }) {
+                i.overtravel_bottom_released = !i.overtravel_bottom_released;
+            }
+            if rng.one_in(if i.overtravel_top_released { 6000 } else { 200 }) {
+                i.overtravel_top_released = !i.overtravel_top_released;
+            }
+            if rng.one_in(if i.overloaded { 300 } else { 4000 }) {
+                i.overloaded = !i.overloaded;
+            }
+            // The contact mostly follows K1, a few scans late; now and then it sticks.
+            if i.k1_aux == k1 && rng.one_in(3) && !rng.one_in(300) {
+                i.k1_aux = !k1;
+            }
+            let mut faults = Vec::new();
+            if rng.one_in(1500) {
+                let link = if rng.one_in(2) {
+                    SafeLink::CabinStop
+                } else {
+                    SafeLink::Cabinet
+                };
+                let at = now + SimDuration::from_millis(rng.below(30));
+                let fault = match rng.below(8) {
+                    0..=3 => ChannelFault::Drop {
+                        duration: SimDuration::from_millis(rng.below(250)),
+                    },
+                    4 => ChannelFault::CorruptCrc,
+                    5 => ChannelFault::Replay {
+                        age: rng.below(20) as u8,
+                    },
+                    6 => ChannelFault::WrongAddress { sender: 7 },
+                    _ => ChannelFault::NullTelegram,
+                };
+                faults.push(Fault::Link(link, at, fault));
+            }
+            if rng.one_in(4000) {
+                faults.push(Fault::K1Output(rng.one_in(3)));
+            }
+            faults
+        }
+    }
+
+    enum Fault {
+        Link(SafeLink, SimTime, ChannelFault),
+        K1Output(bool),
+    }
+
+    /// `true` if the two are in the same state: the logic field by field and the wrapper's own.
+    fn same(a: &LiftSafety, b: &LiftSafety) -> bool {
+        a.k1 == b.k1 && a.last == b.last && a.logic.same_state(&b.logic)
+    }
+
+    /// The scan with its quiet way against the full scan (the reference, every step taken
+    /// every time): two `LiftSafety` side by side over long random runs, the same outputs
+    /// and the same whole state after every scan. Runs with the default STOP delay and with a
+    /// short one (so the delay elapses often), with a logic fault injected or a scan time
+    /// going backwards near the end of some, and one run long enough for the connections'
+    /// sequence numbers to wrap.
+    #[test]
+    fn a_quiet_scan_is_the_full_scan() {
+        let mut quiet = 0u64;
+        let mut scans = 0u64;
+        for seed in 1..=100u64 {
+            let mut driver = Driver {
+                rng: Rng(seed.wrapping_mul(0x9e37_79b9_7f4a_7c15) | 1),
+                planned: Vec::new(),
+            };
+            let rng = &mut driver.rng;
+            let mut config = LiftSafetyConfig::default();
+            if seed % 2 == 0 {
+                config.estop_delay = SimDuration::from_millis(rng.below(300));
+            }
+            let mut fast = LiftSafety::new(config.clone()).expect("the lift project");
+            let mut full = LiftSafety::new(config).expect("the lift project");
+            let mut inputs = LiftSafetyInputs::healthy();
+            let mut now = SimTime::from_millis(rng.below(5));
+            let mut k1 = false;
+            let mut last_now = now;
+            // One long run, past the sequence numbers' wrap at 65535.
+            let steps = if seed == 1 { 70_000 } else { 3000 };
+            for step in 0..steps {
+                for fault in driver.step(&mut inputs, k1, now) {
+                    match fault {
+                        Fault::Link(link, at, f) => {
+                            fast.inject_link_fault(link, at, f);
+                            full.inject_link_fault(link, at, f);
+                        }
+                        Fault::K1Output(faulty) => {
+                            fast.set_k1_output_fault(faulty);
+                            full.set_k1_output_fault(faulty);
+                        }
+                    }
+                }
+                if seed % 5 == 0 && step == 2900 {
+                    fast.inject_logic_fault("test");
+                    full.inject_logic_fault("test");
+                }
+                if seed % 7 == 0 && step == 2500 {
+                    // A scan time before the last one stops the logic.
+                    now = last_now
+                        .checked_sub(SimDuration::from_millis(1))
+                        .unwrap_or(now);
+                }
+                let may_rest =
+                    fast.logic.settled() && fast.last.is_some_and(|l| l.inputs == inputs);
+                let a = fast.scan(now, &inputs);
+                let b = full.full_scan(now, &inputs);
+                assert_eq!(a, b, "seed {seed} step {step} at {now}");
+                assert!(same(&fast, &full), "seed {seed} step {step} at {now}");
+                quiet += u64::from(may_rest);
+                scans += 1;
+                k1 = a.k1;
+                last_now = now;
+                let rng = &mut driver.rng;
+                now += match rng.below(100) {
+                    0 => SimDuration::ZERO,
+                    1 => SimDuration::from_millis(2 + rng.below(150)),
+                    2 => SimDuration::from_micros(1 + rng.below(3000)),
+                    _ => SAFETY_SCAN_PERIOD,
+                };
+            }
+        }
+        // The quiet way must be taken often, or the test shows nothing.
+        assert!(quiet * 2 > scans, "{quiet} of {scans} scans quiet");
     }
 }

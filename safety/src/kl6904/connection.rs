@@ -588,6 +588,11 @@ impl Connection {
         self.partner.inputs = bits;
     }
 
+    /// The partner's safe inputs as last set ([`Connection::set_partner_inputs`]).
+    pub fn partner_inputs(&self) -> u8 {
+        self.partner.inputs
+    }
+
     /// The partner's safe outputs as it drives them (a KL2904's terminals).
     pub fn partner_outputs(&self) -> u8 {
         self.partner.outputs
@@ -639,6 +644,69 @@ impl Connection {
         }
         self.cause_active = !valid || expired;
         &self.events
+    }
+
+    /// `true` if an exchange at `now` sending `outputs` would go as the last one did: the
+    /// partner takes the request, its reply arrives intact and is accepted with nothing new
+    /// (no event, no error, the same inputs), so only the sequence numbers, the black
+    /// channel's reply history and the times of the last valid telegram move on
+    /// ([`Connection::quiet_exchange`]). That is [`Connection::rests`] and no fault falling
+    /// due by `now`.
+    pub(crate) fn is_quiet(&self, now: SimTime, outputs: u8) -> bool {
+        self.rests(outputs) && self.next_fault_at().is_none_or(|at| at > now)
+    }
+
+    /// [`Connection::is_quiet`] apart from time: it checks every branch
+    /// [`Connection::exchange`] could take otherwise but a scheduled fault falling due: a
+    /// reply fault pending, the link down, an acknowledgement to send, a request the partner
+    /// would refuse, the partner's outputs or inputs changing, a partner fault not yet
+    /// latched, the first valid reply, a last exchange that failed. A quiet exchange keeps it
+    /// true, so it holds until an input or fault changes.
+    pub(crate) fn rests(&self, outputs: u8) -> bool {
+        let p = &self.partner;
+        let ch = &self.channel;
+        let sent = if self.fail_safe() { 0 } else { outputs };
+        let seq_ok = self.seq != 0
+            && (p.last_seq == 0 || self.seq == p.last_seq || self.seq == next_seq(p.last_seq));
+        let faults_seen = p.faults & (status::COMM_FAULT | status::WD_FAULT) == 0
+            || self.latched.contains(ConnDiag::SLAVE_ERROR);
+        self.events.is_empty()
+            && self.first_scan.is_some()
+            && self.last_valid.is_some()
+            && !self.ack_pending
+            && !self.cause_active
+            && ch.down_until.is_none()
+            && ch.next_reply_fault.is_empty()
+            && seq_ok
+            && p.outputs == sent
+            && self.received == p.inputs
+            && faults_seen
+    }
+
+    /// When the first scheduled fault falls due (it acts at the first exchange at or after
+    /// it), if any.
+    pub(crate) fn next_fault_at(&self) -> Option<SimTime> {
+        self.channel.scheduled.first().map(|&(at, _)| at)
+    }
+
+    /// The exchange at `now` when [`Connection::is_quiet`] holds: what
+    /// [`Connection::exchange`] changes in that case, and nothing else.
+    pub(crate) fn quiet_exchange(&mut self, now: SimTime) {
+        let seq = self.seq;
+        let p = &mut self.partner;
+        p.last_seq = seq;
+        p.last_valid = Some(now);
+        let reply = Payload {
+            seq,
+            data: p.inputs,
+            status: p.faults,
+        };
+        let ch = &mut self.channel;
+        ch.history[ch.next % BlackChannel::HISTORY] = reply;
+        ch.next = (ch.next + 1) % BlackChannel::HISTORY;
+        ch.carried = (ch.carried + 1).min(BlackChannel::HISTORY);
+        self.seq = next_seq(seq);
+        self.last_valid = Some(now);
     }
 
     /// No valid telegram for `silent`, longer than the watchdog time.

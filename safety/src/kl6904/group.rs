@@ -155,6 +155,24 @@ impl Group {
         };
     }
 
+    /// `true` if a scan with these inputs (as for [`Group::update`]) and the same errors found
+    /// again after the modules ([`Group::trip`]) leaves the group as it is and does not
+    /// acknowledge: tried on a copy, so the answer is the scan's own.
+    pub(crate) fn stays(
+        &self,
+        run: bool,
+        err_ack: bool,
+        errors: GroupErrors,
+        cause_active: bool,
+    ) -> bool {
+        let mut g = self.clone();
+        if g.update(run, err_ack, errors, cause_active) {
+            return false;
+        }
+        g.trip(errors);
+        g == *self
+    }
+
     /// A member reported a new error during the scan: trip at once.
     pub fn trip(&mut self, errors: GroupErrors) {
         self.errors = errors;

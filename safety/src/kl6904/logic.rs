@@ -242,6 +242,7 @@ impl fmt::Display for LogicEvent {
 
 /// A module as the scan runs it: its state, and what the scan needs of its compiled form.
 #[derive(Clone, Debug)]
+#[cfg_attr(test, derive(PartialEq))]
 struct ModuleRt {
     kind: ModuleKind,
     /// Its group.
@@ -260,6 +261,7 @@ struct ModuleRt {
 
 /// A module's function and state.
 #[derive(Clone, Debug)]
+#[cfg_attr(test, derive(PartialEq))]
 enum Fb {
     /// AND: the input positions linked, and those of them with a make contact.
     And {
@@ -315,40 +317,57 @@ impl ModuleRt {
     }
 
     /// One scan at `now`: reads the inputs from `image`, runs the function and writes the
-    /// outputs (safety outputs 0 unless `run`). `true` if the module has events to report
-    /// ([`ModuleRt::events`]).
-    fn scan(&mut self, now: SimTime, run: bool, image: &mut [bool]) -> bool {
+    /// outputs (safety outputs 0 unless `run`). Returns whether the module has events to report
+    /// ([`ModuleRt::events`]), and whether it is quiet: another scan with the same inputs and
+    /// `run` would change nothing if it came before the time returned last, if any (the
+    /// stateless modules always are; the others as [`Estop::quiet`] says; the time is the end
+    /// of a running delay, [`Estop::delay_ends`]).
+    fn scan(
+        &mut self,
+        now: SimTime,
+        run: bool,
+        image: &mut [bool],
+    ) -> (bool, bool, Option<SimTime>) {
         let inputs = self
             .links
             .iter()
             .fold(0u16, |bits, &(k, slot)| bits | u16::from(image[slot]) << k);
-        let (outputs, events) = match &mut self.fb {
-            Fb::And { linked, make } => (u16::from(and_bits(inputs, *linked, *make)), false),
-            Fb::Or { linked, make } => (u16::from(or_bits(inputs, *linked, *make)), false),
+        let mut until = None;
+        let (outputs, events, quiet) = match &mut self.fb {
+            Fb::And { linked, make } => (u16::from(and_bits(inputs, *linked, *make)), false, true),
+            Fb::Or { linked, make } => (u16::from(or_bits(inputs, *linked, *make)), false, true),
             // DECOUPLE: DecOut n = DecIn n (`decouple`).
-            Fb::Decouple => (inputs, false),
+            Fb::Decouple => (inputs, false, true),
             Fb::OpMode(fb) => {
+                let before = fb.state();
                 let o = fb.scan_bits(now, run, inputs);
                 let outs = o.op_out.iter().enumerate();
                 let outs = outs.fold(0, |m, (k, &v)| m | u16::from(v) << k);
-                (outs | u16::from(o.error) << 8, !fb.events().is_empty())
+                let events = !fb.events().is_empty();
+                (outs | u16::from(o.error) << 8, events, fb.quiet(before))
             }
             Fb::Estop(fb) => {
+                let before = fb.state();
                 let o = fb.scan_bits(now, run, inputs);
                 let outs = u16::from(o.estop_out) | u16::from(o.estop_del_out) << 1;
-                (outs | u16::from(o.error) << 2, !fb.events().is_empty())
+                let events = !fb.events().is_empty();
+                until = fb.delay_ends();
+                (outs | u16::from(o.error) << 2, events, fb.quiet(before))
             }
             Fb::Mon(fb) => {
+                let before = fb.state();
                 let o = fb.scan_bits(now, run, inputs);
                 let outs = u16::from(o.mon_out) | u16::from(o.mon_del_out) << 1;
-                (outs | u16::from(o.error) << 2, !fb.events().is_empty())
+                let events = !fb.events().is_empty();
+                until = fb.delay_ends();
+                (outs | u16::from(o.error) << 2, events, fb.quiet(before))
             }
         };
         let outputs = if run { outputs } else { outputs & !self.safety };
         for (k, &slot) in self.outputs.iter().enumerate() {
             image[slot] = outputs & 1 << k != 0;
         }
-        events
+        (events, quiet, until)
     }
 
     /// The state machine of a stateful module; AND, OR and DECOUPLE have none.
@@ -395,6 +414,7 @@ impl ModuleRt {
 
 /// A local output's error state (OUT_ERR).
 #[derive(Clone, Copy, Debug, Default)]
+#[cfg_attr(test, derive(PartialEq))]
 struct LocalFault {
     present: bool,
     latched: bool,
@@ -417,6 +437,18 @@ pub struct TwinSafeLogic {
     fault: Option<String>,
     pending_fault: Option<String>,
     events: Vec<LogicEvent>,
+    /// `true` while the last scan left the logic at rest for its inputs: a scan with the same
+    /// inputs (standard inputs, partner inputs, faults) changes nothing but the connections'
+    /// sequence numbers and times ([`TwinSafeLogic::quiet_scan`]). Set by a full scan that
+    /// finds so; cleared by every change of an input or a fault.
+    settled: bool,
+    /// While settled: when the first fault scheduled on a connection falls due or a module's
+    /// delay ends, whichever comes first (`None`: neither); a scan from then on is taken in
+    /// full.
+    quiet_until: Option<SimTime>,
+    /// The image as a full scan found it, to tell whether the scan changed it (kept here so
+    /// that the comparison allocates nothing).
+    image_before: Vec<bool>,
 }
 
 impl TwinSafeLogic {
@@ -442,6 +474,9 @@ impl TwinSafeLogic {
             fault: None,
             pending_fault: None,
             events: Vec::new(),
+            settled: false,
+            quiet_until: None,
+            image_before: vec![false; c.slots],
             c,
         })
     }
@@ -502,18 +537,26 @@ impl TwinSafeLogic {
 
     /// Set a standard input for the next scan.
     pub fn set_standard_input(&mut self, input: StandardInput, value: bool) {
-        self.image[input.0] = value;
+        if self.image[input.0] != value {
+            self.image[input.0] = value;
+            self.settled = false;
+        }
     }
 
     /// Set the partner's safe inputs of connection `c` (bit `n-1` = channel `n`); they reach
     /// the logic with the next exchange.
     pub fn set_partner_inputs(&mut self, c: ConnectionId, bits: u8) {
-        self.connections[c.0].set_partner_inputs(bits);
+        let conn = &mut self.connections[c.0];
+        if conn.partner_inputs() != bits {
+            conn.set_partner_inputs(bits);
+            self.settled = false;
+        }
     }
 
     /// Schedule a fault on connection `c`'s black channel at `at`.
     pub fn inject(&mut self, c: ConnectionId, at: SimTime, fault: ChannelFault) {
         self.connections[c.0].inject(at, fault);
+        self.settled = false;
     }
 
     /// Make local output `index` (1..4) report an error (e.g. a cross-circuit seen on its
@@ -521,25 +564,78 @@ impl TwinSafeLogic {
     pub fn set_local_output_fault(&mut self, index: u8, faulty: bool) {
         if let Some(k) = self.c.local_outputs.iter().position(|o| o.index == index) {
             self.local_faults[k].present = faulty;
+            self.settled = false;
         }
     }
 
     /// Raise an internal logic fault at the next scan: the whole logic stops for good.
     pub fn inject_logic_fault(&mut self, cause: &str) {
         self.pending_fault = Some(cause.to_owned());
+        self.settled = false;
     }
 
     // ---- the scan ----------------------------------------------------------------------------
 
     /// One safety scan at `now`; returns what happened in it.
+    ///
+    /// Almost every scan finds the logic at rest with the inputs of the last one: then it is
+    /// taken the quiet way ([`TwinSafeLogic::quiet_scan`]), else in full
+    /// ([`TwinSafeLogic::full_scan`]). Both leave the same state and report the same.
     pub fn scan(&mut self, now: SimTime) -> &[LogicEvent] {
+        if self.quiet_scan(now) {
+            return &self.events;
+        }
+        self.full_scan(now)
+    }
+
+    /// The scan at `now` if it can change nothing but the connections' sequence numbers and
+    /// times, done directly; `true` if so (it then reported nothing), `false` with nothing
+    /// touched if a full scan is needed.
+    ///
+    /// Why this is the full scan's result: the last scan, at a time not after `now`, left the
+    /// logic settled ([`TwinSafeLogic::full_scan`] says when), and no input or fault changed
+    /// since. The full scan would then see the image it saw last time, every group and module
+    /// would do nothing (none has a timer running, none an edge to see), and every connection
+    /// would exchange one good telegram with the same data ([`Connection::rests`], which a
+    /// quiet exchange keeps true), unless a scheduled fault falls due or a module's delay
+    /// ends by `now`: the things time can bring, checked here. The logic's events are empty
+    /// already (a settled scan reported nothing).
+    pub(crate) fn quiet_scan(&mut self, now: SimTime) -> bool {
+        let quiet = self.settled
+            && self.last_now.is_some_and(|last| now >= last)
+            && self.quiet_until.is_none_or(|at| now < at);
+        if !quiet {
+            return false;
+        }
+        debug_assert!(self.events.is_empty());
+        self.last_now = Some(now);
+        for (conn, &out) in self.connections.iter_mut().zip(&self.twinsafe_out) {
+            debug_assert!(conn.is_quiet(now, out));
+            conn.quiet_exchange(now);
+        }
+        true
+    }
+
+    /// One safety scan at `now` with every step taken, whatever the state; returns what
+    /// happened in it. At its end it notes whether the logic is settled: it reported nothing,
+    /// no group or stateful module changed its state, no module has a discrepancy time
+    /// running ([`Estop::quiet`]; a running delay only bounds the settled time), the image is the one the scan started with (so a
+    /// module that reads another later in the order sees the same value next time), every
+    /// connection's next exchange would be a good one with nothing new
+    /// ([`Connection::rests`]), and every group would stay as it is with its members as they
+    /// are now ([`Group::stays`]).
+    pub(crate) fn full_scan(&mut self, now: SimTime) -> &[LogicEvent] {
         self.events.clear();
+        self.settled = false;
         let backwards = self.last_now.is_some_and(|last| now < last);
         if (self.fault.is_some() || self.pending_fault.is_some() || backwards) && self.stopped(now)
         {
             return &self.events;
         }
         self.last_now = Some(now);
+        self.image_before.copy_from_slice(&self.image);
+        let mut quiet = true;
+        let mut delays_end = None;
         // The parts one at a time: a write to the image then cannot change the others.
         let TwinSafeLogic {
             c,
@@ -582,6 +678,7 @@ impl TwinSafeLogic {
                 let members = (&mut **modules, &mut **connections, &mut **local_faults);
                 acknowledge_group(events, now, g, run, c, group, members);
             }
+            quiet &= group.state() == before;
             refresh_group(image, events, now, cg, group, before);
         }
         for (cc, conn) in c.connections.iter().zip(&*connections) {
@@ -595,9 +692,12 @@ impl TwinSafeLogic {
         for (m, rt) in modules.iter_mut().enumerate() {
             let run = groups[rt.group].running();
             // Events are rare: walk them in place rather than copying them every scan.
-            if rt.scan(now, run, image) {
+            let (reported, at_rest, until) = rt.scan(now, run, image);
+            if reported {
                 push_module_events(events, now, &c.modules[m], rt.events());
             }
+            quiet &= at_rest;
+            delays_end = earliest(delays_end, until);
         }
 
         // 4. Errors found in this scan trip their group at once.
@@ -606,6 +706,7 @@ impl TwinSafeLogic {
             let group = &mut groups[g];
             let before = group.state();
             group.trip(errors);
+            quiet &= group.state() == before;
             refresh_group(image, events, now, cg, group, before);
         }
 
@@ -637,7 +738,40 @@ impl TwinSafeLogic {
                 0
             };
         }
+        if quiet && events.is_empty() && *image == *self.image_before {
+            self.settled = self.connections_rest(delays_end) && self.groups_stay();
+        }
         &self.events
+    }
+
+    /// `true` if every connection's next exchange, with the TwinSAFE-Out data this scan
+    /// wrote, would be a quiet one apart from time ([`Connection::rests`]); then notes when
+    /// the first scheduled fault falls due or, if earlier, `delays_end`.
+    #[cold]
+    fn connections_rest(&mut self, delays_end: Option<SimTime>) -> bool {
+        let mut conns = self.connections.iter().zip(&self.twinsafe_out);
+        if !conns.all(|(conn, &out)| conn.rests(out)) {
+            return false;
+        }
+        let faults = self.connections.iter().map(Connection::next_fault_at);
+        self.quiet_until = faults.fold(delays_end, earliest);
+        true
+    }
+
+    /// `true` if every group, seeing the image and its members as they are now, would stay as
+    /// it is in the next scan (for [`TwinSafeLogic::full_scan`]'s settled state).
+    #[cold]
+    fn groups_stay(&self) -> bool {
+        let (c, image) = (&self.c, &self.image);
+        (c.groups.iter().zip(&self.groups))
+            .enumerate()
+            .all(|(g, (cg, group))| {
+                let run = cg.run.is_none_or(|s| image[s]);
+                let ack = cg.err_ack.is_some_and(|s| image[s]);
+                let (errors, cause) =
+                    collect(g, c, &self.modules, &self.connections, &self.local_faults);
+                group.stays(run, ack, errors, cause)
+            })
     }
 
     /// The start of a scan at `now` when the logic has stopped, or has to stop now on a
@@ -761,6 +895,42 @@ impl TwinSafeLogic {
             }
         }?;
         self.image.get(slot).copied()
+    }
+}
+
+#[cfg(test)]
+impl TwinSafeLogic {
+    /// Whether the last scan left the logic settled (see the field).
+    pub(crate) fn settled(&self) -> bool {
+        self.settled
+    }
+
+    /// `true` if the two logics (of the same project) are in the same state: every field that
+    /// a scan or a setter changes.
+    pub(crate) fn same_state(&self, other: &TwinSafeLogic) -> bool {
+        self.image == other.image
+            && self.groups == other.groups
+            && self.connections == other.connections
+            && self.modules == other.modules
+            && self.local_faults == other.local_faults
+            && self.local_values == other.local_values
+            && self.twinsafe_out == other.twinsafe_out
+            && self.standard_values == other.standard_values
+            && self.last_now == other.last_now
+            && self.fault == other.fault
+            && self.pending_fault == other.pending_fault
+            && self.events == other.events
+            && self.settled == other.settled
+            && self.image_before == other.image_before
+    }
+}
+
+/// The earlier of two times, where `None` is no time at all (never).
+fn earliest(a: Option<SimTime>, b: Option<SimTime>) -> Option<SimTime> {
+    match (a, b) {
+        (Some(a), Some(b)) => Some(a.min(b)),
+        (a, None) => a,
+        (None, b) => b,
     }
 }
 
@@ -927,4 +1097,265 @@ fn push_local_output_fault(out: &mut Vec<LogicEvent>, now: SimTime, o: &Compiled
         name: o.name.clone(),
     };
     out.push(LogicEvent { at: now, kind });
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::kl6904::connection::ChannelFault;
+    use asi_phy::SimDuration;
+
+    /// Every kind of module, two groups (one with RUN), connections to an input terminal, a
+    /// KL6904 partner and an output terminal with TwinSAFE-Out channels, modules that read
+    /// modules later in the order, delays, discrepancy times, EDM, muting and the function
+    /// test: for the quiet scan against the full scan on more than the lift's project.
+    const PLANT: &str = r#"
+[logic]
+name = "plant"
+address = 1
+
+[[group]]
+name = "main"
+err_ack = "std:ack"
+run = "std:run"
+
+[[group]]
+name = "aux"
+err_ack = "std:ack2"
+
+[[connection]]
+name = "inA"
+group = "main"
+partner = "KL1904"
+partner_address = 2
+watchdog = "30ms"
+
+[[connection]]
+name = "peer"
+group = "aux"
+partner = "KL6904"
+partner_address = 3
+watchdog = "40ms"
+outputs = [
+    { channel = 1, source = "fb:either.OrOut" },
+    { channel = 2, source = "fb:mode.OpOut1" },
+    { channel = 3, source = "fb:dec.DecOut1" },
+]
+
+[[connection]]
+name = "outB"
+group = "main"
+partner = "KL2904"
+partner_address = 4
+watchdog = "30ms"
+outputs = [{ channel = 1, source = "fb:guard.MonDelOut" }]
+
+[[module]]
+kind = "AND"
+name = "k"
+group = "main"
+inputs.AndIn1 = { signal = "std:blocked", contact = "make" }
+inputs.AndIn2 = "fb:stop.EStopDelOut"
+inputs.AndIn3 = "fb:guard.MonOut"
+
+[[module]]
+kind = "ESTOP"
+name = "stop"
+group = "main"
+delay = "40ms"
+pair_discrepancy = ["20ms"]
+inputs.EStopIn1 = "ts:inA.1"
+inputs.EStopIn2 = "ts:inA.2"
+inputs.Restart = "std:restart"
+inputs.EDM1 = "ts:inA.4"
+
+[[module]]
+kind = "MON"
+name = "guard"
+group = "main"
+delay = "30ms"
+pair_discrepancy = ["25ms"]
+secure_discrepancy = "15ms"
+manual_restart = false
+function_test = true
+inputs.MonIn1 = "ts:inA.3"
+inputs.MonIn2 = "fb:dec.DecOut2"
+inputs.Secure1 = "fb:dec.DecOut3"
+inputs.Secure2 = "fb:dec.DecOut4"
+inputs.EDM1 = "std:edm"
+
+[[module]]
+kind = "OPMODE"
+name = "mode"
+group = "aux"
+discrepancy = "10ms"
+inputs.OpIn1 = "ts:peer.4"
+inputs.OpIn2 = "ts:peer.5"
+inputs.OpIn3 = "ts:peer.6"
+inputs.Restart = "std:restart2"
+
+[[module]]
+kind = "OR"
+name = "either"
+group = "aux"
+inputs.OrIn1 = "fb:mode.OpOut1"
+inputs.OrIn2 = { signal = "fb:k.AndOut", contact = "make" }
+
+[[module]]
+kind = "DECOUPLE"
+name = "dec"
+group = "aux"
+inputs.DecIn1 = "fb:k.AndOut"
+inputs.DecIn2 = "ts:peer.1"
+inputs.DecIn3 = "ts:peer.2"
+inputs.DecIn4 = "ts:peer.3"
+
+[[local_output]]
+index = 1
+name = "K1"
+group = "main"
+source = "fb:k.AndOut"
+
+[[local_output]]
+index = 2
+name = "lamp"
+group = "aux"
+source = "fb:either.OrOut"
+
+[[standard_output]]
+name = "stop_ok"
+source = "fb:stop.EStopOut"
+
+[[standard_output]]
+name = "com_err"
+source = "group:aux.COM_ERR"
+"#;
+
+    /// A small seeded generator (xorshift64*).
+    struct Rng(u64);
+
+    impl Rng {
+        fn below(&mut self, n: u64) -> u64 {
+            self.0 ^= self.0 >> 12;
+            self.0 ^= self.0 << 25;
+            self.0 ^= self.0 >> 27;
+            self.0.wrapping_mul(0x2545_f491_4f6c_dd1d) % n
+        }
+    }
+
+    /// Two copies of the plant side by side over long random runs, one scanned with
+    /// [`TwinSafeLogic::scan`] (quiet when it can), one with [`TwinSafeLogic::full_scan`]
+    /// (the reference): the same events and the same whole state after every scan. The
+    /// inputs change now and then (a standard input toggled, a partner's channel flipped,
+    /// held for stretches), with channel faults of every kind, local output faults and
+    /// irregular scan times.
+    #[test]
+    fn a_quiet_scan_is_the_full_scan_on_every_kind_of_module() {
+        let project = Project::from_toml("plant.toml", PLANT).expect("the plant project");
+        let names = [
+            "ack", "ack2", "run", "restart", "restart2", "blocked", "edm",
+        ];
+        let mut settled = 0u64;
+        for seed in 1..=30u64 {
+            let mut rng = Rng(seed.wrapping_mul(0x9e37_79b9_7f4a_7c15) | 1);
+            let mut fast = TwinSafeLogic::new(&project).expect("valid");
+            let inputs: Vec<StandardInput> = names
+                .iter()
+                .map(|n| fast.standard_input(n).expect(n))
+                .collect();
+            let conns: Vec<ConnectionId> = ["inA", "peer", "outB"]
+                .iter()
+                .map(|n| fast.connection(n).expect(n))
+                .collect();
+            let mut values = [false, false, true, false, false, false, true];
+            let mut partner = [0b1111u8, 0b0000_1001, 0];
+            // When each held standard input (a button) is let go.
+            let mut release: [Option<SimTime>; 7] = [None; 7];
+            let mut full = fast.clone();
+            let mut now = SimTime::from_millis(rng.below(5));
+            for step in 0..3000 {
+                for (k, r) in release.iter_mut().enumerate() {
+                    if r.is_some_and(|at| at <= now) {
+                        values[k] = false;
+                        *r = None;
+                    }
+                }
+                match rng.below(400) {
+                    // ERR_ACK and restart pulses, the most common act.
+                    0..=11 => {
+                        let k = [0, 1, 3, 4][rng.below(4) as usize];
+                        values[k] = true;
+                        release[k] = Some(now + SimDuration::from_millis(1 + rng.below(10)));
+                    }
+                    12 => values[2] = !values[2] || rng.below(4) == 0,
+                    13 | 14 => values[5] = !values[5],
+                    15 => values[6] = !values[6],
+                    // The E-stop's two channels together, now and then one alone.
+                    16..=18 => {
+                        let both = 0b11 * u8::from(partner[0] & 0b11 == 0);
+                        partner[0] = partner[0] & !0b11 | both;
+                    }
+                    19 => partner[0] ^= 1 << rng.below(2),
+                    // MON's pair, on two connections: together, now and then one alone.
+                    20 | 21 => {
+                        partner[0] ^= 0b100;
+                        partner[1] ^= 1;
+                    }
+                    22 => partner[0] ^= 0b1000,
+                    23 if rng.below(4) == 0 => partner[1] ^= 1,
+                    // The KL6904 partner: the Secure pair (together or not), the mode.
+                    24 | 25 => partner[1] ^= 0b110,
+                    26 if rng.below(4) == 0 => partner[1] ^= 0b010,
+                    27..=29 => {
+                        let mode = [0b0000_1000, 0b0001_0000, 0b0010_0000, 0, 0b0011_0000];
+                        partner[1] = partner[1] & !0b11_1000 | mode[rng.below(5) as usize];
+                    }
+                    30 if rng.below(8) == 0 => {
+                        let c = conns[rng.below(3) as usize];
+                        let at = now + SimDuration::from_millis(rng.below(20));
+                        let fault = match rng.below(6) {
+                            0 | 1 => ChannelFault::Drop {
+                                duration: SimDuration::from_millis(rng.below(60)),
+                            },
+                            2 => ChannelFault::CorruptCrc,
+                            3 => ChannelFault::Replay {
+                                age: rng.below(5) as u8,
+                            },
+                            4 => ChannelFault::WrongAddress { sender: 9 },
+                            _ => ChannelFault::NullTelegram,
+                        };
+                        fast.inject(c, at, fault);
+                        full.inject(c, at, fault);
+                    }
+                    31 if rng.below(20) == 0 => {
+                        let (index, faulty) = (1 + rng.below(2) as u8, rng.below(3) == 0);
+                        fast.set_local_output_fault(index, faulty);
+                        full.set_local_output_fault(index, faulty);
+                    }
+                    _ => {}
+                }
+                for (k, &input) in inputs.iter().enumerate() {
+                    fast.set_standard_input(input, values[k]);
+                    full.set_standard_input(input, values[k]);
+                }
+                for (k, &c) in conns.iter().enumerate() {
+                    fast.set_partner_inputs(c, partner[k]);
+                    full.set_partner_inputs(c, partner[k]);
+                }
+                settled += u64::from(fast.settled);
+                let a = fast.scan(now).to_vec();
+                let b = full.full_scan(now).to_vec();
+                assert_eq!(a, b, "seed {seed} step {step} at {now}");
+                assert!(fast.same_state(&full), "seed {seed} step {step} at {now}");
+                now += match rng.below(100) {
+                    0 => SimDuration::ZERO,
+                    1 => SimDuration::from_millis(2 + rng.below(50)),
+                    2 => SimDuration::from_micros(1 + rng.below(3000)),
+                    _ => SimDuration::from_millis(1),
+                };
+            }
+        }
+        // The quiet way must be taken often, or the test shows nothing.
+        assert!(settled > 20_000, "{settled} settled scans");
+    }
 }

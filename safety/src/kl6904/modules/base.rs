@@ -135,6 +135,12 @@ impl PairMonitor {
     pub(crate) fn reset(&mut self) {
         self.since = None;
     }
+
+    /// `true` while the two inputs differ: the time is running, so a later scan with the same
+    /// inputs may raise the error.
+    pub(crate) fn running(&self) -> bool {
+        self.since.is_some()
+    }
 }
 
 /// The state machine ESTOP and MON share: two outputs, one immediate and one delayed, a
@@ -245,6 +251,25 @@ impl Core {
     /// `true` while in ERROR and its cause was still present in the last scan.
     pub(crate) fn error_cause_active(&self) -> bool {
         self.state == FbState::Error && self.cause_active
+    }
+
+    /// `true` if the last scan left nothing for another scan with the same inputs to do before
+    /// [`Core::delay_ends`]: it reported nothing and did not change the state (`before`, the
+    /// state it started from), and a delay that runs has its start. The module's own timers
+    /// (its pair monitors) are the caller's to check.
+    pub(crate) fn quiet(&self, before: FbState) -> bool {
+        let delay_known = self.state != FbState::DelayOut || self.delay_since.is_some();
+        self.events.is_empty() && self.state == before && delay_known
+    }
+
+    /// In DELAYOUT, when the delayed output goes off with the Delay Time `delay`: the first
+    /// scan at or after it ends the delay ([`Core::supervise`]); `None` in any other state
+    /// (or past the end of time).
+    pub(crate) fn delay_ends(&self, delay: SimDuration) -> Option<SimTime> {
+        match (self.state, self.delay_since) {
+            (FbState::DelayOut, Some(since)) => since.checked_add(delay),
+            _ => None,
+        }
     }
 
     /// (immediate output, delayed output, Error).

@@ -169,4 +169,19 @@ impl Estop {
     }
 }
 
+impl Estop {
+    /// `true` if the last scan, which started in state `before`, left nothing for another
+    /// scan with the same inputs and group state to do before [`Estop::delay_ends`]: no event, no
+    /// change of state, no discrepancy time running (the logic's quiet scan relies on it).
+    pub(crate) fn quiet(&self, before: FbState) -> bool {
+        self.core.quiet(before) && !(self.pairs.iter().any(PairMonitor::running))
+    }
+
+    /// In DELAYOUT, when the delayed output goes off (the first scan at or after it is not a
+    /// quiet one).
+    pub(crate) fn delay_ends(&self) -> Option<SimTime> {
+        self.core.delay_ends(self.config.delay)
+    }
+}
+
 core_accessors!(Estop);

@@ -147,4 +147,14 @@ impl OpMode {
     }
 }
 
+impl OpMode {
+    /// `true` if the last scan, which started in state `before`, left nothing for another
+    /// scan with the same inputs and group state to do, at any later time: no event, no
+    /// change of state, no discrepancy time running (the logic's quiet scan relies on it).
+    /// OPMODE has no delay.
+    pub(crate) fn quiet(&self, before: FbState) -> bool {
+        self.core.quiet(before) && !(self.invalid.running())
+    }
+}
+
 core_accessors!(OpMode);
