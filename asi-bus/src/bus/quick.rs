@@ -1,0 +1,123 @@
+//! Quick transactions: a transaction's telegrams held off a line that takes them clean, their
+//! frames handed to the receivers at their events (see the module documentation of the bus).
+
+use super::*;
+
+impl Bus {
+    /// `true` if the transaction of request `req` may run quick: its telegrams held off the
+    /// line and their frames taken directly ([`Bus::quick_request`], [`Bus::quick_finish`]),
+    /// each as long as the line takes it clean ([`Medium::takes_clean`]: an idle line whose
+    /// faults leave it untouched hands a telegram on as its own frame at its end plus the
+    /// pause, and is idle again after it, so a telegram alone on it needs no line at all).
+    /// What may not run quick: more than one receiver state among the slaves, a
+    /// request two slaves may answer (their answers collide on the line), the broadcast reset
+    /// (every slave takes it), a slave without power. A quick transaction goes on to its next
+    /// event at once only within the horizon and while no new output waits to be taken by
+    /// [`Bus::advance_before`], which must return at that event. Anything that changes the line, the slaves'
+    /// receivers or their power puts a held telegram on the line first ([`Bus::release_held`]),
+    /// and the transaction goes on as it would have. Held to the line's path by a lockstep
+    /// test against the pulse-exact bus (`tests/quick.rs`) and by the rig's fast-path
+    /// equivalence (tests/tests/fast_path.rs).
+    pub(super) fn may_run_quick(&self, req: Request) -> bool {
+        if self.groups.len() != 1 || !self.slaves_powered || req.is_broadcast_reset() {
+            return false;
+        }
+        let who = self.groups[0].members & self.addr_index[req.address().get() as usize];
+        who & who.wrapping_sub(1) == 0
+    }
+
+    /// A quick transaction's request frame, at `t`: what `request_frame` and `hear` do with
+    /// it, the slave's answer held off the line. When the transaction's end falls within the
+    /// horizon it ends here too.
+    pub(super) fn quick_request(&mut self, t: SimTime) {
+        let (Some(cur), Some(f)) = (self.cur.as_mut(), self.held.take()) else {
+            // Nothing held: the line's path.
+            if let Some(c) = self.cur.as_mut() {
+                c.quick = false;
+            }
+            self.request_frame(t);
+            return;
+        };
+        let r = self.groups[0].listener.accept(&f);
+        let request = r.request();
+        cur.request_frames = 1;
+        cur.request_failed = r.failed;
+        cur.valid_request = request;
+        let base = cur.start + self.timing.transaction();
+        for m in &mut self.monitors {
+            m.on_frame(t, &f);
+        }
+        let mut answer = None;
+        if let Some(q) = request {
+            let who = self.groups[0].members & self.addr_index[q.address().get() as usize];
+            if who != 0 {
+                self.ask_slaves(t, q, who, |r| answer = Some(r));
+            }
+        }
+        let timing = self.timing;
+        let mut quiet = None;
+        if let Some(r) = answer {
+            let tg = Transmission::response(r, f.end + timing.master_pause(), timing.half_bit());
+            // The line is as the request found it (idle, nothing recorded: anything that
+            // changes that releases the held request first), so only its faults are left to ask.
+            if self.medium.pass_untouched(&tg) {
+                let answer = tg.frame();
+                self.held = Some(answer);
+                quiet = Some(answer.end + timing.min_pause());
+            } else {
+                // The line touches the answer: the transaction goes on the line's path.
+                if let Some(c) = self.cur.as_mut() {
+                    c.quick = false;
+                }
+                self.transmit_answers(t, &[tg]);
+                quiet = self.medium.poll_at();
+            }
+        }
+        let quiet = quiet.map(|p| p + (timing.slave_pause() - timing.min_pause()));
+        self.state = State::AwaitResponse;
+        self.next_event = quiet.map_or(base, |q| q.max(base)).max(t);
+        let quick = self.cur.is_some_and(|c| c.quick);
+        if quick && self.next_event <= self.horizon && !self.output_taken {
+            let t3 = self.next_event;
+            self.now = t3;
+            self.next_event = match self.quick_finish(t3) {
+                Some(resync) if resync > t3 => resync,
+                _ => t3,
+            };
+            self.state = State::Idle;
+        }
+    }
+
+    /// A quick transaction's end, at `t`: the held answer's frame to the master's receiver,
+    /// the slaves' and the monitors', then the master's verdict ([`Bus::close`]).
+    pub(super) fn quick_finish(&mut self, t: SimTime) -> Option<SimTime> {
+        let mut cur = self.cur.take()?;
+        if let Some(f) = self.held.take() {
+            cur.line_end = cur.line_end.max(f.end);
+            cur.master_hears(&mut self.master_rx, &self.timing, &f);
+            self.groups[0].listener.accept(&f);
+            for m in &mut self.monitors {
+                m.on_frame(t, &f);
+            }
+        }
+        self.close(t, &cur)
+    }
+
+    /// Puts a quick transaction's held telegram on the line, where the line's path would
+    /// have it by now, and lets the transaction go on that path: called before anything
+    /// changes the line, the slaves' receivers or their power.
+    pub(super) fn release_held(&mut self) {
+        let Some(cur) = self.cur.as_mut().filter(|c| c.quick) else {
+            return;
+        };
+        cur.quick = false;
+        if let Some(f) = self.held.take() {
+            // The telegram the frame was made of; an idle, clean line keeps it pending, so no
+            // frame comes out now.
+            let tg = Transmission::new(f.raw, f.bit_count, f.start, self.timing.half_bit());
+            self.medium.transmit_taken(&tg, &mut |_| {
+                debug_assert!(false, "a held telegram went on a line that was not idle")
+            });
+        }
+    }
+}
