@@ -1,0 +1,200 @@
+//! The rig's scans: the safety logic's (with the bus watch and the safe drive's) every 1 ms, and
+//! the PLC's, each with what it hands to the report and the log.
+
+use super::*;
+
+impl Rig {
+    /// The master's LAS and the safety monitor's drops since the last look, to the report
+    /// and the log (every safety scan, 1 ms).
+    #[inline]
+    pub(super) fn watch_bus(&mut self, t: SimTime) {
+        let m = self.lab.bus.master();
+        let las = (m.phase() == asi_master::Phase::NormalOperation).then(|| m.las().bits() as u32);
+        let (left, back) = self.las_watch.update(t, las);
+        // Nothing to say in almost every scan.
+        if left | back != 0 {
+            self.log_las(t, left, back);
+        }
+        let id = self.lab.monitor;
+        let drops = self
+            .lab
+            .bus
+            .monitor_mut(id)
+            .map(|m| m.take_drops())
+            .unwrap_or_default();
+        if !drops.is_empty() {
+            self.log_drops(drops);
+        }
+    }
+
+    /// The addresses that `left` LAS and came `back` at `t`, to the log.
+    #[inline(never)]
+    fn log_las(&mut self, t: SimTime, left: u32, back: u32) {
+        for i in 1..32u8 {
+            if left & (1 << i) != 0 {
+                self.log_at(t, "bus", format!("slave {i} dropped out of LAS"));
+            }
+            if back & (1 << i) != 0 {
+                self.log_at(t, "bus", format!("slave {i} back in LAS"));
+            }
+        }
+    }
+
+    /// The safety monitor's drops, to the log and the report.
+    #[inline(never)]
+    fn log_drops(&mut self, drops: Vec<asi_slaves::monitor::MonitorDrop>) {
+        for d in drops {
+            let (cause, text) = words::monitor_drop(d.why);
+            let address = d.address.get();
+            self.log_at(
+                d.at,
+                "monitor",
+                format!("safety sensor {address} not released: {text}"),
+            );
+            self.report.safety.monitor.push(MonitorTrip {
+                at_s: d.at.as_secs_f64(),
+                address,
+                cause: cause.into(),
+            });
+        }
+    }
+
+    pub(super) fn safety_scan(&mut self, t: SimTime) {
+        self.watch_bus(t);
+        let [ch1, ch2] = self.lift.stop_channels();
+        let inputs = LiftSafetyInputs {
+            stop_ch1: ch1,
+            stop_ch2: ch2,
+            overtravel_bottom_released: self.lab.released(SAFETY_BOTTOM),
+            overtravel_top_released: self.lab.released(SAFETY_TOP),
+            overloaded: self.to_safety.overloaded,
+            k1_aux: self.lift.k1_aux_closed(),
+            operator_reset: self.operator_reset,
+            err_ack: self.err_ack,
+            controller_restart: self.to_safety.restart,
+        };
+        let out = self.safety.scan(t, &inputs);
+        for e in &out.events {
+            let kind = match e.kind {
+                LiftEventKind::Trip => Some(TripKind::Trip),
+                LiftEventKind::Error => Some(TripKind::Error),
+                LiftEventKind::PowerOff => Some(TripKind::PowerOff),
+                LiftEventKind::Release | LiftEventKind::Acknowledge | LiftEventKind::Info => None,
+            };
+            if let Some(kind) = kind {
+                self.report.safety.trips.push(Trip {
+                    at_s: e.at_s(),
+                    kind,
+                    cause: e.cause.clone(),
+                });
+            }
+            self.report.log.push(LogLine {
+                at_s: e.at_s(),
+                who: "safety",
+                text: e.cause.clone(),
+            });
+        }
+        self.from_safety = FromSafety {
+            estop_out: out.estop_out,
+        };
+        let k1 = self.drive_scan(t, out.estop_out, out.k1);
+        let drive_tripped = self.drive.as_ref().is_some_and(|d| d.error().is_some());
+        let answered = out
+            .diag
+            .k1_open_cause
+            .as_ref()
+            .is_some_and(operator::answers);
+        if self.attendant.watch(t, answered || (drive_tripped && !k1)) {
+            let cause = out
+                .diag
+                .k1_open_cause
+                .map(|c| c.to_string())
+                .or_else(|| self.drive.as_ref().and_then(|d| d.torque_off_cause()));
+            self.log(
+                "attendant",
+                format!(
+                    "K1 open for {ATTENDANT_NOTICE} ({}): rescue, acknowledge and reset",
+                    cause.unwrap_or_default()
+                ),
+            );
+            self.report.safety.attendant_rounds += 1;
+            self.act(t, "attendant", &Action::Rescue);
+            let ack = t + ATTENDANT_ACK_AFTER;
+            self.timers.push((ack, Timer::Attendant(Round::Ack)));
+            let reset = ack + ATTENDANT_RESET_AFTER;
+            self.timers.push((reset, Timer::Attendant(Round::Reset)));
+        }
+        self.safety_out = Some(out.diag);
+        if k1 != self.k1 {
+            self.k1 = k1;
+            if let Err(e) = self.lift.set_contactor(t, k1) {
+                self.log("plant", format!("error: {e}"));
+            }
+            self.plant_dirty = true;
+        }
+    }
+
+    /// The safe drive's scan at `t` (docs/drive-safety.md §6), after the safety logic's (its
+    /// EStopOut `estop_out`, its K1 output `k1`); returns K1's coil: the safety logic's output
+    /// and the drive's torque enable in series. Without the safe drive, `k1` as it is.
+    pub(super) fn drive_scan(&mut self, t: SimTime, estop_out: bool, k1: bool) -> bool {
+        let Some(guard) = self.drive.as_mut() else {
+            return k1;
+        };
+        let signals = drive::Signals {
+            estop_out,
+            initialising: self.external.is_none()
+                && self.plc.program().state() == controller::State::Initialising,
+            run: self.applied.run,
+            up: self.applied.up,
+            setpoint_ua: self.applied.setpoint_ua,
+            reset: self.operator_reset,
+            door_closed: self.lift.door_closed(),
+            position_mm: self.lift.position_mm(),
+            velocity_mm_s: self.lift.velocity_mm_s(),
+        };
+        let (torque, lines) = guard.scan(t, &signals, &mut self.report.safety.trips);
+        for (at, text) in lines {
+            self.log_at(at, "drive", text);
+        }
+        k1 && torque
+    }
+
+    pub(super) fn plc_scan(&mut self, t: SimTime) {
+        if let Some(signals) = self.external {
+            // The outside controller writes the output image itself, between moments.
+            self.to_safety = signals;
+            return;
+        }
+        self.to_safety = self.plc.scan(t, self.lab.bus.image_mut(), self.from_safety);
+        let held = self.plc.program().state() == controller::State::BusFault;
+        match (self.bus_fault_since, held) {
+            (None, true) => {
+                self.bus_fault_since = Some(t);
+                self.report.availability.bus_fault_holds += 1;
+            }
+            (Some(s), false) => {
+                self.report.availability.bus_fault_s += (t - s).as_secs_f64();
+                self.bus_fault_since = None;
+            }
+            _ => {}
+        }
+        let events: Vec<_> = self.plc.program_mut().drain_events().collect();
+        for e in events {
+            match e.kind {
+                Ctl::Initialised if self.report.initialised_at_s.is_none() => {
+                    self.report.initialised_at_s = Some(e.at.as_secs_f64());
+                }
+                Ctl::StopDemanded {
+                    dropped: Some(f), ..
+                } => self.passengers.target_dropped(f, e.at),
+                Ctl::Served(s) => {
+                    let served = self.passengers.served(&s, e.at);
+                    self.report.served.push(served);
+                }
+                _ => {}
+            }
+            self.log_at(e.at, "controller", e.kind.to_string());
+        }
+    }
+}
