@@ -643,18 +643,7 @@ impl Run {
                 level_raw(self.occupied, self.positive, cells)
             }
         };
-        if cells >= 1 && raw >> (cells - 1) & 1 == 1 {
-            failed = failed.with(Check::StartBit);
-        }
-        if cells >= 3 {
-            let between = (raw >> 1) & ((1 << (cells - 2)) - 1);
-            if odd_parity(between) {
-                failed = failed.with(Check::Parity);
-            }
-        }
-        if g % 2 != 0 || n == 0 || raw & 1 == 0 {
-            failed = failed.with(Check::EndBit);
-        }
+        failed = failed.union(bit_checks(raw, cells, g));
         Frame {
             start: SimTime::from_nanos(self.t0),
             end: SimTime::from_nanos(self.last_t),
@@ -664,6 +653,24 @@ impl Run {
             line_failed: failed,
         }
     }
+}
+
+/// The checks a frame's bits decide: start bit, parity and end bit, for `raw` holding its
+/// first `cells` bits (the first highest, nothing above them; 0 without a cell) and its last
+/// pulse on grid point `g`.
+///
+/// Without a branch or a mask for each: the first bit is what shifts out below the cells, and
+/// the parity of the bits between the first and the last is that of all of them less those
+/// two (with one cell the identity does not hold, but there is no parity to check).
+#[inline(always)]
+fn bit_checks(raw: u32, cells: u32, g: u64) -> Checks {
+    let first = (u64::from(raw) << 1 >> cells) as u32 & 1;
+    let last = raw & 1;
+    let between_odd = odd_parity(raw) != (first != last);
+    Checks::NONE
+        .with_if(Check::StartBit, first == 1)
+        .with_if(Check::Parity, cells >= 3 && between_odd)
+        .with_if(Check::EndBit, g % 2 != 0 || last == 0)
 }
 
 /// Bit j is the parity of the bits of `x` at j and below.
@@ -946,6 +953,73 @@ mod tests {
                     place_by_division(&grid, y, prev),
                     "h {} tol {} prev {} y {}", h, tol, prev, y
                 );
+            }
+        }
+    }
+
+    /// The reference of [`bit_checks`]: each check from the bits it names.
+    fn bit_checks_bit_by_bit(raw: u32, cells: u32, g: u64) -> Checks {
+        let mut failed = Checks::NONE;
+        if cells >= 1 && raw >> (cells - 1) & 1 == 1 {
+            failed = failed.with(Check::StartBit);
+        }
+        if cells >= 3 {
+            let between = (raw >> 1) & ((1 << (cells - 2)) - 1);
+            if odd_parity(between) {
+                failed = failed.with(Check::Parity);
+            }
+        }
+        if g % 2 != 0 || g.div_ceil(2) == 0 || raw & 1 == 0 {
+            failed = failed.with(Check::EndBit);
+        }
+        failed
+    }
+
+    /// The checks of the bits without a branch for each are the checks bit by bit, for every
+    /// number of cells a frame holds (with its last pulse at the end of its last cell or in
+    /// its middle, or far past the 32 cells kept): every value up to 12 cells, and for more
+    /// the values with one bit, with all but one and 5,000 others each.
+    #[test]
+    fn the_checks_of_the_bits_are_the_checks_bit_by_bit() {
+        let mut x = 0x9E37_79B9_7F4A_7C15u64;
+        for cells in 0..=32u32 {
+            let all = if cells == 32 {
+                u32::MAX
+            } else {
+                (1u32 << cells) - 1
+            };
+            let mut values: Vec<u32> = if cells <= 12 {
+                (0..=all).collect()
+            } else {
+                let ones = (0..cells).map(|k| 1 << k);
+                let holes = (0..cells).map(|k| all & !(1 << k));
+                ones.chain(holes).chain([0, all]).collect()
+            };
+            if cells > 12 {
+                values.extend((0..100_000 / 20).map(|_| {
+                    x ^= x << 13;
+                    x ^= x >> 7;
+                    x ^= x << 17;
+                    x as u32 & all
+                }));
+            }
+            let ends = [
+                2 * u64::from(cells),
+                (2 * u64::from(cells)).saturating_sub(1),
+            ];
+            let gs = if cells == 32 {
+                vec![63, 64, 65, 1_000]
+            } else {
+                ends.to_vec()
+            };
+            for g in gs {
+                for &raw in &values {
+                    assert_eq!(
+                        bit_checks(raw, cells, g),
+                        bit_checks_bit_by_bit(raw, cells, g),
+                        "{raw:#x} {cells} {g}"
+                    );
+                }
             }
         }
     }
