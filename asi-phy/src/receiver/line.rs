@@ -350,17 +350,14 @@ impl Placed {
     }
 }
 
-/// What [`Run::whole`] found ahead of a run's first pulse ([`Ahead::scan`]).
+/// The pulses [`Run::whole`] takes after a run's first pulse ([`Ahead::scan`]).
 #[derive(Clone, Copy, Debug)]
 struct Ahead {
-    /// The grid points of the 1st, 3rd, .. pulse of the run (which must be negative).
+    /// The grid points of the 1st, 3rd, .. pulse of the run (all negative).
     first: u64,
-    /// The grid points of the 2nd, 4th, .. pulse (which must be positive).
+    /// The grid points of the 2nd, 4th, .. pulse (all positive).
     second: u64,
-    /// The number of positive pulses among the second less that among the first: the number
-    /// of the second exactly where all of them are positive and none of the first.
-    signs: u8,
-    /// How many pulses it took.
+    /// How many pulses it took after the first.
     n: usize,
 }
 
@@ -368,19 +365,23 @@ impl Ahead {
     /// Takes the pulses of `ahead` after a run's first pulse (negative, on point 0 of the grid
     /// at `base` + the tolerance) while each lies within the tolerance of one of the two grid
     /// points after the previous one's, as [`Placed::scan`] does, for a grid with a fast scan
-    /// ([`Grid::recip`]).
+    /// ([`Grid::recip`]); `None` if their signs do not alternate from the first pulse's.
     ///
-    /// The 31 steps are written out, each with its own constant index and so the sign it
-    /// expects, and a function of their own, so that the compiler keeps everything in registers:
-    /// a pulse costs its placement, one bit and one sign.
+    /// The 31 steps are written out, each with its own constant index, so the sign it expects
+    /// and its own way out, which knows how many pulses were taken and how many of them must
+    /// be positive; and in a function of their own, so that the compiler keeps everything in
+    /// registers: a pulse costs its placement, one bit and one sign.
     // (The last step's grid point goes unread: no pulse follows it in the array.)
     #[allow(unused_assignments)]
     #[inline(never)]
-    fn scan(ahead: &[Pulse; 32], base: u64, grid: &Grid) -> Ahead {
+    fn scan(ahead: &[Pulse; 32], base: u64, grid: &Grid) -> Option<Ahead> {
         // In locals, not in the result, which the compiler would store at every step; the grid
         // point of the last pulse is only needed for the next (the highest point taken is the
         // run's last).
-        let (mut first, mut second, mut last_g, mut signs) = (1u64, 0u64, 0u64, 0u8);
+        let (mut first, mut second, mut last_g) = (1u64, 0u64, 0u64);
+        // The number of positive pulses among the second less that among the first: the
+        // number of the second exactly where all of them are positive and none of the first.
+        let mut signs = 0u8;
         macro_rules! take_while_placed {
             ($($i:literal)*) => {
                 {
@@ -388,8 +389,9 @@ impl Ahead {
                         let p = &ahead[$i];
                         let at = p.at.as_nanos().wrapping_sub(base);
                         let Some(q) = grid.place(at, last_g) else {
-                            // Each step has its own way out, which knows the count.
-                            return Ahead { first, second, signs, n: $i };
+                            // The first i take ⌈i/2⌉ of the second.
+                            return (usize::from(signs) == usize::div_ceil($i, 2))
+                                .then_some(Ahead { first, second, n: $i });
                         };
                         // q ≤ 2·(i + 1) ≤ 62.
                         let bit = 1u64.wrapping_shl(q as u32);
@@ -408,12 +410,11 @@ impl Ahead {
         take_while_placed!(
             0 1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16 17 18 19 20 21 22 23 24 25 26 27 28 29 30
         );
-        Ahead {
+        (usize::from(signs) == usize::div_ceil(31, 2)).then_some(Ahead {
             first,
             second,
-            signs,
             n: 31,
-        }
+        })
     }
 }
 
@@ -456,17 +457,17 @@ impl Run {
             return None;
         }
         let ahead: &[Pulse; 32] = tail.first_chunk()?;
-        let pulse = |i: usize| ahead[i].at.as_nanos();
         let t0 = first.at.as_nanos();
-        let found = Ahead::scan(ahead, t0.wrapping_sub(grid.tol), grid);
+        let found = Ahead::scan(ahead, t0.wrapping_sub(grid.tol), grid)?;
         let occupied = found.first | found.second;
         let n = found.n;
-        let last_t = if n == 0 { t0 } else { pulse(n - 1) };
-        let at = pulse(n);
-        // After a pause, and the signs alternate (n ≤ 31 takes ⌈n/2⌉ of the second).
-        if !(at.wrapping_sub(last_t) >= grid.pause && at >= last_t)
-            || usize::from(found.signs) != n.div_ceil(2)
-        {
+        // The pulse after the run (n ≤ 31) and the run's last.
+        let at = ahead.get(n)?.at.as_nanos();
+        let last_t = match n.checked_sub(1) {
+            Some(last) => ahead[last].at.as_nanos(),
+            None => t0,
+        };
+        if !(at.wrapping_sub(last_t) >= grid.pause && at >= last_t) {
             return None;
         }
         let run = Run {
