@@ -473,7 +473,8 @@ impl Run {
         let run = Run {
             t0,
             last_t,
-            last_g: u64::from(63 - occupied.leading_zeros()),
+            // (Point 0 holds the first pulse: the compiler need not mind an empty mask.)
+            last_g: u64::from(63 - (occupied | 1).leading_zeros()),
             // The last pulse is the run's (n + 1)th.
             last_positive: n % 2 == 1,
             on_grid: true,
