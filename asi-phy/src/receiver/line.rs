@@ -661,18 +661,24 @@ impl Run {
 /// first `cells` bits (the first highest, nothing above them; 0 without a cell) and its last
 /// pulse on grid point `g`.
 ///
-/// Without a branch or a mask for each: the first bit is what shifts out below the cells, and
-/// the parity of the bits between the first and the last is that of all of them less those
-/// two (with one cell the identity does not hold, but there is no parity to check).
+/// Without a branch or a mask for each: the first bit is what shifts out below the cells, the
+/// parity of the bits between the first and the last is that of all of them less those two
+/// (with one cell the identity does not hold, but there is no parity to check), and the three
+/// failures are put together as bits of the set (the compiler made a longer sequence of
+/// tests of the flags one by one).
 #[inline(always)]
 fn bit_checks(raw: u32, cells: u32, g: u64) -> Checks {
     let first = (u64::from(raw) << 1 >> cells) as u32 & 1;
     let last = raw & 1;
-    let between_odd = odd_parity(raw) != (first != last);
-    Checks::NONE
-        .with_if(Check::StartBit, first == 1)
-        .with_if(Check::Parity, cells >= 3 && between_odd)
-        .with_if(Check::EndBit, g % 2 != 0 || last == 0)
+    let between_odd = odd_parity(raw) as u32 ^ first ^ last;
+    let parity = between_odd & u32::from(cells >= 3);
+    // The last pulse not at the end of a cell, or a last bit 0.
+    let end = (g as u32 & 1) | (last ^ 1);
+    Checks::from_bits(
+        (first << Check::StartBit as u32
+            | parity << Check::Parity as u32
+            | end << Check::EndBit as u32) as u8,
+    )
 }
 
 /// Bit j is the parity of the bits of `x` at j and below.
