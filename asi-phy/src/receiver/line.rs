@@ -170,23 +170,47 @@ impl LineDecoder {
             out(self.run.finish());
         }
         while let Some((first, tail)) = rest.split_first() {
-            // A clean run at once; any other pulse by pulse.
+            // A clean run at once.
             if let Some((frame, after)) = Run::whole(first, tail, &grid) {
                 out(frame);
                 rest = after;
                 continue;
             }
-            let mut run = Run::begin(*first);
-            let taken = run.extend(tail, &grid);
-            match tail.get(taken..) {
-                Some(r) if !r.is_empty() => rest = r,
-                _ => {
-                    self.run = run;
-                    self.active = true;
-                    return;
-                }
+            // Any other pulse by pulse.
+            match self.by_pulse(first, tail, &mut out) {
+                Some(r) => rest = r,
+                None => return,
             }
-            out(run.finish());
+        }
+    }
+
+    /// The run that begins with `first` and goes on in `tail`, pulse by pulse where it leaves
+    /// the grid (`Run::extend`): calls `out` with its frame and returns the pulses after it if
+    /// it ends within the slice, else keeps it as the frame in progress.
+    ///
+    /// Out of line, so that the compiler gives the registers of `push_slice`'s loop to the runs
+    /// decided at once, the common case (four instructions a telegram fewer on the phy bench's
+    /// line).
+    #[inline(never)]
+    fn by_pulse<'p>(
+        &mut self,
+        first: &Pulse,
+        tail: &'p [Pulse],
+        out: &mut impl FnMut(Frame),
+    ) -> Option<&'p [Pulse]> {
+        let grid = self.grid;
+        let mut run = Run::begin(*first);
+        let taken = run.extend(tail, &grid);
+        match tail.get(taken..) {
+            Some(r) if !r.is_empty() => {
+                out(run.finish());
+                Some(r)
+            }
+            _ => {
+                self.run = run;
+                self.active = true;
+                None
+            }
         }
     }
 
@@ -350,6 +374,74 @@ impl Placed {
     }
 }
 
+/// The pulses [`Run::whole`] takes after a run's first pulse ([`Ahead::scan`]).
+#[derive(Clone, Copy, Debug)]
+struct Ahead {
+    /// The grid points of the 1st, 3rd, .. pulse of the run (all negative).
+    first: u64,
+    /// The grid points of the 2nd, 4th, .. pulse (all positive).
+    second: u64,
+    /// How many pulses it took after the first.
+    n: usize,
+}
+
+impl Ahead {
+    /// Takes the pulses of `ahead` after a run's first pulse (negative, on point 0 of the grid
+    /// at `base` + the tolerance) while each lies within the tolerance of one of the two grid
+    /// points after the previous one's, as [`Placed::scan`] does, for a grid with a fast scan
+    /// ([`Grid::recip`]); `None` if their signs do not alternate from the first pulse's.
+    ///
+    /// The 31 steps are written out, each with its own constant index, so the sign it expects
+    /// and its own way out, which knows how many pulses were taken and how many of them must
+    /// be positive; and in a function of their own, so that the compiler keeps everything in
+    /// registers: a pulse costs its placement, one bit and one sign.
+    // (The last step's grid point goes unread: no pulse follows it in the array.)
+    #[allow(unused_assignments)]
+    #[inline(never)]
+    fn scan(ahead: &[Pulse; 32], base: u64, grid: &Grid) -> Option<Ahead> {
+        // In locals, not in the result, which the compiler would store at every step; the grid
+        // point of the last pulse is only needed for the next (the highest point taken is the
+        // run's last).
+        let (mut first, mut second, mut last_g) = (1u64, 0u64, 0u64);
+        // The number of positive pulses among the second less that among the first: the
+        // number of the second exactly where all of them are positive and none of the first.
+        let mut signs = 0u8;
+        macro_rules! take_while_placed {
+            ($($i:literal)*) => {
+                {
+                    $(
+                        let p = &ahead[$i];
+                        let at = p.at.as_nanos().wrapping_sub(base);
+                        let Some(q) = grid.place(at, last_g) else {
+                            // The first i take ⌈i/2⌉ of the second.
+                            return (usize::from(signs) == usize::div_ceil($i, 2))
+                                .then_some(Ahead { first, second, n: $i });
+                        };
+                        // q ≤ 2·(i + 1) ≤ 62.
+                        let bit = 1u64.wrapping_shl(q as u32);
+                        if $i % 2 == 0 {
+                            second |= bit;
+                            signs = signs.wrapping_add(p.polarity as u8);
+                        } else {
+                            first |= bit;
+                            signs = signs.wrapping_sub(p.polarity as u8);
+                        }
+                        last_g = q;
+                    )*
+                }
+            };
+        }
+        take_while_placed!(
+            0 1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16 17 18 19 20 21 22 23 24 25 26 27 28 29 30
+        );
+        (usize::from(signs) == usize::div_ceil(31, 2)).then_some(Ahead {
+            first,
+            second,
+            n: 31,
+        })
+    }
+}
+
 impl Run {
     fn begin(p: Pulse) -> Run {
         let positive = p.polarity == Polarity::Positive;
@@ -372,58 +464,51 @@ impl Run {
     }
 
     /// The run that begins with `first` and goes on in `tail`, if it is decided at once: its
-    /// pulses after the first all lie within the tolerance of the grid, one or two points apart
-    /// (the fast scan, [`Run::scan`]), with alternating signs, and the pulse after them comes
-    /// after a pause. Returns its frame and the pulses after it (which begin with the pulse
-    /// after the pause); `None` leaves the run to [`Run::begin`] and [`Run::extend`], which
-    /// give the same result for any run.
+    /// first pulse is negative, its pulses after the first all lie within the tolerance of the
+    /// grid, one or two points apart (as in the fast scan, [`Run::scan`]), with alternating
+    /// signs, and the pulse after them comes after a pause. Returns its frame and the pulses
+    /// after it (which begin with the pulse after the pause); `None` leaves the run to
+    /// [`Run::begin`] and [`Run::extend`], which give the same result for any run.
+    ///
+    /// Every telegram a sound transmitter sends is such a run, so this is the decoder's hot
+    /// path: it looks at the 31 pulses a run can hold within the masks and the one after them
+    /// as an array ([`Ahead::scan`]), so a pulse costs little more than its placement. A run it
+    /// cannot decide (one beginning with a positive pulse, or one less than 32 pulses before
+    /// the end of the slice) goes the longer way, which is exact for any run.
     #[inline(always)]
     fn whole<'p>(first: &Pulse, tail: &'p [Pulse], grid: &Grid) -> Option<(Frame, &'p [Pulse])> {
-        if grid.recip == 0 {
+        if grid.recip == 0 || first.polarity == Polarity::Positive {
             return None;
         }
+        let ahead: &[Pulse; 32] = tail.first_chunk()?;
         let t0 = first.at.as_nanos();
-        // At most 31 pulses after the first keep every grid point under 64.
-        let scanned = &tail[..tail.len().min(31)];
-        let placed = Placed::scan(scanned, t0.wrapping_sub(grid.tol), 0, grid);
-        let (n, q_prev) = (placed.n, placed.last_g);
-        let occupied = 1 | placed.occupied;
-        let signs = (first.polarity as u64) << n | placed.signs;
-        let last_t = if n == 0 {
-            t0
-        } else {
-            tail[n - 1].at.as_nanos()
+        let found = Ahead::scan(ahead, t0.wrapping_sub(grid.tol), grid)?;
+        let occupied = found.first | found.second;
+        let n = found.n;
+        // The pulse after the run (n ≤ 31) and the run's last.
+        let at = ahead.get(n)?.at.as_nanos();
+        let last_t = match n.checked_sub(1) {
+            Some(last) => ahead[last].at.as_nanos(),
+            None => t0,
         };
-        let after = tail.get(n..)?;
-        let at = after.first()?.at.as_nanos();
         if !(at.wrapping_sub(last_t) >= grid.pause && at >= last_t) {
             return None;
         }
-        // All n + 1 signs alternate.
-        let all = (1u64 << n) - 1;
-        if (signs ^ (signs >> 1)) & all != all {
-            return None;
-        }
-        let first_positive = first.polarity == Polarity::Positive;
-        let odd = prefix_parity(occupied);
         let run = Run {
             t0,
             last_t,
-            last_g: q_prev,
-            last_positive: signs & 1 == 1,
+            // (Point 0 holds the first pulse: the compiler need not mind an empty mask.)
+            last_g: u64::from(63 - (occupied | 1).leading_zeros()),
+            // The last pulse is the run's (n + 1)th.
+            last_positive: n % 2 == 1,
             on_grid: true,
             count: n as u32 + 1,
             occupied,
-            // The 1st, 3rd, .. pulse has the first one's sign.
-            positive: occupied & if first_positive { odd } else { !odd },
-            failed: if first_positive {
-                Checks::only(Check::StartBit)
-            } else {
-                Checks::NONE
-            },
+            positive: found.second,
+            failed: Checks::NONE,
             clean: None,
         };
-        Some((run.finish(), after))
+        Some((run.finish(), &tail[n..]))
     }
 
     /// Adds the leading pulses of `pulses` that belong to this run (all up to the first that
@@ -584,18 +669,7 @@ impl Run {
                 level_raw(self.occupied, self.positive, cells)
             }
         };
-        if cells >= 1 && raw >> (cells - 1) & 1 == 1 {
-            failed = failed.with(Check::StartBit);
-        }
-        if cells >= 3 {
-            let between = (raw >> 1) & ((1 << (cells - 2)) - 1);
-            if odd_parity(between) {
-                failed = failed.with(Check::Parity);
-            }
-        }
-        if g % 2 != 0 || n == 0 || raw & 1 == 0 {
-            failed = failed.with(Check::EndBit);
-        }
+        failed = failed.union(bit_checks(raw, cells, g));
         Frame {
             start: SimTime::from_nanos(self.t0),
             end: SimTime::from_nanos(self.last_t),
@@ -605,6 +679,30 @@ impl Run {
             line_failed: failed,
         }
     }
+}
+
+/// The checks a frame's bits decide: start bit, parity and end bit, for `raw` holding its
+/// first `cells` bits (the first highest, nothing above them; 0 without a cell) and its last
+/// pulse on grid point `g`.
+///
+/// Without a branch or a mask for each: the first bit is what shifts out below the cells, the
+/// parity of the bits between the first and the last is that of all of them less those two
+/// (with one cell the identity does not hold, but there is no parity to check), and the three
+/// failures are put together as bits of the set (the compiler made a longer sequence of
+/// tests of the flags one by one).
+#[inline(always)]
+fn bit_checks(raw: u32, cells: u32, g: u64) -> Checks {
+    let first = (u64::from(raw) << 1 >> cells) as u32 & 1;
+    let last = raw & 1;
+    let between_odd = odd_parity(raw) as u32 ^ first ^ last;
+    let parity = between_odd & u32::from(cells >= 3);
+    // The last pulse not at the end of a cell, or a last bit 0.
+    let end = (g as u32 & 1) | (last ^ 1);
+    Checks::from_bits(
+        (first << Check::StartBit as u32
+            | parity << Check::Parity as u32
+            | end << Check::EndBit as u32) as u8,
+    )
 }
 
 /// Bit j is the parity of the bits of `x` at j and below.
@@ -692,14 +790,17 @@ fn level_bits(occupied: u64, positive: u64, cells: u32) -> u32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::receiver::tests::equivalence::{border_config, grid_line};
     use crate::receiver::Expect;
     use crate::telegram::Request;
     use crate::timing::BusTiming;
-    use proptest::prelude::Just;
+    use proptest::prelude::{Just, Strategy};
 
     /// Every request's pulses, each after the first off its grid point by exactly the
-    /// tolerance (late, early, alternately), and a pulse exactly a pause after the last.
-    fn on_the_borders() -> impl Iterator<Item = (u16, Vec<Pulse>)> {
+    /// tolerance (late, early, alternately), then a pulse exactly a pause after the last, which
+    /// begins a run of 32 on the grid (so that [`Run::whole`] has all it looks at); and the
+    /// number of the request's pulses.
+    fn on_the_borders() -> impl Iterator<Item = (u16, Vec<Pulse>, usize)> {
         let timing = BusTiming::default();
         let tol = timing.tolerance().as_nanos();
         (0u16..1 << 11).map(move |body| {
@@ -713,9 +814,17 @@ mod tests {
                 let at = p.at.as_nanos();
                 p.at = SimTime::from_nanos(if i % 2 == 1 { at + tol } else { at - tol });
             }
-            let last = pulses.last().expect("pulses").at;
-            pulses.push(Pulse::new(last + timing.min_pause(), Polarity::Negative));
-            (bits, pulses)
+            let n = pulses.len();
+            let next = pulses[n - 1].at + timing.min_pause();
+            pulses.extend((0..32u64).map(|k| {
+                let polarity = if k % 2 == 0 {
+                    Polarity::Negative
+                } else {
+                    Polarity::Positive
+                };
+                Pulse::new(next + timing.half_bit().saturating_mul(k), polarity)
+            }));
+            (bits, pulses, n)
         })
     }
 
@@ -726,20 +835,97 @@ mod tests {
     fn the_fast_paths_take_pulses_on_the_tolerance_borders() {
         let grid = Grid::new(&BusTiming::default().receiver(Expect::Both));
         assert_ne!(grid.recip, 0);
-        for (bits, pulses) in on_the_borders() {
-            let n = pulses.len();
+        for (bits, pulses, n) in on_the_borders() {
             let (frame, after) = Run::whole(&pulses[0], &pulses[1..], &grid).expect("at once");
-            assert_eq!(after, &pulses[n - 1..], "{bits:#06x}");
+            assert_eq!(after, &pulses[n..], "{bits:#06x}");
             assert_eq!(
                 (frame.raw, frame.line_failed, frame.pulses),
-                (u32::from(bits), Checks::NONE, n as u32 - 1)
+                (u32::from(bits), Checks::NONE, n as u32)
             );
             let mut run = Run::begin(pulses[0]);
-            let (taken, same) = run.scan(&pulses[1..n - 1], &grid);
-            assert_eq!((taken, same), (n - 2, false), "{bits:#06x}");
+            let (taken, same) = run.scan(&pulses[1..n], &grid);
+            assert_eq!((taken, same), (n - 1, false), "{bits:#06x}");
             // (The count is extend's to keep.)
             run.count += taken as u32;
             assert_eq!(run.finish(), frame);
+        }
+    }
+
+    /// The reference of [`Run::whole`]: the run decided at once as it was before its scan was
+    /// written out: the pulses after the first placed two at a time ([`Placed::scan`]), their
+    /// signs collected in order and checked to alternate, the positive ones found by prefix
+    /// parity; for a first pulse of either sign and a slice of any length.
+    fn whole_by_placed_scan<'p>(
+        first: &Pulse,
+        tail: &'p [Pulse],
+        grid: &Grid,
+    ) -> Option<(Frame, &'p [Pulse])> {
+        if grid.recip == 0 {
+            return None;
+        }
+        let t0 = first.at.as_nanos();
+        let scanned = &tail[..tail.len().min(31)];
+        let placed = Placed::scan(scanned, t0.wrapping_sub(grid.tol), 0, grid);
+        let (n, q_prev) = (placed.n, placed.last_g);
+        let occupied = 1 | placed.occupied;
+        let signs = (first.polarity as u64) << n | placed.signs;
+        let last_t = if n == 0 {
+            t0
+        } else {
+            tail[n - 1].at.as_nanos()
+        };
+        let after = tail.get(n..)?;
+        let at = after.first()?.at.as_nanos();
+        if !(at.wrapping_sub(last_t) >= grid.pause && at >= last_t) {
+            return None;
+        }
+        let all = (1u64 << n) - 1;
+        if (signs ^ (signs >> 1)) & all != all {
+            return None;
+        }
+        let first_positive = first.polarity == Polarity::Positive;
+        let odd = prefix_parity(occupied);
+        let run = Run {
+            t0,
+            last_t,
+            last_g: q_prev,
+            last_positive: signs & 1 == 1,
+            on_grid: true,
+            count: n as u32 + 1,
+            occupied,
+            positive: occupied & if first_positive { odd } else { !odd },
+            failed: if first_positive {
+                Checks::only(Check::StartBit)
+            } else {
+                Checks::NONE
+            },
+            clean: None,
+        };
+        Some((run.finish(), after))
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(2_000))]
+
+        /// The written-out scan decides a run at once exactly where the placed scan did and
+        /// gives the same frame, wherever it has the 32 pulses it looks at and the run begins
+        /// negative (any other run goes the longer way): from every pulse of lines on the
+        /// borders of the tolerance, the pause and the grid (`grid_line`).
+        #[test]
+        fn the_run_at_once_is_the_run_by_the_placed_scan(
+            (cfg, pulses) in border_config().prop_flat_map(|cfg| (Just(cfg), grid_line(cfg))),
+        ) {
+            let grid = Grid::new(&cfg);
+            for (i, first) in pulses.iter().enumerate() {
+                let tail = &pulses[i + 1..];
+                let reference = whole_by_placed_scan(first, tail, &grid);
+                let expected = if tail.len() >= 32 && first.polarity == Polarity::Negative {
+                    reference
+                } else {
+                    None
+                };
+                proptest::prop_assert_eq!(Run::whole(first, tail, &grid), expected, "at {}", i);
+            }
         }
     }
 
@@ -799,6 +985,73 @@ mod tests {
                     place_by_division(&grid, y, prev),
                     "h {} tol {} prev {} y {}", h, tol, prev, y
                 );
+            }
+        }
+    }
+
+    /// The reference of [`bit_checks`]: each check from the bits it names.
+    fn bit_checks_bit_by_bit(raw: u32, cells: u32, g: u64) -> Checks {
+        let mut failed = Checks::NONE;
+        if cells >= 1 && raw >> (cells - 1) & 1 == 1 {
+            failed = failed.with(Check::StartBit);
+        }
+        if cells >= 3 {
+            let between = (raw >> 1) & ((1 << (cells - 2)) - 1);
+            if odd_parity(between) {
+                failed = failed.with(Check::Parity);
+            }
+        }
+        if g % 2 != 0 || g.div_ceil(2) == 0 || raw & 1 == 0 {
+            failed = failed.with(Check::EndBit);
+        }
+        failed
+    }
+
+    /// The checks of the bits without a branch for each are the checks bit by bit, for every
+    /// number of cells a frame holds (with its last pulse at the end of its last cell or in
+    /// its middle, or far past the 32 cells kept): every value up to 12 cells, and for more
+    /// the values with one bit, with all but one and 5,000 others each.
+    #[test]
+    fn the_checks_of_the_bits_are_the_checks_bit_by_bit() {
+        let mut x = 0x9E37_79B9_7F4A_7C15u64;
+        for cells in 0..=32u32 {
+            let all = if cells == 32 {
+                u32::MAX
+            } else {
+                (1u32 << cells) - 1
+            };
+            let mut values: Vec<u32> = if cells <= 12 {
+                (0..=all).collect()
+            } else {
+                let ones = (0..cells).map(|k| 1 << k);
+                let holes = (0..cells).map(|k| all & !(1 << k));
+                ones.chain(holes).chain([0, all]).collect()
+            };
+            if cells > 12 {
+                values.extend((0..100_000 / 20).map(|_| {
+                    x ^= x << 13;
+                    x ^= x >> 7;
+                    x ^= x << 17;
+                    x as u32 & all
+                }));
+            }
+            let ends = [
+                2 * u64::from(cells),
+                (2 * u64::from(cells)).saturating_sub(1),
+            ];
+            let gs = if cells == 32 {
+                vec![63, 64, 65, 1_000]
+            } else {
+                ends.to_vec()
+            };
+            for g in gs {
+                for &raw in &values {
+                    assert_eq!(
+                        bit_checks(raw, cells, g),
+                        bit_checks_bit_by_bit(raw, cells, g),
+                        "{raw:#x} {cells} {g}"
+                    );
+                }
             }
         }
     }

@@ -281,7 +281,7 @@ fn odd_inputs_never_panic() {
 /// The equivalence of the fast line decoder with the one it replaced (`reference.rs`): random
 /// pulse sequences, cut and fed in random ways, give the same frames, the same telegrams and
 /// the same state (`poll_at`) after every step.
-mod equivalence {
+pub(super) mod equivalence {
     use super::super::reference::ReferenceLineDecoder;
     use super::*;
     use proptest::prelude::*;
@@ -485,7 +485,7 @@ mod equivalence {
     /// a tolerance at zero, just under, at and over half the grid; a pause just under, at and
     /// over two half-bits plus twice the tolerance; the largest grid the scan takes and the
     /// next one; and the bus's own.
-    fn border_config() -> impl Strategy<Value = ReceiverConfig> {
+    pub(in crate::receiver) fn border_config() -> impl Strategy<Value = ReceiverConfig> {
         let bordered = (
             prop_oneof![
                 2 => Just(3_000u64),
@@ -537,7 +537,7 @@ mod equivalence {
     /// the same point, three or more points on, or with the last one's sign; runs longer than
     /// the masks; each next run just under, at or over the pause after the last pulse, or
     /// later. Times wrap past the clock's end where the origin is near it.
-    fn grid_line(cfg: ReceiverConfig) -> impl Strategy<Value = Vec<Pulse>> {
+    pub(in crate::receiver) fn grid_line(cfg: ReceiverConfig) -> impl Strategy<Value = Vec<Pulse>> {
         let h = cfg.half_bit;
         let tol = cfg.tolerance as i64;
         let pause = cfg.pause;
