@@ -42,7 +42,7 @@ use asi_master::record::{BusStats, TraceRing, TransactionRecord};
 use asi_phy::line::{Line, Medium};
 use asi_phy::{
     BusTiming, Call, Checks, Expect, FaultInjector, FaultRates, Frame, Listener, PulseFault,
-    PulseTrain, Request, Response, SimTime, Transmission,
+    PulseTrain, Received, Request, Response, SimDuration, SimTime, Transmission,
 };
 use asi_slaves::monitor::SafetyMonitor;
 use asi_slaves::slave::{Peripheral, Slave};
@@ -146,13 +146,26 @@ impl Current {
     /// within the response window counts as a response (a second one makes the outcome
     /// corrupt, as does any that fails a check).
     fn master_hears(&mut self, rx: &mut Listener, timing: &BusTiming, f: &Frame) {
+        self.master_hears_as(rx, timing, f, Received::response);
+    }
+
+    /// [`Current::master_hears`], with `decode` telling the response a valid telegram is
+    /// ([`Received::response`], or the answer a held frame was made of).
+    #[inline]
+    fn master_hears_as(
+        &mut self,
+        rx: &mut Listener,
+        timing: &BusTiming,
+        f: &Frame,
+        decode: impl FnOnce(&Received) -> Option<Response>,
+    ) {
         let window_end = self.req_end + timing.response_timeout();
         if f.start > self.req_end && f.start <= window_end {
             let r = rx.accept(f);
             self.responses += 1;
             self.line_error |= !r.is_valid();
             if r.is_valid() && self.responses == 1 {
-                self.response = r.response();
+                self.response = decode(&r);
             } else {
                 self.response = None;
                 self.response_failed = cur_checks(self.response_failed, r.failed);
@@ -167,6 +180,9 @@ pub type TraceCallback = Box<dyn FnMut(&TransactionRecord) + Send>;
 /// An AS-i segment: master, slaves, line, passive monitors.
 pub struct Bus {
     timing: BusTiming,
+    /// `timing.transaction()`, worked out once: the timing of a bus never changes, and the
+    /// quick path needs it at every transaction.
+    transaction: SimDuration,
     master: Master,
     slaves: Vec<SlaveSlot>,
     addr_index: [u64; 32],
@@ -183,6 +199,8 @@ pub struct Bus {
     /// The frame of a quick transaction's telegram held off the line ([`Bus::may_run_quick`]):
     /// the frame the clean line would hand on.
     held: Option<Frame>,
+    /// The slave's answer that `held` was made of, while it is held.
+    held_answer: Option<Response>,
     volts: f64,
     slaves_powered: bool,
     cur: Option<Current>,
@@ -221,6 +239,7 @@ impl Bus {
         let master = Master::new(cfg, projected)?;
         let mut bus = Bus {
             timing,
+            transaction: timing.transaction(),
             master_rx: Listener::new(&timing.receiver(Expect::Responses)),
             medium: Medium::quiet(&timing),
             master,
@@ -233,6 +252,7 @@ impl Bus {
             next_event: SimTime::ZERO,
             horizon: SimTime::ZERO,
             held: None,
+            held_answer: None,
             volts: NOMINAL_VOLTS,
             slaves_powered: true,
             cur: None,
@@ -430,7 +450,7 @@ impl Bus {
             return;
         };
         self.state = State::AwaitResponse;
-        let base = cur.start + self.timing.transaction();
+        let base = cur.start + self.transaction;
         let quiet = self
             .medium
             .poll_at()

@@ -39,11 +39,12 @@ impl Bus {
             return;
         };
         let r = self.groups[0].listener.accept(&f);
-        let request = r.request();
+        // The held frame is the request's own (`start_transaction` made it of `cur.tx`).
+        let request = r.request_sent(cur.tx.request);
         cur.request_frames = 1;
         cur.request_failed = r.failed;
         cur.valid_request = request;
-        let base = cur.start + self.timing.transaction();
+        let base = cur.start + self.transaction;
         for m in &mut self.monitors {
             m.on_frame(t, &f);
         }
@@ -63,6 +64,7 @@ impl Bus {
             if self.medium.pass_untouched(&tg) {
                 let answer = tg.frame();
                 self.held = Some(answer);
+                self.held_answer = Some(r);
                 quiet = Some(answer.end + timing.min_pause());
             } else {
                 // The line touches the answer: the transaction goes on the line's path.
@@ -94,7 +96,12 @@ impl Bus {
         let mut cur = self.cur.take()?;
         if let Some(f) = self.held.take() {
             cur.line_end = cur.line_end.max(f.end);
-            cur.master_hears(&mut self.master_rx, &self.timing, &f);
+            // The held frame is the answer's own (`quick_request` made it of `held_answer`).
+            let answer = self.held_answer.take();
+            cur.master_hears_as(&mut self.master_rx, &self.timing, &f, |r| match answer {
+                Some(a) => r.response_sent(a),
+                None => r.response(),
+            });
             self.groups[0].listener.accept(&f);
             for m in &mut self.monitors {
                 m.on_frame(t, &f);
@@ -111,6 +118,7 @@ impl Bus {
             return;
         };
         cur.quick = false;
+        self.held_answer = None;
         if let Some(f) = self.held.take() {
             // The telegram the frame was made of; an idle, clean line keeps it pending, so no
             // frame comes out now.
