@@ -502,6 +502,25 @@ impl Bus {
             ab: cur.tx.ab,
         };
         self.stats.record(&rec, verdict.error, verdict.repeat);
+        // Most runs keep no record: no ring, no callback, no subscriber at TRACE. The record
+        // is then only counted, and never stored for them. `tracing::trace!` itself checks
+        // first that TRACE is within the static and the current maximum level (its
+        // `level_enabled!`), and does nothing else when it is not (without the `log` feature,
+        // which asi-lift does not turn on); the same test here lets every subscriber that
+        // could see the event see it.
+        let traced = tracing::Level::TRACE <= tracing::level_filters::STATIC_MAX_LEVEL
+            && tracing::Level::TRACE <= tracing::level_filters::LevelFilter::current();
+        if traced || self.ring.is_some() || self.callback.is_some() {
+            self.publish(rec);
+        }
+        cur.line_error
+            .then(|| cur.line_end + self.timing.async_pause())
+    }
+
+    /// Trace record `rec` to `tracing` (target `asi_master::trace`, level TRACE), to the ring
+    /// and to the callback.
+    #[inline(never)]
+    fn publish(&mut self, rec: TransactionRecord) {
         tracing::trace!(target: "asi_master::trace", "{rec}");
         if let Some(r) = &mut self.ring {
             r.push(rec);
@@ -509,8 +528,6 @@ impl Bus {
         if let Some(cb) = &mut self.callback {
             cb(&rec);
         }
-        cur.line_error
-            .then(|| cur.line_end + self.timing.async_pause())
     }
 
     /// Every receiver on the line hears frame `f` at `now`. The transaction in progress is
