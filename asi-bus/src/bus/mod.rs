@@ -183,6 +183,10 @@ pub struct Bus {
     /// `timing.transaction()`, worked out once: the timing of a bus never changes, and the
     /// quick path needs it at every transaction.
     transaction: SimDuration,
+    /// From the first pulse of a request to its last, and of a response
+    /// ([`quick::last_pulse`]), worked out once as `transaction` is.
+    request_last: SimDuration,
+    response_last: SimDuration,
     master: Master,
     slaves: Vec<SlaveSlot>,
     addr_index: [u64; 32],
@@ -240,6 +244,8 @@ impl Bus {
         let mut bus = Bus {
             timing,
             transaction: timing.transaction(),
+            request_last: quick::last_pulse(timing.half_bit(), Request::BITS),
+            response_last: quick::last_pulse(timing.half_bit(), Response::BITS),
             master_rx: Listener::new(&timing.receiver(Expect::Responses)),
             medium: Medium::quiet(&timing),
             master,
@@ -403,7 +409,7 @@ impl Bus {
         let tg = Transmission::request(tx.request, t, self.timing.half_bit());
         if self.may_run_quick(tx.request) && self.medium.takes_clean(&tg) {
             // As the clean line would: the frame at its end plus the pause.
-            let f = tg.frame();
+            let f = quick::request_frame(tx.request, t, self.request_last);
             self.cur = Some(Current::new(tx, t, f.end, true));
             self.held = Some(f);
             self.state = State::AwaitRequestFrame;

@@ -62,7 +62,7 @@ impl Bus {
             // The line is as the request found it (idle, nothing recorded: anything that
             // changes that releases the held request first), so only its faults are left to ask.
             if self.medium.pass_untouched(&tg) {
-                let answer = tg.frame();
+                let answer = answer_frame(r, tg.start(), self.response_last);
                 self.held = Some(answer);
                 self.held_answer = Some(r);
                 quiet = Some(answer.end + timing.min_pause());
@@ -126,6 +126,84 @@ impl Bus {
             self.medium.transmit_taken(&tg, &mut |_| {
                 debug_assert!(false, "a held telegram went on a line that was not idle")
             });
+        }
+    }
+}
+
+/// From the first pulse of a request or response of `bits` bits to its last on the `half_bit`
+/// grid: the last pulse is the return to idle after the end bit, at grid point `2 * bits`.
+pub(super) fn last_pulse(half_bit: SimDuration, bits: u32) -> SimDuration {
+    half_bit.saturating_mul(u64::from(2 * bits))
+}
+
+/// `Transmission::request(q, start, h).frame()`, the frame a clean line hands on for request
+/// `q` sent at `start`, its last pulse `last` after the first ([`last_pulse`]): the pulse
+/// count looked up ([`Request::pulses`]) instead of worked out from the bits at every
+/// transaction. Held to `Transmission::frame` for every request by the test below.
+#[inline]
+pub(super) fn request_frame(q: Request, start: SimTime, last: SimDuration) -> Frame {
+    Frame {
+        start,
+        end: start + last,
+        pulses: q.pulses(),
+        bit_count: Request::BITS,
+        raw: u32::from(q.bits()),
+        line_failed: Checks::NONE,
+    }
+}
+
+/// [`request_frame`] of response `r`.
+#[inline]
+fn answer_frame(r: Response, start: SimTime, last: SimDuration) -> Frame {
+    Frame {
+        start,
+        end: start + last,
+        pulses: r.pulses(),
+        bit_count: Response::BITS,
+        raw: u32::from(r.bits()),
+        line_failed: Checks::NONE,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use asi_phy::Nibble;
+
+    /// The quick path's frames are the transmissions' frames, for every request and every
+    /// response, on the default grid and on odd ones, at the start of time and near its end.
+    #[test]
+    fn the_quick_frames_are_the_transmissions_frames() {
+        for h in [3_000, 1, 2_999, u64::MAX / 64] {
+            let h = SimDuration::from_nanos(h);
+            let (rq, rs) = (last_pulse(h, Request::BITS), last_pulse(h, Response::BITS));
+            for start in [
+                SimTime::ZERO,
+                SimTime::from_nanos(123_456_789),
+                SimTime::MAX,
+            ] {
+                for body in 0u16..1 << 11 {
+                    let q = Request::from_fields(
+                        body & 0x400 != 0,
+                        asi_phy::Address::new((body >> 5 & 0x1F) as u8).expect("an address"),
+                        (body & 0x1F) as u8,
+                    )
+                    .expect("a request");
+                    assert_eq!(
+                        request_frame(q, start, rq),
+                        Transmission::request(q, start, h).frame(),
+                        "{q:?}"
+                    );
+                }
+                for d in 0..16 {
+                    let r = Response::new(Nibble::new(d).expect("a nibble"));
+                    assert_eq!(
+                        answer_frame(r, start, rs),
+                        Transmission::response(r, start, h).frame(),
+                        "{r:?}"
+                    );
+                }
+            }
         }
     }
 }
