@@ -151,7 +151,7 @@ pub struct MonitorDrop {
     pub why: NotReleased,
 }
 
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 struct Channel {
     address: Address,
     table: Option<CodeTable>,
@@ -327,7 +327,7 @@ impl Channel {
 }
 
 /// A passive Safety-at-Work monitor on the bus (docs/asi.md §7).
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct SafetyMonitor {
     cfg: MonitorConfig,
     listener: Listener,
@@ -392,6 +392,36 @@ impl SafetyMonitor {
     #[inline]
     pub fn on_frame(&mut self, now: SimTime, frame: &Frame) {
         let r = self.listener.accept(frame);
+        self.judge(now, &r);
+    }
+
+    /// `true` if the monitor's receiver is in the state of `other`: it would take every frame
+    /// as `other` does ([`SafetyMonitor::on_frame_as`]).
+    pub fn listens_as(&self, other: &Listener) -> bool {
+        self.listener == *other
+    }
+
+    /// [`SafetyMonitor::on_frame`] of a frame that a receiver in the state of the monitor's own
+    /// ([`SafetyMonitor::listens_as`]) took as `r`, ending in state `after`: the monitor takes
+    /// that telegram and state instead of checking the frame again (on the bus the slaves'
+    /// receiver and the monitor's hear the same frames). Debug builds, and so every test
+    /// that runs a bus, check that the monitor's own receiver would have done the same.
+    #[inline]
+    pub fn on_frame_as(&mut self, now: SimTime, frame: &Frame, r: &Received, after: &Listener) {
+        debug_assert!(
+            {
+                let mut own = self.listener.clone();
+                own.accept(frame) == *r && own == *after
+            },
+            "the monitor's receiver is not in the state of the one whose telegram it takes"
+        );
+        self.listener.clone_from(after);
+        self.judge(now, r);
+    }
+
+    /// What the monitor notes of telegram `r`, heard at `now`.
+    #[inline]
+    fn judge(&mut self, now: SimTime, r: &Received) {
         match r.kind {
             TelegramKind::Request => {
                 // The address field of a request (A4..A0, bits 11..7): `Request::address` of
@@ -399,12 +429,12 @@ impl SafetyMonitor {
                 let address = r.raw >> 7 & 0x1F;
                 self.asked = None;
                 if r.is_valid() && self.monitored >> address & 1 != 0 {
-                    self.heard_request(now, &r);
+                    self.heard_request(now, r);
                 }
             }
             TelegramKind::Response => {
                 if let Some(a) = self.asked.take() {
-                    self.heard_response(now, a, &r);
+                    self.heard_response(now, a, r);
                 }
             }
         }

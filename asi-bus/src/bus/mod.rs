@@ -205,6 +205,12 @@ pub struct Bus {
     held: Option<Frame>,
     /// The slave's answer that `held` was made of, while it is held.
     held_answer: Option<Response>,
+    /// The first monitor's receiver is in the state of the slaves' receiver, so it takes each
+    /// frame of a quick transaction as that one does (`quick::hear_in_step`). They hear the
+    /// same frames from then on; whatever may change the slaves' receivers (power, plugging,
+    /// a new slave) releases the held telegrams first, which clears this, as a new monitor
+    /// and the application's access to a monitor do.
+    monitor_in_step: bool,
     volts: f64,
     slaves_powered: bool,
     cur: Option<Current>,
@@ -259,6 +265,7 @@ impl Bus {
             horizon: SimTime::ZERO,
             held: None,
             held_answer: None,
+            monitor_in_step: false,
             volts: NOMINAL_VOLTS,
             slaves_powered: true,
             cur: None,
@@ -296,6 +303,7 @@ impl Bus {
 
     /// Adds a passive monitor that hears every frame.
     pub fn add_monitor(&mut self, m: SafetyMonitor) -> MonitorId {
+        self.monitor_in_step = false;
         self.monitors.push(m);
         MonitorId(self.monitors.len() - 1)
     }
@@ -843,6 +851,8 @@ impl Bus {
 
     /// A monitor, mutable.
     pub fn monitor_mut(&mut self, id: MonitorId) -> Option<&mut SafetyMonitor> {
+        // The application may put another monitor in its place.
+        self.monitor_in_step = false;
         self.monitors.get_mut(id.0)
     }
 

@@ -38,16 +38,19 @@ impl Bus {
             self.request_frame(t);
             return;
         };
-        let r = self.groups[0].listener.accept(&f);
+        let r = hear_in_step(
+            &mut self.groups[0].listener,
+            &mut self.monitors,
+            &mut self.monitor_in_step,
+            t,
+            &f,
+        );
         // The held frame is the request's own (`start_transaction` made it of `cur.tx`).
         let request = r.request_sent(cur.tx.request);
         cur.request_frames = 1;
         cur.request_failed = r.failed;
         cur.valid_request = request;
         let base = cur.start + self.transaction;
-        for m in &mut self.monitors {
-            m.on_frame(t, &f);
-        }
         let mut answer = None;
         if let Some(q) = request {
             let who = self.groups[0].members & self.addr_index[q.address().get() as usize];
@@ -102,10 +105,13 @@ impl Bus {
                 Some(a) => r.response_sent(a),
                 None => r.response(),
             });
-            self.groups[0].listener.accept(&f);
-            for m in &mut self.monitors {
-                m.on_frame(t, &f);
-            }
+            hear_in_step(
+                &mut self.groups[0].listener,
+                &mut self.monitors,
+                &mut self.monitor_in_step,
+                t,
+                &f,
+            );
         }
         self.close(t, &cur)
     }
@@ -114,6 +120,9 @@ impl Bus {
     /// have it by now, and lets the transaction go on that path: called before anything
     /// changes the line, the slaves' receivers or their power.
     pub(super) fn release_held(&mut self) {
+        // What comes may change the slaves' receivers: the first monitor's is compared with
+        // theirs again before it takes their telegrams ([`hear_in_step`]).
+        self.monitor_in_step = false;
         let Some(cur) = self.cur.as_mut().filter(|c| c.quick) else {
             return;
         };
@@ -128,6 +137,39 @@ impl Bus {
             });
         }
     }
+}
+
+/// The slaves' receiver `slaves` and the monitors take frame `f` at `t`; returns the slaves'
+/// telegram. The first monitor's receiver hears what the slaves' does, so once the two are in
+/// the same state (`in_step`, compared again only after something may have changed the
+/// slaves' receivers: [`Bus::release_held`]) it takes the slaves' telegram and state
+/// ([`SafetyMonitor::on_frame_as`], which debug builds check against its own receiver)
+/// instead of checking every frame a second time. Inlined into the two events: a call of its
+/// own cost as much as the second check it saves.
+#[inline(always)]
+fn hear_in_step(
+    slaves: &mut Listener,
+    monitors: &mut [SafetyMonitor],
+    in_step: &mut bool,
+    t: SimTime,
+    f: &Frame,
+) -> Received {
+    let Some((first, rest)) = monitors.split_first_mut() else {
+        return slaves.accept(f);
+    };
+    if !*in_step {
+        *in_step = first.listens_as(slaves);
+    }
+    let r = slaves.accept(f);
+    if *in_step {
+        first.on_frame_as(t, f, &r, slaves);
+    } else {
+        first.on_frame(t, f);
+    }
+    for m in rest {
+        m.on_frame(t, f);
+    }
+    r
 }
 
 /// From the first pulse of a request or response of `bits` bits to its last on the `half_bit`
@@ -168,7 +210,97 @@ fn answer_frame(r: Response, start: SimTime, last: SimDuration) -> Frame {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use asi_phy::Nibble;
+    use asi_phy::{Address, Nibble};
+    use asi_slaves::monitor::MonitorConfig;
+    use proptest::prelude::*;
+
+    /// What happens at a step of the test below.
+    #[derive(Clone, Debug)]
+    enum Step {
+        /// A frame `gap` ns after the last one's end: a Data_Exchange to a monitored slave
+        /// (`to` 11 or 12) or to another, or an answer with `data`; `failed` line checks.
+        Frame {
+            gap: u64,
+            request: bool,
+            to: u8,
+            data: u8,
+            failed: u8,
+        },
+        /// The slaves' receiver is reset (their power returns), which the bus lets happen
+        /// only after clearing `in_step` (`Bus::release_held`).
+        Reset,
+    }
+
+    fn step() -> impl Strategy<Value = Step> {
+        prop_oneof![
+            12 => (
+                prop_oneof![0u64..40_000, 100_000u64..300_000],
+                any::<bool>(),
+                prop_oneof![Just(11u8), Just(12u8), 1u8..32],
+                0u8..16,
+                prop_oneof![4 => Just(0u8), 1 => any::<u8>()],
+            )
+                .prop_map(|(gap, request, to, data, failed)| Step::Frame {
+                    gap,
+                    request,
+                    to,
+                    data,
+                    failed,
+                }),
+            1 => Just(Step::Reset),
+        ]
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(500))]
+
+        /// The monitor that takes the slaves' telegrams while its receiver is in step with
+        /// theirs ends every frame in the state of one that checks every frame itself, and
+        /// the slaves' receiver in the state it would reach alone: Data_Exchanges to
+        /// monitored slaves and others with their answers, broken frames, frames after too
+        /// short a pause, and resets of the slaves' receiver that put the two out of step.
+        #[test]
+        fn a_monitor_in_step_takes_the_frames_as_its_own_receiver(
+            steps in proptest::collection::vec(step(), 1..80),
+        ) {
+            let timing = BusTiming::default();
+            let addresses = [Address::new(11).expect("a"), Address::new(12).expect("a")];
+            let monitor = SafetyMonitor::new(&timing, MonitorConfig::default(), &addresses);
+            let mut slaves = Listener::new(&timing.receiver(Expect::Both));
+            let mut monitors = [monitor];
+            let mut in_step = false;
+            let (mut slaves_alone, mut alone) = (slaves.clone(), monitors[0].clone());
+            let h = timing.half_bit();
+            let mut t = SimTime::ZERO;
+            for step in &steps {
+                match *step {
+                    Step::Frame { gap, request, to, data, failed } => {
+                        let start = t + SimDuration::from_nanos(gap);
+                        let d = Nibble::new(data).expect("a nibble");
+                        let mut f = if request {
+                            let a = Address::new(to).expect("an address");
+                            let q = Request::data_exchange(a, d).expect("a request");
+                            request_frame(q, start, last_pulse(h, Request::BITS))
+                        } else {
+                            answer_frame(Response::new(d), start, last_pulse(h, Response::BITS))
+                        };
+                        f.line_failed = Checks::from_bits(failed);
+                        t = f.end;
+                        let r = hear_in_step(&mut slaves, &mut monitors, &mut in_step, t, &f);
+                        prop_assert_eq!(r, slaves_alone.accept(&f));
+                        alone.on_frame(t, &f);
+                    }
+                    Step::Reset => {
+                        in_step = false;
+                        slaves.reset();
+                        slaves_alone.reset();
+                    }
+                }
+                prop_assert_eq!(&slaves, &slaves_alone);
+                prop_assert!(monitors[0] == alone, "{:?}\n{:?}", monitors[0], alone);
+            }
+        }
+    }
 
     /// The quick path's frames are the transmissions' frames, for every request and every
     /// response, on the default grid and on odd ones, at the start of time and near its end.
