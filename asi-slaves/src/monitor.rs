@@ -34,9 +34,7 @@
 //! - After a drop the monitor releases again after 8 consecutive correct codes (one rotation);
 //!   restart interlocks (manual restart) belong to the safety logic (docs/safety.md, MON).
 
-use asi_phy::{
-    Address, Call, Expect, Frame, Listener, Received, SimDuration, SimTime, TelegramKind,
-};
+use asi_phy::{Address, Expect, Frame, Listener, Received, SimDuration, SimTime, TelegramKind};
 use rand::seq::SliceRandom;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -444,10 +442,13 @@ impl SafetyMonitor {
     /// the slave it asks takes a step, and its answer is awaited.
     #[inline(never)]
     fn heard_request(&mut self, now: SimTime, r: &Received) {
-        self.asked = match r.request().map(|q| q.call()) {
-            Some(Call::DataExchange { address, .. }) => Some(address),
-            _ => None,
-        };
+        // A Data_Exchange told from its bits, without decoding the call
+        // (`Request::as_data_exchange`, held to the call decoder for every request by asi-phy's
+        // telegram tests).
+        self.asked = r
+            .request()
+            .and_then(|q| q.as_data_exchange())
+            .map(|(address, _)| address);
         if let Some(a) = self.asked {
             let cfg = self.cfg;
             if let Some(c) = self.channel_mut(a) {
@@ -552,7 +553,7 @@ impl SafetyMonitor {
 mod tests {
     use super::*;
 
-    use asi_phy::{Request, Response};
+    use asi_phy::{Call, Request, Response};
     use proptest::strategy::Strategy as _;
 
     /// What the monitor does at a moment of the property test below.
