@@ -476,11 +476,20 @@ impl SafetyMonitor {
         }
     }
 
-    /// Advances the monitor's clock (missing-code timeouts).
+    /// Advances the monitor's clock (missing-code timeouts). The bus polls at every
+    /// transaction, and almost always before the earliest deadline: only that test is
+    /// inlined.
+    #[inline]
     pub fn poll(&mut self, now: SimTime) {
-        if now <= self.quiet_until {
-            return;
+        if now > self.quiet_until {
+            self.check_channels(now);
         }
+    }
+
+    /// [`SafetyMonitor::poll`] past the earliest deadline: every channel checked, and the next
+    /// deadline found.
+    #[inline(never)]
+    fn check_channels(&mut self, now: SimTime) {
         let cfg = self.cfg;
         let mut quiet_until = SimTime::MAX;
         for c in &mut self.channels {
