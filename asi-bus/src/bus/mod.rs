@@ -34,7 +34,10 @@
 //! synchronised afterwards, so two receivers that agree on those two are identical from then on
 //! and are merged. A slave put (back) on the bus gets a fresh receiver of its own. This keeps
 //! the cost of a frame independent of the number of slaves (tested against one listener per
-//! slave in asi-phy's `tests/receivers.rs`).
+//! slave in asi-phy's `tests/receivers.rs`). A safety monitor's receiver hears the same frames
+//! as the slaves' and so, once in their state, stays in it: in a quick transaction the first
+//! monitor then takes the slaves' telegram instead of checking the frame itself
+//! (`quick::hear_in_step`).
 
 use asi_master::config::{ConfigError, MasterConfig, ProjectedConfig};
 use asi_master::master::{Master, Outcome, Phase, Transmit};
