@@ -93,4 +93,16 @@ fn every_transaction_is_one_record_everywhere() {
         text.contains("0.005000000 s  detect    0 1 00000 10000 0 1  Read_IO_Configuration 0A"),
         "{text}"
     );
+    // Without ring and callback, the subscriber alone still gets every record.
+    bus.enable_trace(0);
+    bus.set_trace_callback(None);
+    let sub = Count {
+        events: events.clone(),
+        first,
+    };
+    tracing::subscriber::with_default(sub, || bus.advance_to(ms(40)));
+    let m = bus.stats().transactions as usize;
+    assert!(m > n + 50);
+    assert_eq!(events.load(Ordering::SeqCst), m);
+    assert_eq!(calls.load(Ordering::SeqCst), n);
 }

@@ -34,7 +34,10 @@
 //! synchronised afterwards, so two receivers that agree on those two are identical from then on
 //! and are merged. A slave put (back) on the bus gets a fresh receiver of its own. This keeps
 //! the cost of a frame independent of the number of slaves (tested against one listener per
-//! slave in asi-phy's `tests/receivers.rs`).
+//! slave in asi-phy's `tests/receivers.rs`). A safety monitor's receiver hears the same frames
+//! as the slaves' and so, once in their state, stays in it: in a quick transaction the first
+//! monitor then takes the slaves' telegram instead of checking the frame itself
+//! (`quick::hear_in_step`).
 
 use asi_master::config::{ConfigError, MasterConfig, ProjectedConfig};
 use asi_master::master::{Master, Outcome, Phase, Transmit};
@@ -42,7 +45,7 @@ use asi_master::record::{BusStats, TraceRing, TransactionRecord};
 use asi_phy::line::{Line, Medium};
 use asi_phy::{
     BusTiming, Call, Checks, Expect, FaultInjector, FaultRates, Frame, Listener, PulseFault,
-    PulseTrain, Request, Response, SimTime, Transmission,
+    PulseTrain, Received, Request, Response, SimDuration, SimTime, Transmission,
 };
 use asi_slaves::monitor::SafetyMonitor;
 use asi_slaves::slave::{Peripheral, Slave};
@@ -146,13 +149,26 @@ impl Current {
     /// within the response window counts as a response (a second one makes the outcome
     /// corrupt, as does any that fails a check).
     fn master_hears(&mut self, rx: &mut Listener, timing: &BusTiming, f: &Frame) {
+        self.master_hears_as(rx, timing, f, Received::response);
+    }
+
+    /// [`Current::master_hears`], with `decode` telling the response a valid telegram is
+    /// ([`Received::response`], or the answer a held frame was made of).
+    #[inline]
+    fn master_hears_as(
+        &mut self,
+        rx: &mut Listener,
+        timing: &BusTiming,
+        f: &Frame,
+        decode: impl FnOnce(&Received) -> Option<Response>,
+    ) {
         let window_end = self.req_end + timing.response_timeout();
         if f.start > self.req_end && f.start <= window_end {
             let r = rx.accept(f);
             self.responses += 1;
             self.line_error |= !r.is_valid();
             if r.is_valid() && self.responses == 1 {
-                self.response = r.response();
+                self.response = decode(&r);
             } else {
                 self.response = None;
                 self.response_failed = cur_checks(self.response_failed, r.failed);
@@ -167,6 +183,13 @@ pub type TraceCallback = Box<dyn FnMut(&TransactionRecord) + Send>;
 /// An AS-i segment: master, slaves, line, passive monitors.
 pub struct Bus {
     timing: BusTiming,
+    /// `timing.transaction()`, worked out once: the timing of a bus never changes, and the
+    /// quick path needs it at every transaction.
+    transaction: SimDuration,
+    /// From the first pulse of a request to its last, and of a response
+    /// ([`quick::last_pulse`]), worked out once as `transaction` is.
+    request_last: SimDuration,
+    response_last: SimDuration,
     master: Master,
     slaves: Vec<SlaveSlot>,
     addr_index: [u64; 32],
@@ -183,6 +206,14 @@ pub struct Bus {
     /// The frame of a quick transaction's telegram held off the line ([`Bus::may_run_quick`]):
     /// the frame the clean line would hand on.
     held: Option<Frame>,
+    /// The slave's answer that `held` was made of, while it is held.
+    held_answer: Option<Response>,
+    /// The first monitor's receiver is in the state of the slaves' receiver, so it takes each
+    /// frame of a quick transaction as that one does (`quick::hear_in_step`). They hear the
+    /// same frames from then on; whatever may change the slaves' receivers (power, plugging,
+    /// a new slave) releases the held telegrams first, which clears this, as a new monitor
+    /// and the application's access to a monitor do.
+    monitor_in_step: bool,
     volts: f64,
     slaves_powered: bool,
     cur: Option<Current>,
@@ -221,6 +252,9 @@ impl Bus {
         let master = Master::new(cfg, projected)?;
         let mut bus = Bus {
             timing,
+            transaction: timing.transaction(),
+            request_last: quick::last_pulse(timing.half_bit(), Request::BITS),
+            response_last: quick::last_pulse(timing.half_bit(), Response::BITS),
             master_rx: Listener::new(&timing.receiver(Expect::Responses)),
             medium: Medium::quiet(&timing),
             master,
@@ -233,6 +267,8 @@ impl Bus {
             next_event: SimTime::ZERO,
             horizon: SimTime::ZERO,
             held: None,
+            held_answer: None,
+            monitor_in_step: false,
             volts: NOMINAL_VOLTS,
             slaves_powered: true,
             cur: None,
@@ -270,6 +306,7 @@ impl Bus {
 
     /// Adds a passive monitor that hears every frame.
     pub fn add_monitor(&mut self, m: SafetyMonitor) -> MonitorId {
+        self.monitor_in_step = false;
         self.monitors.push(m);
         MonitorId(self.monitors.len() - 1)
     }
@@ -383,7 +420,7 @@ impl Bus {
         let tg = Transmission::request(tx.request, t, self.timing.half_bit());
         if self.may_run_quick(tx.request) && self.medium.takes_clean(&tg) {
             // As the clean line would: the frame at its end plus the pause.
-            let f = tg.frame();
+            let f = quick::request_frame(tx.request, t, self.request_last);
             self.cur = Some(Current::new(tx, t, f.end, true));
             self.held = Some(f);
             self.state = State::AwaitRequestFrame;
@@ -430,7 +467,7 @@ impl Bus {
             return;
         };
         self.state = State::AwaitResponse;
-        let base = cur.start + self.timing.transaction();
+        let base = cur.start + self.transaction;
         let quiet = self
             .medium
             .poll_at()
@@ -482,6 +519,25 @@ impl Bus {
             ab: cur.tx.ab,
         };
         self.stats.record(&rec, verdict.error, verdict.repeat);
+        // Most runs keep no record: no ring, no callback, no subscriber at TRACE. The record
+        // is then only counted, and never stored for them. `tracing::trace!` itself checks
+        // first that TRACE is within the static and the current maximum level (its
+        // `level_enabled!`), and does nothing else when it is not (without the `log` feature,
+        // which asi-lift does not turn on); the same test here lets every subscriber that
+        // could see the event see it.
+        let traced = tracing::Level::TRACE <= tracing::level_filters::STATIC_MAX_LEVEL
+            && tracing::Level::TRACE <= tracing::level_filters::LevelFilter::current();
+        if traced || self.ring.is_some() || self.callback.is_some() {
+            self.publish(rec);
+        }
+        cur.line_error
+            .then(|| cur.line_end + self.timing.async_pause())
+    }
+
+    /// Trace record `rec` to `tracing` (target `asi_master::trace`, level TRACE), to the ring
+    /// and to the callback.
+    #[inline(never)]
+    fn publish(&mut self, rec: TransactionRecord) {
         tracing::trace!(target: "asi_master::trace", "{rec}");
         if let Some(r) = &mut self.ring {
             r.push(rec);
@@ -489,8 +545,6 @@ impl Bus {
         if let Some(cb) = &mut self.callback {
             cb(&rec);
         }
-        cur.line_error
-            .then(|| cur.line_end + self.timing.async_pause())
     }
 
     /// Every receiver on the line hears frame `f` at `now`. The transaction in progress is
@@ -800,6 +854,8 @@ impl Bus {
 
     /// A monitor, mutable.
     pub fn monitor_mut(&mut self, id: MonitorId) -> Option<&mut SafetyMonitor> {
+        // The application may put another monitor in its place.
+        self.monitor_in_step = false;
         self.monitors.get_mut(id.0)
     }
 

@@ -38,15 +38,19 @@ impl Bus {
             self.request_frame(t);
             return;
         };
-        let r = self.groups[0].listener.accept(&f);
-        let request = r.request();
+        let r = hear_in_step(
+            &mut self.groups[0].listener,
+            &mut self.monitors,
+            &mut self.monitor_in_step,
+            t,
+            &f,
+        );
+        // The held frame is the request's own (`start_transaction` made it of `cur.tx`).
+        let request = r.request_sent(cur.tx.request);
         cur.request_frames = 1;
         cur.request_failed = r.failed;
         cur.valid_request = request;
-        let base = cur.start + self.timing.transaction();
-        for m in &mut self.monitors {
-            m.on_frame(t, &f);
-        }
+        let base = cur.start + self.transaction;
         let mut answer = None;
         if let Some(q) = request {
             let who = self.groups[0].members & self.addr_index[q.address().get() as usize];
@@ -61,8 +65,9 @@ impl Bus {
             // The line is as the request found it (idle, nothing recorded: anything that
             // changes that releases the held request first), so only its faults are left to ask.
             if self.medium.pass_untouched(&tg) {
-                let answer = tg.frame();
+                let answer = answer_frame(r, tg.start(), self.response_last);
                 self.held = Some(answer);
+                self.held_answer = Some(r);
                 quiet = Some(answer.end + timing.min_pause());
             } else {
                 // The line touches the answer: the transaction goes on the line's path.
@@ -94,11 +99,19 @@ impl Bus {
         let mut cur = self.cur.take()?;
         if let Some(f) = self.held.take() {
             cur.line_end = cur.line_end.max(f.end);
-            cur.master_hears(&mut self.master_rx, &self.timing, &f);
-            self.groups[0].listener.accept(&f);
-            for m in &mut self.monitors {
-                m.on_frame(t, &f);
-            }
+            // The held frame is the answer's own (`quick_request` made it of `held_answer`).
+            let answer = self.held_answer.take();
+            cur.master_hears_as(&mut self.master_rx, &self.timing, &f, |r| match answer {
+                Some(a) => r.response_sent(a),
+                None => r.response(),
+            });
+            hear_in_step(
+                &mut self.groups[0].listener,
+                &mut self.monitors,
+                &mut self.monitor_in_step,
+                t,
+                &f,
+            );
         }
         self.close(t, &cur)
     }
@@ -107,10 +120,14 @@ impl Bus {
     /// have it by now, and lets the transaction go on that path: called before anything
     /// changes the line, the slaves' receivers or their power.
     pub(super) fn release_held(&mut self) {
+        // What comes may change the slaves' receivers: the first monitor's is compared with
+        // theirs again before it takes their telegrams ([`hear_in_step`]).
+        self.monitor_in_step = false;
         let Some(cur) = self.cur.as_mut().filter(|c| c.quick) else {
             return;
         };
         cur.quick = false;
+        self.held_answer = None;
         if let Some(f) = self.held.take() {
             // The telegram the frame was made of; an idle, clean line keeps it pending, so no
             // frame comes out now.
@@ -118,6 +135,207 @@ impl Bus {
             self.medium.transmit_taken(&tg, &mut |_| {
                 debug_assert!(false, "a held telegram went on a line that was not idle")
             });
+        }
+    }
+}
+
+/// The slaves' receiver `slaves` and the monitors take frame `f` at `t`; returns the slaves'
+/// telegram. The first monitor's receiver hears what the slaves' does, so once the two are in
+/// the same state (`in_step`, compared again only after something may have changed the
+/// slaves' receivers: [`Bus::release_held`]) it takes the slaves' telegram and state
+/// ([`SafetyMonitor::on_frame_as`], which debug builds check against its own receiver)
+/// instead of checking every frame a second time. Inlined into the two events: a call of its
+/// own cost as much as the second check it saves.
+#[inline(always)]
+fn hear_in_step(
+    slaves: &mut Listener,
+    monitors: &mut [SafetyMonitor],
+    in_step: &mut bool,
+    t: SimTime,
+    f: &Frame,
+) -> Received {
+    let Some((first, rest)) = monitors.split_first_mut() else {
+        return slaves.accept(f);
+    };
+    if !*in_step {
+        *in_step = first.listens_as(slaves);
+    }
+    let r = slaves.accept(f);
+    if *in_step {
+        first.on_frame_as(t, f, &r, slaves);
+    } else {
+        first.on_frame(t, f);
+    }
+    for m in rest {
+        m.on_frame(t, f);
+    }
+    r
+}
+
+/// From the first pulse of a request or response of `bits` bits to its last on the `half_bit`
+/// grid: the last pulse is the return to idle after the end bit, at grid point `2 * bits`.
+pub(super) fn last_pulse(half_bit: SimDuration, bits: u32) -> SimDuration {
+    half_bit.saturating_mul(u64::from(2 * bits))
+}
+
+/// `Transmission::request(q, start, h).frame()`, the frame a clean line hands on for request
+/// `q` sent at `start`, its last pulse `last` after the first ([`last_pulse`]): the pulse
+/// count looked up ([`Request::pulses`]) instead of worked out from the bits at every
+/// transaction. Held to `Transmission::frame` for every request by the test below.
+#[inline]
+pub(super) fn request_frame(q: Request, start: SimTime, last: SimDuration) -> Frame {
+    Frame {
+        start,
+        end: start + last,
+        pulses: q.pulses(),
+        bit_count: Request::BITS,
+        raw: u32::from(q.bits()),
+        line_failed: Checks::NONE,
+    }
+}
+
+/// [`request_frame`] of response `r`.
+#[inline]
+fn answer_frame(r: Response, start: SimTime, last: SimDuration) -> Frame {
+    Frame {
+        start,
+        end: start + last,
+        pulses: r.pulses(),
+        bit_count: Response::BITS,
+        raw: u32::from(r.bits()),
+        line_failed: Checks::NONE,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use asi_phy::{Address, Nibble};
+    use asi_slaves::monitor::MonitorConfig;
+    use proptest::prelude::*;
+
+    /// What happens at a step of the test below.
+    #[derive(Clone, Debug)]
+    enum Step {
+        /// A frame `gap` ns after the last one's end: a Data_Exchange to a monitored slave
+        /// (`to` 11 or 12) or to another, or an answer with `data`; `failed` line checks.
+        Frame {
+            gap: u64,
+            request: bool,
+            to: u8,
+            data: u8,
+            failed: u8,
+        },
+        /// The slaves' receiver is reset (their power returns), which the bus lets happen
+        /// only after clearing `in_step` (`Bus::release_held`).
+        Reset,
+    }
+
+    fn step() -> impl Strategy<Value = Step> {
+        prop_oneof![
+            12 => (
+                prop_oneof![0u64..40_000, 100_000u64..300_000],
+                any::<bool>(),
+                prop_oneof![Just(11u8), Just(12u8), 1u8..32],
+                0u8..16,
+                prop_oneof![4 => Just(0u8), 1 => any::<u8>()],
+            )
+                .prop_map(|(gap, request, to, data, failed)| Step::Frame {
+                    gap,
+                    request,
+                    to,
+                    data,
+                    failed,
+                }),
+            1 => Just(Step::Reset),
+        ]
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(500))]
+
+        /// The monitor that takes the slaves' telegrams while its receiver is in step with
+        /// theirs ends every frame in the state of one that checks every frame itself, and
+        /// the slaves' receiver in the state it would reach alone: Data_Exchanges to
+        /// monitored slaves and others with their answers, broken frames, frames after too
+        /// short a pause, and resets of the slaves' receiver that put the two out of step.
+        #[test]
+        fn a_monitor_in_step_takes_the_frames_as_its_own_receiver(
+            steps in proptest::collection::vec(step(), 1..80),
+        ) {
+            let timing = BusTiming::default();
+            let addresses = [Address::new(11).expect("a"), Address::new(12).expect("a")];
+            let monitor = SafetyMonitor::new(&timing, MonitorConfig::default(), &addresses);
+            let mut slaves = Listener::new(&timing.receiver(Expect::Both));
+            let mut monitors = [monitor];
+            let mut in_step = false;
+            let (mut slaves_alone, mut alone) = (slaves.clone(), monitors[0].clone());
+            let h = timing.half_bit();
+            let mut t = SimTime::ZERO;
+            for step in &steps {
+                match *step {
+                    Step::Frame { gap, request, to, data, failed } => {
+                        let start = t + SimDuration::from_nanos(gap);
+                        let d = Nibble::new(data).expect("a nibble");
+                        let mut f = if request {
+                            let a = Address::new(to).expect("an address");
+                            let q = Request::data_exchange(a, d).expect("a request");
+                            request_frame(q, start, last_pulse(h, Request::BITS))
+                        } else {
+                            answer_frame(Response::new(d), start, last_pulse(h, Response::BITS))
+                        };
+                        f.line_failed = Checks::from_bits(failed);
+                        t = f.end;
+                        let r = hear_in_step(&mut slaves, &mut monitors, &mut in_step, t, &f);
+                        prop_assert_eq!(r, slaves_alone.accept(&f));
+                        alone.on_frame(t, &f);
+                    }
+                    Step::Reset => {
+                        in_step = false;
+                        slaves.reset();
+                        slaves_alone.reset();
+                    }
+                }
+                prop_assert_eq!(&slaves, &slaves_alone);
+                prop_assert!(monitors[0] == alone, "{:?}\n{:?}", monitors[0], alone);
+            }
+        }
+    }
+
+    /// The quick path's frames are the transmissions' frames, for every request and every
+    /// response, on the default grid and on odd ones, at the start of time and near its end.
+    #[test]
+    fn the_quick_frames_are_the_transmissions_frames() {
+        for h in [3_000, 1, 2_999, u64::MAX / 64] {
+            let h = SimDuration::from_nanos(h);
+            let (rq, rs) = (last_pulse(h, Request::BITS), last_pulse(h, Response::BITS));
+            for start in [
+                SimTime::ZERO,
+                SimTime::from_nanos(123_456_789),
+                SimTime::MAX,
+            ] {
+                for body in 0u16..1 << 11 {
+                    let q = Request::from_fields(
+                        body & 0x400 != 0,
+                        asi_phy::Address::new((body >> 5 & 0x1F) as u8).expect("an address"),
+                        (body & 0x1F) as u8,
+                    )
+                    .expect("a request");
+                    assert_eq!(
+                        request_frame(q, start, rq),
+                        Transmission::request(q, start, h).frame(),
+                        "{q:?}"
+                    );
+                }
+                for d in 0..16 {
+                    let r = Response::new(Nibble::new(d).expect("a nibble"));
+                    assert_eq!(
+                        answer_frame(r, start, rs),
+                        Transmission::response(r, start, h).frame(),
+                        "{r:?}"
+                    );
+                }
+            }
         }
     }
 }

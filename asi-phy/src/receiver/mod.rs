@@ -95,6 +95,32 @@ impl Received {
         }
     }
 
+    /// [`Received::request`] of a telegram known to carry the bits of `sent` (its frame was
+    /// made of that request, as the bus's quick transactions do): a valid one is `sent`, and
+    /// its bits need not be decoded and their parity checked again, since every request
+    /// round-trips through its bits. Held to [`Received::request`] by the tests below.
+    #[inline]
+    pub fn request_sent(&self, sent: Request) -> Option<Request> {
+        debug_assert_eq!(
+            self.raw,
+            u32::from(sent.bits()),
+            "not the frame of {sent:?}"
+        );
+        (self.is_valid() && self.kind == TelegramKind::Request).then_some(sent)
+    }
+
+    /// [`Received::response`] of a telegram known to carry the bits of `sent`, as
+    /// [`Received::request_sent`].
+    #[inline]
+    pub fn response_sent(&self, sent: Response) -> Option<Response> {
+        debug_assert_eq!(
+            self.raw,
+            u32::from(sent.bits()),
+            "not the frame of {sent:?}"
+        );
+        (self.is_valid() && self.kind == TelegramKind::Response).then_some(sent)
+    }
+
     /// The decoded bits as `0`/`1` digits (at most 32), for traces of broken telegrams.
     pub fn bit_string(&self) -> String {
         let n = self.bit_count.min(32);
@@ -121,6 +147,52 @@ impl fmt::Debug for Received {
             self.bit_string(),
             self.failed
         )
+    }
+}
+
+#[cfg(test)]
+mod sent_tests {
+    use super::*;
+
+    /// `Received` of `raw` taken as `kind`, with the failed checks of `failed`.
+    fn received(kind: TelegramKind, raw: u32, failed: u8) -> Received {
+        Received {
+            kind,
+            start: SimTime::ZERO,
+            end: SimTime::ZERO,
+            pulses: 0,
+            bit_count: kind.bits(),
+            raw,
+            failed: Checks::from_bits(failed),
+        }
+    }
+
+    /// For every request and every response, taken as either kind, valid or failing any one
+    /// check: what the sent telegram gives is what decoding the bits gives.
+    #[test]
+    fn a_telegram_known_to_be_sent_decodes_as_its_bits() {
+        let kinds = [TelegramKind::Request, TelegramKind::Response];
+        let failed = core::iter::once(0).chain((0..7).map(|i| 1u8 << i));
+        let failed: Vec<u8> = failed.collect();
+        for body in 0u16..1 << 11 {
+            let bits = (body << 2) | ((body.count_ones() as u16 & 1) << 1) | 1;
+            let q = Request::from_bits(bits).expect("a request");
+            for kind in kinds {
+                for &f in &failed {
+                    let r = received(kind, u32::from(bits), f);
+                    assert_eq!(r.request_sent(q), r.request(), "{r:?}");
+                }
+            }
+        }
+        for d in 0..16 {
+            let a = Response::new(crate::Nibble::new(d).expect("a nibble"));
+            for kind in kinds {
+                for &f in &failed {
+                    let r = received(kind, u32::from(a.bits()), f);
+                    assert_eq!(r.response_sent(a), r.response(), "{r:?}");
+                }
+            }
+        }
     }
 }
 

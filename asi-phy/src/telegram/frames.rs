@@ -63,7 +63,49 @@ const fn with_i3(low3: u8, i4: bool, i3: bool) -> u8 {
     ((i4 as u8) << 4) | ((i3 as u8) << 3) | (low3 & 0b111)
 }
 
+/// The number of pulses a telegram of `n` bits `w` (first bit highest) that starts with a 0 and
+/// ends with a 1, as requests and responses do, has on the line: the mid-bit edge of every bit,
+/// one before the start bit (the line idles high), one between two equal neighbours, and the
+/// return to idle after the end bit. For the tables below.
+const fn framed_pulses(w: u16, n: u32) -> u8 {
+    let changes = ((w ^ (w >> 1)) & ((1 << (n - 1)) - 1)).count_ones();
+    (n + 1 + (n - 1 - changes) + 1) as u8
+}
+
+/// The pulses of every request, by body (CB, address, information: bits 12..2).
+static REQUEST_PULSES: [u8; 1 << 11] = {
+    let mut t = [0u8; 1 << 11];
+    let mut body = 0;
+    while body < 1 << 11 {
+        let pb = (body as u16).count_ones() as u16 & 1;
+        t[body] = framed_pulses(((body as u16) << 2) | (pb << 1) | 1, Request::BITS);
+        body += 1;
+    }
+    t
+};
+
+/// The pulses of every response, by data.
+static RESPONSE_PULSES: [u8; 16] = {
+    let mut t = [0u8; 16];
+    let mut d = 0;
+    while d < 16 {
+        let pb = (d as u8).count_ones() as u8 & 1;
+        t[d] = framed_pulses((((d as u8) << 2) | (pb << 1) | 1) as u16, Response::BITS);
+        d += 1;
+    }
+    t
+};
+
 impl Request {
+    /// The number of pulses of the request on the line, looked up: the bus's quick
+    /// transactions make a frame of every request, and working it out from the bits took a
+    /// software popcount (asi-lift builds for baseline x86-64). Held to the encoder's train
+    /// ([`crate::Transmission::pulses`]) for every request by the telegram tests.
+    #[inline]
+    pub fn pulses(self) -> u32 {
+        u32::from(REQUEST_PULSES[usize::from(self.0 >> 2) & 0x7FF])
+    }
+
     /// Number of bits in a request.
     pub const BITS: u32 = 14;
 
@@ -313,6 +355,13 @@ impl Request {
 impl Response {
     /// Number of bits in a response.
     pub const BITS: u32 = 7;
+
+    /// The number of pulses of the response on the line, looked up as
+    /// [`Request::pulses`] is.
+    #[inline]
+    pub fn pulses(self) -> u32 {
+        u32::from(RESPONSE_PULSES[usize::from(self.0 >> 2) & 0xF])
+    }
 
     /// The response carrying `data` in I3..I0; computes the parity bit.
     pub const fn new(data: Nibble) -> Response {

@@ -175,3 +175,23 @@ fn every_response_round_trips() {
         assert_eq!((r.bits() >> 1).count_ones() % 2, 0);
     }
 }
+
+/// The looked-up pulse counts are those of the encoder's train, for every request and every
+/// response.
+#[test]
+fn every_telegram_has_the_pulses_of_its_train() {
+    let h = crate::SimDuration::from_micros(3);
+    for body in 0u16..1 << 11 {
+        let bits = (body << 2) | ((body.count_ones() as u16 & 1) << 1) | 1;
+        let q = Request::from_bits(bits).expect("a request");
+        let tg = crate::Transmission::request(q, crate::SimTime::ZERO, h);
+        assert_eq!(q.pulses(), tg.train().len(), "{q:?}");
+        assert_eq!(q.pulses(), tg.pulses(), "{q:?}");
+    }
+    for v in 0..16 {
+        let r = Response::new(n(v));
+        let tg = crate::Transmission::response(r, crate::SimTime::ZERO, h);
+        assert_eq!(r.pulses(), tg.train().len(), "{r:?}");
+        assert_eq!(r.pulses(), tg.pulses(), "{r:?}");
+    }
+}
