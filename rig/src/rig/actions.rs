@@ -1,0 +1,170 @@
+//! What the rig does for the scenario's actions, the operator's and the attendant's: presses,
+//! loads, doors, the hand crank, resets and rescues, faults, and the timers that end them.
+
+use super::*;
+
+impl Rig {
+    pub(super) fn apply(&mut self, t: SimTime, ev: &ScenarioEvent) {
+        self.act(t, "scenario", &ev.action);
+    }
+
+    /// `who` (the scenario or the attendant) does `action` at `t`.
+    pub(super) fn act(&mut self, t: SimTime, who: &'static str, action: &Action) {
+        self.log(who, describe(action));
+        let result = match action {
+            Action::Press { button, hold } => {
+                self.passengers.press(t, *button);
+                self.lift.press(t, *button, *hold)
+            }
+            Action::Load(l) => self.lift.set_load(t, *l),
+            Action::Door { closed } => self.lift.set_door(t, *closed),
+            Action::Crank { mm } => self.lift.crank(t, *mm),
+            Action::Reset => {
+                self.operator_reset = true;
+                self.timers
+                    .push((t + OPERATOR_PULSE, Timer::OperatorReset(false)));
+                Ok(())
+            }
+            Action::Rescue => self.rescue(t, who),
+            Action::Attend => {
+                self.attendant.start(t);
+                Ok(())
+            }
+            Action::Ack => {
+                self.err_ack = true;
+                self.timers.push((t + OPERATOR_PULSE, Timer::ErrAck(false)));
+                Ok(())
+            }
+            Action::Fault(f) => {
+                self.fault(t, *f);
+                Ok(())
+            }
+        };
+        if let Err(e) = result {
+            self.log(who, format!("refused by the plant: {e}"));
+        }
+        self.plant_dirty = true;
+    }
+
+    /// The operator's overtravel rescue ([`operator::rescue`]).
+    pub(super) fn rescue(
+        &mut self,
+        t: SimTime,
+        who: &'static str,
+    ) -> Result<(), lift_model::PlantError> {
+        let rescue = match operator::rescue(&self.lift, self.sc.floors) {
+            Rescue::NotNeeded => self
+                .drive
+                .as_ref()
+                .and_then(|d| d.slp_rescue_mm(&self.lift, self.sc.floors))
+                .map_or(Rescue::NotNeeded, Rescue::Crank),
+            r => r,
+        };
+        match rescue {
+            Rescue::NotNeeded => {
+                self.log(who, "the cabin needs no rescue".into());
+                Ok(())
+            }
+            Rescue::K1Closed => {
+                self.log(who, "K1 is closed: no rescue by hand".into());
+                Ok(())
+            }
+            Rescue::Crank(mm) => {
+                self.log(who, format!("hand crank {mm:+.1} mm"));
+                self.lift.crank(t, mm)
+            }
+        }
+    }
+
+    pub(super) fn fault(&mut self, t: SimTime, f: Fault) {
+        match f {
+            Fault::SlaveOffline { slave } | Fault::SlaveOnline { slave } => {
+                let Some(id) = self.lab.slave_id(slave) else {
+                    self.log(
+                        "scenario",
+                        format!("no slave at address {slave} on the lab bus"),
+                    );
+                    return;
+                };
+                if matches!(f, Fault::SlaveOffline { .. }) {
+                    self.lab.bus.detach(id);
+                } else {
+                    self.lab.bus.attach(id);
+                    self.plant_dirty = true;
+                }
+            }
+            Fault::PowerFail { duration } => {
+                self.lab.bus.set_supply_voltage(0.0);
+                self.timers.push((t + duration, Timer::PowerBack));
+            }
+            Fault::SafeLinkDrop { duration } => {
+                self.safety.drop_link(SafeLink::CabinStop, t, duration)
+            }
+            Fault::Vane { sensor, fault } => {
+                if let Err(e) = self.lift.set_vane_fault(t, sensor, fault) {
+                    self.log("plant", format!("error: {e}"));
+                }
+                self.plant_dirty = true;
+            }
+            Fault::ConverterRunaway { .. } | Fault::ConverterRepaired => {
+                let runaway = match f {
+                    Fault::ConverterRunaway { up } => Some(up),
+                    _ => None,
+                };
+                if let Err(e) = self.lift.set_converter_runaway(t, runaway) {
+                    self.log("plant", format!("error: {e}"));
+                }
+                self.plant_dirty = true;
+            }
+            Fault::EncoderFailed | Fault::EncoderRepaired => {
+                // The scenario reader takes these only with the safe drive.
+                match self.drive.as_mut() {
+                    Some(d) => d.set_encoder_failed(matches!(f, Fault::EncoderFailed)),
+                    None => self.log(
+                        "scenario",
+                        "no safe drive, so no encoder: the fault changes nothing".into(),
+                    ),
+                }
+            }
+        }
+    }
+
+    pub(super) fn fire_timers(&mut self, t: SimTime) {
+        // None due at almost every step (no timer at all, mostly).
+        if self.timers.iter().all(|(at, _)| *at > t) {
+            return;
+        }
+        let mut due: Vec<Timer> = Vec::new();
+        self.timers.retain(|(at, timer)| {
+            if *at <= t {
+                due.push(*timer);
+                false
+            } else {
+                true
+            }
+        });
+        for timer in due {
+            match timer {
+                Timer::OperatorReset(on) => {
+                    self.operator_reset = on;
+                    if on {
+                        self.log(
+                            "rig",
+                            "operator presses the safety reset after power-on".into(),
+                        );
+                        self.timers
+                            .push((t + OPERATOR_PULSE, Timer::OperatorReset(false)));
+                    }
+                }
+                Timer::ErrAck(on) => self.err_ack = on,
+                Timer::Attendant(Round::Ack) => self.act(t, "attendant", &Action::Ack),
+                Timer::Attendant(Round::Reset) => self.act(t, "attendant", &Action::Reset),
+                Timer::PowerBack => {
+                    self.lab.bus.set_supply_voltage(NOMINAL_VOLTS);
+                    self.log("rig", "AS-i power back".into());
+                    self.plant_dirty = true;
+                }
+            }
+        }
+    }
+}
