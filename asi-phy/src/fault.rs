@@ -271,21 +271,17 @@ impl Odds {
         );
         // ln(1 − p) summed: exact for the smallest rates, where 1 − (1 − p) is not.
         let ln_none = |ps: &[f64]| ps.iter().map(|p| (-p).ln_1p()).sum::<f64>();
-        // The probability of at least one of `ps`.
-        let any = |ps: &[f64]| -ln_none(ps).exp_m1();
-        // `p` under the condition that it or one of `rest` happens: certain if none of `rest`
-        // can (so that rounding never sends a draw down a branch of probability 0).
-        let given = |p: f64, rest: &[f64]| {
-            let b = |x: f64| Bernoulli::new(x).expect("a clamped probability is in 0..=1");
-            if any(rest) == 0.0 {
-                b(1.0)
-            } else {
-                let mut all = vec![p];
-                all.extend_from_slice(rest);
-                b((p / any(&all)).clamp(0.0, 1.0))
-            }
-        };
         let plain = |p: f64| Bernoulli::new(p).expect("a clamped probability is in 0..=1");
+        // `p` under the condition that it or one of `rest` happens, p / (1 − (1 − p)·Π(1 − r)):
+        // certain if none of `rest` can (so that rounding never sends a draw down a branch of
+        // probability 0).
+        let given = |p: f64, rest: &[f64]| {
+            if ln_none(rest) == 0.0 {
+                return plain(1.0);
+            }
+            let ln_neither = rest.iter().fold((-p).ln_1p(), |a, r| a + (-r).ln_1p());
+            plain((p / -ln_neither.exp_m1()).clamp(0.0, 1.0))
+        };
         Odds {
             ln_untouched: ln_none(&[d, f, s, i]),
             drop: given(d, &[f, s, i]),
