@@ -154,7 +154,7 @@ impl Current {
 
     /// [`Current::master_hears`], with `decode` telling the response a valid telegram is
     /// ([`Received::response`], or the answer a held frame was made of).
-    #[inline]
+    #[inline(always)]
     fn master_hears_as(
         &mut self,
         rx: &mut Listener,
@@ -421,13 +421,18 @@ impl Bus {
         if self.may_run_quick(tx.request) && self.medium.takes_clean(&tg) {
             // As the clean line would: the frame at its end plus the pause.
             let f = quick::request_frame(tx.request, t, self.request_last);
-            self.cur = Some(Current::new(tx, t, f.end, true));
-            self.held = Some(f);
-            self.state = State::AwaitRequestFrame;
-            self.next_event = (f.end + self.timing.min_pause()).max(t);
-            if self.next_event <= self.horizon && !self.output_taken {
-                self.now = self.next_event;
-                self.quick_request(self.next_event);
+            let cur = Current::new(tx, t, f.end, true);
+            let at = (f.end + self.timing.min_pause()).max(t);
+            if at <= self.horizon && !self.output_taken {
+                // Its request frame's event falls within: the transaction goes on at once,
+                // held in locals rather than in the bus until it has to wait.
+                self.now = at;
+                self.quick_from(at, cur, f);
+            } else {
+                self.cur = Some(cur);
+                self.held = Some(f);
+                self.state = State::AwaitRequestFrame;
+                self.next_event = at;
             }
             return;
         }
@@ -490,6 +495,7 @@ impl Bus {
 
     /// The master judges transaction `cur` at `t`, and it is counted and traced; returns the
     /// earliest start of the next request when the line carried an error.
+    #[inline(always)]
     fn close(&mut self, t: SimTime, cur: &Current) -> Option<SimTime> {
         let outcome = match (cur.responses, cur.response) {
             (0, _) => Outcome::NoResponse,
@@ -630,6 +636,7 @@ impl Bus {
 
     /// Notes what request `req`, taken by a slave, does to what the watched slaves drive
     /// ([`Bus::output_note`]): a change ends [`Bus::advance_before`] at this event.
+    #[inline(always)]
     fn note_output(&mut self, req: Request) {
         match self.output_note(req) {
             OutputNote::Same => {}

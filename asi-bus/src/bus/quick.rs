@@ -30,7 +30,7 @@ impl Bus {
     /// it, the slave's answer held off the line. When the transaction's end falls within the
     /// horizon it ends here too.
     pub(super) fn quick_request(&mut self, t: SimTime) {
-        let (Some(cur), Some(f)) = (self.cur.as_mut(), self.held.take()) else {
+        let (Some(cur), Some(f)) = (self.cur, self.held.take()) else {
             // Nothing held: the line's path.
             if let Some(c) = self.cur.as_mut() {
                 c.quick = false;
@@ -38,6 +38,15 @@ impl Bus {
             self.request_frame(t);
             return;
         };
+        self.cur = None;
+        self.quick_from(t, cur, f);
+    }
+
+    /// [`Bus::quick_request`] of transaction `cur`, its request frame `f` held: both in
+    /// locals, and put in the bus only where the transaction has to wait for a later event
+    /// (or leaves the quick path), so that a transaction run in one go from its start
+    /// (`start_transaction`) never stores them.
+    pub(super) fn quick_from(&mut self, t: SimTime, mut cur: Current, f: Frame) {
         let r = hear_in_step(
             &mut self.groups[0].listener,
             &mut self.monitors,
@@ -60,47 +69,68 @@ impl Bus {
         }
         let timing = self.timing;
         let mut quiet = None;
+        let mut held = None;
         if let Some(r) = answer {
             let tg = Transmission::response(r, f.end + timing.master_pause(), timing.half_bit());
             // The line is as the request found it (idle, nothing recorded: anything that
             // changes that releases the held request first), so only its faults are left to ask.
             if self.medium.pass_untouched(&tg) {
                 let answer = answer_frame(r, tg.start(), self.response_last);
-                self.held = Some(answer);
-                self.held_answer = Some(r);
+                held = Some((answer, Some(r)));
                 quiet = Some(answer.end + timing.min_pause());
             } else {
-                // The line touches the answer: the transaction goes on the line's path.
-                if let Some(c) = self.cur.as_mut() {
-                    c.quick = false;
-                }
+                // The line touches the answer: the transaction goes on the line's path, from
+                // the bus (`hear` finds it there).
+                cur.quick = false;
+                self.cur = Some(cur);
                 self.transmit_answers(t, &[tg]);
-                quiet = self.medium.poll_at();
+                let quiet = self
+                    .medium
+                    .poll_at()
+                    .map(|p| p + (timing.slave_pause() - timing.min_pause()));
+                self.state = State::AwaitResponse;
+                self.next_event = quiet.map_or(base, |q| q.max(base)).max(t);
+                return;
             }
         }
         let quiet = quiet.map(|p| p + (timing.slave_pause() - timing.min_pause()));
-        self.state = State::AwaitResponse;
-        self.next_event = quiet.map_or(base, |q| q.max(base)).max(t);
-        let quick = self.cur.is_some_and(|c| c.quick);
-        if quick && self.next_event <= self.horizon && !self.output_taken {
-            let t3 = self.next_event;
-            self.now = t3;
-            self.next_event = match self.quick_finish(t3) {
-                Some(resync) if resync > t3 => resync,
-                _ => t3,
-            };
+        let next = quiet.map_or(base, |q| q.max(base)).max(t);
+        if next <= self.horizon && !self.output_taken {
+            self.now = next;
             self.state = State::Idle;
+            self.next_event = match self.quick_end(next, cur, held) {
+                Some(resync) if resync > next => resync,
+                _ => next,
+            };
+        } else {
+            self.cur = Some(cur);
+            self.held = held.map(|(f, _)| f);
+            self.held_answer = held.and_then(|(_, r)| r);
+            self.state = State::AwaitResponse;
+            self.next_event = next;
         }
     }
 
     /// A quick transaction's end, at `t`: the held answer's frame to the master's receiver,
     /// the slaves' and the monitors', then the master's verdict ([`Bus::close`]).
     pub(super) fn quick_finish(&mut self, t: SimTime) -> Option<SimTime> {
-        let mut cur = self.cur.take()?;
-        if let Some(f) = self.held.take() {
+        let cur = self.cur.take()?;
+        let held = self.held.take().map(|f| (f, self.held_answer.take()));
+        self.quick_end(t, cur, held)
+    }
+
+    /// [`Bus::quick_finish`] of transaction `cur` with its held answer (`held`: the frame
+    /// and the answer it was made of, if known) in locals.
+    #[inline(always)]
+    fn quick_end(
+        &mut self,
+        t: SimTime,
+        mut cur: Current,
+        held: Option<(Frame, Option<Response>)>,
+    ) -> Option<SimTime> {
+        if let Some((f, answer)) = held {
             cur.line_end = cur.line_end.max(f.end);
-            // The held frame is the answer's own (`quick_request` made it of `held_answer`).
-            let answer = self.held_answer.take();
+            // The held frame is the answer's own (`quick_from` made it of `answer`).
             cur.master_hears_as(&mut self.master_rx, &self.timing, &f, |r| match answer {
                 Some(a) => r.response_sent(a),
                 None => r.response(),
