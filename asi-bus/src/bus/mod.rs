@@ -45,7 +45,7 @@ use asi_master::record::{BusStats, TraceRing, TransactionRecord};
 use asi_phy::line::{Line, Medium};
 use asi_phy::{
     BusTiming, Call, Checks, Expect, FaultInjector, FaultRates, Frame, Listener, PulseFault,
-    PulseTrain, Received, Request, Response, SimDuration, SimTime, Transmission,
+    PulseTrain, Received, Request, Response, SimDuration, SimTime, TelegramKind, Transmission,
 };
 use asi_slaves::monitor::SafetyMonitor;
 use asi_slaves::slave::{Peripheral, Slave};
@@ -214,6 +214,10 @@ pub struct Bus {
     /// a new slave) releases the held telegrams first, which clears this, as a new monitor
     /// and the application's access to a monitor do.
     monitor_in_step: bool,
+    /// The receivers' state a run of clean quick transactions has left, while it is not yet
+    /// written into them ([`quick::Unsettled`]): only within an `advance_to` or
+    /// `advance_before` call.
+    unsettled: Option<quick::Unsettled>,
     volts: f64,
     slaves_powered: bool,
     cur: Option<Current>,
@@ -269,6 +273,7 @@ impl Bus {
             held: None,
             held_answer: None,
             monitor_in_step: false,
+            unsettled: None,
             volts: NOMINAL_VOLTS,
             slaves_powered: true,
             cur: None,
@@ -351,6 +356,7 @@ impl Bus {
         while self.next_event <= now {
             self.event();
         }
+        self.settle();
         if now > self.now {
             self.now = now;
             for m in &mut self.monitors {
@@ -377,9 +383,11 @@ impl Bus {
         while self.next_event < until {
             self.event();
             if core::mem::take(&mut self.output_taken) {
+                self.settle();
                 return Some(self.now);
             }
         }
+        self.settle();
         None
     }
 
@@ -556,6 +564,7 @@ impl Bus {
     /// Every receiver on the line hears frame `f` at `now`. The transaction in progress is
     /// updated in place: `respond` may hear the answer's frames before this returns.
     fn hear(&mut self, now: SimTime, f: &Frame, role: Role) {
+        self.settle();
         let Some(cur) = self.cur.as_mut() else {
             return;
         };
@@ -856,6 +865,7 @@ impl Bus {
 
     /// A monitor.
     pub fn monitor(&self, id: MonitorId) -> Option<&SafetyMonitor> {
+        debug_assert!(self.unsettled.is_none(), "the bus is settled between calls");
         self.monitors.get(id.0)
     }
 
