@@ -37,7 +37,12 @@
 //! slave in asi-phy's `tests/receivers.rs`). A safety monitor's receiver hears the same frames
 //! as the slaves' and so, once in their state, stays in it: in a quick transaction the first
 //! monitor then takes the slaves' telegram instead of checking the frame itself
-//! (`quick::hear_in_step`).
+//! (`quick::hear_in_step`). In a run of quick transactions whose frames are all clean, with
+//! the slaves' and the master's receivers synchronised and the monitor's in step, no receiver
+//! checks a frame: each would take it as the valid telegram its timing makes it, and the state
+//! that leaves depends on the frame alone, so the run notes that state and writes it into the
+//! receivers once (`quick::Unsettled`, `Bus::settle`), before anything else hears a frame and
+//! at the end of every `advance_to` and `advance_before` call.
 
 use asi_master::config::{ConfigError, MasterConfig, ProjectedConfig};
 use asi_master::master::{Master, Outcome, Phase, Transmit};
