@@ -552,7 +552,7 @@ impl Master {
         self.service_host(now);
         let t = match self.next_exchange(now) {
             Some(t) => Some(t),
-            None => self.next_transmit(now),
+            None => self.next_cycle_call(now),
         };
         self.inputs_after();
         t
@@ -640,6 +640,94 @@ impl Master {
         })
     }
 
+    /// The call after [`Master::next_exchange`] found none: the cycle's other two calls,
+    /// Read_Status of the next LAS slave when the data stage has ended and the inclusion
+    /// probe of the next free address, or anything else through [`Master::next_transmit`].
+    ///
+    /// The two calls are [`Master::normal_next`]'s management and inclusion stages,
+    /// [`Master::request_for`] and the start of the call in one, without the general
+    /// dispatch. Each is taken only where it is sure to be the general path's call (worked
+    /// out before anything is changed); the rest (a host job, no LAS slave, a running
+    /// inclusion, nothing to include) is left to the general path, from the same state. The
+    /// tests compare them with the general path transaction by transaction.
+    #[inline(never)]
+    fn next_cycle_call(&mut self, now: SimTime) -> Option<Transmit> {
+        if self.phase == Phase::NormalOperation && !self.host.offline && self.job.is_none() {
+            let t = match self.stage {
+                Stage::Data => self.next_status(),
+                Stage::Inclusion => self.next_probe(),
+                Stage::Management => None,
+            };
+            if t.is_some() {
+                return t;
+            }
+        }
+        self.next_transmit(now)
+    }
+
+    /// The management call at the end of the data stage: Read_Status of the first LAS slave
+    /// at or after the status cursor (as [`Master::management_next`]), when no LAS slot is
+    /// left ahead of the cursor and no host job waits; `None`, with nothing changed,
+    /// otherwise.
+    #[inline]
+    fn next_status(&mut self) -> Option<Transmit> {
+        let las = self.las.bits();
+        let occupied = (las as u32 | (las >> 32) as u32) as u64;
+        if las == 0 || occupied & (u64::MAX << self.cursor.min(32)) != 0 {
+            return None;
+        }
+        // Bit 32 (0B) is never in a list.
+        let c = u32::from(self.status_cursor);
+        let i = ((c + las.rotate_right(c).trailing_zeros()) % 64) as u8;
+        let a = SlaveAddr::from_index(i)?;
+        let request = requests::READS.status[i as usize]?;
+        self.cursor = 32;
+        self.stage = Stage::Inclusion;
+        self.status_cursor = (i + 1) % 64;
+        self.in_flight = Some(InFlight {
+            tx: Tx::Status(a),
+            request,
+            repeated: false,
+        });
+        Some(Transmit {
+            request,
+            kind: TxKind::Management,
+            repeat: false,
+            ab: false,
+        })
+    }
+
+    /// The inclusion stage at the start of a call: the cycle closes and the next inclusion
+    /// candidate gets its first probe, Read_IO_Configuration (as [`Master::normal_next`] and
+    /// [`Master::inclusion_next`]), when no inclusion is running or asked for by a job and
+    /// there is a candidate; `None`, with nothing changed, otherwise.
+    #[inline]
+    fn next_probe(&mut self) -> Option<Transmit> {
+        if (self.incl.is_some() && self.incl_step.is_some()) || self.incl_priority.is_some() {
+            return None;
+        }
+        let i = self.inclusion_scan()?;
+        let a = SlaveAddr::from_index(i)?;
+        let request = requests::READS.io[i as usize]?;
+        self.stage = Stage::Data;
+        self.cursor = 1;
+        self.cycle_open = false;
+        self.odd_cycle = !self.odd_cycle;
+        self.incl_cursor = (i + 1) % 64;
+        let tx = self.begin_inclusion(a);
+        self.in_flight = Some(InFlight {
+            tx,
+            request,
+            repeated: false,
+        });
+        Some(Transmit {
+            request,
+            kind: TxKind::Inclusion,
+            repeat: false,
+            ab: false,
+        })
+    }
+
     #[inline(never)]
     fn next_transmit(&mut self, now: SimTime) -> Option<Transmit> {
         for _ in 0..4 {
@@ -689,7 +777,57 @@ impl Master {
                 error: false,
             };
         }
-        self.judge_outcome(now, outcome)
+        self.judge_cycle_call(now, outcome)
+    }
+
+    /// [`Master::handle_outcome`] for every outcome but an answered Data_Exchange: the
+    /// cycle's other two calls as they nearly always end (Read_Status answered, the
+    /// inclusion probe of a free address unanswered) take a short path; every other outcome
+    /// goes through [`Master::judge_outcome`].
+    ///
+    /// Each short path is what `judge_outcome` and [`Master::apply`] do with that outcome:
+    /// neither is a failure, so neither is repeated. The tests compare them with the general
+    /// path.
+    #[inline(never)]
+    fn judge_cycle_call(&mut self, now: SimTime, outcome: Outcome) -> Verdict {
+        let quiet = Verdict {
+            repeat: false,
+            error: false,
+        };
+        match (self.in_flight, outcome) {
+            (
+                Some(InFlight {
+                    tx: Tx::Status(a), ..
+                }),
+                Outcome::Response(r),
+            ) => {
+                self.in_flight = None;
+                self.inputs_before();
+                // As `apply`: LPF, and so the flags, change only when the peripheral-fault
+                // bit does.
+                let fault = r.data().bit(1);
+                if self.lpf.contains(a) != fault {
+                    self.lpf.set(a, fault);
+                    self.touch_inputs();
+                }
+                self.inputs_after();
+                quiet
+            }
+            (
+                Some(InFlight {
+                    tx: Tx::Include(a, InclStep::Read(Read::Io)),
+                    ..
+                }),
+                Outcome::NoResponse,
+            ) => {
+                self.in_flight = None;
+                self.inputs_before();
+                self.include_result(a, InclStep::Read(Read::Io), None);
+                self.inputs_after();
+                quiet
+            }
+            _ => self.judge_outcome(now, outcome),
+        }
     }
 
     /// [`Master::handle_outcome`] for every outcome but an answered Data_Exchange.

@@ -219,14 +219,23 @@ impl Master {
         if let Some(a) = self.incl_priority.take() {
             return Some(self.begin_inclusion(a));
         }
+        let i = self.inclusion_scan()?;
+        self.incl_cursor = (i + 1) % 64;
+        SlaveAddr::from_index(i).map(|a| self.begin_inclusion(a))
+    }
+
+    /// The first inclusion candidate's list bit at or after the inclusion cursor, going round
+    /// after bit 63, or `None` when there is none (the cursor, moved on by one for each bit
+    /// asked, would then be back where it was).
+    pub(super) fn inclusion_scan(&self) -> Option<u8> {
+        let mut i = self.incl_cursor;
         for _ in 0..64 {
-            let i = self.incl_cursor;
-            self.incl_cursor = (self.incl_cursor + 1) % 64;
             if let Some(a) = SlaveAddr::from_index(i) {
                 if self.is_inclusion_candidate(a) {
-                    return Some(self.begin_inclusion(a));
+                    return Some(i);
                 }
             }
+            i = (i + 1) % 64;
         }
         None
     }
