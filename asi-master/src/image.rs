@@ -18,8 +18,8 @@
 //! mailbox at 32..49, analog output values at 68..155. Output word 0 bits 15..12 carry the
 //! host flags ([`crate::HostFlags`]); word 8 bits 15..12 (slot "0B") are reserved and stay 0.
 
+use asi_phy::Nibble;
 use asi_phy::SlaveAddr;
-use asi_phy::{Nibble, Select};
 
 /// Number of words in each image (seed 003 §4: 244 words for master revision 1.3 and later).
 pub const IMAGE_WORDS: usize = 244;
@@ -46,18 +46,17 @@ pub const F3_CONFIGURATION_NOT_ACTIVE: u16 = 1 << 15;
 /// Slave `n` is slot `n` of its half (slot 0 is the flag nibble), 4 slots per word with the
 /// lowest slot in the highest bits: word = n / 4 (+ 8 for B), shift = 12 − 4·(n mod 4).
 /// Address 0 has no nibble.
+///
+/// Both come straight from the list bit `i` = n (A) or 32 + n (B): word = i / 4 (32 / 4 = 8
+/// words for B), shift = 4 · (3 − i mod 4).
 pub const fn nibble_position(a: SlaveAddr) -> Option<(usize, u32)> {
-    // An address is 0..=31; the mask changes nothing but lets the compiler see that the
+    // A list bit is 0..=63; the mask changes nothing but lets the compiler see that the
     // word is in the image (no bounds check where the position is used).
-    let n = (a.address.get() & 31) as usize;
-    if n == 0 {
+    let i = (a.index() & 63) as usize;
+    if i % 32 == 0 {
         return None;
     }
-    let base = match a.select {
-        Select::A => 0,
-        Select::B => 8,
-    };
-    Some((base + n / 4, (12 - 4 * (n % 4)) as u32))
+    Some((i / 4, (4 * (3 - i % 4)) as u32))
 }
 
 /// The analog word of slave `address` (10..=31), `channel` (1..=4): 68 + 4·(addr − 10) +
@@ -197,6 +196,7 @@ pub struct ProcessImage {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use asi_phy::Select;
 
     fn a(n: u8) -> SlaveAddr {
         SlaveAddr::a(n).expect("address")
@@ -233,6 +233,24 @@ mod tests {
         }
         assert_eq!(&used[..8], &[0xFFFF; 8]);
         assert_eq!(used[8], 0x0FFF);
+    }
+
+    /// The position from the list bit is table 4.1's from the address and select: word
+    /// n / 4, plus 8 for B, shift 12 − 4 · (n mod 4).
+    #[test]
+    fn nibble_positions_from_the_list_bit_are_the_tables() {
+        for i in 0..64u8 {
+            let Some(s) = SlaveAddr::from_index(i) else {
+                continue;
+            };
+            let n = s.address.get() as usize;
+            let base = match s.select {
+                Select::A => 0,
+                Select::B => 8,
+            };
+            let want = (n != 0).then(|| (base + n / 4, (12 - 4 * (n % 4)) as u32));
+            assert_eq!(nibble_position(s), want, "{s}");
+        }
     }
 
     #[test]

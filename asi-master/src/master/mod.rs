@@ -235,6 +235,9 @@ pub struct Master {
     incl_step: Option<InclStep>,
     incl_priority: Option<SlaveAddr>,
     analog: Vec<Option<AnalogEngine>>,
+    /// The list bits `i` with an engine in `analog[i]`: asked at every Data_Exchange, so
+    /// one bit test instead of a look into the vector.
+    analog_mask: u64,
     analog_out: [Nibble; 64],
     mailbox: Mailbox,
     job: Option<(MailboxRequest, JobStep)>,
@@ -294,6 +297,7 @@ impl Master {
             incl_step: None,
             incl_priority: None,
             analog: vec![None; 64],
+            analog_mask: 0,
             analog_out: [Nibble::ZERO; 64],
             mailbox: Mailbox::default(),
             job: None,
@@ -486,6 +490,25 @@ impl Master {
             }
     }
 
+    /// `analog[i]` holds an engine.
+    #[inline(always)]
+    fn has_analog(&self, i: usize) -> bool {
+        let has = self.analog_mask >> (i & 63) & 1 != 0;
+        debug_assert_eq!(has, self.analog[i].is_some(), "analog_mask out of step");
+        has
+    }
+
+    /// Puts `e` (or none) into `analog[i]`, and marks it in `analog_mask`.
+    fn set_analog(&mut self, i: usize, e: Option<AnalogEngine>) {
+        let bit = 1u64 << (i & 63);
+        if e.is_some() {
+            self.analog_mask |= bit;
+        } else {
+            self.analog_mask &= !bit;
+        }
+        self.analog[i] = e;
+    }
+
     fn update_flags(&mut self) {
         let f = self.compute_flags();
         self.flags = f;
@@ -615,7 +638,7 @@ impl Master {
         let i = index as usize;
         let out = if !self.host.data_exchange_active {
             Nibble::ALL
-        } else if self.analog[i].is_some() {
+        } else if self.has_analog(i) {
             self.analog_out[i]
         } else {
             self.image.output.nibble(a)
@@ -757,6 +780,7 @@ impl Master {
     ///
     /// The common outcome, a Data_Exchange answered, takes a short path; every other goes
     /// through the general judgement and [`Master::apply`].
+    #[inline(always)]
     pub fn handle_outcome(&mut self, now: SimTime, outcome: Outcome) -> Verdict {
         if let (
             Some(InFlight {

@@ -82,15 +82,16 @@ impl Master {
         self.fails[i] = 0;
         self.image.input.set_nibble(a, inputs);
         let codes = self.detected[i];
-        self.analog[i] = codes.is_analog_7_3().then(|| {
+        let engine = codes.is_analog_7_3().then(|| {
             if codes.analog_is_input() {
                 AnalogEngine::Input(S73InputMaster::new())
             } else {
                 AnalogEngine::Output(S73OutputMaster::new(codes.analog_channels()))
             }
         });
+        self.set_analog(i, engine);
         self.analog_out[i] = Nibble::ZERO;
-        if self.analog[i].is_some() {
+        if self.has_analog(i) {
             self.step_analog(a, inputs);
         }
     }
@@ -101,7 +102,7 @@ impl Master {
         self.lpf.set(a, false);
         self.touch_inputs();
         self.image.input.set_nibble(a, Nibble::ZERO);
-        self.analog[i] = None;
+        self.set_analog(i, None);
         self.fails[i] = 0;
     }
 
@@ -158,7 +159,7 @@ impl Master {
         let i = a.index() as usize;
         self.fails[i] = 0;
         self.image.input.set_nibble(a, d);
-        if self.analog[i].is_some() {
+        if self.has_analog(i) {
             self.step_analog(a, d);
         }
     }

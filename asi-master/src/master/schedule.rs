@@ -282,6 +282,7 @@ impl Master {
         for e in self.analog.iter_mut() {
             *e = None;
         }
+        self.analog_mask = 0;
         self.det_probe = None;
         self.incl = None;
         self.incl_step = None;
