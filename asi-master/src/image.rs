@@ -69,16 +69,38 @@ pub const fn analog_word(address: u8, channel: u8) -> Option<usize> {
 }
 
 /// One data image: [`IMAGE_WORDS`] 16-bit words.
-#[derive(Clone, PartialEq, Eq)]
+///
+/// The image notes that it was written (any word, by any of its setters), so the master
+/// reads the host flags and the mailbox out of the output image only after a write. A new
+/// or cloned image counts as written; two images are equal when their words are.
+#[derive(Eq)]
 pub struct Image {
     words: [u16; IMAGE_WORDS],
+    /// A word was written since the master last took this (see [`Image::take_written`]).
+    written: bool,
 }
 
 impl Default for Image {
     fn default() -> Self {
         Image {
             words: [0; IMAGE_WORDS],
+            written: true,
         }
+    }
+}
+
+impl Clone for Image {
+    fn clone(&self) -> Self {
+        Image {
+            words: self.words,
+            written: true,
+        }
+    }
+}
+
+impl PartialEq for Image {
+    fn eq(&self, other: &Self) -> bool {
+        self.words == other.words
     }
 }
 
@@ -96,9 +118,21 @@ impl Image {
 
     /// Sets word `i`; ignored past the end.
     pub fn set_word(&mut self, i: usize, v: u16) {
+        self.written = true;
         if let Some(w) = self.words.get_mut(i) {
             *w = v;
         }
+    }
+
+    /// Whether a word was written since the last call (or since the image was made or
+    /// cloned); the note is cleared.
+    pub(crate) fn take_written(&mut self) -> bool {
+        core::mem::replace(&mut self.written, false)
+    }
+
+    /// Counts the image as written (the master's state changed so that it must read it again).
+    pub(crate) fn mark_written(&mut self) {
+        self.written = true;
     }
 
     /// All words.
@@ -116,6 +150,7 @@ impl Image {
 
     /// Sets the nibble of slave `a` (ignored for address 0).
     pub fn set_nibble(&mut self, a: SlaveAddr, v: Nibble) {
+        self.written = true;
         if let Some((w, s)) = nibble_position(a) {
             let word = &mut self.words[w];
             *word = (*word & !(0xF << s)) | ((v.get() as u16) << s);
@@ -142,6 +177,7 @@ impl Image {
 
     /// Sets the analog word of `address`, `channel` (ignored outside 10..=31, 1..=4).
     pub fn set_analog(&mut self, address: u8, channel: u8, v: u16) {
+        self.written = true;
         if let Some(i) = analog_word(address, channel) {
             self.words[i] = v;
         }
@@ -154,6 +190,7 @@ impl Image {
 
     /// Sets the flag nibble of word 0 (bits 15..12).
     pub fn set_flag_nibble(&mut self, v: Nibble) {
+        self.written = true;
         self.words[0] = (self.words[0] & 0x0FFF) | ((v.get() as u16) << 12);
     }
 
@@ -175,6 +212,7 @@ impl Image {
         if !(1..=MAILBOX_BYTES).contains(&k) {
             return;
         }
+        self.written = true;
         let w = &mut self.words[MAILBOX_WORD + 1 + (k - 1) / 2];
         *w = if k % 2 == 1 {
             (*w & 0x00FF) | ((v as u16) << 8)

@@ -294,6 +294,8 @@ impl Master {
         self.offline_cursor = 0;
         if let Some((req, _)) = self.job.take() {
             self.mailbox.abort(&mut self.image.input, &req);
+            // A job the PLC posted meanwhile is taken at the next call.
+            self.image.output.mark_written();
         }
         self.update_flags();
     }
