@@ -148,6 +148,14 @@ impl Image {
         }
     }
 
+    /// The nibble of the slave of list bit `i` (1..=31 A, 33..=63 B): [`Image::nibble`]
+    /// without going through the address.
+    pub(crate) fn nibble_of_bit(&self, i: usize) -> Nibble {
+        debug_assert!(i < 64 && i % 32 != 0, "no slave nibble at list bit {i}");
+        let i = i & 63;
+        Nibble::from_low_bits((self.words[i / 4] >> (4 * (3 - i % 4))) as u8)
+    }
+
     /// Sets the nibble of slave `a` (ignored for address 0).
     pub fn set_nibble(&mut self, a: SlaveAddr, v: Nibble) {
         self.written = true;
@@ -288,6 +296,19 @@ mod tests {
             };
             let want = (n != 0).then(|| (base + n / 4, (12 - 4 * (n % 4)) as u32));
             assert_eq!(nibble_position(s), want, "{s}");
+        }
+    }
+
+    /// The nibble read by list bit is the one read by address, for every slave.
+    #[test]
+    fn nibble_of_bit_is_the_slaves_nibble() {
+        let mut img = Image::default();
+        for (i, w) in img.words.iter_mut().enumerate() {
+            *w = (i as u16).wrapping_mul(0x9E37) ^ 0x5A5A;
+        }
+        for i in (1..64u8).filter(|i| i % 32 != 0) {
+            let s = SlaveAddr::from_index(i).expect("a slave's list bit");
+            assert_eq!(img.nibble_of_bit(i as usize), img.nibble(s), "{s}");
         }
     }
 

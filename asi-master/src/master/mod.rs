@@ -618,7 +618,9 @@ impl Master {
         }
         let las = self.las.bits();
         let occupied = (las as u32 | (las >> 32) as u32) as u64;
-        let ahead = occupied & (u64::MAX << self.cursor.min(32));
+        // `occupied` has 32 bits: a shift by 32..=63 clears them all as one by 32 does (the
+        // general path's `min(32)`); the cursor is never above 33.
+        let ahead = occupied & (u64::MAX << (self.cursor & 63));
         let n = ahead.trailing_zeros() as u8;
         // Nothing ahead (n = 64) ends the stage; address 0 has no Data_Exchange (the
         // general path fails the call). Both are left to the general path.
@@ -641,14 +643,15 @@ impl Master {
         } else if self.has_analog(i) {
             self.analog_out[i]
         } else {
-            self.image.output.nibble(a)
+            self.image.output.nibble_of_bit(i)
         };
         let ab = self.detected[i].is_ab();
         let request = if ab {
             DEXG.ab[i][(out.get() & 7) as usize]
         } else {
-            // A nibble holds 4 bits; the mask only lets the compiler see it.
-            DEXG.standard[n as usize][(out.get() & 0xF) as usize]
+            // An address is 1..=31 here and a nibble holds 4 bits; the masks only let the
+            // compiler see it.
+            DEXG.standard[(n & 31) as usize][(out.get() & 0xF) as usize]
         };
         self.in_flight = Some(InFlight {
             tx: Tx::Exchange(a),
@@ -846,7 +849,17 @@ impl Master {
             ) => {
                 self.in_flight = None;
                 self.inputs_before();
-                self.include_result(a, InclStep::Read(Read::Io), None);
+                // `include_result` of a probe without an answer: the inclusion in progress
+                // at `a` ends, and a detected slave that is not active leaves LDS.
+                if self.incl.is_some_and(|p| p.a == a) {
+                    if self.lds.contains(a) && !self.las.contains(a) {
+                        self.lds.set(a, false);
+                        self.touch_inputs();
+                        self.lcs.set(a, true);
+                    }
+                    self.incl = None;
+                    self.incl_step = None;
+                }
                 self.inputs_after();
                 quiet
             }

@@ -156,7 +156,8 @@ impl Master {
         if !self.las.contains(a) {
             return;
         }
-        let i = a.index() as usize;
+        // A list bit is 0..=63; the mask only lets the compiler see it.
+        let i = (a.index() & 63) as usize;
         self.fails[i] = 0;
         self.image.input.set_nibble(a, d);
         if self.has_analog(i) {
