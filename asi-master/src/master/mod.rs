@@ -210,6 +210,9 @@ pub struct Master {
     lcs: SlaveList,
     lpf: SlaveList,
     detected: [SlaveCodes; 64],
+    /// The list bits `i` whose `detected[i]` are the codes of an A/B slave: the inclusion
+    /// scan reads which addresses a standard slave holds whole from it.
+    ab_mask: u64,
     pi: [Nibble; 64],
     fails: [u8; 64],
     image: ProcessImage,
@@ -274,6 +277,7 @@ impl Master {
             lcs: SlaveList::EMPTY,
             lpf: SlaveList::EMPTY,
             detected: [UNKNOWN_CODES; 64],
+            ab_mask: 0,
             pi: [Nibble::ALL; 64],
             fails: [0; 64],
             image: ProcessImage::default(),
@@ -488,6 +492,17 @@ impl Master {
                 Mode::Protected => self.matches_projection(a),
                 Mode::Configuration => true,
             }
+    }
+
+    /// The codes read from the slave of list bit `i`, noted in `detected` and `ab_mask`.
+    fn set_detected(&mut self, i: usize, codes: SlaveCodes) {
+        let bit = 1u64 << (i & 63);
+        if codes.is_ab() {
+            self.ab_mask |= bit;
+        } else {
+            self.ab_mask &= !bit;
+        }
+        self.detected[i] = codes;
     }
 
     /// `analog[i]` holds an engine.

@@ -66,7 +66,7 @@ impl Master {
                 p.codes.id2 = v;
                 self.lds.set(a, true);
                 self.touch_inputs();
-                self.detected[a.index() as usize] = p.codes;
+                self.set_detected(a.index() as usize, p.codes);
                 self.det_probe = None;
                 return;
             }
@@ -221,7 +221,7 @@ impl Master {
                 p.codes.id2 = v;
                 self.lds.set(a, true);
                 self.touch_inputs();
-                self.detected[a.index() as usize] = p.codes;
+                self.set_detected(a.index() as usize, p.codes);
                 if a.number() == 0 {
                     match self.auto_address_target(p.codes) {
                         Some((t, Some(id1))) => InclStep::AutoId1(t, id1),

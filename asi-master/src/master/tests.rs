@@ -296,6 +296,78 @@ fn status_call_by_address(m: &mut Master) -> Option<Tx> {
     None
 }
 
+impl Master {
+    /// Whether the inclusion stage may probe `a`, asked address by address.
+    fn is_inclusion_candidate(&self, a: SlaveAddr) -> bool {
+        if self.las.contains(a) {
+            return false;
+        }
+        match (a.number(), a.select) {
+            (0, _) => (1..=31u8).any(|n| {
+                !self.occupies_whole(n) && SlaveAddr::a(n).is_some_and(|x| !self.las.contains(x))
+            }),
+            (n, Select::B) => !self.occupies_whole(n),
+            _ => true,
+        }
+    }
+}
+
+/// The inclusion candidate found by asking list bits in turn from the cursor.
+fn inclusion_scan_by_address(m: &Master) -> Option<u8> {
+    let mut i = m.incl_cursor;
+    for _ in 0..64 {
+        if let Some(a) = SlaveAddr::from_index(i) {
+            if m.is_inclusion_candidate(a) {
+                return Some(i);
+            }
+        }
+        i = (i + 1) % 64;
+    }
+    None
+}
+
+#[test]
+fn the_inclusion_scan_finds_the_candidate_asking_each_address_would() {
+    let mut rng = Rng(0x1C1);
+    let mut m = Master::new(MasterConfig::default(), projected()).expect("master");
+    let mut found = 0;
+    for round in 0..20_000 {
+        // Sparse, dense and random lists; full ones leave no candidate.
+        let list = |rng: &mut Rng| match round % 4 {
+            0 => rng.next() & rng.next(),
+            1 => rng.next() | rng.next(),
+            2 => u64::MAX,
+            _ => rng.next(),
+        };
+        m.las = SlaveList::from_bits(list(&mut rng));
+        m.lds = SlaveList::from_bits(list(&mut rng) | m.las.bits());
+        for i in 0..64 {
+            let codes = if rng.chance(30) {
+                SlaveCodes::new(0x7, 0xA, 0x7, 0xE)
+            } else {
+                SlaveCodes::new(0x7, 0x1, 0xF, 0xE)
+            };
+            m.set_detected(i, codes);
+        }
+        m.incl_cursor = rng.below(64) as u8;
+        let want = inclusion_scan_by_address(&m);
+        assert_eq!(
+            m.inclusion_scan(),
+            want,
+            "las {:#x} lds {:#x} ab {:#x} cursor {}",
+            m.las.bits(),
+            m.lds.bits(),
+            m.ab_mask,
+            m.incl_cursor
+        );
+        found += want.is_some() as u32;
+    }
+    assert!(
+        (1_000..19_000).contains(&found),
+        "{found} of 20000 found one"
+    );
+}
+
 #[test]
 fn the_cycle_calls_the_slaves_asking_each_address_would() {
     let mut rng = Rng(0x5EED);
