@@ -18,8 +18,8 @@
 //! mailbox at 32..49, analog output values at 68..155. Output word 0 bits 15..12 carry the
 //! host flags ([`crate::HostFlags`]); word 8 bits 15..12 (slot "0B") are reserved and stay 0.
 
+use asi_phy::Nibble;
 use asi_phy::SlaveAddr;
-use asi_phy::{Nibble, Select};
 
 /// Number of words in each image (seed 003 §4: 244 words for master revision 1.3 and later).
 pub const IMAGE_WORDS: usize = 244;
@@ -46,18 +46,17 @@ pub const F3_CONFIGURATION_NOT_ACTIVE: u16 = 1 << 15;
 /// Slave `n` is slot `n` of its half (slot 0 is the flag nibble), 4 slots per word with the
 /// lowest slot in the highest bits: word = n / 4 (+ 8 for B), shift = 12 − 4·(n mod 4).
 /// Address 0 has no nibble.
+///
+/// Both come straight from the list bit `i` = n (A) or 32 + n (B): word = i / 4 (32 / 4 = 8
+/// words for B), shift = 4 · (3 − i mod 4).
 pub const fn nibble_position(a: SlaveAddr) -> Option<(usize, u32)> {
-    // An address is 0..=31; the mask changes nothing but lets the compiler see that the
+    // A list bit is 0..=63; the mask changes nothing but lets the compiler see that the
     // word is in the image (no bounds check where the position is used).
-    let n = (a.address.get() & 31) as usize;
-    if n == 0 {
+    let i = (a.index() & 63) as usize;
+    if i % 32 == 0 {
         return None;
     }
-    let base = match a.select {
-        Select::A => 0,
-        Select::B => 8,
-    };
-    Some((base + n / 4, (12 - 4 * (n % 4)) as u32))
+    Some((i / 4, (4 * (3 - i % 4)) as u32))
 }
 
 /// The analog word of slave `address` (10..=31), `channel` (1..=4): 68 + 4·(addr − 10) +
@@ -70,16 +69,38 @@ pub const fn analog_word(address: u8, channel: u8) -> Option<usize> {
 }
 
 /// One data image: [`IMAGE_WORDS`] 16-bit words.
-#[derive(Clone, PartialEq, Eq)]
+///
+/// The image notes that it was written (any word, by any of its setters), so the master
+/// reads the host flags and the mailbox out of the output image only after a write. A new
+/// or cloned image counts as written; two images are equal when their words are.
+#[derive(Eq)]
 pub struct Image {
     words: [u16; IMAGE_WORDS],
+    /// A word was written since the master last took this (see [`Image::take_written`]).
+    written: bool,
 }
 
 impl Default for Image {
     fn default() -> Self {
         Image {
             words: [0; IMAGE_WORDS],
+            written: true,
         }
+    }
+}
+
+impl Clone for Image {
+    fn clone(&self) -> Self {
+        Image {
+            words: self.words,
+            written: true,
+        }
+    }
+}
+
+impl PartialEq for Image {
+    fn eq(&self, other: &Self) -> bool {
+        self.words == other.words
     }
 }
 
@@ -97,9 +118,21 @@ impl Image {
 
     /// Sets word `i`; ignored past the end.
     pub fn set_word(&mut self, i: usize, v: u16) {
+        self.written = true;
         if let Some(w) = self.words.get_mut(i) {
             *w = v;
         }
+    }
+
+    /// Whether a word was written since the last call (or since the image was made or
+    /// cloned); the note is cleared.
+    pub(crate) fn take_written(&mut self) -> bool {
+        core::mem::replace(&mut self.written, false)
+    }
+
+    /// Counts the image as written (the master's state changed so that it must read it again).
+    pub(crate) fn mark_written(&mut self) {
+        self.written = true;
     }
 
     /// All words.
@@ -115,8 +148,17 @@ impl Image {
         }
     }
 
+    /// The nibble of the slave of list bit `i` (1..=31 A, 33..=63 B): [`Image::nibble`]
+    /// without going through the address.
+    pub(crate) fn nibble_of_bit(&self, i: usize) -> Nibble {
+        debug_assert!(i < 64 && i % 32 != 0, "no slave nibble at list bit {i}");
+        let i = i & 63;
+        Nibble::from_low_bits((self.words[i / 4] >> (4 * (3 - i % 4))) as u8)
+    }
+
     /// Sets the nibble of slave `a` (ignored for address 0).
     pub fn set_nibble(&mut self, a: SlaveAddr, v: Nibble) {
+        self.written = true;
         if let Some((w, s)) = nibble_position(a) {
             let word = &mut self.words[w];
             *word = (*word & !(0xF << s)) | ((v.get() as u16) << s);
@@ -143,6 +185,7 @@ impl Image {
 
     /// Sets the analog word of `address`, `channel` (ignored outside 10..=31, 1..=4).
     pub fn set_analog(&mut self, address: u8, channel: u8, v: u16) {
+        self.written = true;
         if let Some(i) = analog_word(address, channel) {
             self.words[i] = v;
         }
@@ -155,6 +198,7 @@ impl Image {
 
     /// Sets the flag nibble of word 0 (bits 15..12).
     pub fn set_flag_nibble(&mut self, v: Nibble) {
+        self.written = true;
         self.words[0] = (self.words[0] & 0x0FFF) | ((v.get() as u16) << 12);
     }
 
@@ -176,6 +220,7 @@ impl Image {
         if !(1..=MAILBOX_BYTES).contains(&k) {
             return;
         }
+        self.written = true;
         let w = &mut self.words[MAILBOX_WORD + 1 + (k - 1) / 2];
         *w = if k % 2 == 1 {
             (*w & 0x00FF) | ((v as u16) << 8)
@@ -197,6 +242,7 @@ pub struct ProcessImage {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use asi_phy::Select;
 
     fn a(n: u8) -> SlaveAddr {
         SlaveAddr::a(n).expect("address")
@@ -233,6 +279,37 @@ mod tests {
         }
         assert_eq!(&used[..8], &[0xFFFF; 8]);
         assert_eq!(used[8], 0x0FFF);
+    }
+
+    /// The position from the list bit is table 4.1's from the address and select: word
+    /// n / 4, plus 8 for B, shift 12 − 4 · (n mod 4).
+    #[test]
+    fn nibble_positions_from_the_list_bit_are_the_tables() {
+        for i in 0..64u8 {
+            let Some(s) = SlaveAddr::from_index(i) else {
+                continue;
+            };
+            let n = s.address.get() as usize;
+            let base = match s.select {
+                Select::A => 0,
+                Select::B => 8,
+            };
+            let want = (n != 0).then(|| (base + n / 4, (12 - 4 * (n % 4)) as u32));
+            assert_eq!(nibble_position(s), want, "{s}");
+        }
+    }
+
+    /// The nibble read by list bit is the one read by address, for every slave.
+    #[test]
+    fn nibble_of_bit_is_the_slaves_nibble() {
+        let mut img = Image::default();
+        for (i, w) in img.words.iter_mut().enumerate() {
+            *w = (i as u16).wrapping_mul(0x9E37) ^ 0x5A5A;
+        }
+        for i in (1..64u8).filter(|i| i % 32 != 0) {
+            let s = SlaveAddr::from_index(i).expect("a slave's list bit");
+            assert_eq!(img.nibble_of_bit(i as usize), img.nibble(s), "{s}");
+        }
     }
 
     #[test]

@@ -189,6 +189,11 @@ impl Mailbox {
         self.take_posted(output, w, t)
     }
 
+    /// Whether [`Mailbox::take`] would take a job now.
+    pub(crate) fn posted(&self, output: &Image) -> bool {
+        !self.busy && (output.word(MAILBOX_WORD) & 0x80 != 0) != self.last_t
+    }
+
     /// Takes the job the PLC has just posted (output word 32 = `w`, its T = `t`).
     #[inline(never)]
     fn take_posted(&mut self, output: &Image, w: u16, t: bool) -> Option<MailboxRequest> {

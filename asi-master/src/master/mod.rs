@@ -210,6 +210,9 @@ pub struct Master {
     lcs: SlaveList,
     lpf: SlaveList,
     detected: [SlaveCodes; 64],
+    /// The list bits `i` whose `detected[i]` are the codes of an A/B slave: the inclusion
+    /// scan reads which addresses a standard slave holds whole from it.
+    ab_mask: u64,
     pi: [Nibble; 64],
     fails: [u8; 64],
     image: ProcessImage,
@@ -235,6 +238,9 @@ pub struct Master {
     incl_step: Option<InclStep>,
     incl_priority: Option<SlaveAddr>,
     analog: Vec<Option<AnalogEngine>>,
+    /// The list bits `i` with an engine in `analog[i]`: asked at every Data_Exchange, so
+    /// one bit test instead of a look into the vector.
+    analog_mask: u64,
     analog_out: [Nibble; 64],
     mailbox: Mailbox,
     job: Option<(MailboxRequest, JobStep)>,
@@ -271,6 +277,7 @@ impl Master {
             lcs: SlaveList::EMPTY,
             lpf: SlaveList::EMPTY,
             detected: [UNKNOWN_CODES; 64],
+            ab_mask: 0,
             pi: [Nibble::ALL; 64],
             fails: [0; 64],
             image: ProcessImage::default(),
@@ -294,6 +301,7 @@ impl Master {
             incl_step: None,
             incl_priority: None,
             analog: vec![None; 64],
+            analog_mask: 0,
             analog_out: [Nibble::ZERO; 64],
             mailbox: Mailbox::default(),
             job: None,
@@ -486,6 +494,36 @@ impl Master {
             }
     }
 
+    /// The codes read from the slave of list bit `i`, noted in `detected` and `ab_mask`.
+    fn set_detected(&mut self, i: usize, codes: SlaveCodes) {
+        let bit = 1u64 << (i & 63);
+        if codes.is_ab() {
+            self.ab_mask |= bit;
+        } else {
+            self.ab_mask &= !bit;
+        }
+        self.detected[i] = codes;
+    }
+
+    /// `analog[i]` holds an engine.
+    #[inline(always)]
+    fn has_analog(&self, i: usize) -> bool {
+        let has = self.analog_mask >> (i & 63) & 1 != 0;
+        debug_assert_eq!(has, self.analog[i].is_some(), "analog_mask out of step");
+        has
+    }
+
+    /// Puts `e` (or none) into `analog[i]`, and marks it in `analog_mask`.
+    fn set_analog(&mut self, i: usize, e: Option<AnalogEngine>) {
+        let bit = 1u64 << (i & 63);
+        if e.is_some() {
+            self.analog_mask |= bit;
+        } else {
+            self.analog_mask &= !bit;
+        }
+        self.analog[i] = e;
+    }
+
     fn update_flags(&mut self) {
         let f = self.compute_flags();
         self.flags = f;
@@ -552,7 +590,7 @@ impl Master {
         self.service_host(now);
         let t = match self.next_exchange(now) {
             Some(t) => Some(t),
-            None => self.next_transmit(now),
+            None => self.next_cycle_call(now),
         };
         self.inputs_after();
         t
@@ -595,7 +633,9 @@ impl Master {
         }
         let las = self.las.bits();
         let occupied = (las as u32 | (las >> 32) as u32) as u64;
-        let ahead = occupied & (u64::MAX << self.cursor.min(32));
+        // `occupied` has 32 bits: a shift by 32..=63 clears them all as one by 32 does (the
+        // general path's `min(32)`); the cursor is never above 33.
+        let ahead = occupied & (u64::MAX << (self.cursor & 63));
         let n = ahead.trailing_zeros() as u8;
         // Nothing ahead (n = 64) ends the stage; address 0 has no Data_Exchange (the
         // general path fails the call). Both are left to the general path.
@@ -615,17 +655,18 @@ impl Master {
         let i = index as usize;
         let out = if !self.host.data_exchange_active {
             Nibble::ALL
-        } else if self.analog[i].is_some() {
+        } else if self.has_analog(i) {
             self.analog_out[i]
         } else {
-            self.image.output.nibble(a)
+            self.image.output.nibble_of_bit(i)
         };
         let ab = self.detected[i].is_ab();
         let request = if ab {
             DEXG.ab[i][(out.get() & 7) as usize]
         } else {
-            // A nibble holds 4 bits; the mask only lets the compiler see it.
-            DEXG.standard[n as usize][(out.get() & 0xF) as usize]
+            // An address is 1..=31 here and a nibble holds 4 bits; the masks only let the
+            // compiler see it.
+            DEXG.standard[(n & 31) as usize][(out.get() & 0xF) as usize]
         };
         self.in_flight = Some(InFlight {
             tx: Tx::Exchange(a),
@@ -637,6 +678,94 @@ impl Master {
             kind: TxKind::DataExchange,
             repeat: false,
             ab,
+        })
+    }
+
+    /// The call after [`Master::next_exchange`] found none: the cycle's other two calls,
+    /// Read_Status of the next LAS slave when the data stage has ended and the inclusion
+    /// probe of the next free address, or anything else through [`Master::next_transmit`].
+    ///
+    /// The two calls are [`Master::normal_next`]'s management and inclusion stages,
+    /// [`Master::request_for`] and the start of the call in one, without the general
+    /// dispatch. Each is taken only where it is sure to be the general path's call (worked
+    /// out before anything is changed); the rest (a host job, no LAS slave, a running
+    /// inclusion, nothing to include) is left to the general path, from the same state. The
+    /// tests compare them with the general path transaction by transaction.
+    #[inline(never)]
+    fn next_cycle_call(&mut self, now: SimTime) -> Option<Transmit> {
+        if self.phase == Phase::NormalOperation && !self.host.offline && self.job.is_none() {
+            let t = match self.stage {
+                Stage::Data => self.next_status(),
+                Stage::Inclusion => self.next_probe(),
+                Stage::Management => None,
+            };
+            if t.is_some() {
+                return t;
+            }
+        }
+        self.next_transmit(now)
+    }
+
+    /// The management call at the end of the data stage: Read_Status of the first LAS slave
+    /// at or after the status cursor (as [`Master::management_next`]), when no LAS slot is
+    /// left ahead of the cursor and no host job waits; `None`, with nothing changed,
+    /// otherwise.
+    #[inline]
+    fn next_status(&mut self) -> Option<Transmit> {
+        let las = self.las.bits();
+        let occupied = (las as u32 | (las >> 32) as u32) as u64;
+        if las == 0 || occupied & (u64::MAX << self.cursor.min(32)) != 0 {
+            return None;
+        }
+        // Bit 32 (0B) is never in a list.
+        let c = u32::from(self.status_cursor);
+        let i = ((c + las.rotate_right(c).trailing_zeros()) % 64) as u8;
+        let a = SlaveAddr::from_index(i)?;
+        let request = requests::READS.status[i as usize]?;
+        self.cursor = 32;
+        self.stage = Stage::Inclusion;
+        self.status_cursor = (i + 1) % 64;
+        self.in_flight = Some(InFlight {
+            tx: Tx::Status(a),
+            request,
+            repeated: false,
+        });
+        Some(Transmit {
+            request,
+            kind: TxKind::Management,
+            repeat: false,
+            ab: false,
+        })
+    }
+
+    /// The inclusion stage at the start of a call: the cycle closes and the next inclusion
+    /// candidate gets its first probe, Read_IO_Configuration (as [`Master::normal_next`] and
+    /// [`Master::inclusion_next`]), when no inclusion is running or asked for by a job and
+    /// there is a candidate; `None`, with nothing changed, otherwise.
+    #[inline]
+    fn next_probe(&mut self) -> Option<Transmit> {
+        if (self.incl.is_some() && self.incl_step.is_some()) || self.incl_priority.is_some() {
+            return None;
+        }
+        let i = self.inclusion_scan()?;
+        let a = SlaveAddr::from_index(i)?;
+        let request = requests::READS.io[i as usize]?;
+        self.stage = Stage::Data;
+        self.cursor = 1;
+        self.cycle_open = false;
+        self.odd_cycle = !self.odd_cycle;
+        self.incl_cursor = (i + 1) % 64;
+        let tx = self.begin_inclusion(a);
+        self.in_flight = Some(InFlight {
+            tx,
+            request,
+            repeated: false,
+        });
+        Some(Transmit {
+            request,
+            kind: TxKind::Inclusion,
+            repeat: false,
+            ab: false,
         })
     }
 
@@ -669,6 +798,7 @@ impl Master {
     ///
     /// The common outcome, a Data_Exchange answered, takes a short path; every other goes
     /// through the general judgement and [`Master::apply`].
+    #[inline(always)]
     pub fn handle_outcome(&mut self, now: SimTime, outcome: Outcome) -> Verdict {
         if let (
             Some(InFlight {
@@ -689,7 +819,67 @@ impl Master {
                 error: false,
             };
         }
-        self.judge_outcome(now, outcome)
+        self.judge_cycle_call(now, outcome)
+    }
+
+    /// [`Master::handle_outcome`] for every outcome but an answered Data_Exchange: the
+    /// cycle's other two calls as they nearly always end (Read_Status answered, the
+    /// inclusion probe of a free address unanswered) take a short path; every other outcome
+    /// goes through [`Master::judge_outcome`].
+    ///
+    /// Each short path is what `judge_outcome` and [`Master::apply`] do with that outcome:
+    /// neither is a failure, so neither is repeated. The tests compare them with the general
+    /// path.
+    #[inline(never)]
+    fn judge_cycle_call(&mut self, now: SimTime, outcome: Outcome) -> Verdict {
+        let quiet = Verdict {
+            repeat: false,
+            error: false,
+        };
+        match (self.in_flight, outcome) {
+            (
+                Some(InFlight {
+                    tx: Tx::Status(a), ..
+                }),
+                Outcome::Response(r),
+            ) => {
+                self.in_flight = None;
+                self.inputs_before();
+                // As `apply`: LPF, and so the flags, change only when the peripheral-fault
+                // bit does.
+                let fault = r.data().bit(1);
+                if self.lpf.contains(a) != fault {
+                    self.lpf.set(a, fault);
+                    self.touch_inputs();
+                }
+                self.inputs_after();
+                quiet
+            }
+            (
+                Some(InFlight {
+                    tx: Tx::Include(a, InclStep::Read(Read::Io)),
+                    ..
+                }),
+                Outcome::NoResponse,
+            ) => {
+                self.in_flight = None;
+                self.inputs_before();
+                // `include_result` of a probe without an answer: the inclusion in progress
+                // at `a` ends, and a detected slave that is not active leaves LDS.
+                if self.incl.is_some_and(|p| p.a == a) {
+                    if self.lds.contains(a) && !self.las.contains(a) {
+                        self.lds.set(a, false);
+                        self.touch_inputs();
+                        self.lcs.set(a, true);
+                    }
+                    self.incl = None;
+                    self.incl_step = None;
+                }
+                self.inputs_after();
+                quiet
+            }
+            _ => self.judge_outcome(now, outcome),
+        }
     }
 
     /// [`Master::handle_outcome`] for every outcome but an answered Data_Exchange.

@@ -66,7 +66,7 @@ impl Master {
                 p.codes.id2 = v;
                 self.lds.set(a, true);
                 self.touch_inputs();
-                self.detected[a.index() as usize] = p.codes;
+                self.set_detected(a.index() as usize, p.codes);
                 self.det_probe = None;
                 return;
             }
@@ -82,15 +82,16 @@ impl Master {
         self.fails[i] = 0;
         self.image.input.set_nibble(a, inputs);
         let codes = self.detected[i];
-        self.analog[i] = codes.is_analog_7_3().then(|| {
+        let engine = codes.is_analog_7_3().then(|| {
             if codes.analog_is_input() {
                 AnalogEngine::Input(S73InputMaster::new())
             } else {
                 AnalogEngine::Output(S73OutputMaster::new(codes.analog_channels()))
             }
         });
+        self.set_analog(i, engine);
         self.analog_out[i] = Nibble::ZERO;
-        if self.analog[i].is_some() {
+        if self.has_analog(i) {
             self.step_analog(a, inputs);
         }
     }
@@ -101,7 +102,7 @@ impl Master {
         self.lpf.set(a, false);
         self.touch_inputs();
         self.image.input.set_nibble(a, Nibble::ZERO);
-        self.analog[i] = None;
+        self.set_analog(i, None);
         self.fails[i] = 0;
     }
 
@@ -155,10 +156,11 @@ impl Master {
         if !self.las.contains(a) {
             return;
         }
-        let i = a.index() as usize;
+        // A list bit is 0..=63; the mask only lets the compiler see it.
+        let i = (a.index() & 63) as usize;
         self.fails[i] = 0;
         self.image.input.set_nibble(a, d);
-        if self.analog[i].is_some() {
+        if self.has_analog(i) {
             self.step_analog(a, d);
         }
     }
@@ -219,7 +221,7 @@ impl Master {
                 p.codes.id2 = v;
                 self.lds.set(a, true);
                 self.touch_inputs();
-                self.detected[a.index() as usize] = p.codes;
+                self.set_detected(a.index() as usize, p.codes);
                 if a.number() == 0 {
                     match self.auto_address_target(p.codes) {
                         Some((t, Some(id1))) => InclStep::AutoId1(t, id1),

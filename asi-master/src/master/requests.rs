@@ -66,7 +66,7 @@ impl Master {
             Tx::Exchange(a) => {
                 let out = if !self.host.data_exchange_active {
                     Nibble::ALL
-                } else if self.analog[a.index() as usize].is_some() {
+                } else if self.has_analog(a.index() as usize) {
                     self.analog_out[a.index() as usize]
                 } else {
                     self.image.output.nibble(a)

@@ -198,19 +198,6 @@ impl Master {
         SlaveAddr::from_index(i as u8).map(Tx::Status)
     }
 
-    pub(super) fn is_inclusion_candidate(&self, a: SlaveAddr) -> bool {
-        if self.las.contains(a) {
-            return false;
-        }
-        match (a.number(), a.select) {
-            (0, _) => (1..=31u8).any(|n| {
-                !self.occupies_whole(n) && SlaveAddr::a(n).is_some_and(|x| !self.las.contains(x))
-            }),
-            (n, Select::B) => !self.occupies_whole(n),
-            _ => true,
-        }
-    }
-
     #[inline(never)]
     pub(super) fn inclusion_next(&mut self) -> Option<Tx> {
         if let (Some(p), Some(step)) = (self.incl, self.incl_step) {
@@ -219,16 +206,37 @@ impl Master {
         if let Some(a) = self.incl_priority.take() {
             return Some(self.begin_inclusion(a));
         }
-        for _ in 0..64 {
-            let i = self.incl_cursor;
-            self.incl_cursor = (self.incl_cursor + 1) % 64;
-            if let Some(a) = SlaveAddr::from_index(i) {
-                if self.is_inclusion_candidate(a) {
-                    return Some(self.begin_inclusion(a));
-                }
-            }
+        let i = self.inclusion_scan()?;
+        self.incl_cursor = (i + 1) % 64;
+        SlaveAddr::from_index(i).map(|a| self.begin_inclusion(a))
+    }
+
+    /// The first inclusion candidate's list bit at or after the inclusion cursor (0..=63),
+    /// going round after bit 63, or `None` when there is none (the cursor, moved on by one
+    /// for each bit asked, would then be back where it was).
+    ///
+    /// Every bit's candidacy at once, from the lists: an A address 1..=31 not in LAS; a B address not in LAS whose A address no standard slave
+    /// holds whole; 0A, not in LAS, while some address 1..=31 is neither held whole nor
+    /// active. The tests compare it with asking each address in turn.
+    pub(super) fn inclusion_scan(&self) -> Option<u8> {
+        debug_assert_eq!(
+            self.ab_mask,
+            (0..64).fold(0u64, |m, i| m | (self.detected[i].is_ab() as u64) << i),
+            "ab_mask out of step with detected"
+        );
+        let las = self.las.bits();
+        // Bit n (1..=31): `occupies_whole(n)`.
+        let whole = (self.lds.bits() & !self.ab_mask) as u32 & !1;
+        let free_a = !(las as u32) & !1;
+        // Bit 0 of the B half, 0B, is no address.
+        let free_b = !((las >> 32) as u32) & !whole & !1;
+        let zero = las & 1 == 0 && free_a & !whole != 0;
+        let candidates = u64::from(free_a) | u64::from(zero) | u64::from(free_b) << 32;
+        if candidates == 0 {
+            return None;
         }
-        None
+        let c = u32::from(self.incl_cursor) % 64;
+        Some(((c + candidates.rotate_right(c).trailing_zeros()) % 64) as u8)
     }
 
     pub(super) fn begin_inclusion(&mut self, a: SlaveAddr) -> Tx {
@@ -273,6 +281,7 @@ impl Master {
         for e in self.analog.iter_mut() {
             *e = None;
         }
+        self.analog_mask = 0;
         self.det_probe = None;
         self.incl = None;
         self.incl_step = None;
@@ -284,6 +293,8 @@ impl Master {
         self.offline_cursor = 0;
         if let Some((req, _)) = self.job.take() {
             self.mailbox.abort(&mut self.image.input, &req);
+            // A job the PLC posted meanwhile is taken at the next call.
+            self.image.output.mark_written();
         }
         self.update_flags();
     }

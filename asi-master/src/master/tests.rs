@@ -296,6 +296,78 @@ fn status_call_by_address(m: &mut Master) -> Option<Tx> {
     None
 }
 
+impl Master {
+    /// Whether the inclusion stage may probe `a`, asked address by address.
+    fn is_inclusion_candidate(&self, a: SlaveAddr) -> bool {
+        if self.las.contains(a) {
+            return false;
+        }
+        match (a.number(), a.select) {
+            (0, _) => (1..=31u8).any(|n| {
+                !self.occupies_whole(n) && SlaveAddr::a(n).is_some_and(|x| !self.las.contains(x))
+            }),
+            (n, Select::B) => !self.occupies_whole(n),
+            _ => true,
+        }
+    }
+}
+
+/// The inclusion candidate found by asking list bits in turn from the cursor.
+fn inclusion_scan_by_address(m: &Master) -> Option<u8> {
+    let mut i = m.incl_cursor;
+    for _ in 0..64 {
+        if let Some(a) = SlaveAddr::from_index(i) {
+            if m.is_inclusion_candidate(a) {
+                return Some(i);
+            }
+        }
+        i = (i + 1) % 64;
+    }
+    None
+}
+
+#[test]
+fn the_inclusion_scan_finds_the_candidate_asking_each_address_would() {
+    let mut rng = Rng(0x1C1);
+    let mut m = Master::new(MasterConfig::default(), projected()).expect("master");
+    let mut found = 0;
+    for round in 0..20_000 {
+        // Sparse, dense and random lists; full ones leave no candidate.
+        let list = |rng: &mut Rng| match round % 4 {
+            0 => rng.next() & rng.next(),
+            1 => rng.next() | rng.next(),
+            2 => u64::MAX,
+            _ => rng.next(),
+        };
+        m.las = SlaveList::from_bits(list(&mut rng));
+        m.lds = SlaveList::from_bits(list(&mut rng) | m.las.bits());
+        for i in 0..64 {
+            let codes = if rng.chance(30) {
+                SlaveCodes::new(0x7, 0xA, 0x7, 0xE)
+            } else {
+                SlaveCodes::new(0x7, 0x1, 0xF, 0xE)
+            };
+            m.set_detected(i, codes);
+        }
+        m.incl_cursor = rng.below(64) as u8;
+        let want = inclusion_scan_by_address(&m);
+        assert_eq!(
+            m.inclusion_scan(),
+            want,
+            "las {:#x} lds {:#x} ab {:#x} cursor {}",
+            m.las.bits(),
+            m.lds.bits(),
+            m.ab_mask,
+            m.incl_cursor
+        );
+        found += want.is_some() as u32;
+    }
+    assert!(
+        (1_000..19_000).contains(&found),
+        "{found} of 20000 found one"
+    );
+}
+
 #[test]
 fn the_cycle_calls_the_slaves_asking_each_address_would() {
     let mut rng = Rng(0x5EED);
@@ -346,8 +418,9 @@ fn the_cycle_calls_the_slaves_asking_each_address_would() {
 }
 
 /// The reference for the short paths: every call and every outcome through the general path,
-/// as the master did before [`Master::next_exchange`] and the answered-Data_Exchange branch of
-/// [`Master::handle_outcome`] existed.
+/// as the master did before [`Master::next_exchange`], [`Master::next_cycle_call`], the
+/// answered-Data_Exchange branch of [`Master::handle_outcome`] and
+/// [`Master::judge_cycle_call`] existed.
 impl Master {
     fn poll_transmit_reference(&mut self, now: SimTime) -> Option<Transmit> {
         if let Some(f) = self.in_flight {
@@ -397,7 +470,7 @@ fn state_of(m: &Master) -> String {
 /// Two masters, one with the short paths and one through the general path only, driven
 /// through the same random traffic (as `drive`): every call, verdict and all of their state
 /// must be the same after every step.
-fn lockstep(seed: u64, steps: usize) -> u64 {
+fn lockstep(seed: u64, steps: usize) -> [u64; 3] {
     let mut rng = Rng(seed | 1);
     let mut cfg = MasterConfig::default();
     if rng.chance(50) {
@@ -408,7 +481,8 @@ fn lockstep(seed: u64, steps: usize) -> u64 {
     let mut world = World::new();
     let mut now = SimTime::ZERO;
     let step = SimDuration::from_micros(154);
-    let mut exchanges = 0;
+    // Data_Exchanges, Read_Status calls and inclusion probes of a normal cycle.
+    let mut calls = [0; 3];
     for k in 0..steps {
         now += step;
         if rng.chance(2) {
@@ -430,8 +504,15 @@ fn lockstep(seed: u64, steps: usize) -> u64 {
         let want = r.poll_transmit_reference(now);
         assert_eq!(t, want, "call at step {k}");
         assert_same(&m, &r, "state after the call", k);
-        if t.is_some_and(|t| t.kind == TxKind::DataExchange && !t.repeat) {
-            exchanges += 1;
+        if let Some(t) = t.filter(|t| !t.repeat) {
+            match t.kind {
+                TxKind::DataExchange => calls[0] += 1,
+                TxKind::Management => calls[1] += 1,
+                TxKind::Inclusion if matches!(m.in_flight, Some(f) if f.tx.is_probe()) => {
+                    calls[2] += 1
+                }
+                _ => {}
+            }
         }
         if t.is_none() || rng.chance(1) {
             continue;
@@ -442,18 +523,23 @@ fn lockstep(seed: u64, steps: usize) -> u64 {
         assert_eq!(v, want, "verdict at step {k}");
         assert_same(&m, &r, "state after the outcome", k);
     }
-    exchanges
+    calls
 }
 
 #[test]
 fn the_short_paths_do_what_the_general_path_does() {
-    let mut exchanges = 0;
+    let mut calls = [0; 3];
     for seed in 1..=12u64 {
-        exchanges += lockstep(seed.wrapping_mul(0xD1B5_4A32_D192_ED03), 10_000);
+        let c = lockstep(seed.wrapping_mul(0xD1B5_4A32_D192_ED03), 10_000);
+        for (sum, n) in calls.iter_mut().zip(c) {
+            *sum += n;
+        }
     }
+    let [exchanges, statuses, probes] = calls;
     assert!(
-        exchanges > 5_000,
-        "the short path ran: {exchanges} Data_Exchanges"
+        exchanges > 5_000 && statuses > 500 && probes > 1_000,
+        "the short paths ran: {exchanges} Data_Exchanges, {statuses} Read_Status calls, \
+         {probes} inclusion probes"
     );
 }
 
