@@ -575,13 +575,14 @@ impl Run {
 /// tests of the flags one by one).
 #[inline(always)]
 fn bit_checks(raw: u32, cells: u32, g: u64) -> Checks {
-    bit_checks_odd(raw, odd_parity(raw) as u32, cells, g)
+    let first = (u64::from(raw) << 1 >> cells) as u32 & 1;
+    bit_checks_odd(raw, odd_parity(raw) as u32, first, cells, g)
 }
 
-/// [`bit_checks`] with the parity of `raw` known (`odd`: 1 for an odd number of ones).
+/// [`bit_checks`] with the parity of `raw` known (`odd`: 1 for an odd number of ones) and its
+/// first bit (`first`: 0 without a cell).
 #[inline(always)]
-fn bit_checks_odd(raw: u32, odd: u32, cells: u32, g: u64) -> Checks {
-    let first = (u64::from(raw) << 1 >> cells) as u32 & 1;
+fn bit_checks_odd(raw: u32, odd: u32, first: u32, cells: u32, g: u64) -> Checks {
     let last = raw & 1;
     let between_odd = odd ^ first ^ last;
     let parity = between_odd & u32::from(cells >= 3);

@@ -41,13 +41,13 @@ const fn fold16(x: u32) -> u32 {
 }
 
 /// The first `cells` (≤ 16) bits of a clean run in transmission order (first bit highest, as
-/// [`Frame::raw`]) from `ones`, the run's negative pulses on the middles of its cells (odd
-/// points under 32), and their parity (1 for an odd number of ones): one fold and two table
-/// lookups where compaction, reversal and the parity took about three times as many
-/// instructions.
+/// [`Frame::raw`]) from `ones`, bit `2i` set where the middle of cell `i` (point `2i + 1`)
+/// holds a negative pulse (the odd bits 0), and their parity (1 for an odd number of ones):
+/// one fold and two table lookups where compaction, reversal and the parity took about three
+/// times as many instructions.
 #[inline(always)]
-fn raw16(ones: u64, cells: u32) -> (u32, u32) {
-    let folded = fold16((ones >> 1) as u32);
+fn raw16(ones: u32, cells: u32) -> (u32, u32) {
+    let folded = fold16(ones);
     let w =
         FOLDED_REV8[0][(folded & 0xFF) as usize] ^ FOLDED_REV8[1][((folded >> 16) & 0xFF) as usize];
     ((w & 0xFFFF) >> (16 - cells), w >> 16)
@@ -161,25 +161,25 @@ fn whole_frame(t0: u64, last_t: u64, n: usize, negative: u64, positive: u64, g: 
     let occupied = negative | positive;
     // g ≤ 62.
     let cells = (g as u32 + 1) >> 1;
-    let missing = !occupied & (occupied >> 1) & MIDS;
-    let (raw, failed) = if missing == 0 {
-        let ones = negative & MIDS;
-        if cells <= 16 {
-            let (raw, odd) = raw16(ones, cells);
-            (raw, bit_checks_odd(raw, odd, cells, g))
+    let (raw, failed) = if cells <= 16 {
+        // The middles are points 1, 3, .., 31 at most, in 32 bits.
+        let missing = !(occupied as u32) & (occupied >> 1) as u32 & MIDS as u32;
+        if missing == 0 {
+            let (raw, odd) = raw16((negative >> 1) as u32 & !MIDS as u32, cells);
+            // The first bit is 1 where the middle of the first cell holds a negative pulse.
+            let first = (negative >> 1) as u32 & 1;
+            (raw, bit_checks_odd(raw, odd, first, cells, g))
         } else {
-            // As in `Run::finish`: reversed, point 2i + 1 is point 62 − 2i, which compacts
-            // to bit 31 − i.
-            let top = crate::manchester::compact(ones.reverse_bits());
-            let raw = (u64::from(top) >> (32 - cells)) as u32;
-            (raw, bit_checks(raw, cells, g))
+            information(occupied, positive, cells, g)
         }
+    } else if !occupied & (occupied >> 1) & MIDS == 0 {
+        // As in `Run::finish`: reversed, point 2i + 1 is point 62 − 2i, which compacts to
+        // bit 31 − i.
+        let top = crate::manchester::compact((negative & MIDS).reverse_bits());
+        let raw = (u64::from(top) >> (32 - cells)) as u32;
+        (raw, bit_checks(raw, cells, g))
     } else {
-        let raw = level_raw(occupied, positive, cells);
-        (
-            raw,
-            Checks::only(Check::Information).union(bit_checks(raw, cells, g)),
-        )
+        information(occupied, positive, cells, g)
     };
     Frame {
         start: SimTime::from_nanos(t0),
@@ -189,6 +189,16 @@ fn whole_frame(t0: u64, last_t: u64, n: usize, negative: u64, positive: u64, g: 
         raw,
         line_failed: failed,
     }
+}
+
+/// The bits and the checks of a run decided at once with a missing middle of a cell.
+#[cold]
+fn information(occupied: u64, positive: u64, cells: u32, g: u64) -> (u32, Checks) {
+    let raw = level_raw(occupied, positive, cells);
+    (
+        raw,
+        Checks::only(Check::Information).union(bit_checks(raw, cells, g)),
+    )
 }
 
 #[cfg(test)]
@@ -211,7 +221,7 @@ mod tests {
                 let ones = spread & below;
                 let raw = reverse_low16(compact32((ones >> 1) as u32), cells);
                 let want = (raw, ones.count_ones() & 1);
-                assert_eq!(raw16(ones, cells), want, "{bits:#x} {cells}");
+                assert_eq!(raw16((ones >> 1) as u32, cells), want, "{bits:#x} {cells}");
             }
         }
     }
