@@ -111,8 +111,10 @@ impl Run {
                             }
                             break 'scan $i;
                         };
-                        // q ≤ 2·(i + 1) ≤ 62.
-                        let bit = 1u64.wrapping_shl(q as u32);
+                        // q ≤ 2·(i + 1) ≤ 62; the first pulse after the run's first takes
+                        // point 1 or 2, whose bit is 2·q (an addition, not a shift by a
+                        // register).
+                        let bit = if $i == 0 { q << 1 } else { 1u64.wrapping_shl(q as u32) };
                         if $i % 2 == 0 {
                             positive |= bit;
                             signs = signs.wrapping_add(p.polarity as u8);
