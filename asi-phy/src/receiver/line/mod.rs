@@ -576,15 +576,15 @@ impl Run {
 #[inline(always)]
 fn bit_checks(raw: u32, cells: u32, g: u64) -> Checks {
     let first = (u64::from(raw) << 1 >> cells) as u32 & 1;
-    bit_checks_odd(raw, odd_parity(raw) as u32, first, cells, g)
+    bit_checks_odd(raw, odd_parity(raw) as u32 ^ first, first, cells, g)
 }
 
-/// [`bit_checks`] with the parity of `raw` known (`odd`: 1 for an odd number of ones) and its
-/// first bit (`first`: 0 without a cell).
+/// [`bit_checks`] with the first bit of `raw` known (`first`: 0 without a cell) and the parity
+/// of its other bits (`rest_odd`: 1 for an odd number of ones).
 #[inline(always)]
-fn bit_checks_odd(raw: u32, odd: u32, first: u32, cells: u32, g: u64) -> Checks {
+fn bit_checks_odd(raw: u32, rest_odd: u32, first: u32, cells: u32, g: u64) -> Checks {
     let last = raw & 1;
-    let between_odd = odd ^ first ^ last;
+    let between_odd = rest_odd ^ last;
     let parity = between_odd & u32::from(cells >= 3);
     // The last pulse not at the end of a cell, or a last bit 0.
     let end = (g as u32 & 1) | (last ^ 1);
