@@ -47,7 +47,7 @@ fn the_fast_paths_take_pulses_on_the_tolerance_borders() {
     let grid = Grid::new(&BusTiming::default().receiver(Expect::Both));
     assert_ne!(grid.recip, 0);
     for (bits, pulses, n) in on_the_borders() {
-        let (frame, after) = Run::whole(&pulses[0], &pulses[1..], &grid).expect("at once");
+        let (frame, after) = whole_at_once(&pulses[0], &pulses[1..], &grid).expect("at once");
         assert_eq!(after, &pulses[n..], "{bits:#06x}");
         assert_eq!(
             (frame.raw, frame.line_failed, frame.pulses),
@@ -60,6 +60,19 @@ fn the_fast_paths_take_pulses_on_the_tolerance_borders() {
         run.count += taken as u32;
         assert_eq!(run.finish(), frame);
     }
+}
+
+/// [`Run::whole`] with its frame returned.
+fn whole_at_once<'p>(
+    first: &Pulse,
+    tail: &'p [Pulse],
+    grid: &Grid,
+) -> Option<(Frame, &'p [Pulse])> {
+    let mut frame = None;
+    let after = Run::whole(first, tail, grid, &mut |f| {
+        assert!(frame.replace(f).is_none(), "one frame");
+    })?;
+    Some((frame.expect("a frame"), after))
 }
 
 /// The reference of [`Run::whole`]: the run decided at once as it was before its scan was
@@ -135,7 +148,7 @@ proptest::proptest! {
             } else {
                 None
             };
-            proptest::prop_assert_eq!(Run::whole(first, tail, &grid), expected, "at {}", i);
+            proptest::prop_assert_eq!(whole_at_once(first, tail, &grid), expected, "at {}", i);
         }
     }
 }
@@ -277,4 +290,64 @@ fn odd_parity_counts_the_ones() {
         x = x.rotate_left(5) ^ k.wrapping_mul(0x85EB_CA6B);
     }
     assert!(!odd_parity(0) && odd_parity(u32::MAX >> 1) && !odd_parity(u32::MAX));
+}
+
+/// Every run of up to 31 pulses after the first, one or two grid points apart (all step
+/// patterns up to 12 pulses, a spread of them beyond), exactly on the grid or off it by up to
+/// the tolerance, followed by a pause: [`Run::whole`] decides each at once, with the frame of
+/// the placed scan. This reaches the cases of the frame made at once (`whole_frame`): missing
+/// middles of cells, one and two cells, up to 16 cells (read by table) and more.
+#[test]
+fn every_pattern_of_steps_is_decided_at_once_as_by_the_placed_scan() {
+    let cfg = BusTiming::default().receiver(Expect::Both);
+    let grid = Grid::new(&cfg);
+    let (h, tol) = (cfg.half_bit, cfg.tolerance as i64);
+    let mut seed = 0x2545_F491_4F6C_DD1Du64;
+    let mut patterns = Vec::new();
+    for n in 0..=31u32 {
+        if n <= 12 {
+            patterns.extend((0..1u64 << n).map(|p| (n, p)));
+        } else {
+            patterns.extend((0..200).map(|_| {
+                seed ^= seed << 13;
+                seed ^= seed >> 7;
+                seed ^= seed << 17;
+                (n, seed)
+            }));
+        }
+    }
+    let mut decided = [0u32; 32];
+    for &(n, steps) in &patterns {
+        for jitter in [false, true] {
+            let t0 = 1_000_000u64;
+            let mut g = 0u64;
+            let mut pulses = vec![Pulse::new(SimTime::from_nanos(t0), Polarity::Negative)];
+            for i in 0..n {
+                g += 1 + (steps >> i & 1);
+                let off = if jitter {
+                    [tol, -tol, 0][i as usize % 3]
+                } else {
+                    0
+                };
+                let polarity = if i % 2 == 0 {
+                    Polarity::Positive
+                } else {
+                    Polarity::Negative
+                };
+                let at = (t0 + g * h).saturating_add_signed(off);
+                pulses.push(Pulse::new(SimTime::from_nanos(at), polarity));
+            }
+            let next = pulses[n as usize].at.as_nanos() + cfg.pause;
+            pulses.extend(
+                (0..32u64)
+                    .map(|k| Pulse::new(SimTime::from_nanos(next + k * h), Polarity::Negative)),
+            );
+            let got = whole_at_once(&pulses[0], &pulses[1..], &grid);
+            let want = whole_by_placed_scan(&pulses[0], &pulses[1..], &grid);
+            assert!(got.is_some(), "{n} {steps:#x} {jitter}");
+            assert_eq!(got, want, "{n} {steps:#x} {jitter}");
+            decided[n as usize] += 1;
+        }
+    }
+    assert!(decided.iter().all(|&d| d > 0));
 }
