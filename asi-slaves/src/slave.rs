@@ -223,11 +223,28 @@ impl Slave {
             .then(|| Nibble::from_low_bits(req.info()))
     }
 
+    /// `true` if `req` is Read_Status with select A (CB 1, I4..I0 11110: ~Sel in I3) to this
+    /// slave, an A slave or a standard one: the other request a slave is handed often (the
+    /// master's management phase reads one active slave's status every cycle), told from its
+    /// bits as [`Request::call`] tells it (with I3 set it is Read_Status at address 0 too),
+    /// without decoding the call.
+    #[inline]
+    fn is_read_status_a(&self, req: Request) -> bool {
+        req.cb()
+            && req.info() == 0b11110
+            && req.address() == self.address
+            && self.select() == Select::A
+    }
+
     /// The slave's answer to a valid request received at `now`, or `None` (not addressed, or a
     /// call it ignores). Broadcast reset resets the slave and gets no answer.
     pub fn handle(&mut self, now: SimTime, req: Request) -> Option<Response> {
         if let Some(outputs) = self.standard_data_exchange(req) {
             return Some(Response::new(self.device.exchange(now, outputs)));
+        }
+        if self.is_read_status_a(req) {
+            // The master's status poll: it changes nothing, so nothing to refresh.
+            return Some(Response::new(self.status(now)));
         }
         let answer = self.handle_call(now, req);
         self.refresh();
