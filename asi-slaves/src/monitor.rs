@@ -371,6 +371,10 @@ pub struct SafetyMonitor {
     channels: Vec<Channel>,
     /// The monitored addresses, as a mask.
     monitored: u32,
+    /// The index in `channels` of each address's channel, [`SafetyMonitor::NO_CHANNEL`] for an
+    /// address not monitored: the channel of a Data_Exchange and of its answer found with one
+    /// look, not by a search of the channels.
+    slots: [u16; 32],
     /// No released channel can have been silent too long at or before this time (a lower
     /// bound of every released channel's last code + `max_silence`): [`SafetyMonitor::poll`]
     /// up to it has nothing to check. Polled at every transaction, that check was a loop
@@ -392,9 +396,20 @@ impl SafetyMonitor {
             asked: None,
             channels: addresses.iter().map(|&a| Channel::new(a)).collect(),
             monitored: addresses.iter().fold(0, |m, a| m | 1 << a.get()),
+            slots: core::array::from_fn(|n| {
+                // The first channel of the address, as a search of the channels finds it.
+                addresses
+                    .iter()
+                    .position(|a| usize::from(a.get()) == n)
+                    .and_then(|i| u16::try_from(i).ok())
+                    .unwrap_or(SafetyMonitor::NO_CHANNEL)
+            }),
             quiet_until: SimTime::ZERO,
         }
     }
+
+    /// `slots` of an address that has no channel (no monitor has as many channels).
+    const NO_CHANNEL: u16 = u16::MAX;
 
     /// Gives the monitor `table` for `address` instead of teaching it.
     pub fn set_table(&mut self, address: Address, table: CodeTable) {
@@ -413,8 +428,11 @@ impl SafetyMonitor {
         }
     }
 
+    /// The channel of the slave at `a`, `None` if it is not monitored.
+    #[inline]
     fn channel_mut(&mut self, a: Address) -> Option<&mut Channel> {
-        self.channels.iter_mut().find(|c| c.address == a)
+        let slot = self.slots.get(usize::from(a.get()))?;
+        self.channels.get_mut(usize::from(*slot))
     }
 
     /// A frame heard on the line at `now`.
@@ -483,15 +501,14 @@ impl SafetyMonitor {
         // A Data_Exchange told from its bits, without decoding the call
         // (`Request::as_data_exchange`, held to the call decoder for every request by asi-phy's
         // telegram tests).
-        self.asked = r
-            .request()
-            .and_then(|q| q.as_data_exchange())
-            .map(|(address, _)| address);
-        if let Some(a) = self.asked {
-            let cfg = self.cfg;
-            if let Some(c) = self.channel_mut(a) {
-                c.request(now, &cfg);
-            }
+        let Some((a, _)) = r.request().and_then(|q| q.as_data_exchange()) else {
+            // `judge` cleared `asked` already.
+            return;
+        };
+        self.asked = Some(a);
+        let cfg = self.cfg;
+        if let Some(c) = self.channel_mut(a) {
+            c.request(now, &cfg);
         }
     }
 
@@ -827,6 +844,33 @@ mod tests {
                 fast.on_frame(f.start, &f);
                 old.on_frame_as_it_was(f.start, &f);
                 proptest::prop_assert_eq!(format!("{fast:?}"), format!("{old:?}"));
+            }
+        }
+    }
+
+    proptest::proptest! {
+        /// The channel an address's slot names is the one a search of the channels finds
+        /// (the first of that address), for any list of addresses: repeated ones, address 0,
+        /// none at all.
+        #[test]
+        fn the_slot_of_an_address_names_the_channel_a_search_finds(
+            numbers in proptest::collection::vec(0..32u8, 0..40),
+        ) {
+            let addresses: Vec<Address> =
+                numbers.iter().map(|&n| Address::new(n).expect("a")).collect();
+            let timing = asi_phy::BusTiming::default();
+            let mut m = SafetyMonitor::new(&timing, MonitorConfig::default(), &addresses);
+            for n in 0..32 {
+                let a = Address::new(n).expect("a");
+                let searched = m.channels.iter().position(|c| c.address == a);
+                for c in &mut m.channels {
+                    c.bad_codes = 0;
+                }
+                if let Some(c) = m.channel_mut(a) {
+                    c.bad_codes = 1;
+                }
+                let found = m.channels.iter().position(|c| c.bad_codes == 1);
+                proptest::prop_assert_eq!(found, searched, "address {}", n);
             }
         }
     }
