@@ -487,4 +487,44 @@ mod tests {
         }
         assert!(checked > 0);
     }
+
+    proptest::proptest! {
+        /// Runs of random requests, most of them to address 0 or to the slave's address (so
+        /// that Write_Extended_ID1, Address_Assignment, Delete_Address, Write_Parameter and
+        /// the resets follow one another in any order, which one pass over every request
+        /// does not give), get the reference's answers and effects after every request.
+        #[test]
+        fn runs_of_requests_get_the_reference_answers_and_effects(
+            address in 0..32u8,
+            id in proptest::sample::select(vec![0x0u8, 0x7, SlaveCodes::ID_AB]),
+            id1 in 0..16u8,
+            enabled in proptest::prelude::any::<bool>(),
+            run in proptest::collection::vec(
+                (0..3u8, proptest::prelude::any::<bool>(), 0..32u16, 0..32u16),
+                1..100,
+            ),
+        ) {
+            let now = SimTime::from_millis(3);
+            let codes = SlaveCodes::new(7, id, id1, 0xF);
+            let address = Address::new(address).expect("an address");
+            let slave = || {
+                let mut s = Slave::new("s", address, codes, Box::<Recorder>::default());
+                s.data_exchange_enabled = enabled;
+                s.refresh();
+                s
+            };
+            let (mut fast, mut slow) = (slave(), slave());
+            for (to, cb, other, info) in run {
+                let a = match to {
+                    0 => 0,
+                    1 => u16::from(fast.address.get()),
+                    _ => other,
+                };
+                let req = request(u16::from(cb) << 10 | a << 5 | info);
+                let answer = fast.handle(now, req);
+                proptest::prop_assert_eq!(answer, reference_handle(&mut slow, now, req));
+                proptest::prop_assert_eq!(state(&fast), state(&slow));
+            }
+        }
+    }
 }
