@@ -213,34 +213,33 @@ impl Channel {
         }
     }
 
-    /// A valid code `code` heard at `now` for this slave.
+    /// Judges a valid code `code` heard at `now` if it is the next in turn; `false` (and
+    /// nothing changed) for any other code, which the whole rule must judge.
     ///
     /// Nearly every code a taught slave sends is the next of its table after the position the
-    /// monitor holds: that code is judged here with one comparison, and only every other code
-    /// goes through the whole rule ([`Channel::judge_code`]). For such a code the rule comes to
-    /// the same: unless it is the repeat of the code just judged (no step, the same code),
-    /// 0000 aside (no table holds it, but the test costs nothing), it is one code ahead of the
-    /// position (the values are distinct, so it is found there and nowhere else), and one
-    /// ahead is correct however many steps were counted; so the position moves on by one and
-    /// the code counts as correct. Held to the whole rule by the property test
+    /// monitor holds: that code is judged here with one comparison. For such a code the
+    /// rule ([`Channel::judge_code`]) comes to the same: unless it is the repeat of the code
+    /// just judged (no step, the same code), 0000 aside (no table holds it, but the test
+    /// costs nothing), it is one code ahead of the position (the values are distinct, so it
+    /// is found there and nowhere else), and one ahead is correct however many steps were
+    /// counted; so the position moves on by one and the code counts as correct. Held to the
+    /// whole rule by the property test
     /// `the_next_code_in_turn_is_judged_as_the_whole_rule_judges_it`.
     #[inline]
-    fn code(&mut self, now: SimTime, code: u8, cfg: &MonitorConfig) {
-        if let (Some(table), Some(p)) = (self.table, self.pos) {
-            let next = (p + 1) % 8;
-            if code == table.0[next]
-                && code != 0
-                && (self.steps != 0 || self.last_code != Some(code))
-            {
-                self.steps = 0;
-                self.last_code = Some(code);
-                self.last_at = Some(now);
-                self.pos = Some(next);
-                self.correct();
-                return;
-            }
+    fn next_in_turn(&mut self, now: SimTime, code: u8) -> bool {
+        let (Some(table), Some(p)) = (self.table, self.pos) else {
+            return false;
+        };
+        let next = (p + 1) % 8;
+        if code != table.0[next] || code == 0 || (self.steps == 0 && self.last_code == Some(code)) {
+            return false;
         }
-        self.judge_code(now, code, cfg);
+        self.steps = 0;
+        self.last_code = Some(code);
+        self.last_at = Some(now);
+        self.pos = Some(next);
+        self.correct();
+        true
     }
 
     /// A correct code: the bad run ends, the good run grows, and 8 in a row release again.
@@ -256,9 +255,9 @@ impl Channel {
         }
     }
 
-    /// [`Channel::code`] by the whole rule (see the module documentation): the repeat of a
-    /// code already judged, teaching, 0000, a correct code some steps ahead, a frozen or a
-    /// wrong code.
+    /// A valid code `code` heard at `now` for this slave, judged by the whole rule (see the
+    /// module documentation): the repeat of a code already judged, teaching, 0000, a correct
+    /// code some steps ahead, a frozen or a wrong code.
     #[inline(never)]
     fn judge_code(&mut self, now: SimTime, code: u8, cfg: &MonitorConfig) {
         let steps = core::mem::take(&mut self.steps);
@@ -518,13 +517,33 @@ impl SafetyMonitor {
         let Some(resp) = r.response() else {
             return;
         };
+        let code = resp.data().get();
+        let Some(&slot) = self.slots.get(usize::from(a.get())) else {
+            return;
+        };
+        let Some(c) = self.channels.get_mut(usize::from(slot)) else {
+            return;
+        };
+        if c.next_in_turn(now, code) {
+            // A channel released now (its last code now) may be the first to fall silent:
+            // the bound comes down to it. A later code of a channel that was released
+            // already only raises its own deadline, so the bound stays low enough.
+            if c.released {
+                self.quiet_until = self.quiet_until.min(now + self.cfg.max_silence);
+            }
+        } else {
+            self.judge_in_full(now, usize::from(slot), code);
+        }
+    }
+
+    /// [`SafetyMonitor::heard_response`] of a code that is not the next in turn: the whole
+    /// rule, out of line, so that the code in turn is judged without saving registers.
+    #[inline(never)]
+    fn judge_in_full(&mut self, now: SimTime, slot: usize, code: u8) {
         let cfg = self.cfg;
-        if let Some(c) = self.channel_mut(a) {
-            c.code(now, resp.data().get(), &cfg);
-            // A channel released now (its last code now) may be the first to fall
-            // silent: the bound comes down to it. A later code of a channel that was
-            // released already only raises its own deadline, so the bound stays low
-            // enough.
+        if let Some(c) = self.channels.get_mut(slot) {
+            c.judge_code(now, code, &cfg);
+            // As for the code in turn.
             if c.released {
                 self.quiet_until = self.quiet_until.min(now + cfg.max_silence);
             }
@@ -631,6 +650,16 @@ mod tests {
         Lost,
         /// Only a poll.
         Poll,
+    }
+
+    impl Channel {
+        /// A valid code `code` heard at `now` for this slave, as the monitor judges it:
+        /// [`Channel::next_in_turn`], else the whole rule ([`Channel::judge_code`]).
+        fn code(&mut self, now: SimTime, code: u8, cfg: &MonitorConfig) {
+            if !self.next_in_turn(now, code) {
+                self.judge_code(now, code, cfg);
+            }
+        }
     }
 
     impl SafetyMonitor {
