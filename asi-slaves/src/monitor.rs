@@ -481,12 +481,15 @@ impl SafetyMonitor {
                 // the request `r.request()` decodes, whenever it decodes one.
                 let address = r.raw >> 7 & 0x1F;
                 self.asked = None;
-                if r.is_valid() && self.monitored >> address & 1 != 0 {
+                if self.monitored >> address & 1 != 0 && r.is_valid() {
                     self.heard_request(now, r);
                 }
             }
             TelegramKind::Response => {
-                if let Some(a) = self.asked.take() {
+                // Cleared only when set: most responses answer a slave the monitor does not
+                // watch, and leave nothing to clear.
+                if let Some(a) = self.asked {
+                    self.asked = None;
                     self.heard_response(now, a, r);
                 }
             }
