@@ -213,7 +213,53 @@ impl Channel {
         }
     }
 
-    fn code(&mut self, now: SimTime, code: u8, cfg: &MonitorConfig) {
+    /// Judges a valid code `code` heard at `now` if it is the next in turn; `false` (and
+    /// nothing changed) for any other code, which the whole rule must judge.
+    ///
+    /// Nearly every code a taught slave sends is the next of its table after the position the
+    /// monitor holds: that code is judged here with one comparison. For such a code the
+    /// rule ([`Channel::judge_code`]) comes to the same: unless it is the repeat of the code
+    /// just judged (no step, the same code), 0000 aside (no table holds it, but the test
+    /// costs nothing), it is one code ahead of the position (the values are distinct, so it
+    /// is found there and nowhere else), and one ahead is correct however many steps were
+    /// counted; so the position moves on by one and the code counts as correct. Held to the
+    /// whole rule by the property test
+    /// `the_next_code_in_turn_is_judged_as_the_whole_rule_judges_it`.
+    #[inline]
+    fn next_in_turn(&mut self, now: SimTime, code: u8) -> bool {
+        let (Some(table), Some(p)) = (self.table, self.pos) else {
+            return false;
+        };
+        let next = (p + 1) % 8;
+        if code != table.0[next] || code == 0 || (self.steps == 0 && self.last_code == Some(code)) {
+            return false;
+        }
+        self.steps = 0;
+        self.last_code = Some(code);
+        self.last_at = Some(now);
+        self.pos = Some(next);
+        self.correct();
+        true
+    }
+
+    /// A correct code: the bad run ends, the good run grows, and 8 in a row release again.
+    #[inline]
+    fn correct(&mut self) {
+        self.bad = 0;
+        self.good_run = self.good_run.saturating_add(1);
+        if !self.released && self.good_run >= 8 {
+            self.released = true;
+        }
+        if !self.released && self.reason != NotReleased::Recovering {
+            self.reason = NotReleased::Recovering;
+        }
+    }
+
+    /// A valid code `code` heard at `now` for this slave, judged by the whole rule (see the
+    /// module documentation): the repeat of a code already judged, teaching, 0000, a correct
+    /// code some steps ahead, a frozen or a wrong code.
+    #[inline(never)]
+    fn judge_code(&mut self, now: SimTime, code: u8, cfg: &MonitorConfig) {
         let steps = core::mem::take(&mut self.steps);
         if steps == 0 && self.last_code == Some(code) {
             // The master's repeat of a transaction whose first answer this receiver took:
@@ -271,16 +317,7 @@ impl Channel {
             }
         };
         match bad {
-            None => {
-                self.bad = 0;
-                self.good_run = self.good_run.saturating_add(1);
-                if !self.released && self.good_run >= 8 {
-                    self.released = true;
-                }
-                if !self.released && self.reason != NotReleased::Recovering {
-                    self.reason = NotReleased::Recovering;
-                }
-            }
+            None => self.correct(),
             Some(why) => {
                 self.bad_codes += 1;
                 self.bad = self.bad.saturating_add(1);
@@ -333,6 +370,10 @@ pub struct SafetyMonitor {
     channels: Vec<Channel>,
     /// The monitored addresses, as a mask.
     monitored: u32,
+    /// The index in `channels` of each address's channel, [`SafetyMonitor::NO_CHANNEL`] for an
+    /// address not monitored: the channel of a Data_Exchange and of its answer found with one
+    /// look, not by a search of the channels.
+    slots: [u16; 32],
     /// No released channel can have been silent too long at or before this time (a lower
     /// bound of every released channel's last code + `max_silence`): [`SafetyMonitor::poll`]
     /// up to it has nothing to check. Polled at every transaction, that check was a loop
@@ -354,9 +395,20 @@ impl SafetyMonitor {
             asked: None,
             channels: addresses.iter().map(|&a| Channel::new(a)).collect(),
             monitored: addresses.iter().fold(0, |m, a| m | 1 << a.get()),
+            slots: core::array::from_fn(|n| {
+                // The first channel of the address, as a search of the channels finds it.
+                addresses
+                    .iter()
+                    .position(|a| usize::from(a.get()) == n)
+                    .and_then(|i| u16::try_from(i).ok())
+                    .unwrap_or(SafetyMonitor::NO_CHANNEL)
+            }),
             quiet_until: SimTime::ZERO,
         }
     }
+
+    /// `slots` of an address that has no channel (no monitor has as many channels).
+    const NO_CHANNEL: u16 = u16::MAX;
 
     /// Gives the monitor `table` for `address` instead of teaching it.
     pub fn set_table(&mut self, address: Address, table: CodeTable) {
@@ -375,8 +427,11 @@ impl SafetyMonitor {
         }
     }
 
+    /// The channel of the slave at `a`, `None` if it is not monitored.
+    #[inline]
     fn channel_mut(&mut self, a: Address) -> Option<&mut Channel> {
-        self.channels.iter_mut().find(|c| c.address == a)
+        let slot = self.slots.get(usize::from(a.get()))?;
+        self.channels.get_mut(usize::from(*slot))
     }
 
     /// A frame heard on the line at `now`.
@@ -441,12 +496,15 @@ impl SafetyMonitor {
                 // the request `r.request()` decodes, whenever it decodes one.
                 let address = r.raw >> 7 & 0x1F;
                 self.asked = None;
-                if r.is_valid() && self.monitored >> address & 1 != 0 {
+                if self.monitored >> address & 1 != 0 && r.is_valid() {
                     self.heard_request(now, r);
                 }
             }
             TelegramKind::Response => {
-                if let Some(a) = self.asked.take() {
+                // Cleared only when set: most responses answer a slave the monitor does not
+                // watch, and leave nothing to clear.
+                if let Some(a) = self.asked {
+                    self.asked = None;
                     self.heard_response(now, a, r);
                 }
             }
@@ -460,15 +518,14 @@ impl SafetyMonitor {
         // A Data_Exchange told from its bits, without decoding the call
         // (`Request::as_data_exchange`, held to the call decoder for every request by asi-phy's
         // telegram tests).
-        self.asked = r
-            .request()
-            .and_then(|q| q.as_data_exchange())
-            .map(|(address, _)| address);
-        if let Some(a) = self.asked {
-            let cfg = self.cfg;
-            if let Some(c) = self.channel_mut(a) {
-                c.request(now, &cfg);
-            }
+        let Some((a, _)) = r.request().and_then(|q| q.as_data_exchange()) else {
+            // `judge` cleared `asked` already.
+            return;
+        };
+        self.asked = Some(a);
+        let cfg = self.cfg;
+        if let Some(c) = self.channel_mut(a) {
+            c.request(now, &cfg);
         }
     }
 
@@ -478,13 +535,33 @@ impl SafetyMonitor {
         let Some(resp) = r.response() else {
             return;
         };
+        let code = resp.data().get();
+        let Some(&slot) = self.slots.get(usize::from(a.get())) else {
+            return;
+        };
+        let Some(c) = self.channels.get_mut(usize::from(slot)) else {
+            return;
+        };
+        if c.next_in_turn(now, code) {
+            // A channel released now (its last code now) may be the first to fall silent:
+            // the bound comes down to it. A later code of a channel that was released
+            // already only raises its own deadline, so the bound stays low enough.
+            if c.released {
+                self.quiet_until = self.quiet_until.min(now + self.cfg.max_silence);
+            }
+        } else {
+            self.judge_in_full(now, usize::from(slot), code);
+        }
+    }
+
+    /// [`SafetyMonitor::heard_response`] of a code that is not the next in turn: the whole
+    /// rule, out of line, so that the code in turn is judged without saving registers.
+    #[inline(never)]
+    fn judge_in_full(&mut self, now: SimTime, slot: usize, code: u8) {
         let cfg = self.cfg;
-        if let Some(c) = self.channel_mut(a) {
-            c.code(now, resp.data().get(), &cfg);
-            // A channel released now (its last code now) may be the first to fall
-            // silent: the bound comes down to it. A later code of a channel that was
-            // released already only raises its own deadline, so the bound stays low
-            // enough.
+        if let Some(c) = self.channels.get_mut(slot) {
+            c.judge_code(now, code, &cfg);
+            // As for the code in turn.
             if c.released {
                 self.quiet_until = self.quiet_until.min(now + cfg.max_silence);
             }
@@ -591,6 +668,16 @@ mod tests {
         Lost,
         /// Only a poll.
         Poll,
+    }
+
+    impl Channel {
+        /// A valid code `code` heard at `now` for this slave, as the monitor judges it:
+        /// [`Channel::next_in_turn`], else the whole rule ([`Channel::judge_code`]).
+        fn code(&mut self, now: SimTime, code: u8, cfg: &MonitorConfig) {
+            if !self.next_in_turn(now, code) {
+                self.judge_code(now, code, cfg);
+            }
+        }
     }
 
     impl SafetyMonitor {
@@ -804,6 +891,122 @@ mod tests {
                 fast.on_frame(f.start, &f);
                 old.on_frame_as_it_was(f.start, &f);
                 proptest::prop_assert_eq!(format!("{fast:?}"), format!("{old:?}"));
+            }
+        }
+    }
+
+    proptest::proptest! {
+        /// The channel an address's slot names is the one a search of the channels finds
+        /// (the first of that address), for any list of addresses: repeated ones, address 0,
+        /// none at all.
+        #[test]
+        fn the_slot_of_an_address_names_the_channel_a_search_finds(
+            numbers in proptest::collection::vec(0..32u8, 0..40),
+        ) {
+            let addresses: Vec<Address> =
+                numbers.iter().map(|&n| Address::new(n).expect("a")).collect();
+            let timing = asi_phy::BusTiming::default();
+            let mut m = SafetyMonitor::new(&timing, MonitorConfig::default(), &addresses);
+            for n in 0..32 {
+                let a = Address::new(n).expect("a");
+                let searched = m.channels.iter().position(|c| c.address == a);
+                for c in &mut m.channels {
+                    c.bad_codes = 0;
+                }
+                if let Some(c) = m.channel_mut(a) {
+                    c.bad_codes = 1;
+                }
+                let found = m.channels.iter().position(|c| c.bad_codes == 1);
+                proptest::prop_assert_eq!(found, searched, "address {}", n);
+            }
+        }
+    }
+
+    /// What a safe slave's exchange does in the property test below.
+    #[derive(Clone, Copy, Debug)]
+    enum Exchange {
+        /// A request and the code `skip` + 1 places on in the slave's table (`skip` codes
+        /// whose exchanges were lost), after `gap` ns.
+        Step { gap: u64, skip: usize },
+        /// A request whose answer is lost, after `gap` ns.
+        Lost { gap: u64 },
+        /// The master's repeat: a request within the hold and the code sent last.
+        Repeat,
+        /// A request answered with the code `code` (any value).
+        Other { code: u8 },
+        /// The tolerance time looked at, after `gap` ns.
+        Poll { gap: u64 },
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::test_runner::Config::with_cases(1_000))]
+
+        /// The next code in turn judged with one comparison leaves the channel as the whole
+        /// rule does: a slave's codes in turn, with lost exchanges, skipped codes, the
+        /// master's repeats, codes off the table, 0000 and silences, to a channel that
+        /// teaches itself or was given the table, compared after every exchange.
+        #[test]
+        fn the_next_code_in_turn_is_judged_as_the_whole_rule_judges_it(
+            run in proptest::collection::vec(
+                proptest::prop_oneof![
+                    12 => (150_000..4_000_000u64, proptest::prop_oneof![
+                        6 => proptest::strategy::Just(0usize),
+                        1 => 1..10usize,
+                    ]).prop_map(|(gap, skip)| Exchange::Step { gap, skip }),
+                    1 => (0..4_000_000u64).prop_map(|gap| Exchange::Lost { gap }),
+                    1 => proptest::strategy::Just(Exchange::Repeat),
+                    1 => (0..16u8).prop_map(|code| Exchange::Other { code }),
+                    1 => (0..60_000_000u64).prop_map(|gap| Exchange::Poll { gap }),
+                ],
+                1..300,
+            ),
+            given in proptest::prelude::any::<bool>(),
+            serial in 0..1_000u64,
+        ) {
+            let cfg = MonitorConfig::default();
+            let table = CodeTable::from_serial(serial);
+            let mut fast = Channel::new(Address::new(11).expect("a"));
+            if given {
+                fast.table = Some(table);
+                fast.reason = NotReleased::Recovering;
+            }
+            let mut rule = fast.clone();
+            let (mut now, mut index, mut sent) = (0u64, 0usize, table.codes()[0]);
+            for exchange in run {
+                let code = match exchange {
+                    Exchange::Step { gap, skip } => {
+                        now += gap;
+                        index = (index + 1 + skip) % 8;
+                        Some(table.codes()[index])
+                    }
+                    Exchange::Lost { gap } => {
+                        now += gap;
+                        None
+                    }
+                    Exchange::Repeat => {
+                        now += REPEAT;
+                        Some(sent)
+                    }
+                    Exchange::Other { code } => {
+                        now += CYCLE;
+                        Some(code)
+                    }
+                    Exchange::Poll { gap } => {
+                        now += gap;
+                        fast.check_silence(at(now), &cfg);
+                        rule.check_silence(at(now), &cfg);
+                        proptest::prop_assert_eq!(format!("{fast:?}"), format!("{rule:?}"));
+                        continue;
+                    }
+                };
+                fast.request(at(now), &cfg);
+                rule.request(at(now), &cfg);
+                if let Some(code) = code {
+                    sent = code;
+                    fast.code(at(now + 100_000), code, &cfg);
+                    rule.judge_code(at(now + 100_000), code, &cfg);
+                }
+                proptest::prop_assert_eq!(format!("{fast:?}"), format!("{rule:?}"));
             }
         }
     }

@@ -58,6 +58,11 @@ pub struct Slave {
     nv_error: bool,
     eeprom_busy_until: SimTime,
     eeprom_write_time: SimDuration,
+    /// The address field of the Data_Exchange requests the slave answers as a standard (not
+    /// A/B) slave with data exchange enabled: its address, or [`Slave::NO_DATA_EXCHANGE`]
+    /// (which no 5-bit field holds) for an A/B slave, at address 0 or before a
+    /// Write_Parameter. Kept by [`Slave::refresh`] after every change of those.
+    data_exchange_at: u8,
     device: Box<dyn Peripheral>,
 }
 
@@ -92,8 +97,24 @@ impl Slave {
             nv_error: false,
             eeprom_busy_until: SimTime::ZERO,
             eeprom_write_time: SimDuration::from_millis(15),
+            data_exchange_at: Slave::NO_DATA_EXCHANGE,
             device,
         }
+    }
+
+    /// [`Slave::data_exchange_at`](Slave) of a slave that answers no Data_Exchange the quick
+    /// way: no request's address field (5 bits) holds it.
+    const NO_DATA_EXCHANGE: u8 = 0xFF;
+
+    /// Works out `data_exchange_at` from the address, the ID code and the data exchange
+    /// flag: called after anything that may have changed them.
+    fn refresh(&mut self) {
+        let quick = self.address.get() != 0 && !self.codes.is_ab() && self.data_exchange_enabled;
+        self.data_exchange_at = if quick {
+            self.address.get()
+        } else {
+            Slave::NO_DATA_EXCHANGE
+        };
     }
 
     /// The slave's name (for traces and errors).
@@ -180,6 +201,7 @@ impl Slave {
         self.codes.id1 = self.nv_id1;
         self.parameter = Nibble::ALL;
         self.data_exchange_enabled = false;
+        self.refresh();
         self.device.reset();
     }
 
@@ -189,13 +211,29 @@ impl Slave {
 
     /// The output bits of `req` if it is a Data_Exchange this slave answers as a standard
     /// (not A/B) slave: nearly every request a slave is handed, told from the request's bits
-    /// without decoding its call ([`Request::as_data_exchange`]); a standard slave's select is
-    /// always A, so the address alone says it is meant. `None` sends the request the long
-    /// way, through [`Slave::handle`]'s match of its call.
+    /// without decoding its call. A Data_Exchange is CB 0 and I4 0 at an address other than 0
+    /// ([`Request::as_data_exchange`]); a standard slave's select is always A, so the address
+    /// alone says it is meant; `data_exchange_at` holds the address only for a standard slave
+    /// at an address other than 0 with data exchange enabled, so one comparison tells all
+    /// three. `None` sends the request the long way, through [`Slave::handle_call`]'s match
+    /// of its call.
+    #[inline]
     fn standard_data_exchange(&self, req: Request) -> Option<Nibble> {
-        let (address, outputs) = req.as_data_exchange()?;
-        (address == self.address && !self.codes.is_ab() && self.data_exchange_enabled)
-            .then_some(outputs)
+        (!req.cb() && req.info() & 0x10 == 0 && req.address().get() == self.data_exchange_at)
+            .then(|| Nibble::from_low_bits(req.info()))
+    }
+
+    /// `true` if `req` is Read_Status with select A (CB 1, I4..I0 11110: ~Sel in I3) to this
+    /// slave, an A slave or a standard one: the other request a slave is handed often (the
+    /// master's management phase reads one active slave's status every cycle), told from its
+    /// bits as [`Request::call`] tells it (with I3 set it is Read_Status at address 0 too),
+    /// without decoding the call.
+    #[inline]
+    fn is_read_status_a(&self, req: Request) -> bool {
+        req.cb()
+            && req.info() == 0b11110
+            && req.address() == self.address
+            && self.select() == Select::A
     }
 
     /// The slave's answer to a valid request received at `now`, or `None` (not addressed, or a
@@ -204,6 +242,18 @@ impl Slave {
         if let Some(outputs) = self.standard_data_exchange(req) {
             return Some(Response::new(self.device.exchange(now, outputs)));
         }
+        if self.is_read_status_a(req) {
+            // The master's status poll: it changes nothing, so nothing to refresh.
+            return Some(Response::new(self.status(now)));
+        }
+        let answer = self.handle_call(now, req);
+        self.refresh();
+        answer
+    }
+
+    /// [`Slave::handle`] of a request that is not a standard Data_Exchange to this slave: the
+    /// match of its call. The caller refreshes `data_exchange_at`.
+    fn handle_call(&mut self, now: SimTime, req: Request) -> Option<Response> {
         let ab = self.codes.is_ab();
         let data = match req.call() {
             Call::DataExchange { address, data } => {
@@ -420,6 +470,7 @@ mod tests {
                         let slave = || {
                             let mut s = Slave::new("s", address, codes, Box::<Recorder>::default());
                             s.data_exchange_enabled = enabled;
+                            s.refresh();
                             s
                         };
                         let (mut fast, mut slow) = (slave(), slave());
@@ -435,5 +486,45 @@ mod tests {
             }
         }
         assert!(checked > 0);
+    }
+
+    proptest::proptest! {
+        /// Runs of random requests, most of them to address 0 or to the slave's address (so
+        /// that Write_Extended_ID1, Address_Assignment, Delete_Address, Write_Parameter and
+        /// the resets follow one another in any order, which one pass over every request
+        /// does not give), get the reference's answers and effects after every request.
+        #[test]
+        fn runs_of_requests_get_the_reference_answers_and_effects(
+            address in 0..32u8,
+            id in proptest::sample::select(vec![0x0u8, 0x7, SlaveCodes::ID_AB]),
+            id1 in 0..16u8,
+            enabled in proptest::prelude::any::<bool>(),
+            run in proptest::collection::vec(
+                (0..3u8, proptest::prelude::any::<bool>(), 0..32u16, 0..32u16),
+                1..100,
+            ),
+        ) {
+            let now = SimTime::from_millis(3);
+            let codes = SlaveCodes::new(7, id, id1, 0xF);
+            let address = Address::new(address).expect("an address");
+            let slave = || {
+                let mut s = Slave::new("s", address, codes, Box::<Recorder>::default());
+                s.data_exchange_enabled = enabled;
+                s.refresh();
+                s
+            };
+            let (mut fast, mut slow) = (slave(), slave());
+            for (to, cb, other, info) in run {
+                let a = match to {
+                    0 => 0,
+                    1 => u16::from(fast.address.get()),
+                    _ => other,
+                };
+                let req = request(u16::from(cb) << 10 | a << 5 | info);
+                let answer = fast.handle(now, req);
+                proptest::prop_assert_eq!(answer, reference_handle(&mut slow, now, req));
+                proptest::prop_assert_eq!(state(&fast), state(&slow));
+            }
+        }
     }
 }
