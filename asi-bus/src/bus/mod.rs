@@ -737,6 +737,8 @@ impl Bus {
         mut answer: impl FnMut(Response),
     ) {
         let mut readdressed = false;
+        // A Data_Exchange (told from its bits) never changes an address.
+        let exchange = req.as_data_exchange().is_some();
         while who != 0 {
             let i = who.trailing_zeros() as usize;
             who &= who - 1;
@@ -746,16 +748,16 @@ impl Bus {
             if !slot.attached {
                 continue;
             }
-            let before = slot.slave.addr();
+            let before = (!exchange).then(|| slot.slave.addr());
             let r = slot.slave.handle(now, req);
-            readdressed |= slot.slave.addr() != before;
+            readdressed |= before.is_some_and(|b| slot.slave.addr() != b);
             if let Some(r) = r {
                 answer(r);
             }
         }
         self.note_output(req);
         let reset = || matches!(req.call(), Call::BroadcastReset | Call::ResetSlave { .. });
-        if readdressed || (req.as_data_exchange().is_none() && reset()) {
+        if readdressed || (!exchange && reset()) {
             self.reindex();
         }
     }
