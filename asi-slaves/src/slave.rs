@@ -457,6 +457,15 @@ mod tests {
         Request::from_bits((body << 2) | (pb << 1) | 1).expect("a valid request")
     }
 
+    /// A slave at `address` with `codes` and a recording device, Data_Exchange `enabled`.
+    fn test_slave(address: u8, codes: SlaveCodes, enabled: bool) -> Slave {
+        let address = Address::new(address).expect("an address");
+        let mut s = Slave::new("s", address, codes, Box::<Recorder>::default());
+        s.data_exchange_enabled = enabled;
+        s.refresh();
+        s
+    }
+
     #[test]
     fn every_request_gets_the_reference_answer_and_effect() {
         let now = SimTime::from_millis(3);
@@ -466,13 +475,7 @@ mod tests {
                 for id1 in [0x0, 0x7, 0x8, 0xF] {
                     for enabled in [false, true] {
                         let codes = SlaveCodes::new(7, id, id1, 0xF);
-                        let address = Address::new(address).expect("an address");
-                        let slave = || {
-                            let mut s = Slave::new("s", address, codes, Box::<Recorder>::default());
-                            s.data_exchange_enabled = enabled;
-                            s.refresh();
-                            s
-                        };
+                        let slave = || test_slave(address, codes, enabled);
                         let (mut fast, mut slow) = (slave(), slave());
                         for body in 0..1u16 << 11 {
                             let req = request(body);
@@ -506,13 +509,7 @@ mod tests {
         ) {
             let now = SimTime::from_millis(3);
             let codes = SlaveCodes::new(7, id, id1, 0xF);
-            let address = Address::new(address).expect("an address");
-            let slave = || {
-                let mut s = Slave::new("s", address, codes, Box::<Recorder>::default());
-                s.data_exchange_enabled = enabled;
-                s.refresh();
-                s
-            };
+            let slave = || test_slave(address, codes, enabled);
             let (mut fast, mut slow) = (slave(), slave());
             for (to, cb, other, info) in run {
                 let a = match to {

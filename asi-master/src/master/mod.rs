@@ -496,12 +496,7 @@ impl Master {
 
     /// The codes read from the slave of list bit `i`, noted in `detected` and `ab_mask`.
     fn set_detected(&mut self, i: usize, codes: SlaveCodes) {
-        let bit = 1u64 << (i & 63);
-        if codes.is_ab() {
-            self.ab_mask |= bit;
-        } else {
-            self.ab_mask &= !bit;
-        }
+        self.ab_mask = with_bit(self.ab_mask, i, codes.is_ab());
         self.detected[i] = codes;
     }
 
@@ -515,12 +510,7 @@ impl Master {
 
     /// Puts `e` (or none) into `analog[i]`, and marks it in `analog_mask`.
     fn set_analog(&mut self, i: usize, e: Option<AnalogEngine>) {
-        let bit = 1u64 << (i & 63);
-        if e.is_some() {
-            self.analog_mask |= bit;
-        } else {
-            self.analog_mask &= !bit;
-        }
+        self.analog_mask = with_bit(self.analog_mask, i, e.is_some());
         self.analog[i] = e;
     }
 
@@ -915,6 +905,16 @@ impl Master {
             repeat: false,
             error: failed,
         }
+    }
+}
+
+/// `mask` with list bit `i` set to `on`.
+fn with_bit(mask: u64, i: usize, on: bool) -> u64 {
+    let bit = 1u64 << (i & 63);
+    if on {
+        mask | bit
+    } else {
+        mask & !bit
     }
 }
 
