@@ -2,6 +2,7 @@
 //! recomputed exactly when their inputs changed (as when the signature was compared around
 //! every transaction), and the cycle picks the same slaves as asking every address in turn.
 
+use super::cycle::DEXG;
 use super::requests::READS;
 use super::*;
 use crate::mailbox::post;
