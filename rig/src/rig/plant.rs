@@ -1,0 +1,146 @@
+//! The plant and the slaves at a moment: the plant brought to it with its edges, what the
+//! plant shows handed to the slaves' inputs, and what the slaves drive handed to the plant.
+
+use super::*;
+
+impl Rig {
+    /// Brings the plant to `t` and handles its edges on the way.
+    #[inline]
+    pub(super) fn advance_plant(&mut self, t: SimTime) {
+        // No edge at almost every moment: nothing to collect then.
+        match self.lift.catch_up_to(t) {
+            Ok(false) => {
+                // What it replaces: `advance_to`, whose drain is empty then.
+                #[cfg(test)]
+                assert_eq!(
+                    self.lift.advance_to(t).map(|ev| ev.len()),
+                    Ok(0),
+                    "the plant has edges at {t} that it did not tell"
+                );
+            }
+            Ok(true) => self.plant_edges(t),
+            Err(e) => self.plant_error(e),
+        }
+    }
+
+    #[cold]
+    #[inline(never)]
+    pub(super) fn plant_error(&mut self, e: lift_model::PlantError) {
+        self.log("plant", format!("error: {e}"));
+    }
+
+    /// The plant's edges up to `t`, which it has reached.
+    #[inline(never)]
+    pub(super) fn plant_edges(&mut self, t: SimTime) {
+        let events = self.lift.advance_to(t).map(|ev| ev.collect::<Vec<_>>());
+        let events = match events {
+            Ok(ev) => ev,
+            Err(e) => return self.plant_error(e),
+        };
+        self.plant_dirty = true;
+        for e in events {
+            match e.kind {
+                Plant::Stopped { position_mm } => self.stopped(e.at, position_mm),
+                Plant::Crash { end, impact_mm_s } => {
+                    let text =
+                        format!("crash into the mechanical end ({end:?}) at {impact_mm_s:.1} mm/s");
+                    self.log_at(e.at, "plant", text.clone());
+                    self.violation(e.at, ViolationKind::MechanicalEnd, text);
+                }
+                Plant::Overtravel { end, tripped } => {
+                    let text = if tripped {
+                        format!(
+                            "overtravel sensor ({end:?}) tripped at {:.1} mm",
+                            self.lift.position_mm()
+                        )
+                    } else {
+                        format!("overtravel sensor ({end:?}) free again")
+                    };
+                    self.log_at(e.at, "plant", text);
+                }
+                Plant::ConverterFault { fault } => {
+                    self.log_at(e.at, "plant", format!("converter fault: {fault:?}"));
+                }
+                _ => {}
+            }
+        }
+    }
+
+    /// The cabin came to rest: an arrival if it stands level at a floor with the drive
+    /// commanded to stand still.
+    pub(super) fn stopped(&mut self, at: SimTime, position_mm: f64) {
+        if self.applied.run && self.applied.setpoint_ua > STANDSTILL_UA {
+            return;
+        }
+        let cfg = self.lift.config();
+        let Some(floor) = cfg.level_floor(position_mm) else {
+            return;
+        };
+        let level = cfg.floor_level_mm(floor).unwrap_or_default();
+        self.report.arrivals.push(Arrival {
+            floor,
+            at_s: at.as_secs_f64(),
+            position_mm: round3(position_mm),
+        });
+        self.log_at(
+            at,
+            "plant",
+            format!(
+                "cabin at rest level at floor {floor} ({:+.1} mm)",
+                position_mm - level
+            ),
+        );
+        if self.external.is_some() {
+            // No program tells which call a stop serves: a stop at a floor answers every
+            // call waiting there.
+            let served = self.passengers.arrived(floor, at);
+            self.report.served.extend(served);
+        }
+    }
+
+    /// The plant's signals on the slaves' peripheral inputs.
+    pub(super) fn plant_to_slaves(&mut self) {
+        self.plant_dirty = false;
+        wiring::plant_to_slaves(&self.lift, &mut self.lab, self.sc.floors);
+    }
+
+    /// What the slaves drive, to the plant, at the moment they drive it.
+    ///
+    /// The slaves' outputs are read only when the lab's count of drive changes has moved
+    /// since the last reading: until then they are what was read, which the plant has
+    /// (checked against a fresh reading at every moment in the rig's tests).
+    #[inline]
+    pub(super) fn slaves_to_plant(&mut self, t: SimTime) {
+        let changes = self.lab.drive_changes();
+        if self.drives_seen == Some(changes) {
+            #[cfg(test)]
+            assert_eq!(
+                wiring::slave_outputs(&self.lab),
+                self.applied,
+                "the slaves drive something new at {t} without a drive change counted"
+            );
+            return;
+        }
+        self.read_slaves(t, changes);
+    }
+
+    /// Reads what the slaves drive (the lab's count of drive changes is `changes` now) and
+    /// hands the plant what changed.
+    #[inline(never)]
+    pub(super) fn read_slaves(&mut self, t: SimTime, changes: u64) {
+        self.drives_seen = Some(changes);
+        let new = wiring::slave_outputs(&self.lab);
+        // At most moments the slaves drive what they drove: the plant is handed only what
+        // changed, so nothing then.
+        if new == self.applied {
+            return;
+        }
+        let result = wiring::apply_to_plant(&mut self.lift, t, &self.applied, &new, self.sc.floors);
+        if let Err(e) = result {
+            self.log("plant", format!("error: {e}"));
+        }
+        // What the plant shows the slaves can change with what it is given.
+        self.plant_dirty = true;
+        self.applied = new;
+    }
+}
