@@ -491,6 +491,32 @@ mod tests {
         assert_eq!(lab.drive_changes(), count);
     }
 
+    /// `advance_to` hands the caller every output it took, so the next `advance_before`
+    /// stops at the next new output, as it does from a bus that stopped at the last one.
+    #[test]
+    fn advance_to_leaves_no_output_behind_for_advance_before() {
+        let lab = || {
+            let mut lab = LabLift::new().expect("the lab bus");
+            lab.bus.watch_outputs(u32::MAX);
+            lab.bus
+                .image_mut()
+                .output
+                .set_analog(SPEED_SETPOINT, 1, 7000);
+            lab
+        };
+        let mut stops = lab();
+        let mut at = Vec::new();
+        while let Some(t) = stops.bus.advance_before(ms(300)) {
+            at.push(t);
+        }
+        assert!(at.len() > 5, "{} new outputs", at.len());
+        for w in at.windows(2) {
+            let mut to = lab();
+            to.bus.advance_to(w[0]);
+            assert_eq!(to.bus.advance_before(ms(300)), Some(w[1]), "after {}", w[0]);
+        }
+    }
+
     #[test]
     fn an_io_bus_has_at_most_31_modules() {
         let std = SlaveCodes::new(7, 0, 0xF, 0xF);

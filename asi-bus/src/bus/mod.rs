@@ -355,12 +355,15 @@ impl Bus {
         self.now
     }
 
-    /// Processes every event up to and including `now`.
+    /// Processes every event up to and including `now`. A new output a watched slave took in
+    /// them ([`Bus::watch_outputs`]) is the caller's to hand on now: it does not end the next
+    /// [`Bus::advance_before`] early.
     pub fn advance_to(&mut self, now: SimTime) {
         self.horizon = now;
         while self.next_event <= now {
             self.event();
         }
+        self.output_taken = false;
         self.settle();
         if now > self.now {
             self.now = now;
