@@ -534,8 +534,8 @@ impl LiftSafety {
     /// reads, and the outputs are the last scan's with no events (K1 did not change either).
     /// Every other scan is taken in full ([`LiftSafety::full_scan`]).
     pub fn scan(&mut self, now: SimTime, inputs: &LiftSafetyInputs) -> LiftSafetyOutputs {
-        if let Some(last) = &self.last {
-            if last.inputs.same_as(inputs) && self.logic.quiet_scan(now) {
+        if self.scan_if_quiet(now, inputs) {
+            if let Some(last) = &self.last {
                 return LiftSafetyOutputs {
                     k1: last.k1,
                     estop_out: last.estop_out,
@@ -545,6 +545,16 @@ impl LiftSafety {
             }
         }
         self.full_scan(now, inputs)
+    }
+
+    /// The scan at `now` with `inputs` where it is a quiet one (see [`LiftSafety::scan`]: the
+    /// inputs of the last scan, the logic at rest, nothing due by `now`): the logic is moved
+    /// on as that scan moves it, and `true`; the outputs are the last scan's, with no events.
+    /// `false`, with nothing changed, where the scan must be taken in full. For a caller that
+    /// keeps the last scan's outputs and needs nothing new from a quiet scan.
+    #[inline]
+    pub fn scan_if_quiet(&mut self, now: SimTime, inputs: &LiftSafetyInputs) -> bool {
+        self.last.as_ref().is_some_and(|l| l.inputs.same_as(inputs)) && self.logic.quiet_scan(now)
     }
 
     /// One safety scan at `now` with `inputs`, every step taken: the inputs set, the logic's

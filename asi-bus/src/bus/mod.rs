@@ -886,6 +886,17 @@ impl Bus {
         self.monitors.get_mut(id.0)
     }
 
+    /// The releases monitor `id` dropped since the last call, in order
+    /// ([`SafetyMonitor::take_drops`]); empty for no such monitor. Taking them leaves its
+    /// receiver as it is, so a monitor in step with the slaves' receiver stays so (unlike
+    /// [`Bus::monitor_mut`], after which the two are compared again).
+    pub fn take_monitor_drops(&mut self, id: MonitorId) -> Vec<asi_slaves::monitor::MonitorDrop> {
+        self.monitors
+            .get_mut(id.0)
+            .map(SafetyMonitor::take_drops)
+            .unwrap_or_default()
+    }
+
     /// `true` once the master is in normal operation.
     pub fn is_running(&self) -> bool {
         self.master.phase() == Phase::NormalOperation

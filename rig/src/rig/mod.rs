@@ -131,6 +131,11 @@ pub struct Rig {
     err_ack: bool,
     /// The lift attendant, once a scenario's `attend` has started it.
     attendant: Attendant,
+    /// The last safety scan left the attendant's watch with nothing to count (K1 closed, or
+    /// open for a cause no round answers): a scan with the same outputs changes nothing in it
+    /// ([`Attendant::watch`] of a K1 it does not watch only forgets since when it was open,
+    /// which it has forgotten already).
+    attendant_idle: bool,
     /// Every press of a call button, for the passengers' waits and the served calls' requests.
     passengers: Passengers,
     watch: InvariantWatch,
@@ -203,6 +208,7 @@ impl Rig {
             operator_reset: false,
             err_ack: false,
             attendant: Attendant::default(),
+            attendant_idle: false,
             passengers: Passengers::default(),
             watch: InvariantWatch::default(),
             quiet: Quiet::default(),
