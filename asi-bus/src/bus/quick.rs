@@ -62,7 +62,6 @@ impl Bus {
             // The held frame is the request's own (`start_transaction` made it of `cur.tx`).
             r.request_sent(cur.tx.request)
         };
-        cur.valid_request = request;
         let base = cur.start + self.transaction;
         let mut answer = None;
         if let Some(q) = request {
@@ -196,7 +195,7 @@ impl Bus {
         });
         if let Some(first) = self.monitors.first_mut() {
             self.monitor_in_step = true;
-            first.on_telegram(t, &clean(TelegramKind::Request, f));
+            first.on_clean_request(t, q);
         }
         debug_assert_eq!(f.raw, u32::from(q.bits()), "not the frame of {q:?}");
         true
@@ -232,7 +231,7 @@ impl Bus {
             }
         }
         if let Some(first) = self.monitors.first_mut() {
-            first.on_telegram(t, &clean(TelegramKind::Response, f));
+            first.on_clean_response(t, a);
         }
         debug_assert_eq!(f.raw, u32::from(a.bits()), "not the frame of {a:?}");
         true
@@ -296,20 +295,6 @@ pub(super) struct Unsettled {
     window_open: bool,
     /// The end of the last answer the master's receiver took in the run.
     master_end: Option<SimTime>,
-}
-
-/// The valid telegram of `kind` that clean frame `f` is.
-#[inline(always)]
-fn clean(kind: TelegramKind, f: &Frame) -> Received {
-    Received {
-        kind,
-        start: f.start,
-        end: f.end,
-        pulses: f.pulses,
-        bit_count: f.bit_count,
-        raw: f.raw,
-        failed: Checks::NONE,
-    }
 }
 
 /// The slaves' receiver `slaves` and the monitors take frame `f` at `t`; returns the slaves'
