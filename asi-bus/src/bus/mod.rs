@@ -50,7 +50,7 @@ use asi_master::record::{BusStats, TraceRing, TransactionRecord};
 use asi_phy::line::{Line, Medium};
 use asi_phy::{
     BusTiming, Call, Checks, Expect, FaultInjector, FaultRates, Frame, Listener, PulseFault,
-    PulseTrain, Received, Request, Response, SimDuration, SimTime, TelegramKind, Transmission,
+    PulseTrain, Received, Request, Response, SimDuration, SimTime, Transmission,
 };
 use asi_slaves::monitor::SafetyMonitor;
 use asi_slaves::slave::{Peripheral, Slave};
@@ -120,7 +120,6 @@ struct Current {
     req_end: SimTime,
     request_failed: Checks,
     request_frames: u32,
-    valid_request: Option<Request>,
     responses: u32,
     response_failed: Checks,
     response: Option<Response>,
@@ -140,7 +139,6 @@ impl Current {
             req_end,
             request_failed: Checks::NONE,
             request_frames: 0,
-            valid_request: None,
             responses: 0,
             response_failed: Checks::NONE,
             response: None,
@@ -520,24 +518,20 @@ impl Bus {
             }),
         };
         let verdict = self.master.handle_outcome(t, outcome);
-        let rec = TransactionRecord {
-            start: cur.start,
-            kind: cur.tx.kind,
-            request: cur.tx.request,
-            request_failed: cur.request_failed,
-            response: match outcome {
-                Outcome::Response(r) => Some(r),
-                _ => None,
-            },
-            response_failed: match outcome {
-                Outcome::Corrupt(c) => c,
-                _ => Checks::NONE,
-            },
-            no_response: outcome == Outcome::NoResponse,
-            repeat: cur.tx.repeat,
-            ab: cur.tx.ab,
+        let response_failed = match outcome {
+            Outcome::Corrupt(c) => c,
+            _ => Checks::NONE,
         };
-        self.stats.record(&rec, verdict.error, verdict.repeat);
+        let no_response = outcome == Outcome::NoResponse;
+        // What `BusStats::record` counts of the record, without the record.
+        self.stats.count(
+            cur.tx.repeat,
+            cur.request_failed,
+            response_failed,
+            no_response,
+            verdict.error,
+            verdict.repeat,
+        );
         // Most runs keep no record: no ring, no callback, no subscriber at TRACE. The record
         // is then only counted, and never stored for them. `tracing::trace!` itself checks
         // first that TRACE is within the static and the current maximum level (its
@@ -547,7 +541,20 @@ impl Bus {
         let traced = tracing::Level::TRACE <= tracing::level_filters::STATIC_MAX_LEVEL
             && tracing::Level::TRACE <= tracing::level_filters::LevelFilter::current();
         if traced || self.ring.is_some() || self.callback.is_some() {
-            self.publish(rec);
+            self.publish(TransactionRecord {
+                start: cur.start,
+                kind: cur.tx.kind,
+                request: cur.tx.request,
+                request_failed: cur.request_failed,
+                response: match outcome {
+                    Outcome::Response(r) => Some(r),
+                    _ => None,
+                },
+                response_failed,
+                no_response,
+                repeat: cur.tx.repeat,
+                ab: cur.tx.ab,
+            });
         }
         cur.line_error
             .then(|| cur.line_end + self.timing.async_pause())
@@ -604,9 +611,6 @@ impl Bus {
         if is_request && cur.request_frames > 1 {
             // A request split in pieces is no request.
             request = None;
-            cur.valid_request = None;
-        } else if request.is_some() {
-            cur.valid_request = request;
         }
         if self.groups.len() > 1 {
             self.merge_groups();
