@@ -394,22 +394,29 @@ impl Bus {
         None
     }
 
-    /// Processes the next event.
+    /// Processes the next event. A transaction is started at one place only, so that
+    /// [`Bus::start_transaction`] (and with it the quick transaction that most starts run to
+    /// its end) is inlined here rather than called.
     fn event(&mut self) {
-        {
-            let t = self.next_event;
-            self.now = t;
-            match self.state {
-                State::Idle => self.start_transaction(t),
-                State::AwaitRequestFrame => self.request_frame(t),
-                State::AwaitResponse => match self.finish_transaction(t) {
-                    Some(resync) if resync > t => {
-                        self.state = State::Idle;
-                        self.next_event = resync;
-                    }
-                    _ => self.start_transaction(t),
-                },
+        let t = self.next_event;
+        self.now = t;
+        let start = match self.state {
+            State::Idle => true,
+            State::AwaitRequestFrame => {
+                self.request_frame(t);
+                false
             }
+            State::AwaitResponse => match self.finish_transaction(t) {
+                Some(resync) if resync > t => {
+                    self.state = State::Idle;
+                    self.next_event = resync;
+                    false
+                }
+                _ => true,
+            },
+        };
+        if start {
+            self.start_transaction(t);
         }
     }
 
@@ -419,6 +426,7 @@ impl Bus {
         }
     }
 
+    #[inline(always)]
     fn start_transaction(&mut self, t: SimTime) {
         for m in &mut self.monitors {
             m.poll(t);
