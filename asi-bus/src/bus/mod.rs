@@ -197,6 +197,12 @@ pub struct Bus {
     slaves: Vec<SlaveSlot>,
     addr_index: [u64; 32],
     medium: Medium,
+    /// The medium is plain ([`Medium::is_plain`]): a telegram passes its faults untouched
+    /// without a draw, and the line takes it clean when it is idle. Worked out again
+    /// wherever the bus arms faults, records or sets the pulse-exact mode
+    /// ([`Bus::line_changed`]), and after a telegram went on the line (which may use up a
+    /// one-shot fault); `false` only costs the full check.
+    line_plain: bool,
     master_rx: Listener,
     groups: Vec<Group>,
     monitors: Vec<SafetyMonitor>,
@@ -264,6 +270,7 @@ impl Bus {
             response_last: quick::last_pulse(timing.half_bit(), Response::BITS),
             master_rx: Listener::new(&timing.receiver(Expect::Responses)),
             medium: Medium::quiet(&timing),
+            line_plain: true,
             master,
             slaves: Vec::new(),
             addr_index: [0; 32],
@@ -436,8 +443,7 @@ impl Bus {
             self.next_event = self.master.poll_at(t).unwrap_or(SimTime::MAX);
             return;
         };
-        let tg = Transmission::request(tx.request, t, self.timing.half_bit());
-        if self.may_run_quick(tx.request) && self.medium.takes_clean(&tg) {
+        if self.may_run_quick(tx.request) && self.line_takes_clean(tx.request, t) {
             // As the clean line would: the frame at its end plus the pause.
             let f = quick::request_frame(tx.request, t, self.request_last);
             let cur = Current::new(tx, t, f.end, true);
@@ -455,6 +461,7 @@ impl Bus {
             }
             return;
         }
+        let tg = Transmission::request(tx.request, t, self.timing.half_bit());
         let req_end = tg.end();
         self.cur = Some(Current::new(tx, t, req_end, false));
         let mut frames: [Option<Frame>; 4] = [None; 4];
@@ -465,6 +472,7 @@ impl Bus {
                 n += 1;
             }
         });
+        self.line_changed();
         // Borrowed: moving the array out would copy all four slots for every request.
         for f in frames[..n].iter().flatten() {
             self.hear(t, f, Role::Request);
@@ -475,6 +483,24 @@ impl Bus {
             .poll_at()
             .unwrap_or(req_end + self.timing.min_pause())
             .max(t);
+    }
+
+    /// [`Medium::takes_clean`] of request `q` sent at `t`: on a plain line
+    /// ([`Bus::line_plain`]) only whether it is idle.
+    #[inline(always)]
+    fn line_takes_clean(&mut self, q: Request, t: SimTime) -> bool {
+        debug_assert!(!self.line_plain || self.medium.is_plain(), "line_plain is stale");
+        if self.line_plain {
+            self.medium.is_idle()
+        } else {
+            self.medium
+                .takes_clean(&Transmission::request(q, t, self.timing.half_bit()))
+        }
+    }
+
+    /// Works out [`Bus::line_plain`] again, after the medium changed.
+    fn line_changed(&mut self) {
+        self.line_plain = self.medium.is_plain();
     }
 
     fn request_frame(&mut self, t: SimTime) {
@@ -732,6 +758,7 @@ impl Bus {
                 self.medium.transmit_merged(&all, &mut collect);
             }
         }
+        self.line_changed();
         for f in &frames {
             self.hear(now, f, Role::Response);
         }
@@ -781,6 +808,7 @@ impl Bus {
     pub fn record_line(&mut self, on: bool) {
         self.release_held();
         self.medium.record_pulses(on);
+        self.line_changed();
     }
 
     /// The pulses put on the line since the last call, in the order they went on it (a

@@ -74,11 +74,13 @@ impl Bus {
         let mut quiet = None;
         let mut held = None;
         if let Some(r) = answer {
-            let tg = Transmission::response(r, f.end + timing.master_pause(), timing.half_bit());
+            let start = f.end + timing.master_pause();
+            let tg = || Transmission::response(r, start, timing.half_bit());
             // The line is as the request found it (idle, nothing recorded: anything that
-            // changes that releases the held request first), so only its faults are left to ask.
-            if self.medium.pass_untouched(&tg) {
-                let answer = answer_frame(r, tg.start(), self.response_last);
+            // changes that releases the held request first), so only its faults are left to
+            // ask, and on a plain line there are none.
+            if self.line_plain || self.medium.pass_untouched(&tg()) {
+                let answer = answer_frame(r, start, self.response_last);
                 held = Some((answer, Some(r)));
                 quiet = Some(answer.end + timing.min_pause());
             } else {
@@ -86,7 +88,7 @@ impl Bus {
                 // the bus (`hear` finds it there).
                 cur.quick = false;
                 self.cur = Some(cur);
-                self.transmit_answers(t, &[tg]);
+                self.transmit_answers(t, &[tg()]);
                 let quiet = self
                     .medium
                     .poll_at()
