@@ -49,8 +49,8 @@ use asi_master::master::{Master, Outcome, Phase, Transmit};
 use asi_master::record::{BusStats, TraceRing, TransactionRecord};
 use asi_phy::line::{Line, Medium};
 use asi_phy::{
-    BusTiming, Call, Checks, Expect, FaultInjector, FaultRates, Frame, Listener, PulseFault,
-    PulseTrain, Received, Request, Response, SimDuration, SimTime, Transmission,
+    Address, BusTiming, Call, Checks, Expect, FaultInjector, FaultRates, Frame, Listener, Nibble,
+    PulseFault, PulseTrain, Received, Request, Response, SimDuration, SimTime, Transmission,
 };
 use asi_slaves::monitor::SafetyMonitor;
 use asi_slaves::slave::{Peripheral, Slave};
@@ -489,7 +489,10 @@ impl Bus {
     /// ([`Bus::line_plain`]) only whether it is idle.
     #[inline(always)]
     fn line_takes_clean(&mut self, q: Request, t: SimTime) -> bool {
-        debug_assert!(!self.line_plain || self.medium.is_plain(), "line_plain is stale");
+        debug_assert!(
+            !self.line_plain || self.medium.is_plain(),
+            "line_plain is stale"
+        );
         if self.line_plain {
             self.medium.is_idle()
         } else {
@@ -661,20 +664,21 @@ impl Bus {
     /// Data_Exchange with a new output nibble, or any call that writes (parameter, address,
     /// reset), after which the next Data_Exchange counts as new too. A Data_Exchange is told
     /// from its bits, without decoding the call.
-    fn output_note(&self, req: Request) -> OutputNote {
-        let exchange = |a: usize, data: u8| {
+    /// `exchange` is `req.as_data_exchange()`, which the caller has at hand.
+    fn output_note(&self, req: Request, exchange: Option<(Address, Nibble)>) -> OutputNote {
+        let exchange_note = |a: usize, data: u8| {
             if self.watch >> a & 1 == 1 && self.last_out[a] != data {
                 OutputNote::New(a, data)
             } else {
                 OutputNote::Same
             }
         };
-        if let Some((address, data)) = req.as_data_exchange() {
-            return exchange(address.get() as usize, data.get());
+        if let Some((address, data)) = exchange {
+            return exchange_note(address.get() as usize, data.get());
         }
         let a = req.address().get() as usize;
         match req.call() {
-            Call::DataExchange { data, .. } => exchange(a, data.get()),
+            Call::DataExchange { data, .. } => exchange_note(a, data.get()),
             Call::ReadIoConfiguration { .. }
             | Call::ReadIdCode { .. }
             | Call::ReadId1 { .. }
@@ -687,10 +691,11 @@ impl Bus {
     }
 
     /// Notes what request `req`, taken by a slave, does to what the watched slaves drive
-    /// ([`Bus::output_note`]): a change ends [`Bus::advance_before`] at this event.
+    /// ([`Bus::output_note`], `exchange` being `req.as_data_exchange()`): a change ends
+    /// [`Bus::advance_before`] at this event.
     #[inline(always)]
-    fn note_output(&mut self, req: Request) {
-        match self.output_note(req) {
+    fn note_output(&mut self, req: Request, exchange: Option<(Address, Nibble)>) {
+        match self.output_note(req, exchange) {
             OutputNote::Same => {}
             OutputNote::New(a, data) => {
                 self.last_out[a] = data;
@@ -777,7 +782,8 @@ impl Bus {
     ) {
         let mut readdressed = false;
         // A Data_Exchange (told from its bits) never changes an address.
-        let exchange = req.as_data_exchange().is_some();
+        let data_exchange = req.as_data_exchange();
+        let exchange = data_exchange.is_some();
         while who != 0 {
             let i = who.trailing_zeros() as usize;
             who &= who - 1;
@@ -794,7 +800,7 @@ impl Bus {
                 answer(r);
             }
         }
-        self.note_output(req);
+        self.note_output(req, data_exchange);
         let reset = || matches!(req.call(), Call::BroadcastReset | Call::ResetSlave { .. });
         if readdressed || (!exchange && reset()) {
             self.reindex();
