@@ -82,7 +82,11 @@ impl Bus {
             if self.line_plain || self.medium.pass_untouched(&tg()) {
                 let answer = answer_frame(r, start, self.response_last);
                 held = Some((answer, Some(r)));
-                quiet = Some(answer.end + timing.min_pause());
+                // The line hands the answer on at its end plus the pause and is quiet the
+                // slave pause after its end: `(end + min_pause) + (slave_pause - min_pause)`
+                // as the line's path adds it, in one saturating sum (a valid timing has
+                // `slave_pause >= min_pause`).
+                quiet = Some(answer.end + timing.slave_pause());
             } else {
                 // The line touches the answer: the transaction goes on the line's path, from
                 // the bus (`hear` finds it there).
@@ -98,7 +102,6 @@ impl Bus {
                 return;
             }
         }
-        let quiet = quiet.map(|p| p + (timing.slave_pause() - timing.min_pause()));
         let next = quiet.map_or(base, |q| q.max(base)).max(t);
         if next <= self.horizon && !self.output_taken {
             self.now = next;
@@ -189,12 +192,19 @@ impl Bus {
             self.settle();
             return false;
         }
-        let master_end = self.unsettled.and_then(|u| u.master_end);
-        self.unsettled = Some(Unsettled {
-            slaves_end: f.end,
-            window_open: true,
-            master_end,
-        });
+        match &mut self.unsettled {
+            Some(u) => {
+                u.slaves_end = f.end;
+                u.window_open = true;
+            }
+            None => {
+                self.unsettled = Some(Unsettled {
+                    slaves_end: f.end,
+                    window_open: true,
+                    master_end: None,
+                });
+            }
+        }
         if let Some(first) = self.monitors.first_mut() {
             self.monitor_in_step = true;
             first.on_clean_request(t, q);
