@@ -472,6 +472,27 @@ mod tests {
         }
     }
 
+    proptest! {
+        /// The quick path's quiet line, `end + slave_pause` in one saturating sum, is the
+        /// line's path's `(end + min_pause) + (slave_pause - min_pause)` for every end and
+        /// every pair of pauses with `slave_pause >= min_pause` (as a valid timing has),
+        /// near the end of time too.
+        #[test]
+        fn the_quiet_line_in_one_sum_is_the_lines_two(
+            end in prop_oneof![any::<u64>(), (u64::MAX - 1_000_000)..=u64::MAX],
+            min in prop_oneof![0u64..100_000, any::<u64>()],
+            more in prop_oneof![0u64..100_000, any::<u64>()],
+        ) {
+            let end = SimTime::from_nanos(end);
+            let min_pause = SimDuration::from_nanos(min);
+            let slave_pause = SimDuration::from_nanos(min.saturating_add(more));
+            prop_assert_eq!(
+                end + slave_pause,
+                (end + min_pause) + (slave_pause - min_pause)
+            );
+        }
+    }
+
     /// Every receiver on the lab bus, after runs of clean quick transactions have been settled,
     /// is in the state of the same receiver on the pulse-exact bus, which took every frame
     /// from the line: the slaves' and the monitor's (which the lockstep test in
