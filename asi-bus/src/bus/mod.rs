@@ -74,6 +74,26 @@ enum OutputNote {
     ForgetAll,
 }
 
+/// A request taken by a slave, as the bus tells it: a Data_Exchange from its bits
+/// ([`Request::as_data_exchange`]), every other by its call, decoded once.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Told {
+    /// A Data_Exchange to this address with these output bits.
+    Exchange(Address, Nibble),
+    /// Any other call.
+    Call(Call),
+}
+
+impl Told {
+    #[inline(always)]
+    fn of(req: Request) -> Told {
+        match req.as_data_exchange() {
+            Some((a, data)) => Told::Exchange(a, data),
+            None => Told::Call(req.call()),
+        }
+    }
+}
+
 /// A slave's place on the bus.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub struct SlaveId(pub usize);
@@ -663,9 +683,8 @@ impl Bus {
     /// What request `req`, taken by a slave, does to what the watched slaves drive: a
     /// Data_Exchange with a new output nibble, or any call that writes (parameter, address,
     /// reset), after which the next Data_Exchange counts as new too. A Data_Exchange is told
-    /// from its bits, without decoding the call.
-    /// `exchange` is `req.as_data_exchange()`, which the caller has at hand.
-    fn output_note(&self, req: Request, exchange: Option<(Address, Nibble)>) -> OutputNote {
+    /// from its bits, without decoding the call (`told`, [`Told::of`] `req`).
+    fn output_note(&self, req: Request, told: Told) -> OutputNote {
         let exchange_note = |a: usize, data: u8| {
             if self.watch >> a & 1 == 1 && self.last_out[a] != data {
                 OutputNote::New(a, data)
@@ -673,11 +692,14 @@ impl Bus {
                 OutputNote::Same
             }
         };
-        if let Some((address, data)) = exchange {
-            return exchange_note(address.get() as usize, data.get());
-        }
+        let call = match told {
+            Told::Exchange(address, data) => {
+                return exchange_note(address.get() as usize, data.get())
+            }
+            Told::Call(call) => call,
+        };
         let a = req.address().get() as usize;
-        match req.call() {
+        match call {
             Call::DataExchange { data, .. } => exchange_note(a, data.get()),
             Call::ReadIoConfiguration { .. }
             | Call::ReadIdCode { .. }
@@ -691,11 +713,11 @@ impl Bus {
     }
 
     /// Notes what request `req`, taken by a slave, does to what the watched slaves drive
-    /// ([`Bus::output_note`], `exchange` being `req.as_data_exchange()`): a change ends
+    /// ([`Bus::output_note`] of `told`, [`Told::of`] `req`): a change ends
     /// [`Bus::advance_before`] at this event.
     #[inline(always)]
-    fn note_output(&mut self, req: Request, exchange: Option<(Address, Nibble)>) {
-        match self.output_note(req, exchange) {
+    fn note_output(&mut self, req: Request, told: Told) {
+        match self.output_note(req, told) {
             OutputNote::Same => {}
             OutputNote::New(a, data) => {
                 self.last_out[a] = data;
@@ -782,8 +804,8 @@ impl Bus {
     ) {
         let mut readdressed = false;
         // A Data_Exchange (told from its bits) never changes an address.
-        let data_exchange = req.as_data_exchange();
-        let exchange = data_exchange.is_some();
+        let told = Told::of(req);
+        let exchange = matches!(told, Told::Exchange(..));
         while who != 0 {
             let i = who.trailing_zeros() as usize;
             who &= who - 1;
@@ -800,9 +822,12 @@ impl Bus {
                 answer(r);
             }
         }
-        self.note_output(req, data_exchange);
-        let reset = || matches!(req.call(), Call::BroadcastReset | Call::ResetSlave { .. });
-        if readdressed || (!exchange && reset()) {
+        self.note_output(req, told);
+        let reset = matches!(
+            told,
+            Told::Call(Call::BroadcastReset | Call::ResetSlave { .. })
+        );
+        if readdressed || reset {
             self.reindex();
         }
     }
