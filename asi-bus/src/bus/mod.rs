@@ -455,8 +455,15 @@ impl Bus {
 
     #[inline(always)]
     fn start_transaction(&mut self, t: SimTime) {
-        for m in &mut self.monitors {
-            m.poll(t);
+        // Mostly one monitor (the lab bus) or none: those without the loop.
+        match self.monitors.as_mut_slice() {
+            [] => {}
+            [m] => m.poll(t),
+            all => {
+                for m in all {
+                    m.poll(t);
+                }
+            }
         }
         let Some(tx) = self.master.poll_transmit(t) else {
             self.state = State::Idle;
