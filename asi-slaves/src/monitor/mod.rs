@@ -478,8 +478,10 @@ impl SafetyMonitor {
     /// [`SafetyMonitor::on_frame`] of telegram `r`, heard at `now` by a receiver in the state
     /// of the monitor's own, without bringing the monitor's receiver on: its caller knows the
     /// state the frames leave it in and sets it later ([`SafetyMonitor::listen_as`]), as the
-    /// bus does at the end of a run of clean quick transactions. Held to `on_frame` by the
-    /// bus's lockstep test against its pulse-exact path, which compares the monitors.
+    /// bus does at the end of a run of clean quick transactions (whose telegrams it hands over
+    /// as the request or answer itself: [`SafetyMonitor::on_clean_request`],
+    /// [`SafetyMonitor::on_clean_response`]). Held to `on_frame` through those by the bus's
+    /// lockstep test against its pulse-exact path, which compares the monitors.
     #[inline]
     pub fn on_telegram(&mut self, now: SimTime, r: &Received) {
         self.judge(now, r);
