@@ -263,17 +263,39 @@ impl BusStats {
     /// Counts one transaction; `error` says whether its outcome was a fault (a probe of an
     /// empty address that gets no response is not), `will_repeat` whether it is repeated.
     pub fn record(&mut self, r: &TransactionRecord, error: bool, will_repeat: bool) {
+        self.count(
+            r.repeat,
+            r.request_failed,
+            r.response_failed,
+            r.no_response,
+            error,
+            will_repeat,
+        );
+    }
+
+    /// [`BusStats::record`] of a transaction with these fields of its record, for a caller
+    /// that builds the record only where it keeps it.
+    #[inline]
+    pub fn count(
+        &mut self,
+        repeat: bool,
+        request_failed: Checks,
+        response_failed: Checks,
+        no_response: bool,
+        error: bool,
+        will_repeat: bool,
+    ) {
         self.transactions += 1;
-        if r.repeat {
+        if repeat {
             self.repeats += 1;
         }
-        if let Some(c) = r.request_failed.primary() {
+        if let Some(c) = request_failed.primary() {
             self.request_errors[c as usize] += 1;
         }
-        if let Some(c) = r.response_failed.primary() {
+        if let Some(c) = response_failed.primary() {
             self.response_errors[c as usize] += 1;
         }
-        if error && r.no_response && r.request_failed.is_empty() {
+        if error && no_response && request_failed.is_empty() {
             self.no_response += 1;
         }
         if error && !will_repeat {

@@ -58,11 +58,12 @@ pub struct Slave {
     nv_error: bool,
     eeprom_busy_until: SimTime,
     eeprom_write_time: SimDuration,
-    /// The address field of the Data_Exchange requests the slave answers as a standard (not
-    /// A/B) slave with data exchange enabled: its address, or [`Slave::NO_DATA_EXCHANGE`]
-    /// (which no 5-bit field holds) for an A/B slave, at address 0 or before a
-    /// Write_Parameter. Kept by [`Slave::refresh`] after every change of those.
-    data_exchange_at: u8,
+    /// The CB, address and I4 bits ([`Slave::DATA_EXCHANGE_BITS`]) of the Data_Exchange
+    /// requests the slave answers as a standard (not A/B) slave with data exchange enabled:
+    /// CB 0, its address, I4 0; or [`Slave::NO_DATA_EXCHANGE`] (which no request's bits
+    /// hold under the mask) for an A/B slave, at address 0 or before a Write_Parameter. Kept
+    /// by [`Slave::refresh`] after every change of those.
+    data_exchange_at: u16,
     device: Box<dyn Peripheral>,
 }
 
@@ -103,15 +104,19 @@ impl Slave {
     }
 
     /// [`Slave::data_exchange_at`](Slave) of a slave that answers no Data_Exchange the quick
-    /// way: no request's address field (5 bits) holds it.
-    const NO_DATA_EXCHANGE: u8 = 0xFF;
+    /// way: no request's bits under [`Slave::DATA_EXCHANGE_BITS`] are it.
+    const NO_DATA_EXCHANGE: u16 = 0xFFFF;
+
+    /// The bits of a request ([`Request::bits`]) that tell a Data_Exchange and its address:
+    /// CB (bit 12), the address (bits 11..7) and I4 (bit 6).
+    const DATA_EXCHANGE_BITS: u16 = 1 << 12 | 0x1F << 7 | 1 << 6;
 
     /// Works out `data_exchange_at` from the address, the ID code and the data exchange
     /// flag: called after anything that may have changed them.
     fn refresh(&mut self) {
         let quick = self.address.get() != 0 && !self.codes.is_ab() && self.data_exchange_enabled;
         self.data_exchange_at = if quick {
-            self.address.get()
+            u16::from(self.address.get()) << 7
         } else {
             Slave::NO_DATA_EXCHANGE
         };
@@ -213,13 +218,13 @@ impl Slave {
     /// (not A/B) slave: nearly every request a slave is handed, told from the request's bits
     /// without decoding its call. A Data_Exchange is CB 0 and I4 0 at an address other than 0
     /// ([`Request::as_data_exchange`]); a standard slave's select is always A, so the address
-    /// alone says it is meant; `data_exchange_at` holds the address only for a standard slave
-    /// at an address other than 0 with data exchange enabled, so one comparison tells all
-    /// three. `None` sends the request the long way, through [`Slave::handle_call`]'s match
-    /// of its call.
+    /// alone says it is meant; `data_exchange_at` holds CB 0, I4 0 and the address only for
+    /// a standard slave at an address other than 0 with data exchange enabled, so one
+    /// comparison of the masked bits tells all. `None` sends the request the long way,
+    /// through [`Slave::handle_call`]'s match of its call.
     #[inline]
     fn standard_data_exchange(&self, req: Request) -> Option<Nibble> {
-        (!req.cb() && req.info() & 0x10 == 0 && req.address().get() == self.data_exchange_at)
+        (req.bits() & Slave::DATA_EXCHANGE_BITS == self.data_exchange_at)
             .then(|| Nibble::from_low_bits(req.info()))
     }
 

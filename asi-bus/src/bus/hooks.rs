@@ -104,6 +104,7 @@ impl Bus {
             rates,
             self.timing.half_bit(),
         )));
+        self.line_changed();
     }
 
     /// Pulse-exact (`true`): every telegram goes through the pulse decoder, without the
@@ -112,6 +113,7 @@ impl Bus {
     pub fn set_pulse_exact(&mut self, on: bool) {
         self.release_held();
         self.medium.set_pulse_exact(on);
+        self.line_changed();
     }
 
     /// The line fault rates in force.
@@ -124,6 +126,7 @@ impl Bus {
     pub fn corrupt_next_telegram(&mut self, faults: Vec<PulseFault>) {
         self.release_held();
         self.medium.corrupt_next(faults);
+        self.line_changed();
     }
 
     /// Pulse faults injected so far.

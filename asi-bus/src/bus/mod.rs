@@ -49,8 +49,8 @@ use asi_master::master::{Master, Outcome, Phase, Transmit};
 use asi_master::record::{BusStats, TraceRing, TransactionRecord};
 use asi_phy::line::{Line, Medium};
 use asi_phy::{
-    BusTiming, Call, Checks, Expect, FaultInjector, FaultRates, Frame, Listener, PulseFault,
-    PulseTrain, Received, Request, Response, SimDuration, SimTime, TelegramKind, Transmission,
+    Address, BusTiming, Call, Checks, Expect, FaultInjector, FaultRates, Frame, Listener, Nibble,
+    PulseFault, PulseTrain, Received, Request, Response, SimDuration, SimTime, Transmission,
 };
 use asi_slaves::monitor::SafetyMonitor;
 use asi_slaves::slave::{Peripheral, Slave};
@@ -72,6 +72,26 @@ enum OutputNote {
     Forget(usize),
     /// The broadcast reset: every next nibble is new.
     ForgetAll,
+}
+
+/// A request taken by a slave, as the bus tells it: a Data_Exchange from its bits
+/// ([`Request::as_data_exchange`]), every other by its call, decoded once.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Told {
+    /// A Data_Exchange to this address with these output bits.
+    Exchange(Address, Nibble),
+    /// Any other call.
+    Call(Call),
+}
+
+impl Told {
+    #[inline(always)]
+    fn of(req: Request) -> Told {
+        match req.as_data_exchange() {
+            Some((a, data)) => Told::Exchange(a, data),
+            None => Told::Call(req.call()),
+        }
+    }
 }
 
 /// A slave's place on the bus.
@@ -120,7 +140,6 @@ struct Current {
     req_end: SimTime,
     request_failed: Checks,
     request_frames: u32,
-    valid_request: Option<Request>,
     responses: u32,
     response_failed: Checks,
     response: Option<Response>,
@@ -140,7 +159,6 @@ impl Current {
             req_end,
             request_failed: Checks::NONE,
             request_frames: 0,
-            valid_request: None,
             responses: 0,
             response_failed: Checks::NONE,
             response: None,
@@ -199,6 +217,12 @@ pub struct Bus {
     slaves: Vec<SlaveSlot>,
     addr_index: [u64; 32],
     medium: Medium,
+    /// The medium is plain ([`Medium::is_plain`]): a telegram passes its faults untouched
+    /// without a draw, and the line takes it clean when it is idle. Worked out again
+    /// wherever the bus arms faults, records or sets the pulse-exact mode
+    /// ([`Bus::line_changed`]), and after a telegram went on the line (which may use up a
+    /// one-shot fault); `false` only costs the full check.
+    line_plain: bool,
     master_rx: Listener,
     groups: Vec<Group>,
     monitors: Vec<SafetyMonitor>,
@@ -266,6 +290,7 @@ impl Bus {
             response_last: quick::last_pulse(timing.half_bit(), Response::BITS),
             master_rx: Listener::new(&timing.receiver(Expect::Responses)),
             medium: Medium::quiet(&timing),
+            line_plain: true,
             master,
             slaves: Vec::new(),
             addr_index: [0; 32],
@@ -399,22 +424,29 @@ impl Bus {
         None
     }
 
-    /// Processes the next event.
+    /// Processes the next event. A transaction is started at one place only, so that
+    /// [`Bus::start_transaction`] (and with it the quick transaction that most starts run to
+    /// its end) is inlined here rather than called.
     fn event(&mut self) {
-        {
-            let t = self.next_event;
-            self.now = t;
-            match self.state {
-                State::Idle => self.start_transaction(t),
-                State::AwaitRequestFrame => self.request_frame(t),
-                State::AwaitResponse => match self.finish_transaction(t) {
-                    Some(resync) if resync > t => {
-                        self.state = State::Idle;
-                        self.next_event = resync;
-                    }
-                    _ => self.start_transaction(t),
-                },
+        let t = self.next_event;
+        self.now = t;
+        let start = match self.state {
+            State::Idle => true,
+            State::AwaitRequestFrame => {
+                self.request_frame(t);
+                false
             }
+            State::AwaitResponse => match self.finish_transaction(t) {
+                Some(resync) if resync > t => {
+                    self.state = State::Idle;
+                    self.next_event = resync;
+                    false
+                }
+                _ => true,
+            },
+        };
+        if start {
+            self.start_transaction(t);
         }
     }
 
@@ -424,17 +456,24 @@ impl Bus {
         }
     }
 
+    #[inline(always)]
     fn start_transaction(&mut self, t: SimTime) {
-        for m in &mut self.monitors {
-            m.poll(t);
+        // Mostly one monitor (the lab bus) or none: those without the loop.
+        match self.monitors.as_mut_slice() {
+            [] => {}
+            [m] => m.poll(t),
+            all => {
+                for m in all {
+                    m.poll(t);
+                }
+            }
         }
         let Some(tx) = self.master.poll_transmit(t) else {
             self.state = State::Idle;
             self.next_event = self.master.poll_at(t).unwrap_or(SimTime::MAX);
             return;
         };
-        let tg = Transmission::request(tx.request, t, self.timing.half_bit());
-        if self.may_run_quick(tx.request) && self.medium.takes_clean(&tg) {
+        if self.may_run_quick(tx.request) && self.line_takes_clean(tx.request, t) {
             // As the clean line would: the frame at its end plus the pause.
             let f = quick::request_frame(tx.request, t, self.request_last);
             let cur = Current::new(tx, t, f.end, true);
@@ -452,6 +491,7 @@ impl Bus {
             }
             return;
         }
+        let tg = Transmission::request(tx.request, t, self.timing.half_bit());
         let req_end = tg.end();
         self.cur = Some(Current::new(tx, t, req_end, false));
         let mut frames: [Option<Frame>; 4] = [None; 4];
@@ -462,6 +502,7 @@ impl Bus {
                 n += 1;
             }
         });
+        self.line_changed();
         // Borrowed: moving the array out would copy all four slots for every request.
         for f in frames[..n].iter().flatten() {
             self.hear(t, f, Role::Request);
@@ -472,6 +513,27 @@ impl Bus {
             .poll_at()
             .unwrap_or(req_end + self.timing.min_pause())
             .max(t);
+    }
+
+    /// [`Medium::takes_clean`] of request `q` sent at `t`: on a plain line
+    /// ([`Bus::line_plain`]) only whether it is idle.
+    #[inline(always)]
+    fn line_takes_clean(&mut self, q: Request, t: SimTime) -> bool {
+        debug_assert!(
+            !self.line_plain || self.medium.is_plain(),
+            "line_plain is stale"
+        );
+        if self.line_plain {
+            self.medium.is_idle()
+        } else {
+            self.medium
+                .takes_clean(&Transmission::request(q, t, self.timing.half_bit()))
+        }
+    }
+
+    /// Works out [`Bus::line_plain`] again, after the medium changed.
+    fn line_changed(&mut self) {
+        self.line_plain = self.medium.is_plain();
     }
 
     fn request_frame(&mut self, t: SimTime) {
@@ -523,24 +585,20 @@ impl Bus {
             }),
         };
         let verdict = self.master.handle_outcome(t, outcome);
-        let rec = TransactionRecord {
-            start: cur.start,
-            kind: cur.tx.kind,
-            request: cur.tx.request,
-            request_failed: cur.request_failed,
-            response: match outcome {
-                Outcome::Response(r) => Some(r),
-                _ => None,
-            },
-            response_failed: match outcome {
-                Outcome::Corrupt(c) => c,
-                _ => Checks::NONE,
-            },
-            no_response: outcome == Outcome::NoResponse,
-            repeat: cur.tx.repeat,
-            ab: cur.tx.ab,
+        let response_failed = match outcome {
+            Outcome::Corrupt(c) => c,
+            _ => Checks::NONE,
         };
-        self.stats.record(&rec, verdict.error, verdict.repeat);
+        let no_response = outcome == Outcome::NoResponse;
+        // What `BusStats::record` counts of the record, without the record.
+        self.stats.count(
+            cur.tx.repeat,
+            cur.request_failed,
+            response_failed,
+            no_response,
+            verdict.error,
+            verdict.repeat,
+        );
         // Most runs keep no record: no ring, no callback, no subscriber at TRACE. The record
         // is then only counted, and never stored for them. `tracing::trace!` itself checks
         // first that TRACE is within the static and the current maximum level (its
@@ -550,7 +608,20 @@ impl Bus {
         let traced = tracing::Level::TRACE <= tracing::level_filters::STATIC_MAX_LEVEL
             && tracing::Level::TRACE <= tracing::level_filters::LevelFilter::current();
         if traced || self.ring.is_some() || self.callback.is_some() {
-            self.publish(rec);
+            self.publish(TransactionRecord {
+                start: cur.start,
+                kind: cur.tx.kind,
+                request: cur.tx.request,
+                request_failed: cur.request_failed,
+                response: match outcome {
+                    Outcome::Response(r) => Some(r),
+                    _ => None,
+                },
+                response_failed,
+                no_response,
+                repeat: cur.tx.repeat,
+                ab: cur.tx.ab,
+            });
         }
         cur.line_error
             .then(|| cur.line_end + self.timing.async_pause())
@@ -607,9 +678,6 @@ impl Bus {
         if is_request && cur.request_frames > 1 {
             // A request split in pieces is no request.
             request = None;
-            cur.valid_request = None;
-        } else if request.is_some() {
-            cur.valid_request = request;
         }
         if self.groups.len() > 1 {
             self.merge_groups();
@@ -625,21 +693,24 @@ impl Bus {
     /// What request `req`, taken by a slave, does to what the watched slaves drive: a
     /// Data_Exchange with a new output nibble, or any call that writes (parameter, address,
     /// reset), after which the next Data_Exchange counts as new too. A Data_Exchange is told
-    /// from its bits, without decoding the call.
-    fn output_note(&self, req: Request) -> OutputNote {
-        let exchange = |a: usize, data: u8| {
+    /// from its bits, without decoding the call (`told`, [`Told::of`] `req`).
+    fn output_note(&self, req: Request, told: Told) -> OutputNote {
+        let exchange_note = |a: usize, data: u8| {
             if self.watch >> a & 1 == 1 && self.last_out[a] != data {
                 OutputNote::New(a, data)
             } else {
                 OutputNote::Same
             }
         };
-        if let Some((address, data)) = req.as_data_exchange() {
-            return exchange(address.get() as usize, data.get());
-        }
+        let call = match told {
+            Told::Exchange(address, data) => {
+                return exchange_note(address.get() as usize, data.get())
+            }
+            Told::Call(call) => call,
+        };
         let a = req.address().get() as usize;
-        match req.call() {
-            Call::DataExchange { data, .. } => exchange(a, data.get()),
+        match call {
+            Call::DataExchange { data, .. } => exchange_note(a, data.get()),
             Call::ReadIoConfiguration { .. }
             | Call::ReadIdCode { .. }
             | Call::ReadId1 { .. }
@@ -652,10 +723,11 @@ impl Bus {
     }
 
     /// Notes what request `req`, taken by a slave, does to what the watched slaves drive
-    /// ([`Bus::output_note`]): a change ends [`Bus::advance_before`] at this event.
+    /// ([`Bus::output_note`] of `told`, [`Told::of`] `req`): a change ends
+    /// [`Bus::advance_before`] at this event.
     #[inline(always)]
-    fn note_output(&mut self, req: Request) {
-        match self.output_note(req) {
+    fn note_output(&mut self, req: Request, told: Told) {
+        match self.output_note(req, told) {
             OutputNote::Same => {}
             OutputNote::New(a, data) => {
                 self.last_out[a] = data;
@@ -723,6 +795,7 @@ impl Bus {
                 self.medium.transmit_merged(&all, &mut collect);
             }
         }
+        self.line_changed();
         for f in &frames {
             self.hear(now, f, Role::Response);
         }
@@ -741,7 +814,8 @@ impl Bus {
     ) {
         let mut readdressed = false;
         // A Data_Exchange (told from its bits) never changes an address.
-        let exchange = req.as_data_exchange().is_some();
+        let told = Told::of(req);
+        let exchange = matches!(told, Told::Exchange(..));
         while who != 0 {
             let i = who.trailing_zeros() as usize;
             who &= who - 1;
@@ -758,9 +832,12 @@ impl Bus {
                 answer(r);
             }
         }
-        self.note_output(req);
-        let reset = || matches!(req.call(), Call::BroadcastReset | Call::ResetSlave { .. });
-        if readdressed || (!exchange && reset()) {
+        self.note_output(req, told);
+        let reset = matches!(
+            told,
+            Told::Call(Call::BroadcastReset | Call::ResetSlave { .. })
+        );
+        if readdressed || reset {
             self.reindex();
         }
     }
@@ -772,6 +849,7 @@ impl Bus {
     pub fn record_line(&mut self, on: bool) {
         self.release_held();
         self.medium.record_pulses(on);
+        self.line_changed();
     }
 
     /// The pulses put on the line since the last call, in the order they went on it (a

@@ -62,7 +62,6 @@ impl Bus {
             // The held frame is the request's own (`start_transaction` made it of `cur.tx`).
             r.request_sent(cur.tx.request)
         };
-        cur.valid_request = request;
         let base = cur.start + self.transaction;
         let mut answer = None;
         if let Some(q) = request {
@@ -72,22 +71,21 @@ impl Bus {
             }
         }
         let timing = self.timing;
-        let mut quiet = None;
         let mut held = None;
         if let Some(r) = answer {
-            let tg = Transmission::response(r, f.end + timing.master_pause(), timing.half_bit());
+            let start = f.end + timing.master_pause();
+            let tg = || Transmission::response(r, start, timing.half_bit());
             // The line is as the request found it (idle, nothing recorded: anything that
-            // changes that releases the held request first), so only its faults are left to ask.
-            if self.medium.pass_untouched(&tg) {
-                let answer = answer_frame(r, tg.start(), self.response_last);
-                held = Some((answer, Some(r)));
-                quiet = Some(answer.end + timing.min_pause());
+            // changes that releases the held request first), so only its faults are left to
+            // ask, and on a plain line there are none.
+            if self.line_plain || self.medium.pass_untouched(&tg()) {
+                held = Some((answer_frame(r, start, self.response_last), Some(r)));
             } else {
                 // The line touches the answer: the transaction goes on the line's path, from
                 // the bus (`hear` finds it there).
                 cur.quick = false;
                 self.cur = Some(cur);
-                self.transmit_answers(t, &[tg]);
+                self.transmit_answers(t, &[tg()]);
                 let quiet = self
                     .medium
                     .poll_at()
@@ -97,8 +95,11 @@ impl Bus {
                 return;
             }
         }
-        let quiet = quiet.map(|p| p + (timing.slave_pause() - timing.min_pause()));
-        let next = quiet.map_or(base, |q| q.max(base)).max(t);
+        // The line's path ends the transaction when the line is quiet, the slave pause after
+        // the answer, but not before `base`; a held answer's quiet line is `base` itself
+        // (`quiet_line_after_a_held_answer_is_the_transactions_end`), so the end is `base`
+        // with or without an answer.
+        let next = base.max(t);
         if next <= self.horizon && !self.output_taken {
             self.now = next;
             self.state = State::Idle;
@@ -188,15 +189,22 @@ impl Bus {
             self.settle();
             return false;
         }
-        let master_end = self.unsettled.and_then(|u| u.master_end);
-        self.unsettled = Some(Unsettled {
-            slaves_end: f.end,
-            window_open: true,
-            master_end,
-        });
+        match &mut self.unsettled {
+            Some(u) => {
+                u.slaves_end = f.end;
+                u.window_open = true;
+            }
+            None => {
+                self.unsettled = Some(Unsettled {
+                    slaves_end: f.end,
+                    window_open: true,
+                    master_end: None,
+                });
+            }
+        }
         if let Some(first) = self.monitors.first_mut() {
             self.monitor_in_step = true;
-            first.on_telegram(t, &clean(TelegramKind::Request, f));
+            first.on_clean_request(t, q);
         }
         debug_assert_eq!(f.raw, u32::from(q.bits()), "not the frame of {q:?}");
         true
@@ -232,7 +240,7 @@ impl Bus {
             }
         }
         if let Some(first) = self.monitors.first_mut() {
-            first.on_telegram(t, &clean(TelegramKind::Response, f));
+            first.on_clean_response(t, a);
         }
         debug_assert_eq!(f.raw, u32::from(a.bits()), "not the frame of {a:?}");
         true
@@ -296,20 +304,6 @@ pub(super) struct Unsettled {
     window_open: bool,
     /// The end of the last answer the master's receiver took in the run.
     master_end: Option<SimTime>,
-}
-
-/// The valid telegram of `kind` that clean frame `f` is.
-#[inline(always)]
-fn clean(kind: TelegramKind, f: &Frame) -> Received {
-    Received {
-        kind,
-        start: f.start,
-        end: f.end,
-        pulses: f.pulses,
-        bit_count: f.bit_count,
-        raw: f.raw,
-        failed: Checks::NONE,
-    }
 }
 
 /// The slaves' receiver `slaves` and the monitors take frame `f` at `t`; returns the slaves'
@@ -472,6 +466,54 @@ mod tests {
                 prop_assert_eq!(&slaves, &slaves_alone);
                 prop_assert!(monitors[0] == alone, "{:?}\n{:?}", monitors[0], alone);
             }
+        }
+    }
+
+    proptest! {
+        /// A quick transaction's held answer leaves the line quiet, as the line's path works
+        /// it out (its frame handed on at its end plus the pause, quiet the rest of the slave
+        /// pause later), exactly at the transaction's end: its start plus
+        /// `BusTiming::transaction`. A request's and a response's last pulses are 28 and 14
+        /// half bits after their first, which is the request's and the response's span for the
+        /// even bit time of every valid timing, and the pauses are the same. Random valid
+        /// timings, starts near the end of time too.
+        #[test]
+        fn quiet_line_after_a_held_answer_is_the_transactions_end(
+            half_bit in prop_oneof![1u64..10_000, 1u64..u64::MAX / 4],
+            tolerance in 0u64..1_000,
+            pauses in proptest::collection::vec(prop_oneof![0u64..200_000, any::<u64>()], 7),
+            start in prop_oneof![any::<u64>(), (u64::MAX - 10_000_000)..=u64::MAX],
+        ) {
+            let ns = SimDuration::from_nanos;
+            let bit_time = 2 * half_bit;
+            let min_pause = bit_time.saturating_add(2 * tolerance).saturating_add(1 + pauses[0]);
+            let reply_min = min_pause.saturating_add(pauses[1]);
+            let reply_max = reply_min.saturating_add(pauses[2]);
+            let timing = BusTiming::builder()
+                .bit_time(ns(bit_time))
+                .tolerance(ns(tolerance))
+                .min_pause(ns(min_pause))
+                .slave_pause(ns(min_pause.saturating_add(2 * tolerance).saturating_add(pauses[3])))
+                .async_pause(ns(min_pause.saturating_add(pauses[4])))
+                .reply_min(ns(reply_min))
+                .reply_max(ns(reply_max))
+                .master_pause(ns(reply_min.saturating_add(pauses[5] % (reply_max - reply_min + 1))))
+                .response_timeout(ns(reply_max.saturating_add(1 + pauses[6] % 1_000_000)))
+                .build();
+            prop_assume!(timing.is_ok());
+            let timing = timing.expect("a valid timing");
+            let h = timing.half_bit();
+            let start = SimTime::from_nanos(start);
+            let q = Request::data_exchange(asi_phy::Address::new(5).expect("a"), Nibble::ZERO)
+                .expect("a request");
+            let f = request_frame(q, start, last_pulse(h, Request::BITS));
+            let a = answer_frame(
+                Response::new(Nibble::ZERO),
+                f.end + timing.master_pause(),
+                last_pulse(h, Response::BITS),
+            );
+            let quiet = (a.end + timing.min_pause()) + (timing.slave_pause() - timing.min_pause());
+            prop_assert_eq!(quiet, start + timing.transaction());
         }
     }
 

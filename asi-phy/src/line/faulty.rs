@@ -87,8 +87,13 @@ impl<L> Faulty<L> {
         }
     }
 
+    /// `true` while a one-shot fault is armed for the next telegram.
+    pub fn has_one_shot(&self) -> bool {
+        !self.one_shot.is_empty()
+    }
+
     /// `true` while no fault is armed: telegrams pass unchanged.
-    fn is_clean(&self) -> bool {
+    pub fn is_clean(&self) -> bool {
         self.injector.is_none() && self.one_shot.is_empty()
     }
 

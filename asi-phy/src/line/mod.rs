@@ -67,9 +67,86 @@ impl Medium {
             && self.pass_untouched(tg)
     }
 
+    /// `true` if the line is plain: no fault armed (no injector, no one-shot fault), nothing
+    /// recorded, not pulse-exact. Every telegram then passes the faults untouched without a
+    /// draw ([`Faulty::pass_untouched`] is `true`), and [`Medium::takes_clean`] is
+    /// [`Medium::is_idle`] (tested below). Only arming faults, recording and the pulse-exact
+    /// mode make a plain line not plain; a one-shot fault used up may make it plain again.
+    pub fn is_plain(&self) -> bool {
+        self.is_clean() && !self.inner().is_recording() && !self.inner().inner().is_pulse_exact()
+    }
+
+    /// `true` if no telegram is pending on the line and none is in its decoder
+    /// ([`Wire::is_idle`]).
+    #[inline]
+    pub fn is_idle(&self) -> bool {
+        self.inner().inner().is_idle()
+    }
+
     /// Puts telegram `tg`, which [`Medium::takes_clean`] passed, on the line past the faults
     /// whose draws that took: where [`Line::transmit`] would have put it then.
     pub fn transmit_taken(&mut self, tg: &Transmission, done: &mut impl FnMut(Frame)) {
         self.inner_mut().transmit(tg, done);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{FaultInjector, FaultRates, PulseFault, SimDuration, SimTime};
+    use proptest::prelude::*;
+
+    proptest! {
+        /// On a plain line every telegram passes the faults untouched and the line takes it
+        /// clean exactly when it is idle; a line that is not plain is one with a fault armed,
+        /// recording or pulse-exact. Random telegrams, after random ones on the line, with
+        /// each of the things that make a line not plain switched on and off.
+        #[test]
+        fn a_plain_line_takes_a_telegram_clean_when_it_is_idle(
+            steps in proptest::collection::vec(
+                (any::<u16>(), 0u64..400_000, 0u8..8, any::<bool>()),
+                1..40,
+            ),
+        ) {
+            let timing = BusTiming::default();
+            let mut m = Medium::quiet(&timing);
+            let mut t = SimTime::ZERO;
+            for (raw, gap, change, send) in steps {
+                match change {
+                    0 => m.set_faults(Some(FaultInjector::new(
+                        u64::from(raw),
+                        FaultRates::uniform(crate::PulseErrorRate::new(1e-3).expect("a rate")),
+                        timing.half_bit(),
+                    ))),
+                    1 => m.set_faults(None),
+                    2 => m.corrupt_next(vec![PulseFault::Drop {
+                        index: usize::from(raw % 4),
+                    }]),
+                    3 => m.record_pulses(raw % 2 == 0),
+                    4 => m.set_pulse_exact(raw % 2 == 0),
+                    _ => {}
+                }
+                prop_assert_eq!(
+                    m.is_plain(),
+                    m.fault_rates().is_clean()
+                        && !m.has_one_shot()
+                        && !m.inner().is_recording()
+                        && !m.inner().inner().is_pulse_exact()
+                );
+                t += SimDuration::from_nanos(gap);
+                while let Some(at) = m.poll_at().filter(|&at| at <= t) {
+                    m.poll(at);
+                }
+                let tg = Transmission::new(u32::from(raw), 14, t, timing.half_bit());
+                if m.is_plain() {
+                    let idle = m.is_idle();
+                    prop_assert!(m.pass_untouched(&tg));
+                    prop_assert_eq!(m.takes_clean(&tg), idle);
+                }
+                if send {
+                    m.transmit(&tg, &mut |_| {});
+                }
+            }
+        }
     }
 }

@@ -37,7 +37,18 @@ impl Wire {
     /// the decoder. A clean telegram transmitted now becomes the pending frame, which
     /// [`Line::poll`] hands on at its end plus the pause, leaving the wire idle again.
     pub fn is_idle_fast(&self) -> bool {
-        !self.exact && self.pending.is_none() && self.decoder.poll_at().is_none()
+        !self.exact && self.is_idle()
+    }
+
+    /// `true` while the line is idle: no telegram pending, none in the decoder.
+    #[inline]
+    pub fn is_idle(&self) -> bool {
+        self.pending.is_none() && self.decoder.poll_at().is_none()
+    }
+
+    /// `true` while pulse-exact ([`Wire::set_pulse_exact`]).
+    pub fn is_pulse_exact(&self) -> bool {
+        self.exact
     }
 
     /// Hands a pending clean train to the decoder (something else comes on the line).

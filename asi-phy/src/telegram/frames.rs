@@ -318,12 +318,15 @@ impl Request {
     /// 0: at 0 a CB 0 call is Address_Assignment), told from the bits without decoding the
     /// whole call; `None` for every other call. For an A/B slave, I3 is the select bit
     /// ([`Request::ab_payload`]).
+    ///
+    /// Two tests of the bits: CB (bit 12) and I4 (bit 6) both clear, the address (bits 11..7)
+    /// not 0; held to the call decoder for every request by the telegram tests.
+    #[inline]
     pub const fn as_data_exchange(self) -> Option<(Address, Nibble)> {
-        let address = self.address();
-        if self.cb() || self.info() & 0x10 != 0 || address.0 == 0 {
+        if self.0 & (1 << 12 | 1 << 6) != 0 || self.0 & 0x1F << 7 == 0 {
             return None;
         }
-        Some((address, Nibble(self.info() & 0xF)))
+        Some((self.address(), Nibble(self.info() & 0xF)))
     }
 
     /// A command call with I4 = 1; `inverted` for the calls that carry ~Sel in I3.

@@ -34,7 +34,10 @@
 //! - After a drop the monitor releases again after 8 consecutive correct codes (one rotation);
 //!   restart interlocks (manual restart) belong to the safety logic (docs/safety.md, MON).
 
-use asi_phy::{Address, Expect, Frame, Listener, Received, SimDuration, SimTime, TelegramKind};
+use asi_phy::{
+    Address, Expect, Frame, Listener, Received, Request, Response, SimDuration, SimTime,
+    TelegramKind,
+};
 use rand::seq::SliceRandom;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -440,7 +443,7 @@ impl SafetyMonitor {
     /// but only a valid request whose address field names a monitored slave, and the response
     /// to one, leave anything to note. Those are told from the others by the receiver's verdict
     /// and the address bits alone, before any decoding; the work on them is out of line
-    /// ([`SafetyMonitor::heard_request`], [`SafetyMonitor::heard_response`]), so that the
+    /// ([`SafetyMonitor::heard_valid_request`], [`SafetyMonitor::heard_code`]), so that the
     /// common frame costs the receiver and a test. Inlined into the bus's per-frame loop.
     #[inline]
     pub fn on_frame(&mut self, now: SimTime, frame: &Frame) {
@@ -475,11 +478,34 @@ impl SafetyMonitor {
     /// [`SafetyMonitor::on_frame`] of telegram `r`, heard at `now` by a receiver in the state
     /// of the monitor's own, without bringing the monitor's receiver on: its caller knows the
     /// state the frames leave it in and sets it later ([`SafetyMonitor::listen_as`]), as the
-    /// bus does at the end of a run of clean quick transactions. Held to `on_frame` by the
-    /// bus's lockstep test against its pulse-exact path, which compares the monitors.
+    /// bus does at the end of a run of clean quick transactions (whose telegrams it hands over
+    /// as the request or answer itself: [`SafetyMonitor::on_clean_request`],
+    /// [`SafetyMonitor::on_clean_response`]). Held to `on_frame` through those by the bus's
+    /// lockstep test against its pulse-exact path, which compares the monitors.
     #[inline]
     pub fn on_telegram(&mut self, now: SimTime, r: &Received) {
         self.judge(now, r);
+    }
+
+    /// [`SafetyMonitor::on_telegram`] of the valid request `q` (a clean frame of it, taken as
+    /// a request), without a [`Received`] to build: what `judge` does with it, from the
+    /// request itself. Held to `on_telegram` by the property test
+    /// `clean_telegrams_are_judged_as_the_received_ones`.
+    #[inline]
+    pub fn on_clean_request(&mut self, now: SimTime, q: Request) {
+        self.asked = None;
+        if self.monitored >> q.address().get() & 1 != 0 {
+            self.heard_valid_request(now, q);
+        }
+    }
+
+    /// [`SafetyMonitor::on_clean_request`] of the valid response `a`.
+    #[inline]
+    pub fn on_clean_response(&mut self, now: SimTime, a: Response) {
+        if let Some(asked) = self.asked {
+            self.asked = None;
+            self.heard_code(now, asked, a.data().get());
+        }
     }
 
     /// Puts the monitor's receiver in the state of `other`.
@@ -512,13 +538,22 @@ impl SafetyMonitor {
     }
 
     /// A request `r` to a monitored address (by its address bits): if it is a Data_Exchange,
-    /// the slave it asks takes a step, and its answer is awaited.
-    #[inline(never)]
+    /// the slave it asks takes a step, and its answer is awaited (out of line:
+    /// [`SafetyMonitor::heard_valid_request`]).
+    #[inline]
     fn heard_request(&mut self, now: SimTime, r: &Received) {
+        if let Some(q) = r.request() {
+            self.heard_valid_request(now, q);
+        }
+    }
+
+    /// [`SafetyMonitor::heard_request`] of the valid request `q`.
+    #[inline(never)]
+    fn heard_valid_request(&mut self, now: SimTime, q: Request) {
         // A Data_Exchange told from its bits, without decoding the call
         // (`Request::as_data_exchange`, held to the call decoder for every request by asi-phy's
         // telegram tests).
-        let Some((a, _)) = r.request().and_then(|q| q.as_data_exchange()) else {
+        let Some((a, _)) = q.as_data_exchange() else {
             // `judge` cleared `asked` already.
             return;
         };
@@ -530,12 +565,16 @@ impl SafetyMonitor {
     }
 
     /// A telegram `r` taken for the response to the Data_Exchange that asked slave `a`.
-    #[inline(never)]
+    #[inline]
     fn heard_response(&mut self, now: SimTime, a: Address, r: &Received) {
-        let Some(resp) = r.response() else {
-            return;
-        };
-        let code = resp.data().get();
+        if let Some(resp) = r.response() {
+            self.heard_code(now, a, resp.data().get());
+        }
+    }
+
+    /// Code `code` taken for the response to the Data_Exchange that asked slave `a`.
+    #[inline(never)]
+    fn heard_code(&mut self, now: SimTime, a: Address, code: u8) {
         let Some(&slot) = self.slots.get(usize::from(a.get())) else {
             return;
         };
@@ -554,7 +593,7 @@ impl SafetyMonitor {
         }
     }
 
-    /// [`SafetyMonitor::heard_response`] of a code that is not the next in turn: the whole
+    /// [`SafetyMonitor::heard_code`] of a code that is not the next in turn: the whole
     /// rule, out of line, so that the code in turn is judged without saving registers.
     #[inline(never)]
     fn judge_in_full(&mut self, now: SimTime, slot: usize, code: u8) {

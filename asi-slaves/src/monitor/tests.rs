@@ -554,3 +554,84 @@ fn teaching_needs_two_consecutive_rotations_heard_without_a_gap() {
     rotated.rotate_left(6);
     assert_eq!(c.table.map(|x| x.codes()), Some(rotated));
 }
+
+proptest::proptest! {
+    #![proptest_config(proptest::test_runner::Config::with_cases(1_000))]
+
+    /// A clean telegram handed over as the request or response itself
+    /// ([`SafetyMonitor::on_clean_request`], [`SafetyMonitor::on_clean_response`]) leaves the
+    /// monitor as the same telegram handed over as the valid [`Received`] a receiver makes of
+    /// it ([`SafetyMonitor::on_telegram`]): any request (often a Data_Exchange to a monitored
+    /// slave), answers with the codes in turn, wrong codes, no answer, at gaps around the
+    /// tolerance, taught or teaching.
+    #[test]
+    fn clean_telegrams_are_judged_as_the_received_ones(
+        steps in proptest::collection::vec(
+            (
+                proptest::prop_oneof![
+                    2 => (0u16..1 << 11).prop_map(Some),
+                    // Data_Exchange (CB 0, I4 0) to 11 or 12.
+                    4 => (11u16..13, 0u16..16).prop_map(|(a, d)| Some(a << 5 | d)),
+                    1 => proptest::strategy::Just(None),
+                ],
+                proptest::prop_oneof![
+                    3 => proptest::strategy::Just(None),
+                    1 => (0u8..16).prop_map(Some),
+                ],
+                proptest::prop_oneof![8 => 154_000..3_000_000u64, 1 => 3_000_000..100_000_000u64],
+            ),
+            1..300,
+        ),
+        taught in proptest::prelude::any::<bool>(),
+    ) {
+        let addresses = [Address::new(11).expect("a"), Address::new(12).expect("a")];
+        let timing = asi_phy::BusTiming::default();
+        let mut clean = SafetyMonitor::new(&timing, MonitorConfig::default(), &addresses);
+        if taught {
+            for a in addresses {
+                clean.set_table(a, CodeTable::from_serial(u64::from(a.get())));
+            }
+        }
+        let mut received = clean.clone();
+        let tables = [CodeTable::from_serial(11).codes(), CodeTable::from_serial(12).codes()];
+        let mut next = [0usize; 2];
+        let mut now = 0u64;
+        let valid = |kind, raw: u32, bit_count, t| Received {
+            kind,
+            start: t,
+            end: t,
+            pulses: 0,
+            bit_count,
+            raw,
+            failed: asi_phy::Checks::NONE,
+        };
+        for (body, wrong, gap) in steps {
+            now += gap;
+            let t = at(now);
+            let mut to = None;
+            if let Some(body) = body {
+                let a = Address::new((body >> 5 & 0x1F) as u8).expect("an address");
+                let q = Request::from_fields(body & 0x400 != 0, a, (body & 0x1F) as u8)
+                    .expect("a request");
+                clean.on_clean_request(t, q);
+                received.on_telegram(t, &valid(TelegramKind::Request, u32::from(q.bits()), 14, t));
+                to = usize::from(a.get()).checked_sub(11).filter(|&i| i < 2);
+            }
+            let code = match (wrong, to) {
+                (Some(c), _) => c,
+                (None, Some(i)) => {
+                    next[i] = (next[i] + 1) % 8;
+                    tables[i][next[i]]
+                }
+                (None, None) => 0b0110,
+            };
+            let r = Response::new(asi_phy::Nibble::from_low_bits(code));
+            let t = at(now + 100_000);
+            clean.on_clean_response(t, r);
+            received.on_telegram(t, &valid(TelegramKind::Response, u32::from(r.bits()), 7, t));
+            clean.poll(t);
+            received.poll(t);
+            proptest::prop_assert!(clean == received, "{:?}\n{:?}", clean, received);
+        }
+    }
+}
