@@ -270,6 +270,7 @@ impl LabLift {
             ))?;
             ids[n as usize] = Some(id);
         }
+        bus.count_drive_changes(Arc::clone(&drive_changes));
         let monitor = bus.add_monitor(SafetyMonitor::new(
             &timing,
             MonitorConfig::default(),
@@ -514,6 +515,57 @@ mod tests {
             let mut to = lab();
             to.bus.advance_to(w[0]);
             assert_eq!(to.bus.advance_before(ms(300)), Some(w[1]), "after {}", w[0]);
+        }
+    }
+
+    /// A new output nibble that moved no drive passes `advance_before` within the time given
+    /// (inclusive), and only then; one that moved a drive ends it as before. The bus looks at
+    /// the count at every new nibble, passed or not: the stops are those of a bus that
+    /// stops at every new nibble, less the quiet ones within the time.
+    #[test]
+    fn quiet_outputs_pass_only_within_their_time_and_while_no_drive_moves() {
+        let lab = || {
+            let mut lab = LabLift::new().expect("the lab bus");
+            lab.bus.watch_outputs(u32::MAX);
+            lab.bus
+                .image_mut()
+                .output
+                .set_analog(SPEED_SETPOINT, 1, 7000);
+            lab
+        };
+        let mut every = lab();
+        let mut stops = Vec::new();
+        let mut count = every.drive_changes();
+        while let Some(t) = every.bus.advance_before(ms(400)) {
+            stops.push((t, every.drive_changes() != count));
+            count = every.drive_changes();
+        }
+        let quiet = stops.iter().filter(|(_, moved)| !moved).count();
+        assert!(
+            quiet > 5 && quiet < stops.len(),
+            "{quiet} of {}",
+            stops.len()
+        );
+        // A quiet stop's own time: it passes (inclusive).
+        let edge = stops
+            .iter()
+            .rev()
+            .find(|(_, moved)| !moved)
+            .map(|&(t, _)| t);
+        for until in [ms(0), ms(150), ms(400)].into_iter().chain(edge) {
+            let mut passing = lab();
+            passing.bus.pass_quiet_outputs_until(Some(until));
+            let mut seen = Vec::new();
+            while let Some(t) = passing.bus.advance_before(ms(400)) {
+                seen.push(t);
+            }
+            let expected: Vec<asi_phy::SimTime> = stops
+                .iter()
+                .filter(|&&(t, moved)| moved || t > until)
+                .map(|&(t, _)| t)
+                .collect();
+            assert_eq!(seen, expected, "quiet outputs pass until {until}");
+            assert_eq!(passing.bus.stats(), every.bus.stats());
         }
     }
 

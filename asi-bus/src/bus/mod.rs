@@ -54,6 +54,8 @@ use asi_phy::{
 };
 use asi_slaves::monitor::SafetyMonitor;
 use asi_slaves::slave::{Peripheral, Slave};
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::Arc;
 
 mod hooks;
 mod quick;
@@ -257,6 +259,13 @@ pub struct Bus {
     last_out: [u8; 32],
     /// A watched address took a new output nibble in the current event.
     output_taken: bool,
+    /// The application's count of the changes of what the watched slaves' devices drive
+    /// ([`Bus::count_drive_changes`]), and its value when the bus last looked.
+    drive_count: Option<Arc<AtomicU64>>,
+    drive_seen: u64,
+    /// Up to this time a new output nibble that moved no drive passes without ending
+    /// [`Bus::advance_before`] ([`Bus::pass_quiet_outputs_until`]).
+    quiet_outputs_until: Option<SimTime>,
     ring: Option<TraceRing>,
     callback: Option<TraceCallback>,
     /// The frames of a response, kept between transactions so that none allocates.
@@ -311,6 +320,9 @@ impl Bus {
             watch: 0,
             last_out: [NO_OUTPUT; 32],
             output_taken: false,
+            drive_count: None,
+            drive_seen: 0,
+            quiet_outputs_until: None,
             ring: None,
             callback: None,
             response_frames: Vec::new(),
@@ -404,6 +416,39 @@ impl Bus {
     /// output on exactly then.
     pub fn watch_outputs(&mut self, addresses: u32) {
         self.watch = addresses;
+    }
+
+    /// Gives the bus the application's count of the changes of what the watched slaves'
+    /// devices drive (it moves whenever what one drives changes, in the device's exchange):
+    /// what lets a new output nibble that changed nothing pass
+    /// ([`Bus::pass_quiet_outputs_until`]).
+    pub fn count_drive_changes(&mut self, count: Arc<AtomicU64>) {
+        self.drive_seen = count.load(Ordering::Relaxed);
+        self.drive_count = Some(count);
+    }
+
+    /// Up to `until` (inclusive; `None`: never), a watched slave's new output nibble (or a
+    /// call that writes to it, after which its next nibble counts as new) does not end
+    /// [`Bus::advance_before`] where the drive count ([`Bus::count_drive_changes`]) has not
+    /// moved since the bus last looked at it: it changed nothing the slave drives. For an application to whom such a moment would do nothing (the rig while the
+    /// plant has nothing for the slaves and its invariant watch nothing to check); any other
+    /// new nibble ends the call as before.
+    pub fn pass_quiet_outputs_until(&mut self, until: Option<SimTime>) {
+        self.quiet_outputs_until = until;
+    }
+
+    /// Whether a new output nibble taken at the bus's time passes without ending
+    /// [`Bus::advance_before`] ([`Bus::pass_quiet_outputs_until`]): within the time given, and
+    /// the drive count has not moved since the bus last looked (which it now has).
+    #[inline(never)]
+    fn output_passes_quietly(&mut self) -> bool {
+        let Some(count) = &self.drive_count else {
+            return false;
+        };
+        let c = count.load(Ordering::Relaxed);
+        let moved = c != self.drive_seen;
+        self.drive_seen = c;
+        !moved && self.quiet_outputs_until.is_some_and(|u| self.now <= u)
     }
 
     /// Processes the events before `until`, returning early with the event's time when a
@@ -731,11 +776,11 @@ impl Bus {
             OutputNote::Same => {}
             OutputNote::New(a, data) => {
                 self.last_out[a] = data;
-                self.output_taken = true;
+                self.output_taken |= !self.output_passes_quietly();
             }
             OutputNote::Forget(a) => {
                 self.last_out[a] = NO_OUTPUT;
-                self.output_taken = true;
+                self.output_taken |= !self.output_passes_quietly();
             }
             OutputNote::ForgetAll => {
                 self.last_out = [NO_OUTPUT; 32];

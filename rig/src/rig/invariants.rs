@@ -235,6 +235,14 @@ impl Quiet {
         self.0.is_some_and(|(k, through)| k == key && t <= through)
     }
 
+    /// The last time a check of the plant with `key` may be skipped ([`Quiet::holds`] up to
+    /// it), `None` if none may.
+    #[inline]
+    pub(super) fn through(&self, key: PlantKey) -> Option<SimTime> {
+        self.0
+            .and_then(|(k, through)| (k == key).then_some(through))
+    }
+
     /// After a check of the plant with `key` that saw `o`.
     pub(super) fn after_check(
         &mut self,

@@ -136,6 +136,8 @@ pub struct Rig {
     /// ([`Attendant::watch`] of a K1 it does not watch only forgets since when it was open,
     /// which it has forgotten already).
     attendant_idle: bool,
+    /// Every moment is taken ([`Rig::set_pulse_exact`]): no new output passes the rig by.
+    every_moment: bool,
     /// Every press of a call button, for the passengers' waits and the served calls' requests.
     passengers: Passengers,
     watch: InvariantWatch,
@@ -209,6 +211,7 @@ impl Rig {
             err_ack: false,
             attendant: Attendant::default(),
             attendant_idle: false,
+            every_moment: false,
             passengers: Passengers::default(),
             watch: InvariantWatch::default(),
             quiet: Quiet::default(),
@@ -261,6 +264,7 @@ impl Rig {
     /// the fast one is measured against (README, "Measured performance").
     pub fn set_pulse_exact(&mut self, on: bool) {
         self.lab.bus.set_pulse_exact(on);
+        self.every_moment = on;
     }
 
     /// Writes the VCD and the line-voltage CSV of the run (see [`crate::waves`]).
@@ -453,6 +457,8 @@ impl Rig {
             if t > limit {
                 return None;
             }
+            let quiet = self.outputs_pass_until();
+            self.lab.bus.pass_quiet_outputs_until(quiet);
             match self.lab.bus.advance_before(t) {
                 Some(at) => self.output_taken(at),
                 None => {
@@ -461,6 +467,24 @@ impl Rig {
                 }
             }
         }
+    }
+
+    /// Until when (inclusive) a slave's new output nibble that changes nothing it drives may
+    /// pass the rig by ([`asi_bus::bus::Bus::pass_quiet_outputs_until`]), `None`: never.
+    ///
+    /// Its moment ([`Rig::output_taken`]) would do nothing but move the rig's and the plant's
+    /// time: the plant has no edge before the rig's next moment, the slaves drive what they
+    /// drove (the count has not moved), the plant has nothing for the slaves (not dirty), the
+    /// invariant watch's check is skipped (up to the time its quiet holds, for the plant as it
+    /// is), and no waves are sampled. Nothing moves those before the next moment but the bus.
+    /// The pulse-exact path takes every such moment, and the fast-path tests compare the two
+    /// ([`Rig::run_observed`] only: the live mode's moments are the caller's).
+    fn outputs_pass_until(&self) -> Option<SimTime> {
+        if self.every_moment || self.plant_dirty || self.outputs.waves.is_some() {
+            return None;
+        }
+        let key = (self.lift.changes(), self.lift.velocity_mm_s() != 0.0);
+        self.quiet.through(key)
     }
 
     /// A slave took a new output at `t` (before the rig's next moment): the plant gets it.
