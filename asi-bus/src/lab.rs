@@ -492,19 +492,23 @@ mod tests {
         assert_eq!(lab.drive_changes(), count);
     }
 
+    /// The lab bus with every address's outputs watched and 7000 µA asked of the set-point
+    /// output: its analog transfer gives a new output nibble at nearly every cycle.
+    fn analog_transfer() -> LabLift {
+        let mut lab = LabLift::new().expect("the lab bus");
+        lab.bus.watch_outputs(u32::MAX);
+        lab.bus
+            .image_mut()
+            .output
+            .set_analog(SPEED_SETPOINT, 1, 7000);
+        lab
+    }
+
     /// `advance_to` hands the caller every output it took, so the next `advance_before`
     /// stops at the next new output, as it does from a bus that stopped at the last one.
     #[test]
     fn advance_to_leaves_no_output_behind_for_advance_before() {
-        let lab = || {
-            let mut lab = LabLift::new().expect("the lab bus");
-            lab.bus.watch_outputs(u32::MAX);
-            lab.bus
-                .image_mut()
-                .output
-                .set_analog(SPEED_SETPOINT, 1, 7000);
-            lab
-        };
+        let lab = analog_transfer;
         let mut stops = lab();
         let mut at = Vec::new();
         while let Some(t) = stops.bus.advance_before(ms(300)) {
@@ -524,15 +528,7 @@ mod tests {
     /// stops at every new nibble, less the quiet ones within the time.
     #[test]
     fn quiet_outputs_pass_only_within_their_time_and_while_no_drive_moves() {
-        let lab = || {
-            let mut lab = LabLift::new().expect("the lab bus");
-            lab.bus.watch_outputs(u32::MAX);
-            lab.bus
-                .image_mut()
-                .output
-                .set_analog(SPEED_SETPOINT, 1, 7000);
-            lab
-        };
+        let lab = analog_transfer;
         let mut every = lab();
         let mut stops = Vec::new();
         let mut count = every.drive_changes();

@@ -213,14 +213,7 @@ proptest::proptest! {
         ),
         taught in proptest::prelude::any::<bool>(),
     ) {
-        let addresses = [Address::new(11).expect("a"), Address::new(12).expect("a")];
-        let timing = asi_phy::BusTiming::default();
-        let mut fast = SafetyMonitor::new(&timing, MonitorConfig::default(), &addresses);
-        if taught {
-            for a in addresses {
-                fast.set_table(a, CodeTable::from_serial(u64::from(a.get())));
-            }
-        }
+        let mut fast = taught_or_not(taught);
         let mut old = fast.clone();
         let mut now = 0u64;
         for (request, bits, flip, failed, length, gap) in steps {
@@ -363,6 +356,20 @@ proptest::proptest! {
 const CYCLE: u64 = 2_002_000;
 /// A master repeat comes this long after the first try.
 const REPEAT: u64 = 162_000;
+
+/// The lab's monitor of addresses 11 and 12, with each address's table given (`taught`) or
+/// still to be taught.
+fn taught_or_not(taught: bool) -> SafetyMonitor {
+    let addresses = [Address::new(11).expect("a"), Address::new(12).expect("a")];
+    let timing = asi_phy::BusTiming::default();
+    let mut m = SafetyMonitor::new(&timing, MonitorConfig::default(), &addresses);
+    if taught {
+        for a in addresses {
+            m.set_table(a, CodeTable::from_serial(u64::from(a.get())));
+        }
+    }
+    m
+}
 
 fn at(ns: u64) -> SimTime {
     SimTime::from_nanos(ns)
@@ -584,14 +591,7 @@ proptest::proptest! {
         ),
         taught in proptest::prelude::any::<bool>(),
     ) {
-        let addresses = [Address::new(11).expect("a"), Address::new(12).expect("a")];
-        let timing = asi_phy::BusTiming::default();
-        let mut clean = SafetyMonitor::new(&timing, MonitorConfig::default(), &addresses);
-        if taught {
-            for a in addresses {
-                clean.set_table(a, CodeTable::from_serial(u64::from(a.get())));
-            }
-        }
+        let mut clean = taught_or_not(taught);
         let mut received = clean.clone();
         let tables = [CodeTable::from_serial(11).codes(), CodeTable::from_serial(12).codes()];
         let mut next = [0usize; 2];
