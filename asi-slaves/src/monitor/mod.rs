@@ -663,6 +663,11 @@ impl SafetyMonitor {
             .map_or(0, |c| c.bad_codes)
     }
 
+    /// `true` if a release was dropped since the last [`SafetyMonitor::take_drops`].
+    pub fn has_drops(&self) -> bool {
+        self.channels.iter().any(|c| !c.drops.is_empty())
+    }
+
     /// The releases dropped since the last call, in order (for reports).
     pub fn take_drops(&mut self) -> Vec<MonitorDrop> {
         // Asked at every safety scan, and almost always with nothing to give.

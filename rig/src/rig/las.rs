@@ -17,6 +17,12 @@ pub(super) struct LasWatch {
 }
 
 impl LasWatch {
+    /// The LAS last seen in normal operation, `None` outside it: while the master's is this
+    /// one, [`LasWatch::update`] finds nothing and changes nothing.
+    pub(super) fn seen(&self) -> Option<u32> {
+        self.las
+    }
+
     /// The LAS at `t` (`None` when the master is not in normal operation); returns the
     /// addresses that left and that came back.
     pub(super) fn update(&mut self, t: SimTime, las: Option<u32>) -> (u32, u32) {

@@ -5,20 +5,30 @@ use super::*;
 
 impl Rig {
     /// The master's LAS and the safety monitor's drops since the last look, to the report
-    /// and the log (every safety scan, 1 ms).
+    /// and the log (every safety scan, 1 ms). In almost every scan the master is in normal
+    /// operation with the LAS the watch saw last, and the monitor has dropped nothing: that
+    /// is told by two looks, and the watch is left as it is (as [`LasWatch::update`] leaves
+    /// it then).
     #[inline]
     pub(super) fn watch_bus(&mut self, t: SimTime) {
         let m = self.lab.bus.master();
         let las = (m.phase() == asi_master::Phase::NormalOperation).then(|| m.las().bits() as u32);
+        if las.is_none() || las != self.las_watch.seen() {
+            self.las_moved(t, las);
+        }
+        if self.lab.monitor().is_some_and(|m| m.has_drops()) {
+            let drops = self.lab.bus.take_monitor_drops(self.lab.monitor);
+            self.log_drops(drops);
+        }
+    }
+
+    /// The LAS at `t` (`None` outside normal operation) to the watch, and who left and came
+    /// back to the log.
+    #[inline(never)]
+    fn las_moved(&mut self, t: SimTime, las: Option<u32>) {
         let (left, back) = self.las_watch.update(t, las);
-        // Nothing to say in almost every scan.
         if left | back != 0 {
             self.log_las(t, left, back);
-        }
-        let id = self.lab.monitor;
-        let drops = self.lab.bus.take_monitor_drops(id);
-        if !drops.is_empty() {
-            self.log_drops(drops);
         }
     }
 
