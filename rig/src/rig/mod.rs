@@ -138,6 +138,10 @@ pub struct Rig {
     attendant_idle: bool,
     /// Every moment is taken ([`Rig::set_pulse_exact`]): no new output passes the rig by.
     every_moment: bool,
+    /// The outputs of the last safety scan the rig took from the logic (K1, EStopOut, the
+    /// diagnosis), which a quiet scan gives again (checked in `Rig::safety_scan`).
+    #[cfg(test)]
+    scanned: Option<(bool, bool, safety::lift::LiftSafetyDiag)>,
     /// Every press of a call button, for the passengers' waits and the served calls' requests.
     passengers: Passengers,
     watch: InvariantWatch,
@@ -212,6 +216,8 @@ impl Rig {
             attendant: Attendant::default(),
             attendant_idle: false,
             every_moment: false,
+            #[cfg(test)]
+            scanned: None,
             passengers: Passengers::default(),
             watch: InvariantWatch::default(),
             quiet: Quiet::default(),
