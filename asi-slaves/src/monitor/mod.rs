@@ -671,7 +671,7 @@ impl SafetyMonitor {
     /// The releases dropped since the last call, in order (for reports).
     pub fn take_drops(&mut self) -> Vec<MonitorDrop> {
         // Asked at every safety scan, and almost always with nothing to give.
-        if self.channels.iter().all(|c| c.drops.is_empty()) {
+        if !self.has_drops() {
             return Vec::new();
         }
         let mut all: Vec<MonitorDrop> = self
