@@ -1,0 +1,120 @@
+//! What the application watches of the slaves' outputs: the addresses whose new output
+//! nibbles end [`Bus::advance_before`] early ([`Bus::watch_outputs`]), and the new nibbles
+//! that change nothing a slave drives, which may pass ([`Bus::count_drive_changes`],
+//! [`Bus::pass_quiet_outputs_until`]).
+
+use super::*;
+
+/// No output nibble taken yet (or lost with a reset).
+pub(super) const NO_OUTPUT: u8 = 0xFF;
+
+/// What a request taken by a slave does to what the watched slaves drive.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum OutputNote {
+    /// Nothing new.
+    Same,
+    /// A Data_Exchange hands the watched slave at this address a new output nibble.
+    New(usize, u8),
+    /// A call that writes to the watched slave at this address: its next nibble is new.
+    Forget(usize),
+    /// The broadcast reset: every next nibble is new.
+    ForgetAll,
+}
+
+impl Bus {
+    /// Sets the addresses whose slaves drive something outside the bus (a plant): when one of
+    /// them takes a Data_Exchange whose output nibble differs from its last one,
+    /// [`Bus::advance_before`] returns at that moment, so the application can hand the new
+    /// output on exactly then.
+    pub fn watch_outputs(&mut self, addresses: u32) {
+        self.watch = addresses;
+    }
+
+    /// Gives the bus the application's count of the changes of what the watched slaves'
+    /// devices drive (it moves whenever what one drives changes, in the device's exchange):
+    /// what lets a new output nibble that changed nothing pass
+    /// ([`Bus::pass_quiet_outputs_until`]).
+    pub fn count_drive_changes(&mut self, count: Arc<AtomicU64>) {
+        self.drive_seen = count.load(Ordering::Relaxed);
+        self.drive_count = Some(count);
+    }
+
+    /// Up to `until` (inclusive; `None`: never), a watched slave's new output nibble (or a
+    /// call that writes to it, after which its next nibble counts as new) does not end
+    /// [`Bus::advance_before`] where the drive count ([`Bus::count_drive_changes`]) has not
+    /// moved since the bus last looked at it: it changed nothing the slave drives. For an
+    /// application to whom such a moment would do nothing (the rig while the plant has
+    /// nothing for the slaves and its invariant watch nothing to check); any other new nibble
+    /// ends the call as before.
+    pub fn pass_quiet_outputs_until(&mut self, until: Option<SimTime>) {
+        self.quiet_outputs_until = until;
+    }
+
+    /// Whether a new output nibble taken at the bus's time passes without ending
+    /// [`Bus::advance_before`] ([`Bus::pass_quiet_outputs_until`]): within the time given, and
+    /// the drive count has not moved since the bus last looked (which it now has).
+    #[inline(never)]
+    fn output_passes_quietly(&mut self) -> bool {
+        let Some(count) = &self.drive_count else {
+            return false;
+        };
+        let c = count.load(Ordering::Relaxed);
+        let moved = c != self.drive_seen;
+        self.drive_seen = c;
+        !moved && self.quiet_outputs_until.is_some_and(|u| self.now <= u)
+    }
+
+    /// What request `req`, taken by a slave, does to what the watched slaves drive: a
+    /// Data_Exchange with a new output nibble, or any call that writes (parameter, address,
+    /// reset), after which the next Data_Exchange counts as new too. A Data_Exchange is told
+    /// from its bits, without decoding the call (`told`, [`Told::of`] `req`).
+    pub(super) fn output_note(&self, req: Request, told: Told) -> OutputNote {
+        let exchange_note = |a: usize, data: u8| {
+            if self.watch >> a & 1 == 1 && self.last_out[a] != data {
+                OutputNote::New(a, data)
+            } else {
+                OutputNote::Same
+            }
+        };
+        let call = match told {
+            Told::Exchange(address, data) => {
+                return exchange_note(address.get() as usize, data.get())
+            }
+            Told::Call(call) => call,
+        };
+        let a = req.address().get() as usize;
+        match call {
+            Call::DataExchange { data, .. } => exchange_note(a, data.get()),
+            Call::ReadIoConfiguration { .. }
+            | Call::ReadIdCode { .. }
+            | Call::ReadId1 { .. }
+            | Call::ReadId2 { .. }
+            | Call::ReadStatus { .. } => OutputNote::Same,
+            Call::BroadcastReset => OutputNote::ForgetAll,
+            _ if self.watch >> a & 1 == 1 => OutputNote::Forget(a),
+            _ => OutputNote::Same,
+        }
+    }
+
+    /// Notes what request `req`, taken by a slave, does to what the watched slaves drive
+    /// ([`Bus::output_note`] of `told`, [`Told::of`] `req`): a change ends
+    /// [`Bus::advance_before`] at this event.
+    #[inline(always)]
+    pub(super) fn note_output(&mut self, req: Request, told: Told) {
+        match self.output_note(req, told) {
+            OutputNote::Same => {}
+            OutputNote::New(a, data) => {
+                self.last_out[a] = data;
+                self.output_taken |= !self.output_passes_quietly();
+            }
+            OutputNote::Forget(a) => {
+                self.last_out[a] = NO_OUTPUT;
+                self.output_taken |= !self.output_passes_quietly();
+            }
+            OutputNote::ForgetAll => {
+                self.last_out = [NO_OUTPUT; 32];
+                self.output_taken |= self.watch != 0;
+            }
+        }
+    }
+}
