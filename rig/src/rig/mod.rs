@@ -489,8 +489,7 @@ impl Rig {
         if self.every_moment || self.plant_dirty || self.outputs.waves.is_some() {
             return None;
         }
-        let key = (self.lift.changes(), self.lift.velocity_mm_s() != 0.0);
-        self.quiet.through(key)
+        self.quiet.through(self.plant_key())
     }
 
     /// A slave took a new output at `t` (before the rig's next moment): the plant gets it.
@@ -538,12 +537,19 @@ impl Rig {
         self.sample_waves(t);
     }
 
+    /// What the invariant watch's skipping keys on ([`invariants::Quiet`]): the plant's count of
+    /// changes and whether it moves.
+    #[inline]
+    fn plant_key(&self) -> invariants::PlantKey {
+        (self.lift.changes(), self.lift.velocity_mm_s() != 0.0)
+    }
+
     /// The invariant watch at `t`. Skipped while the watch would see what it saw at its last
     /// check and no budget runs out ([`invariants::Quiet`]); in the rig's tests every skipped
     /// check is run on a copy of the watch, which must find nothing and stay as it is.
     #[inline]
     fn check_invariants(&mut self, t: SimTime) {
-        let key = (self.lift.changes(), self.lift.velocity_mm_s() != 0.0);
+        let key = self.plant_key();
         if self.quiet.holds(key, t) {
             #[cfg(test)]
             self.assert_quiet(t);
