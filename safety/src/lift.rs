@@ -554,7 +554,36 @@ impl LiftSafety {
     /// keeps the last scan's outputs and needs nothing new from a quiet scan.
     #[inline]
     pub fn scan_if_quiet(&mut self, now: SimTime, inputs: &LiftSafetyInputs) -> bool {
-        self.last.as_ref().is_some_and(|l| l.inputs.same_as(inputs)) && self.logic.quiet_scan(now)
+        self.scans_if_quiet(now, now, 1, inputs)
+    }
+
+    /// `n` (at least one) scans with `inputs` from `first` to `last`, in time order, where each
+    /// is a quiet one ([`LiftSafety::scan_if_quiet`]), all or none: `true` if so (the logic is
+    /// moved on as those scans move it), `false` with nothing changed. For a caller that
+    /// takes a stretch of quiet scans together ([`LiftSafety::quiet_before`] tells how far
+    /// one goes).
+    #[inline]
+    pub fn scans_if_quiet(
+        &mut self,
+        first: SimTime,
+        last: SimTime,
+        n: u32,
+        inputs: &LiftSafetyInputs,
+    ) -> bool {
+        self.last.as_ref().is_some_and(|l| l.inputs.same_as(inputs))
+            && self.logic.quiet_scans(first, last, n)
+    }
+
+    /// The time before which every scan with `inputs` is a quiet one
+    /// ([`LiftSafety::scan_if_quiet`] holds for each, in time order, from the last scan's time
+    /// on), as long as no fault is injected; `None` if the next scan with them may not be:
+    /// they are not the last scan's inputs, or the logic is not at rest. For a caller that
+    /// takes a stretch of quiet scans together.
+    pub fn quiet_before(&self, inputs: &LiftSafetyInputs) -> Option<SimTime> {
+        if !self.last.as_ref().is_some_and(|l| l.inputs.same_as(inputs)) {
+            return None;
+        }
+        self.logic.quiet_before()
     }
 
     /// One safety scan at `now` with `inputs`, every step taken: the inputs set, the logic's

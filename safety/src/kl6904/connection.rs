@@ -650,7 +650,7 @@ impl Connection {
     /// partner takes the request, its reply arrives intact and is accepted with nothing new
     /// (no event, no error, the same inputs), so only the sequence numbers, the black
     /// channel's reply history and the times of the last valid telegram move on
-    /// ([`Connection::quiet_exchange`]). That is [`Connection::rests`] and no fault falling
+    /// ([`Connection::quiet_exchanges`]). That is [`Connection::rests`] and no fault falling
     /// due by `now`.
     pub(crate) fn is_quiet(&self, now: SimTime, outputs: u8) -> bool {
         self.rests(outputs) && self.next_fault_at().is_none_or(|at| at > now)
@@ -689,24 +689,29 @@ impl Connection {
         self.channel.scheduled.first().map(|&(at, _)| at)
     }
 
-    /// The exchange at `now` when [`Connection::is_quiet`] holds: what
-    /// [`Connection::exchange`] changes in that case, and nothing else.
-    pub(crate) fn quiet_exchange(&mut self, now: SimTime) {
-        let seq = self.seq;
+    /// `n` (at least one) exchanges, the last at `last`, when [`Connection::is_quiet`] holds
+    /// at each: what [`Connection::exchange`] changes in that case, and nothing else. Each
+    /// carries the partner's reply with the next sequence number; the times are the last
+    /// one's.
+    pub(crate) fn quiet_exchanges(&mut self, last: SimTime, n: u32) {
         let p = &mut self.partner;
-        p.last_seq = seq;
-        p.last_valid = Some(now);
-        let reply = Payload {
-            seq,
-            data: p.inputs,
-            status: p.faults,
-        };
         let ch = &mut self.channel;
-        ch.history[ch.next % BlackChannel::HISTORY] = reply;
-        ch.next = (ch.next + 1) % BlackChannel::HISTORY;
-        ch.carried = (ch.carried + 1).min(BlackChannel::HISTORY);
-        self.seq = next_seq(seq);
-        self.last_valid = Some(now);
+        let mut seq = self.seq;
+        for _ in 0..n {
+            p.last_seq = seq;
+            let reply = Payload {
+                seq,
+                data: p.inputs,
+                status: p.faults,
+            };
+            ch.history[ch.next % BlackChannel::HISTORY] = reply;
+            ch.next = (ch.next + 1) % BlackChannel::HISTORY;
+            ch.carried = (ch.carried + 1).min(BlackChannel::HISTORY);
+            seq = next_seq(seq);
+        }
+        self.seq = seq;
+        p.last_valid = Some(last);
+        self.last_valid = Some(last);
     }
 
     /// No valid telegram for `silent`, longer than the watchdog time.

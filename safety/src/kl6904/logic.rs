@@ -588,6 +588,14 @@ impl TwinSafeLogic {
         self.full_scan(now)
     }
 
+    /// The time before which every scan not before the last one is a quiet one
+    /// ([`TwinSafeLogic::quiet_scan`]) while no input or fault changes: when the first
+    /// scheduled fault falls due or a module's delay ends ([`SimTime::MAX`] if neither will);
+    /// `None` if the last scan did not leave the logic settled, or there was none.
+    pub(crate) fn quiet_before(&self) -> Option<SimTime> {
+        (self.settled && self.last_now.is_some()).then(|| self.quiet_until.unwrap_or(SimTime::MAX))
+    }
+
     /// The scan at `now` if it can change nothing but the connections' sequence numbers and
     /// times, done directly; `true` if so (it then reported nothing), `false` with nothing
     /// touched if a full scan is needed.
@@ -601,17 +609,24 @@ impl TwinSafeLogic {
     /// ends by `now`: the things time can bring, checked here. The logic's events are empty
     /// already (a settled scan reported nothing).
     pub(crate) fn quiet_scan(&mut self, now: SimTime) -> bool {
-        let quiet = self.settled
-            && self.last_now.is_some_and(|last| now >= last)
-            && self.quiet_until.is_none_or(|at| now < at);
+        self.quiet_scans(now, now, 1)
+    }
+
+    /// `n` (at least one) scans from `first` to `last`, in time order, taken as
+    /// [`TwinSafeLogic::quiet_scan`] takes each, all or none: `true` if each is a quiet one
+    /// (the first not before the last scan, the last before the logic's quiet ends), else
+    /// `false` with nothing touched.
+    pub(crate) fn quiet_scans(&mut self, first: SimTime, last: SimTime, n: u32) -> bool {
+        let quiet = self.last_now.is_some_and(|l| first >= l)
+            && self.quiet_before().is_some_and(|end| last < end);
         if !quiet {
             return false;
         }
         debug_assert!(self.events.is_empty());
-        self.last_now = Some(now);
+        self.last_now = Some(last);
         for (conn, &out) in self.connections.iter_mut().zip(&self.twinsafe_out) {
-            debug_assert!(conn.is_quiet(now, out));
-            conn.quiet_exchange(now);
+            debug_assert!(conn.is_quiet(last, out));
+            conn.quiet_exchanges(last, n);
         }
         true
     }
@@ -1241,6 +1256,56 @@ source = "group:aux.COM_ERR"
             self.0 ^= self.0 >> 27;
             self.0.wrapping_mul(0x2545_f491_4f6c_dd1d) % n
         }
+    }
+
+    /// A stretch of quiet scans taken together is those scans taken one by one: the same
+    /// state after, whatever the stretch's length (past the connections' reply history too);
+    /// and [`TwinSafeLogic::quiet_before`] is where the quiet way ends, with a channel fault
+    /// scheduled: a stretch that reaches it is refused and changes nothing.
+    #[test]
+    fn quiet_scans_taken_together_are_quiet_scans_one_by_one() {
+        let project = Project::from_toml("plant.toml", PLANT).expect("the plant project");
+        let mut settled = TwinSafeLogic::new(&project).expect("valid");
+        let mut now = SimTime::ZERO;
+        while settled.quiet_before().is_none() {
+            now += SimDuration::from_millis(1);
+            settled.full_scan(now);
+            assert!(now < SimTime::from_millis(200), "the logic never settles");
+        }
+        assert_eq!(settled.quiet_before(), Some(SimTime::MAX));
+        let ms = SimDuration::from_millis(1);
+        for n in [1u32, 2, 9, 15, 16, 17, 40] {
+            let (mut together, mut one_by_one) = (settled.clone(), settled.clone());
+            let first = now + ms;
+            let mut last = first;
+            for k in 0..n {
+                if k > 0 {
+                    last += ms;
+                }
+                assert!(one_by_one.quiet_scan(last), "scan {k} of {n}");
+            }
+            assert!(together.quiet_scans(first, last, n), "{n} scans");
+            assert!(together.same_state(&one_by_one), "{n} scans");
+        }
+        let peer = settled.connection("peer").expect("peer");
+        let due = now + SimDuration::from_millis(5);
+        settled.inject(peer, due, ChannelFault::CorruptCrc);
+        assert_eq!(
+            settled.quiet_before(),
+            None,
+            "a new fault unsettles the logic"
+        );
+        now += ms;
+        assert!(settled.full_scan(now).is_empty());
+        assert_eq!(settled.quiet_before(), Some(due));
+        let before = settled.clone();
+        assert!(!settled.quiet_scans(now + ms, due, 4));
+        assert!(
+            settled.same_state(&before),
+            "a refused stretch changed the logic"
+        );
+        assert!(settled.quiet_scans(now + ms, due - ms, 3));
+        assert!(!settled.quiet_scan(due));
     }
 
     /// Two copies of the plant side by side over long random runs, one scanned with
