@@ -370,10 +370,7 @@ impl LabLift {
     }
     /// `true` if the monitor releases the safety sensor at `address`.
     pub fn released(&self, address: u8) -> bool {
-        match (self.monitor(), Address::new(address)) {
-            (Some(m), Some(a)) => m.released(a),
-            _ => false,
-        }
+        Address::new(address).is_some_and(|a| self.bus.monitor_releases(self.monitor, a))
     }
     /// The slave id at lab address `n` (the slave put there at construction, wherever it
     /// is now).
@@ -421,6 +418,7 @@ pub fn io_bus(n: u8, codes: SlaveCodes) -> Result<Bus, ConfigError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::bus::{GridRun, GridStop};
 
     fn ms(n: u64) -> asi_phy::SimTime {
         asi_phy::SimTime::from_millis(n)
@@ -563,6 +561,121 @@ mod tests {
             assert_eq!(seen, expected, "quiet outputs pass until {until}");
             assert_eq!(passing.bus.stats(), every.bus.stats());
         }
+    }
+
+    /// What [`Bus::advance_grid`] stands for: an application that steps to each grid point
+    /// (`advance_before` the point, then `advance_to` it) and looks at the bus there. A new
+    /// output at the point itself is what `advance_before` of the next nanosecond returns.
+    fn grid_by_steps(
+        bus: &mut Bus,
+        first: asi_phy::SimTime,
+        period: asi_phy::SimDuration,
+        until: asi_phy::SimTime,
+        same: &dyn Fn(&Bus) -> bool,
+    ) -> GridRun {
+        let mut passed = 0;
+        let mut g = first;
+        while g < until {
+            let taken = bus.advance_before(g + asi_phy::SimDuration::from_nanos(1));
+            match taken {
+                Some(at) if at < g => {
+                    return GridRun {
+                        passed,
+                        stop: Some(GridStop::Output(at)),
+                    }
+                }
+                _ => bus.advance_to(g),
+            }
+            if taken.is_some() || !same(bus) {
+                return GridRun {
+                    passed,
+                    stop: Some(GridStop::Point(g)),
+                };
+            }
+            passed += 1;
+            g += period;
+        }
+        GridRun { passed, stop: None }
+    }
+
+    /// Runs `lab` to `end` in grid runs from 1 ms (`by_steps`: as `grid_by_steps`), each to
+    /// the next 10 ms and looking for the `key` the bus had at its start, going on after every
+    /// stop as an application would (from a point it stopped at, the next one; from a new
+    /// output, the point it did not pass); returns the runs.
+    fn grid_runs<K: PartialEq>(
+        lab: &mut LabLift,
+        by_steps: bool,
+        end: u64,
+        key: &dyn Fn(&Bus) -> K,
+    ) -> Vec<GridRun> {
+        let period = asi_phy::SimDuration::from_millis(1);
+        let mut runs = Vec::new();
+        let mut g = ms(1);
+        while g < ms(end) {
+            let until = ms((g.as_nanos() / 10_000_000 + 1) * 10).min(ms(end));
+            let start = key(&lab.bus);
+            let same = |bus: &Bus| key(bus) == start;
+            let run = if by_steps {
+                grid_by_steps(&mut lab.bus, g, period, until, &same)
+            } else {
+                lab.bus.advance_grid(g, period, until, same)
+            };
+            for _ in 0..run.passed {
+                g += period;
+            }
+            if let Some(GridStop::Point(_)) = run.stop {
+                g += period;
+            }
+            runs.push(run);
+        }
+        runs
+    }
+
+    /// A grid run stops where an application stepping to each grid point would: at a new
+    /// output before a point, at a point where one came or where its look changed, and
+    /// nowhere else; and the bus goes through the same transactions. Looked at: the master's
+    /// LAS and phase through the start-up from power-on (the look changes as slaves join),
+    /// and the drive count while the set-point's transfer hands out new nibbles, some of
+    /// which pass ([`Bus::pass_quiet_outputs_until`]).
+    #[test]
+    fn a_grid_run_stops_where_steps_to_each_grid_point_would() {
+        let las = |b: &Bus| (b.master().phase(), b.master().las().bits());
+        let startup = || {
+            let mut lab = LabLift::new().expect("the lab bus");
+            lab.bus.watch_outputs(u32::MAX);
+            lab.bus.enable_trace(1 << 16);
+            lab
+        };
+        let (mut a, mut b) = (startup(), startup());
+        let by_grid = grid_runs(&mut a, false, 300, &las);
+        let by_steps = grid_runs(&mut b, true, 300, &las);
+        assert_eq!(by_grid, by_steps);
+        let points = by_grid
+            .iter()
+            .filter(|r| matches!(r.stop, Some(GridStop::Point(_))))
+            .count();
+        assert!(points > 0, "the LAS never changed: {by_grid:?}");
+        assert_eq!(a.bus.drain_trace(), b.bus.drain_trace());
+        assert_eq!(a.bus.stats(), b.bus.stats());
+
+        let transfer = || {
+            let mut lab = analog_transfer();
+            lab.bus.enable_trace(1 << 16);
+            lab.bus.pass_quiet_outputs_until(Some(ms(150)));
+            lab
+        };
+        let (mut a, mut b) = (transfer(), transfer());
+        let count = |bus: &Bus| bus.drive_count();
+        let by_grid = grid_runs(&mut a, false, 300, &count);
+        let by_steps = grid_runs(&mut b, true, 300, &count);
+        assert_eq!(by_grid, by_steps);
+        let outputs = by_grid
+            .iter()
+            .filter(|r| matches!(r.stop, Some(GridStop::Output(_))))
+            .count();
+        assert!(outputs > 0, "no new output stopped a run: {by_grid:?}");
+        assert_eq!(a.bus.drain_trace(), b.bus.drain_trace());
+        assert_eq!(a.bus.stats(), b.bus.stats());
     }
 
     #[test]

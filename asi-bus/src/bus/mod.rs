@@ -57,10 +57,12 @@ use asi_slaves::slave::{Peripheral, Slave};
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
 
+mod grid;
 mod hooks;
 mod outputs;
 mod quick;
 
+pub use grid::{GridRun, GridStop};
 use outputs::NO_OUTPUT;
 
 /// A request taken by a slave, as the bus tells it: a Data_Exchange from its bits
@@ -383,18 +385,33 @@ impl Bus {
     /// them ([`Bus::watch_outputs`]) is the caller's to hand on now: it does not end the next
     /// [`Bus::advance_before`] early.
     pub fn advance_to(&mut self, now: SimTime) {
+        self.advance_to_taking(now);
+    }
+
+    /// [`Bus::advance_to`]; `true` if a watched slave took a new output nibble in it (one
+    /// that did not pass, [`Bus::pass_quiet_outputs_until`]).
+    #[inline]
+    fn advance_to_taking(&mut self, now: SimTime) -> bool {
+        let taken = self.run_to(now);
+        self.settle();
+        taken
+    }
+
+    /// [`Bus::advance_to_taking`], the receivers left unsettled ([`Bus::settle`]).
+    #[inline]
+    fn run_to(&mut self, now: SimTime) -> bool {
         self.horizon = now;
         while self.next_event <= now {
             self.event();
         }
-        self.output_taken = false;
-        self.settle();
+        let taken = core::mem::take(&mut self.output_taken);
         if now > self.now {
             self.now = now;
             for m in &mut self.monitors {
                 m.poll(now);
             }
         }
+        taken
     }
 
     /// Processes the events before `until`, returning early with the event's time when a
@@ -403,15 +420,21 @@ impl Bus {
     /// so an application that drives the bus this way runs long stretches without stepping
     /// at every event, and still sees every output change at its moment.
     pub fn advance_before(&mut self, until: SimTime) -> Option<SimTime> {
+        let taken = self.run_before(until);
+        self.settle();
+        taken
+    }
+
+    /// [`Bus::advance_before`], the receivers left unsettled ([`Bus::settle`]).
+    #[inline]
+    fn run_before(&mut self, until: SimTime) -> Option<SimTime> {
         self.horizon = SimTime::from_nanos(until.as_nanos().saturating_sub(1));
         while self.next_event < until {
             self.event();
             if core::mem::take(&mut self.output_taken) {
-                self.settle();
                 return Some(self.now);
             }
         }
-        self.settle();
         None
     }
 
@@ -892,6 +915,22 @@ impl Bus {
     pub fn monitor(&self, id: MonitorId) -> Option<&SafetyMonitor> {
         debug_assert!(self.unsettled.is_none(), "the bus is settled between calls");
         self.monitors.get(id.0)
+    }
+
+    /// `true` if monitor `id` releases the safety slave at `address` (`false` without that
+    /// monitor). What the monitor releases is not its receiver's state: this may be asked
+    /// while a run of clean transactions has not been written into the receivers
+    /// ([`Bus::advance_grid`]'s look).
+    pub fn monitor_releases(&self, id: MonitorId, address: Address) -> bool {
+        self.monitors.get(id.0).is_some_and(|m| m.released(address))
+    }
+
+    /// `true` if monitor `id` has dropped a release since the last
+    /// [`Bus::take_monitor_drops`] (may be asked as [`Bus::monitor_releases`]).
+    pub fn monitor_has_drops(&self, id: MonitorId) -> bool {
+        self.monitors
+            .get(id.0)
+            .is_some_and(SafetyMonitor::has_drops)
     }
 
     /// A monitor, mutable.

@@ -39,6 +39,12 @@ impl Bus {
         self.drive_count = Some(count);
     }
 
+    /// The drive count given to the bus ([`Bus::count_drive_changes`]) as it is now, `None`
+    /// without one.
+    pub fn drive_count(&self) -> Option<u64> {
+        self.drive_count.as_ref().map(|c| c.load(Ordering::Relaxed))
+    }
+
     /// Up to `until` (inclusive; `None`: never), a watched slave's new output nibble (or a
     /// call that writes to it, after which its next nibble counts as new) does not end
     /// [`Bus::advance_before`] where the drive count ([`Bus::count_drive_changes`]) has not
