@@ -142,6 +142,9 @@ pub struct Rig {
     /// diagnosis), which a quiet scan gives again (checked in `Rig::safety_scan`).
     #[cfg(test)]
     scanned: Option<(bool, bool, safety::lift::LiftSafetyDiag)>,
+    /// The safety scans taken in stretches of quiet scans ([`Rig::quiet_scans`]).
+    #[cfg(test)]
+    stretch_scans: u64,
     /// Every press of a call button, for the passengers' waits and the served calls' requests.
     passengers: Passengers,
     watch: InvariantWatch,
@@ -218,6 +221,8 @@ impl Rig {
             every_moment: false,
             #[cfg(test)]
             scanned: None,
+            #[cfg(test)]
+            stretch_scans: 0,
             passengers: Passengers::default(),
             watch: InvariantWatch::default(),
             quiet: Quiet::default(),
@@ -420,7 +425,12 @@ impl Rig {
     /// The earliest of the next PLC scan, the next safety scan, the next scenario event and
     /// the next timer.
     fn own_next_moment(&self) -> SimTime {
-        let mut t = self.next_plc.min(self.next_safety);
+        self.next_safety.min(self.own_next_but_safety())
+    }
+
+    /// The earliest of the next PLC scan, the next scenario event and the next timer.
+    fn own_next_but_safety(&self) -> SimTime {
+        let mut t = self.next_plc;
         if let Some(e) = self.sc.events.get(self.next_event) {
             t = t.min(e.at);
         }
@@ -465,6 +475,14 @@ impl Rig {
             }
             let quiet = self.outputs_pass_until();
             self.lab.bus.pass_quiet_outputs_until(quiet);
+            match self.quiet_scans(t, quiet, limit) {
+                scans::Stretch::None => {}
+                scans::Stretch::Went => continue,
+                scans::Stretch::StepAt(at) => {
+                    self.step(at);
+                    return Some(at);
+                }
+            }
             match self.lab.bus.advance_before(t) {
                 Some(at) => self.output_taken(at),
                 None => {
@@ -889,6 +907,34 @@ mod tests {
                 "{name}"
             );
         }
+    }
+
+    /// Most safety scans of a run are taken in stretches of quiet scans
+    /// ([`Rig::quiet_scans`]): those of 30 s from power-on with the initialisation run and a
+    /// call served (the comparisons above would hold with no stretch at all).
+    #[test]
+    fn most_safety_scans_are_taken_in_stretches_of_quiet_scans() {
+        let sc = Scenario {
+            duration: SimDuration::from_secs(30),
+            events: vec![ScenarioEvent {
+                at: SimTime::from_millis(13_000),
+                action: Action::Press {
+                    button: lift_model::Button::Cabin(3),
+                    hold: SimDuration::from_millis(300),
+                },
+                line: 0,
+            }],
+            ..Scenario::defaults()
+        };
+        let mut rig = Rig::new(sc).expect("a rig for the scenario");
+        while rig.advance_to_step(rig.end).is_some_and(|t| t < rig.end) {}
+        // 30,000 scans, one in ten with a PLC scan.
+        assert!(
+            rig.stretch_scans > 24_000,
+            "{} scans in stretches",
+            rig.stretch_scans
+        );
+        assert_eq!(rig.report.served.len(), 1, "the call is served");
     }
 
     /// The drive-change count covers every way the slaves' outputs change in the built-in

@@ -2,24 +2,68 @@
 //! the PLC's, each with what it hands to the report and the log.
 
 use super::*;
+use asi_bus::{Bus, GridStop, MonitorId};
+use asi_phy::Address;
+
+/// What [`Rig::quiet_scans`] did.
+pub(super) enum Stretch {
+    /// Nothing: the next moment is not the start of a stretch of quiet scans.
+    None,
+    /// It took a stretch of quiet scans, and a new output the bus stopped at, if any: the
+    /// rig goes on from its next moment.
+    Went,
+    /// It took the quiet scans before this scan time, where the bus stopped: the rig steps
+    /// here (the bus is there already).
+    StepAt(SimTime),
+}
+
+/// What the safety scan reads of the bus: the master's LAS (A slots) in normal operation
+/// (`None` outside it), whether the safety monitor has dropped a release since the last
+/// look, and whether it releases the bottom and the top overtravel sensor.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct BusReads {
+    las: Option<u32>,
+    drops: bool,
+    bottom: bool,
+    top: bool,
+}
+
+impl BusReads {
+    #[inline]
+    fn of(bus: &Bus, monitor: MonitorId) -> BusReads {
+        let m = bus.master();
+        let las = (m.phase() == asi_master::Phase::NormalOperation).then(|| m.las().bits() as u32);
+        let released = |n: u8| Address::new(n).is_some_and(|a| bus.monitor_releases(monitor, a));
+        BusReads {
+            las,
+            drops: bus.monitor_has_drops(monitor),
+            bottom: released(SAFETY_BOTTOM),
+            top: released(SAFETY_TOP),
+        }
+    }
+}
 
 impl Rig {
-    /// The master's LAS and the safety monitor's drops since the last look, to the report
-    /// and the log (every safety scan, 1 ms). In almost every scan the master is in normal
-    /// operation with the LAS the watch saw last, and the monitor has dropped nothing: that
-    /// is told by two looks, and the watch is left as it is (as [`LasWatch::update`] leaves
-    /// it then).
+    /// The master's LAS and the safety monitor's drops since the last look (`reads`, the bus
+    /// as the scan at `t` finds it), to the report and the log (every safety scan, 1 ms). In
+    /// almost every scan the master is in normal operation with the LAS the watch saw last,
+    /// and the monitor has dropped nothing: the watch is then left as it is (as
+    /// [`LasWatch::update`] leaves it then).
     #[inline]
-    pub(super) fn watch_bus(&mut self, t: SimTime) {
-        let m = self.lab.bus.master();
-        let las = (m.phase() == asi_master::Phase::NormalOperation).then(|| m.las().bits() as u32);
-        if las.is_none() || las != self.las_watch.seen() {
-            self.las_moved(t, las);
+    fn watch_bus_reads(&mut self, t: SimTime, reads: BusReads) {
+        if reads.las.is_none() || reads.las != self.las_watch.seen() {
+            self.las_moved(t, reads.las);
         }
-        if self.lab.monitor().is_some_and(|m| m.has_drops()) {
+        if reads.drops {
             let drops = self.lab.bus.take_monitor_drops(self.lab.monitor);
             self.log_drops(drops);
         }
+    }
+
+    /// [`Rig::watch_bus_reads`] of the bus as it is, at `t` (the end of a run).
+    pub(super) fn watch_bus(&mut self, t: SimTime) {
+        let reads = BusReads::of(&self.lab.bus, self.lab.monitor);
+        self.watch_bus_reads(t, reads);
     }
 
     /// The LAS at `t` (`None` outside normal operation) to the watch, and who left and came
@@ -74,19 +118,9 @@ impl Rig {
     /// counts (after a scan that found K1 open for a cause a round answers, see
     /// [`Rig::attendant_idle`]).
     pub(super) fn safety_scan(&mut self, t: SimTime) {
-        self.watch_bus(t);
-        let [ch1, ch2] = self.lift.stop_channels();
-        let inputs = LiftSafetyInputs {
-            stop_ch1: ch1,
-            stop_ch2: ch2,
-            overtravel_bottom_released: self.lab.released(SAFETY_BOTTOM),
-            overtravel_top_released: self.lab.released(SAFETY_TOP),
-            overloaded: self.to_safety.overloaded,
-            k1_aux: self.lift.k1_aux_closed(),
-            operator_reset: self.operator_reset,
-            err_ack: self.err_ack,
-            controller_restart: self.to_safety.restart,
-        };
+        let reads = BusReads::of(&self.lab.bus, self.lab.monitor);
+        self.watch_bus_reads(t, reads);
+        let inputs = self.safety_inputs(reads);
         if self.attendant_idle && self.drive.is_none() && self.safety.scan_if_quiet(t, &inputs) {
             #[cfg(test)]
             self.assert_quiet_scan_kept(t);
@@ -156,6 +190,121 @@ impl Rig {
                 self.log("plant", format!("error: {e}"));
             }
             self.plant_dirty = true;
+        }
+    }
+
+    /// Takes the safety scans from the rig's next moment `t` on together, where each would be
+    /// a quiet one that hands nothing on ([`Rig::safety_scan`]), and nothing else comes
+    /// before the stretch's end: the bus runs through the stretch's scan times in one call
+    /// ([`asi_bus::Bus::advance_grid`]), stopping where it brings the scan anything new, and
+    /// the scans it passed are taken after it, each as the quiet scan it would have been.
+    ///
+    /// The stretch begins at a safety scan with the inputs of the last one, the logic at rest
+    /// ([`LiftSafety::quiet_before`]), the LAS the watch saw and no monitor drop, the
+    /// attendant idle and no safe drive. It ends before the next moment of anything else
+    /// that a step handles (PLC scan, scenario event, timer, plant edge, the end), before the
+    /// logic's quiet ends, and after the time through which new outputs pass the rig by
+    /// (`quiet`, [`Rig::outputs_pass_until`]: no dirty plant, no waves, not pulse-exact,
+    /// and the invariant watch's quiet holds). Within it the rest of each step does nothing:
+    /// the plant has no edge (it is brought to each scan time all the same), the slaves' new
+    /// outputs pass (the bus stops at one that does not, and at a scan time by which the
+    /// drive count has moved), and the scan's inputs from the plant, the PLC and the
+    /// operator stay as they are. What it reads of the bus ([`BusReads`]) is looked at by
+    /// the bus at every scan time. The fast-path tests compare runs with the pulse-exact
+    /// path, which takes every step; the rig's tests compare runs with one call per moment
+    /// ([`Rig::advance`], which takes no stretch).
+    pub(super) fn quiet_scans(
+        &mut self,
+        t: SimTime,
+        quiet: Option<SimTime>,
+        limit: SimTime,
+    ) -> Stretch {
+        let Some(through) = quiet else {
+            return Stretch::None;
+        };
+        if t != self.next_safety || !self.attendant_idle || self.drive.is_some() {
+            return Stretch::None;
+        }
+        let monitor = self.lab.monitor;
+        let reads = BusReads::of(&self.lab.bus, monitor);
+        if reads.las.is_none() || reads.las != self.las_watch.seen() || reads.drops {
+            return Stretch::None;
+        }
+        // What the slaves drive is read at a step when the drive count has moved: the bus
+        // stops where it has.
+        let drives = self.lab.bus.drive_count();
+        if drives.is_none() || self.drives_seen != drives {
+            return Stretch::None;
+        }
+        let inputs = self.safety_inputs(reads);
+        let Some(logic_quiet) = self.safety.quiet_before(&inputs) else {
+            return Stretch::None;
+        };
+        let after = |at: SimTime| {
+            at.checked_add(SimDuration::from_nanos(1))
+                .unwrap_or(SimTime::MAX)
+        };
+        let mut until = self
+            .own_next_but_safety()
+            .min(self.end)
+            .min(logic_quiet)
+            .min(after(through))
+            .min(after(limit));
+        if let Some(e) = self.lift.next_event() {
+            until = until.min(e);
+        }
+        if t >= until {
+            return Stretch::None;
+        }
+        let run = self
+            .lab
+            .bus
+            .advance_grid(t, SAFETY_SCAN_PERIOD, until, |bus| {
+                BusReads::of(bus, monitor) == reads && bus.drive_count() == drives
+            });
+        if run.passed > 0 {
+            // Each scan time's step: the plant brought to it, the invariant watch (whose
+            // quiet holds), and the quiet scans, taken together after it.
+            let mut g = t;
+            for _ in 0..run.passed {
+                self.now = g;
+                self.advance_plant(g);
+                self.check_invariants(g);
+                g += SAFETY_SCAN_PERIOD;
+            }
+            let kept = self.safety.scans_if_quiet(t, self.now, run.passed, &inputs);
+            debug_assert!(kept, "the safety scans from {t} are not quiet ones");
+            #[cfg(test)]
+            {
+                self.stretch_scans += u64::from(run.passed);
+            }
+            self.next_safety = g;
+            self.own_moments_changed();
+        }
+        match run.stop {
+            None => Stretch::Went,
+            Some(GridStop::Output(at)) => {
+                self.output_taken(at);
+                Stretch::Went
+            }
+            Some(GridStop::Point(at)) => Stretch::StepAt(at),
+        }
+    }
+
+    /// The safety logic's inputs, with what it reads of the bus (`reads`).
+    #[inline]
+    fn safety_inputs(&self, reads: BusReads) -> LiftSafetyInputs {
+        let [ch1, ch2] = self.lift.stop_channels();
+        LiftSafetyInputs {
+            stop_ch1: ch1,
+            stop_ch2: ch2,
+            overtravel_bottom_released: reads.bottom,
+            overtravel_top_released: reads.top,
+            overloaded: self.to_safety.overloaded,
+            k1_aux: self.lift.k1_aux_closed(),
+            operator_reset: self.operator_reset,
+            err_ack: self.err_ack,
+            controller_restart: self.to_safety.restart,
         }
     }
 
