@@ -6,8 +6,12 @@
 //! build, traces off. Both paths run in the same process one after the other, so their ratio
 //! holds on a machine that is busy with something else.
 //!
+//! Each path runs three times (`runs=N` for another count) and the median wall time is the
+//! figure, with the range beside it: a single run on a shared machine can be a fifth off.
+//!
 //! `cargo bench -p rig --bench rig` (arguments after `--`: simulated seconds, default 3600;
-//! `lab`, `full` or `noise` to run only that rig; `fast` to skip the pulse-exact runs).
+//! `lab`, `full` or `noise` to run only that rig; `fast` to skip the pulse-exact runs;
+//! `runs=N`).
 
 use asi_phy::{SimDuration, SimTime};
 use lift_model::Button;
@@ -65,6 +69,30 @@ fn timed(sc: &Scenario, pulse_exact: bool) -> (f64, rig::report::Report) {
     (wall.elapsed().as_secs_f64(), report)
 }
 
+/// Runs `sc` `runs` times on one path; the median wall time, the fastest and the slowest, and
+/// the report (every run's must be the same).
+fn timed_runs(
+    sc: &Scenario,
+    pulse_exact: bool,
+    runs: usize,
+) -> ((f64, f64, f64), rig::report::Report) {
+    let (first, report) = timed(sc, pulse_exact);
+    let mut secs = vec![first];
+    for _ in 1..runs {
+        let (s, r) = timed(sc, pulse_exact);
+        if r != report {
+            eprintln!("{}: two runs of the same scenario differ", sc.name);
+            std::process::exit(1);
+        }
+        secs.push(s);
+    }
+    secs.sort_by(f64::total_cmp);
+    (
+        (secs[secs.len() / 2], secs[0], secs[secs.len() - 1]),
+        report,
+    )
+}
+
 fn main() {
     let args: Vec<String> = std::env::args()
         .skip(1)
@@ -75,19 +103,31 @@ fn main() {
         .iter()
         .find(|a| matches!(a.as_str(), "lab" | "full" | "noise"));
     let fast_only = args.iter().any(|a| a == "fast");
+    let runs: usize = match args.iter().find_map(|a| a.strip_prefix("runs=")) {
+        None => 3,
+        Some(n) => match n.parse() {
+            Ok(n) if n > 0 => n,
+            _ => {
+                eprintln!("runs={n}: must be a whole number of runs, at least 1");
+                std::process::exit(2);
+            }
+        },
+    };
     for (name, extra, noise) in [("lab", 0u8, 0.0), ("full", 20, 0.0), ("noise", 0, 1e-3)] {
         if only.is_some_and(|o| o != name) {
             continue;
         }
         let sc = traffic(seconds, extra, noise);
         let presses = sc.events.len();
-        let (secs, report) = timed(&sc, false);
+        let ((secs, fastest, slowest), report) = timed_runs(&sc, false, runs);
         println!(
-            "{name:>5}: {seconds} s simulated ({} slaves, line noise {noise}, {presses} presses, {} served, {} transactions) in {secs:.2} s wall = {:.0}x real time, {:.1} ns per transaction",
+            "{name:>5}: {seconds} s simulated ({} slaves, line noise {noise}, {presses} presses, {} served, {} transactions) in {secs:.2} s wall (median of {runs}: {fastest:.2}–{slowest:.2} s) = {:.0}x real time ({:.0}–{:.0}x), {:.1} ns per transaction",
             11 + extra as usize,
             report.served.len(),
             report.bus.transactions,
             seconds as f64 / secs,
+            seconds as f64 / slowest,
+            seconds as f64 / fastest,
             secs * 1e9 / report.bus.transactions as f64
         );
         if !report.violations.is_empty() {
@@ -97,13 +137,13 @@ fn main() {
         if fast_only {
             continue;
         }
-        let (exact_secs, exact) = timed(&sc, true);
+        let ((exact_secs, _, _), exact) = timed_runs(&sc, true, runs);
         if exact != report {
             eprintln!("{name}: the pulse-exact run's report differs from the fast one");
             std::process::exit(1);
         }
         println!(
-            "{:>5}  pulse-exact: {exact_secs:.2} s wall = {:.0}x real time; the fast path is {:.2}x as fast",
+            "{:>5}  pulse-exact: {exact_secs:.2} s wall (median of {runs}) = {:.0}x real time; the fast path is {:.2}x as fast",
             "",
             seconds as f64 / exact_secs,
             exact_secs / secs
