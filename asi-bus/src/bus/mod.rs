@@ -925,12 +925,13 @@ impl Bus {
         self.monitors.get(id.0).is_some_and(|m| m.released(address))
     }
 
-    /// `true` if monitor `id` has dropped a release since the last
+    /// [`SafetyMonitor::releases`] of monitor `id` (none without it): the addresses it
+    /// releases and whether it has dropped a release since the last
     /// [`Bus::take_monitor_drops`] (may be asked as [`Bus::monitor_releases`]).
-    pub fn monitor_has_drops(&self, id: MonitorId) -> bool {
+    pub fn monitor_look(&self, id: MonitorId) -> (u32, bool) {
         self.monitors
             .get(id.0)
-            .is_some_and(SafetyMonitor::has_drops)
+            .map_or((0, false), SafetyMonitor::releases)
     }
 
     /// A monitor, mutable.

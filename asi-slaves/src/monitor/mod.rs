@@ -663,6 +663,18 @@ impl SafetyMonitor {
             .map_or(0, |c| c.bad_codes)
     }
 
+    /// The released addresses (bit `a` set for address `a`), and whether a release was
+    /// dropped since the last [`SafetyMonitor::take_drops`]: [`SafetyMonitor::released`] of
+    /// every address and [`SafetyMonitor::has_drops`] in one look at the channels.
+    pub fn releases(&self) -> (u32, bool) {
+        self.channels.iter().fold((0, false), |(mask, drops), c| {
+            (
+                mask | u32::from(c.released) << c.address.get(),
+                drops || !c.drops.is_empty(),
+            )
+        })
+    }
+
     /// `true` if a release was dropped since the last [`SafetyMonitor::take_drops`].
     pub fn has_drops(&self) -> bool {
         self.channels.iter().any(|c| !c.drops.is_empty())

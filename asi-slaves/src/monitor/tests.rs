@@ -96,7 +96,8 @@ proptest::proptest! {
     /// Skipping the polls before the earliest deadline drops exactly what checking every
     /// channel at every poll drops, at the same times: codes, wrong codes, lost answers and
     /// silences of up to 100 ms (the tolerance is 40 ms) for two monitored slaves, polled
-    /// mostly every few transactions as on the bus.
+    /// mostly every few transactions as on the bus. On the way, [`SafetyMonitor::releases`]
+    /// tells what `released` and `has_drops` tell.
     #[test]
     fn a_poll_skipped_before_the_deadline_changes_nothing(
         steps in proptest::collection::vec(
@@ -122,6 +123,11 @@ proptest::proptest! {
             let t = at(now);
             fast.poll(t);
             every.poll_every_channel(t);
+            // The one look at every channel is the look at each.
+            let each = addresses
+                .iter()
+                .fold(0u32, |m, &a| m | u32::from(fast.released(a)) << a.get());
+            proptest::prop_assert_eq!(fast.releases(), (each, fast.has_drops()));
             if matches!(step, Step::Poll) {
                 continue;
             }

@@ -3,7 +3,6 @@
 
 use super::*;
 use asi_bus::{Bus, GridStop, MonitorId};
-use asi_phy::Address;
 
 /// What [`Rig::quiet_scans`] did.
 pub(super) enum Stretch {
@@ -18,14 +17,14 @@ pub(super) enum Stretch {
 }
 
 /// What the safety scan reads of the bus: the master's LAS (A slots) in normal operation
-/// (`None` outside it), whether the safety monitor has dropped a release since the last
-/// look, and whether it releases the bottom and the top overtravel sensor.
+/// (`None` outside it), the addresses the safety monitor releases (bit `a` for address `a`;
+/// the scan reads the overtravel sensors'), and whether it has dropped a release since the
+/// last look.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 struct BusReads {
     las: Option<u32>,
+    released: u32,
     drops: bool,
-    bottom: bool,
-    top: bool,
 }
 
 impl BusReads {
@@ -33,13 +32,18 @@ impl BusReads {
     fn of(bus: &Bus, monitor: MonitorId) -> BusReads {
         let m = bus.master();
         let las = (m.phase() == asi_master::Phase::NormalOperation).then(|| m.las().bits() as u32);
-        let released = |n: u8| Address::new(n).is_some_and(|a| bus.monitor_releases(monitor, a));
+        let (released, drops) = bus.monitor_look(monitor);
         BusReads {
             las,
-            drops: bus.monitor_has_drops(monitor),
-            bottom: released(SAFETY_BOTTOM),
-            top: released(SAFETY_TOP),
+            released,
+            drops,
         }
+    }
+
+    /// `true` if the monitor releases the safety sensor at `address`.
+    #[inline]
+    fn releases(&self, address: u8) -> bool {
+        self.released >> address & 1 == 1
     }
 }
 
@@ -298,8 +302,8 @@ impl Rig {
         LiftSafetyInputs {
             stop_ch1: ch1,
             stop_ch2: ch2,
-            overtravel_bottom_released: reads.bottom,
-            overtravel_top_released: reads.top,
+            overtravel_bottom_released: reads.releases(SAFETY_BOTTOM),
+            overtravel_top_released: reads.releases(SAFETY_TOP),
             overloaded: self.to_safety.overloaded,
             k1_aux: self.lift.k1_aux_closed(),
             operator_reset: self.operator_reset,
