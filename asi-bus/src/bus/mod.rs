@@ -401,9 +401,7 @@ impl Bus {
     #[inline]
     fn run_to(&mut self, now: SimTime) -> bool {
         self.horizon = now;
-        while self.next_event <= now {
-            self.event();
-        }
+        self.events_through(now, false);
         let taken = core::mem::take(&mut self.output_taken);
         if now > self.now {
             self.now = now;
@@ -428,19 +426,36 @@ impl Bus {
     /// [`Bus::advance_before`], the receivers left unsettled ([`Bus::settle`]).
     #[inline]
     fn run_before(&mut self, until: SimTime) -> Option<SimTime> {
-        self.horizon = SimTime::from_nanos(until.as_nanos().saturating_sub(1));
-        while self.next_event < until {
-            self.event();
-            if core::mem::take(&mut self.output_taken) {
-                return Some(self.now);
-            }
+        let Some(last) = until.as_nanos().checked_sub(1) else {
+            return None;
+        };
+        self.horizon = SimTime::from_nanos(last);
+        if self.events_through(self.horizon, true) {
+            self.output_taken = false;
+            return Some(self.now);
         }
         None
+    }
+
+    /// Processes the events up to `last` (inclusive) one after another; with `stop_at_output`,
+    /// returns `true` after the first in which a watched slave took a new output (the note
+    /// left set). The event is inlined into this one loop, so that the many events of a long
+    /// call do not each pay a call of their own.
+    #[inline(never)]
+    fn events_through(&mut self, last: SimTime, stop_at_output: bool) -> bool {
+        while self.next_event <= last {
+            self.event();
+            if stop_at_output && self.output_taken {
+                return true;
+            }
+        }
+        false
     }
 
     /// Processes the next event. A transaction is started at one place only, so that
     /// [`Bus::start_transaction`] (and with it the quick transaction that most starts run to
     /// its end) is inlined here rather than called.
+    #[inline(always)]
     fn event(&mut self) {
         let t = self.next_event;
         self.now = t;
