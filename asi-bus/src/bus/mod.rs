@@ -426,9 +426,8 @@ impl Bus {
     /// [`Bus::advance_before`], the receivers left unsettled ([`Bus::settle`]).
     #[inline]
     fn run_before(&mut self, until: SimTime) -> Option<SimTime> {
-        let Some(last) = until.as_nanos().checked_sub(1) else {
-            return None;
-        };
+        // Nothing comes before time zero.
+        let last = until.as_nanos().checked_sub(1)?;
         self.horizon = SimTime::from_nanos(last);
         if self.events_through(self.horizon, true) {
             self.output_taken = false;
