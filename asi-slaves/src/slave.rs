@@ -243,10 +243,20 @@ impl Slave {
 
     /// The slave's answer to a valid request received at `now`, or `None` (not addressed, or a
     /// call it ignores). Broadcast reset resets the slave and gets no answer.
+    ///
+    /// The standard Data_Exchange (nearly every request) is answered here; every other
+    /// request out of line ([`Slave::handle_other`]), so that the common answer does not
+    /// save and restore the registers the others need.
     pub fn handle(&mut self, now: SimTime, req: Request) -> Option<Response> {
         if let Some(outputs) = self.standard_data_exchange(req) {
             return Some(Response::new(self.device.exchange(now, outputs)));
         }
+        self.handle_other(now, req)
+    }
+
+    /// [`Slave::handle`] of a request that is not a standard Data_Exchange to this slave.
+    #[inline(never)]
+    fn handle_other(&mut self, now: SimTime, req: Request) -> Option<Response> {
         if self.is_read_status_a(req) {
             // The master's status poll: it changes nothing, so nothing to refresh.
             return Some(Response::new(self.status(now)));

@@ -588,3 +588,82 @@ fn the_read_tables_hold_the_requests() {
         );
     }
 }
+
+/// A master after a transaction, with the flags' signature taken as the next transaction's
+/// `inputs_before` takes it: two masters that differ only in when they looked at the flags'
+/// inputs are the same after it.
+fn looked(m: &Master) -> Master {
+    let mut m = m.clone();
+    m.inputs_before();
+    m
+}
+
+/// The answered Data_Exchange leaves the flags to the next transaction's look instead of
+/// looking before and after it (`Master::handle_outcome`). Two masters through the same random
+/// traffic, one with the short paths and one through the general path, with the supply
+/// marked as touched (and now and then changed) between the call and its outcome: the same
+/// verdicts and calls, the same flags and the same state once both have looked.
+#[test]
+fn an_answered_data_exchange_leaves_the_flags_to_the_next_look() {
+    let mut touched_answers = 0;
+    for seed in 1..=8u64 {
+        let mut rng = Rng(seed.wrapping_mul(0xA076_1D64_78BD_642F) | 1);
+        let cfg = MasterConfig::default();
+        let mut m = Master::new(cfg.clone(), projected()).expect("master");
+        let mut r = Master::new(cfg, projected()).expect("master");
+        let mut world = World::new();
+        let mut now = SimTime::ZERO;
+        for k in 0..6_000 {
+            now += SimDuration::from_micros(154);
+            if rng.chance(2) {
+                world.churn(&mut rng);
+            }
+            let mut twin = Rng(rng.0);
+            disturb(&mut m, now, &mut rng);
+            disturb(&mut r, now, &mut twin);
+            let t = m.poll_transmit(now);
+            assert_eq!(t, r.poll_transmit_reference(now), "call at step {k}");
+            assert_same(&looked(&m), &looked(&r), "state after the call", k);
+            if t.is_none() {
+                continue;
+            }
+            if rng.chance(30) {
+                // The flags' inputs touched between the call and its outcome: only marked,
+                // or (as the supply or a host write would) changed and marked.
+                let change = rng.chance(30).then(|| addr(1 + rng.below(31) as u8, false));
+                for x in [&mut m, &mut r] {
+                    if let Some(a) = change {
+                        let on = x.lpf.contains(a);
+                        x.lpf.set(a, !on);
+                    }
+                    x.touch_inputs();
+                }
+            }
+            let outcome = world.answer(&m, &mut rng);
+            if m.inputs_touched
+                && matches!(outcome, Outcome::Response(_))
+                && matches!(
+                    m.in_flight,
+                    Some(InFlight {
+                        tx: Tx::Exchange(_),
+                        ..
+                    })
+                )
+            {
+                touched_answers += 1;
+            }
+            let v = m.handle_outcome(now, outcome);
+            assert_eq!(
+                v,
+                r.handle_outcome_reference(now, outcome),
+                "verdict at step {k}"
+            );
+            assert_eq!(m.flags(), r.flags(), "flags after the outcome at step {k}");
+            assert_same(&looked(&m), &looked(&r), "state after the outcome", k);
+        }
+    }
+    assert!(
+        touched_answers > 100,
+        "answered Data_Exchanges with the flags' inputs touched: {touched_answers}"
+    );
+}

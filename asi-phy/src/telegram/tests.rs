@@ -195,3 +195,32 @@ fn every_telegram_has_the_pulses_of_its_train() {
         assert_eq!(r.pulses(), tg.pulses(), "{r:?}");
     }
 }
+
+/// The responses built and counted by look-up are those worked out from the bits as before:
+/// the parity bit counted over the data, and the pulses of the response with that data, for
+/// every raw pattern a response can be made of.
+#[test]
+fn looked_up_responses_are_the_worked_out_ones() {
+    let h = crate::SimDuration::from_micros(3);
+    for v in 0..16u8 {
+        let pb = (v.count_ones() & 1) as u8;
+        assert_eq!(
+            Response::new(n(v)).bits(),
+            (v << 2) | (pb << 1) | 1,
+            "data {v:04b}"
+        );
+    }
+    let mut responses = 0;
+    for bits in 0..=u8::MAX {
+        let Ok(r) = Response::from_bits(bits) else {
+            continue;
+        };
+        responses += 1;
+        // The pulses of the response carrying the same data, from the encoder's train.
+        let same_data = Response::new(r.data());
+        let tg = crate::Transmission::response(same_data, crate::SimTime::ZERO, h);
+        assert_eq!(r.pulses(), tg.pulses(), "{bits:07b}");
+        assert_eq!(r.pulses(), tg.train().len(), "{bits:07b}");
+    }
+    assert_eq!(responses, 16);
+}

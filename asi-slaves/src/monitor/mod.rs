@@ -382,6 +382,12 @@ pub struct SafetyMonitor {
     /// up to it has nothing to check. Polled at every transaction, that check was a loop
     /// over the channels each time.
     quiet_until: SimTime,
+    /// [`SafetyMonitor::releases`], kept as the channels change: the application asks it at
+    /// every safety scan, and the channels' releases and drops change far more rarely.
+    /// Worked out again after every change of a channel's release or drops
+    /// ([`SafetyMonitor::look_again`]), except for the release of a channel with the code in
+    /// turn, which only sets its bit.
+    looks: (u32, bool),
 }
 
 impl SafetyMonitor {
@@ -392,7 +398,7 @@ impl SafetyMonitor {
         cfg: MonitorConfig,
         addresses: &[Address],
     ) -> SafetyMonitor {
-        SafetyMonitor {
+        let mut m = SafetyMonitor {
             cfg,
             listener: Listener::new(&timing.receiver(Expect::Both)),
             asked: None,
@@ -407,7 +413,21 @@ impl SafetyMonitor {
                     .unwrap_or(SafetyMonitor::NO_CHANNEL)
             }),
             quiet_until: SimTime::ZERO,
-        }
+            looks: (0, false),
+        };
+        m.look_again();
+        m
+    }
+
+    /// Works [`SafetyMonitor::looks`] out from the channels: the released addresses and
+    /// whether a channel holds a dropped release.
+    fn look_again(&mut self) {
+        self.looks = self.channels.iter().fold((0, false), |(mask, drops), c| {
+            (
+                mask | u32::from(c.released) << c.address.get(),
+                drops || !c.drops.is_empty(),
+            )
+        });
     }
 
     /// `slots` of an address that has no channel (no monitor has as many channels).
@@ -421,6 +441,7 @@ impl SafetyMonitor {
             c.released = false;
             c.reason = NotReleased::Recovering;
         }
+        self.look_again();
     }
 
     /// Forgets every learned table and starts teaching again.
@@ -428,6 +449,7 @@ impl SafetyMonitor {
         for c in &mut self.channels {
             *c = Channel::new(c.address);
         }
+        self.look_again();
     }
 
     /// The channel of the slave at `a`, `None` if it is not monitored.
@@ -587,6 +609,9 @@ impl SafetyMonitor {
             // already only raises its own deadline, so the bound stays low enough.
             if c.released {
                 self.quiet_until = self.quiet_until.min(now + self.cfg.max_silence);
+                // The code in turn releases a channel or leaves it as it was, and drops
+                // nothing: its bit is all that can change in `looks`.
+                self.looks.0 |= 1 << c.address.get();
             }
         } else {
             self.judge_in_full(now, usize::from(slot), code);
@@ -605,6 +630,7 @@ impl SafetyMonitor {
                 self.quiet_until = self.quiet_until.min(now + cfg.max_silence);
             }
         }
+        self.look_again();
     }
 
     /// Advances the monitor's clock (missing-code timeouts). The bus polls at every
@@ -630,6 +656,7 @@ impl SafetyMonitor {
             }
         }
         self.quiet_until = quiet_until;
+        self.look_again();
     }
 
     /// `true` if the slave at `address` is monitored and released.
@@ -666,13 +693,21 @@ impl SafetyMonitor {
     /// The released addresses (bit `a` set for address `a`), and whether a release was
     /// dropped since the last [`SafetyMonitor::take_drops`]: [`SafetyMonitor::released`] of
     /// every address and [`SafetyMonitor::has_drops`] in one look at the channels.
+    ///
+    /// Kept as the channels change ([`SafetyMonitor::looks`]); debug builds, and so the
+    /// tests, check it against the channels at every call.
     pub fn releases(&self) -> (u32, bool) {
-        self.channels.iter().fold((0, false), |(mask, drops), c| {
-            (
-                mask | u32::from(c.released) << c.address.get(),
-                drops || !c.drops.is_empty(),
-            )
-        })
+        debug_assert_eq!(
+            self.looks,
+            self.channels.iter().fold((0, false), |(mask, drops), c| {
+                (
+                    mask | u32::from(c.released) << c.address.get(),
+                    drops || !c.drops.is_empty(),
+                )
+            }),
+            "the monitor's releases are out of step with its channels"
+        );
+        self.looks
     }
 
     /// `true` if a release was dropped since the last [`SafetyMonitor::take_drops`].
@@ -691,6 +726,7 @@ impl SafetyMonitor {
             .iter_mut()
             .flat_map(|c| c.drops.drain(..))
             .collect();
+        self.look_again();
         all.sort_by_key(|d| d.at);
         all
     }

@@ -641,3 +641,74 @@ proptest::proptest! {
         }
     }
 }
+
+/// [`SafetyMonitor::releases`] as it was: one look at every channel.
+fn releases_by_channels(m: &SafetyMonitor) -> (u32, bool) {
+    m.channels.iter().fold((0, false), |(mask, drops), c| {
+        (
+            mask | u32::from(c.released) << c.address.get(),
+            drops || !c.drops.is_empty(),
+        )
+    })
+}
+
+proptest::proptest! {
+    #![proptest_config(proptest::test_runner::Config::with_cases(500))]
+
+    /// The releases kept as the channels change are those one look at the channels finds,
+    /// after every telegram, poll, taking of the drops, table given and reteaching: codes in
+    /// turn (the channel released, or kept), wrong codes and 0000 (released dropped), silence
+    /// beyond the tolerance, taught or teaching.
+    #[test]
+    fn the_kept_releases_are_the_channels_releases(
+        steps in proptest::collection::vec(
+            (
+                0u8..3,
+                proptest::prop_oneof![
+                    12 => proptest::strategy::Just(None),
+                    2 => (0u8..16).prop_map(Some),
+                    1 => proptest::strategy::Just(Some(0)),
+                ],
+                proptest::prop_oneof![8 => 154_000..3_000_000u64, 1 => 3_000_000..100_000_000u64],
+                0u8..40,
+            ),
+            1..400,
+        ),
+        taught in proptest::prelude::any::<bool>(),
+    ) {
+        let mut m = taught_or_not(taught);
+        let tables = [CodeTable::from_serial(11).codes(), CodeTable::from_serial(12).codes()];
+        let mut next = [0usize; 2];
+        let mut now = 0u64;
+        for (to, wrong, gap, other) in steps {
+            now += gap;
+            let t = at(now);
+            // A Data_Exchange to 11 or 12, or to an address not monitored.
+            let a = Address::new([11, 12, 3][usize::from(to)]).expect("an address");
+            let q = Request::data_exchange(a, asi_phy::Nibble::ZERO).expect("a request");
+            m.on_clean_request(t, q);
+            let code = match (wrong, usize::from(to)) {
+                (Some(c), _) => c,
+                (None, i) if i < 2 => {
+                    next[i] = (next[i] + 1) % 8;
+                    tables[i][next[i]]
+                }
+                _ => 0b0110,
+            };
+            let r = Response::new(asi_phy::Nibble::from_low_bits(code));
+            m.on_clean_response(at(now + 100_000), r);
+            m.poll(at(now + 100_000));
+            match other {
+                0..=4 => {
+                    m.take_drops();
+                }
+                5 => m.reteach(),
+                6 => m.set_table(Address::new(11).expect("11"), CodeTable::from_serial(11)),
+                _ => {}
+            }
+            let kept = m.looks;
+            proptest::prop_assert_eq!(kept, releases_by_channels(&m));
+            proptest::prop_assert_eq!(m.releases(), kept);
+        }
+    }
+}
