@@ -631,6 +631,22 @@ mod tests {
         runs
     }
 
+    /// Two copies of `lab()` run 300 ms in grid runs looking at `key`, one by
+    /// `advance_grid` and one by steps: the same runs, transactions and statistics. Returns
+    /// the runs, for the caller to check that they stop where it expects.
+    fn grid_runs_agree<K: PartialEq>(
+        lab: impl Fn() -> LabLift,
+        key: &dyn Fn(&Bus) -> K,
+    ) -> Vec<GridRun> {
+        let (mut a, mut b) = (lab(), lab());
+        let by_grid = grid_runs(&mut a, false, 300, key);
+        let by_steps = grid_runs(&mut b, true, 300, key);
+        assert_eq!(by_grid, by_steps);
+        assert_eq!(a.bus.drain_trace(), b.bus.drain_trace());
+        assert_eq!(a.bus.stats(), b.bus.stats());
+        by_grid
+    }
+
     /// A grid run stops where an application stepping to each grid point would: at a new
     /// output before a point, at a point where one came or where its look changed, and
     /// nowhere else; and the bus goes through the same transactions. Looked at: the master's
@@ -646,17 +662,12 @@ mod tests {
             lab.bus.enable_trace(1 << 16);
             lab
         };
-        let (mut a, mut b) = (startup(), startup());
-        let by_grid = grid_runs(&mut a, false, 300, &las);
-        let by_steps = grid_runs(&mut b, true, 300, &las);
-        assert_eq!(by_grid, by_steps);
-        let points = by_grid
+        let runs = grid_runs_agree(startup, &las);
+        let points = runs
             .iter()
             .filter(|r| matches!(r.stop, Some(GridStop::Point(_))))
             .count();
-        assert!(points > 0, "the LAS never changed: {by_grid:?}");
-        assert_eq!(a.bus.drain_trace(), b.bus.drain_trace());
-        assert_eq!(a.bus.stats(), b.bus.stats());
+        assert!(points > 0, "the LAS never changed: {runs:?}");
 
         let transfer = || {
             let mut lab = analog_transfer();
@@ -664,18 +675,13 @@ mod tests {
             lab.bus.pass_quiet_outputs_until(Some(ms(150)));
             lab
         };
-        let (mut a, mut b) = (transfer(), transfer());
         let count = |bus: &Bus| bus.drive_count();
-        let by_grid = grid_runs(&mut a, false, 300, &count);
-        let by_steps = grid_runs(&mut b, true, 300, &count);
-        assert_eq!(by_grid, by_steps);
-        let outputs = by_grid
+        let runs = grid_runs_agree(transfer, &count);
+        let outputs = runs
             .iter()
             .filter(|r| matches!(r.stop, Some(GridStop::Output(_))))
             .count();
-        assert!(outputs > 0, "no new output stopped a run: {by_grid:?}");
-        assert_eq!(a.bus.drain_trace(), b.bus.drain_trace());
-        assert_eq!(a.bus.stats(), b.bus.stats());
+        assert!(outputs > 0, "no new output stopped a run: {runs:?}");
     }
 
     #[test]
