@@ -57,6 +57,7 @@ use asi_slaves::slave::{Peripheral, Slave};
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
 
+mod access;
 mod grid;
 mod hooks;
 mod outputs;
@@ -385,19 +386,13 @@ impl Bus {
     /// them ([`Bus::watch_outputs`]) is the caller's to hand on now: it does not end the next
     /// [`Bus::advance_before`] early.
     pub fn advance_to(&mut self, now: SimTime) {
-        self.advance_to_taking(now);
-    }
-
-    /// [`Bus::advance_to`]; `true` if a watched slave took a new output nibble in it (one
-    /// that did not pass, [`Bus::pass_quiet_outputs_until`]).
-    #[inline]
-    fn advance_to_taking(&mut self, now: SimTime) -> bool {
-        let taken = self.run_to(now);
+        self.run_to(now);
         self.settle();
-        taken
     }
 
-    /// [`Bus::advance_to_taking`], the receivers left unsettled ([`Bus::settle`]).
+    /// [`Bus::advance_to`], the receivers left unsettled ([`Bus::settle`]); `true` if a
+    /// watched slave took a new output nibble in it (one that did not pass,
+    /// [`Bus::pass_quiet_outputs_until`]).
     #[inline]
     fn run_to(&mut self, now: SimTime) -> bool {
         self.horizon = now;
@@ -814,161 +809,6 @@ impl Bus {
         if readdressed || reset {
             self.reindex();
         }
-    }
-
-    // ----- application access -----------------------------------------------------------
-
-    /// Starts (`true`) or stops recording the line: every pulse as it is on the line (after
-    /// faults, colliding answers superimposed), for waveform and VCD export.
-    pub fn record_line(&mut self, on: bool) {
-        self.release_held();
-        self.medium.record_pulses(on);
-        self.line_changed();
-    }
-
-    /// The pulses put on the line since the last call, in the order they went on it (a
-    /// pulse that a fault shifted may be slightly out of time order).
-    pub fn take_line_pulses(&mut self) -> Vec<asi_phy::Pulse> {
-        self.medium.take_pulses()
-    }
-
-    /// The master.
-    pub fn master(&self) -> &Master {
-        &self.master
-    }
-
-    /// The process image (what the PLC reads and writes).
-    pub fn image(&self) -> &asi_master::image::ProcessImage {
-        self.master.image()
-    }
-
-    /// The process image for the PLC to write its outputs, host flags and mailbox jobs. An
-    /// idle master (offline by host flag) looks at it again at the bus time.
-    pub fn image_mut(&mut self) -> &mut asi_master::image::ProcessImage {
-        if self.state == State::Idle && self.master.power_ok() {
-            self.next_event = self.next_event.min(self.now);
-        }
-        self.master.image_mut()
-    }
-
-    /// The bus timing.
-    pub fn timing(&self) -> &BusTiming {
-        &self.timing
-    }
-
-    /// Cumulative statistics: transactions, repeats, errors by check class, no-response, cycle
-    /// time, drop-outs.
-    pub fn stats(&self) -> BusStats {
-        let c = self.master.cycle_stats();
-        BusStats {
-            dropouts: c.dropouts,
-            cycles: c.cycles,
-            cycle_min: c.cycle_min,
-            cycle_max: c.cycle_max,
-            cycle_total: c.cycle_total,
-            ..self.stats
-        }
-    }
-
-    /// Keeps the last `capacity` trace records for [`Bus::drain_trace`] (0 switches it off).
-    pub fn enable_trace(&mut self, capacity: usize) {
-        self.ring = (capacity > 0).then(|| TraceRing::new(capacity));
-    }
-
-    /// Takes the trace records kept so far, oldest first.
-    pub fn drain_trace(&mut self) -> Vec<TransactionRecord> {
-        self.ring
-            .as_mut()
-            .map_or_else(Vec::new, |r| r.drain().collect())
-    }
-
-    /// The trace ring (for `dropped()` and allocation-free draining).
-    pub fn trace_ring_mut(&mut self) -> Option<&mut TraceRing> {
-        self.ring.as_mut()
-    }
-
-    /// Calls `cb` with every trace record (`None` removes it).
-    pub fn set_trace_callback(&mut self, cb: Option<TraceCallback>) {
-        self.callback = cb;
-    }
-
-    /// Number of slaves added.
-    pub fn slave_count(&self) -> usize {
-        self.slaves.len()
-    }
-
-    /// A slave.
-    pub fn slave(&self, id: SlaveId) -> Option<&Slave> {
-        self.slaves.get(id.0).map(|s| &s.slave)
-    }
-
-    /// A slave, mutable (for fault hooks such as [`Slave::set_nv_error`]).
-    pub fn slave_mut(&mut self, id: SlaveId) -> Option<&mut Slave> {
-        self.slaves.get_mut(id.0).map(|s| &mut s.slave)
-    }
-
-    /// The attached slave currently at address `n` (A or standard), if any (first found).
-    pub fn find(&self, n: u8) -> Option<SlaveId> {
-        self.slaves
-            .iter()
-            .position(|s| s.attached && s.slave.addr().number() == n)
-            .map(SlaveId)
-    }
-
-    /// The device of slave `id` as a `T`.
-    pub fn device<T: Peripheral>(&self, id: SlaveId) -> Option<&T> {
-        self.slave(id)?.device().as_any().downcast_ref()
-    }
-
-    /// The device of slave `id` as a `T`, mutable (to set its peripheral inputs).
-    pub fn device_mut<T: Peripheral>(&mut self, id: SlaveId) -> Option<&mut T> {
-        self.slave_mut(id)?.device_mut().as_any_mut().downcast_mut()
-    }
-
-    /// A monitor.
-    pub fn monitor(&self, id: MonitorId) -> Option<&SafetyMonitor> {
-        debug_assert!(self.unsettled.is_none(), "the bus is settled between calls");
-        self.monitors.get(id.0)
-    }
-
-    /// `true` if monitor `id` releases the safety slave at `address` (`false` without that
-    /// monitor). What the monitor releases is not its receiver's state: this may be asked
-    /// while a run of clean transactions has not been written into the receivers
-    /// ([`Bus::advance_grid`]'s look).
-    pub fn monitor_releases(&self, id: MonitorId, address: Address) -> bool {
-        self.monitors.get(id.0).is_some_and(|m| m.released(address))
-    }
-
-    /// [`SafetyMonitor::releases`] of monitor `id` (none without it): the addresses it
-    /// releases and whether it has dropped a release since the last
-    /// [`Bus::take_monitor_drops`] (may be asked as [`Bus::monitor_releases`]).
-    pub fn monitor_look(&self, id: MonitorId) -> (u32, bool) {
-        self.monitors
-            .get(id.0)
-            .map_or((0, false), SafetyMonitor::releases)
-    }
-
-    /// A monitor, mutable.
-    pub fn monitor_mut(&mut self, id: MonitorId) -> Option<&mut SafetyMonitor> {
-        // The application may put another monitor in its place.
-        self.monitor_in_step = false;
-        self.monitors.get_mut(id.0)
-    }
-
-    /// The releases monitor `id` dropped since the last call, in order
-    /// ([`SafetyMonitor::take_drops`]); empty for no such monitor. Taking them leaves its
-    /// receiver as it is, so a monitor in step with the slaves' receiver stays so (unlike
-    /// [`Bus::monitor_mut`], after which the two are compared again).
-    pub fn take_monitor_drops(&mut self, id: MonitorId) -> Vec<asi_slaves::monitor::MonitorDrop> {
-        self.monitors
-            .get_mut(id.0)
-            .map(SafetyMonitor::take_drops)
-            .unwrap_or_default()
-    }
-
-    /// `true` once the master is in normal operation.
-    pub fn is_running(&self) -> bool {
-        self.master.phase() == Phase::NormalOperation
     }
 }
 
