@@ -40,6 +40,13 @@ impl BusReads {
         }
     }
 
+    /// `true` if the master is in normal operation with the LAS the watch saw last (`seen`,
+    /// [`LasWatch::seen`]): the watch then has nothing to note.
+    #[inline]
+    fn las_seen(&self, seen: Option<u32>) -> bool {
+        self.las.is_some() && self.las == seen
+    }
+
     /// `true` if the monitor releases the safety sensor at `address`.
     #[inline]
     fn releases(&self, address: u8) -> bool {
@@ -55,7 +62,7 @@ impl Rig {
     /// [`LasWatch::update`] leaves it then).
     #[inline]
     fn watch_bus_reads(&mut self, t: SimTime, reads: BusReads) {
-        if reads.las.is_none() || reads.las != self.las_watch.seen() {
+        if !reads.las_seen(self.las_watch.seen()) {
             self.las_moved(t, reads.las);
         }
         if reads.drops {
@@ -207,7 +214,7 @@ impl Rig {
     /// ([`LiftSafety::quiet_before`]), the LAS the watch saw and no monitor drop, the
     /// attendant idle and no safe drive. It ends before the next moment of anything else
     /// that a step handles (PLC scan, scenario event, timer, plant edge, the end), before the
-    /// logic's quiet ends, and after the time through which new outputs pass the rig by
+    /// logic's quiet ends, and not after the time through which new outputs pass the rig by
     /// (`quiet`, [`Rig::outputs_pass_until`]: no dirty plant, no waves, not pulse-exact,
     /// and the invariant watch's quiet holds). Within it the rest of each step does nothing:
     /// the plant has no edge (it is brought to each scan time all the same), the slaves' new
@@ -231,7 +238,7 @@ impl Rig {
         }
         let monitor = self.lab.monitor;
         let reads = BusReads::of(&self.lab.bus, monitor);
-        if reads.las.is_none() || reads.las != self.las_watch.seen() || reads.drops {
+        if !reads.las_seen(self.las_watch.seen()) || reads.drops {
             return Stretch::None;
         }
         // What the slaves drive is read at a step when the drive count has moved: the bus
