@@ -239,12 +239,28 @@ pub struct SafetyReport {
     /// (absent when it never did).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub monitor: Vec<MonitorTrip>,
+    /// Every time the cabin reached an overtravel sensor under power (K1 closed), in order
+    /// (absent when it never did): contained by the safety logic, so no violation, but a
+    /// failure of the controller (docs/safety.md).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub overtravel_reached: Vec<OvertravelReached>,
     /// How many rounds (rescue, acknowledge, reset) the attendant made (absent when none).
     #[serde(skip_serializing_if = "is_zero")]
     pub attendant_rounds: u32,
     /// The safe drive's record (absent without `[drive] safe = true`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub drive: Option<DriveReport>,
+}
+
+/// The cabin reached an overtravel sensor under power.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct OvertravelReached {
+    /// When, seconds.
+    pub at_s: f64,
+    /// `top` or `bottom`.
+    pub end: String,
+    /// The cabin's height then, mm.
+    pub position_mm: f64,
 }
 
 /// What the safe drive did (docs/drive-safety.md §6).
@@ -400,17 +416,22 @@ pub enum ViolationKind {
     /// K1 still closed after STOP's delay and a margin.
     #[serde(rename = "stop-ignored")]
     StopIgnored,
+    /// After STOP the cabin went on past the next floor in its direction of travel, reversed,
+    /// or started a new run, before the circuit was restarted (docs/safety.md).
+    #[serde(rename = "stop-overrun")]
+    StopOverrun,
 }
 
 impl ViolationKind {
     /// Every kind.
-    pub const ALL: [ViolationKind; 6] = [
+    pub const ALL: [ViolationKind; 7] = [
         ViolationKind::DoorOpenMoving,
         ViolationKind::K1InOvertravel,
         ViolationKind::MechanicalEnd,
         ViolationKind::UnintendedMovement,
         ViolationKind::OverloadedMoving,
         ViolationKind::StopIgnored,
+        ViolationKind::StopOverrun,
     ];
 
     /// The kind's name in reports and files.
@@ -422,6 +443,7 @@ impl ViolationKind {
             ViolationKind::MechanicalEnd => "mechanical-end",
             ViolationKind::UnintendedMovement => "unintended-movement",
             ViolationKind::StopIgnored => "stop-ignored",
+            ViolationKind::StopOverrun => "stop-overrun",
         }
     }
 }
@@ -510,6 +532,7 @@ impl Report {
             safety: SafetyReport {
                 trips: Vec::new(),
                 monitor: Vec::new(),
+                overtravel_reached: Vec::new(),
                 attendant_rounds: 0,
                 drive: None,
             },
@@ -723,6 +746,26 @@ impl Report {
                     }
                 }
             }
+        }
+        let reached = &self.safety.overtravel_reached;
+        if !reached.is_empty() {
+            let list: Vec<String> = reached
+                .iter()
+                .take(SHOWN)
+                .map(|r| format!("{} at {:.3} s", r.end, r.at_s))
+                .collect();
+            let more = reached.len().saturating_sub(SHOWN);
+            let more = if more > 0 {
+                format!(", … and {more} more")
+            } else {
+                String::new()
+            };
+            let _ = writeln!(
+                s,
+                "  overtravel reached {} under power, contained by the safety logic ({}{more})",
+                reached.len(),
+                list.join(", ")
+            );
         }
         if self.safety.attendant_rounds > 0 {
             let _ = writeln!(s, "  attendant rounds   {}", self.safety.attendant_rounds);

@@ -550,3 +550,161 @@ fn an_attendant_answers_a_monitor_trip_from_line_noise_after_the_repairs() {
         r.to_text()
     );
 }
+
+/// The judge adds up the time the cabin moves with the door open over any 10 s (docs/safety.md).
+/// The door opened twice in one journey, 6 s apart (campaign seed 2026, run 30): each opening
+/// costs the built-in program about 0.55 s of motion (the cabin word, a scan, the converter's
+/// ramp), 1.07 s together. After a door opening halts the cabin, it now waits 11 s before the
+/// next run, so the second opening finds it at rest.
+#[test]
+fn a_door_opened_twice_in_one_journey_is_not_a_second_of_motion() {
+    let r = run_toml(
+        "door twice during travel",
+        r#"
+duration = "40s"
+[lift]
+start_mm = 400.0
+load = "full"
+[bus]
+pulse_error_rate = 0.001
+[[event]]
+at = "12612ms"
+press = "hall-up:2"
+[[event]]
+at = "12990ms"
+door = "open"
+[[event]]
+at = "16748ms"
+door = "closed"
+[[event]]
+at = "18918ms"
+door = "open"
+[[event]]
+at = "20s"
+door = "closed"
+"#,
+    );
+    assert_no_violations(&r);
+    let halted = logged_at(&r, "controller", "halted between floors: door open").expect("halt");
+    let continued = logged_after(&r, "controller", "continues travel", halted).expect("on");
+    assert!(continued >= halted + 11.0, "{}", r.to_text());
+    assert_eq!(served(&r), [(2, "hall".into())]);
+}
+
+/// STOP pressed while a bus fault held the cabin between floors (campaign seed 2026, run 134):
+/// when the bus came back the program resumed the journey to the next floor, a run started
+/// under STOP. Now it waits for the circuit's restart.
+#[test]
+fn a_cabin_held_by_a_bus_fault_starts_no_run_under_stop() {
+    let r = run_toml(
+        "STOP in a bus fault",
+        r#"
+duration = "49s"
+[lift]
+floors = 2
+start_mm = 52.1
+load = "loaded"
+[[event]]
+at = "38582ms"
+press = "cabin:2"
+[[event]]
+at = "41705ms"
+fault = { kind = "slave-offline", slave = 10 }
+[[event]]
+at = "41932ms"
+press = "stop"
+hold = "1466ms"
+[[event]]
+at = "47421ms"
+fault = { kind = "slave-online", slave = 10 }
+"#,
+    );
+    assert_no_violations(&r);
+    assert!(logged(
+        &r,
+        "controller",
+        "initialisation held: STOP circuit open"
+    ));
+    assert!(!r.final_state.moving, "{}", r.to_text());
+}
+
+/// The level sensor stuck off while the cabin brakes for the floor STOP chose (campaign seed
+/// 2026, run 45): the program ran on to the vane's far end and stopped 42 mm past the level.
+/// Its level watchdog now stops the cabin inside the vane.
+#[test]
+fn a_level_sensor_lost_while_braking_for_stop_stops_the_cabin_inside_the_vane() {
+    let r = run_toml(
+        "level sensor lost under STOP",
+        r#"
+duration = "107s"
+algorithm = "collective"
+[lift]
+start_mm = 400.0
+[controller]
+scan = "2ms"
+[[event]]
+at = "44366ms"
+press = "stop"
+hold = "310ms"
+[[event]]
+at = "51610ms"
+press = "hall-down:4"
+[[event]]
+at = "58407ms"
+press = "cabin:2"
+[[event]]
+at = "95454ms"
+press = "hall-up:1"
+hold = "539ms"
+[[event]]
+at = "97389ms"
+press = "stop"
+hold = "1887ms"
+[[event]]
+at = "102657ms"
+fault = { kind = "vane-stuck-off", sensor = "left" }
+"#,
+    );
+    assert_no_violations(&r);
+    assert!(
+        logged(&r, "controller", "level"),
+        "the missed level is reported: {}",
+        r.to_text()
+    );
+    assert!(
+        r.final_state.position_mm > 765.0 && r.final_state.position_mm < 800.0,
+        "{}",
+        r.to_text()
+    );
+}
+
+/// The operator's reset closes K1 during a crank turn under STOP (campaign seed 13, run 801):
+/// the converter takes the moving cabin over and brings it to rest. No run was started; the
+/// judge counts the motion as powered and under way (docs/safety.md).
+#[test]
+fn power_taking_over_a_crank_turn_under_stop_is_no_new_run() {
+    let r = run_toml(
+        "crank and reset under STOP",
+        r#"
+duration = "40s"
+[lift]
+start_mm = 0.0
+load = "overloaded"
+[[event]]
+at = "17063ms"
+load = "full"
+[[event]]
+at = "32780ms"
+press = "stop"
+hold = "1743ms"
+[[event]]
+at = "33424ms"
+crank_mm = 18.2
+[[event]]
+at = "34104ms"
+reset = true
+"#,
+    );
+    assert_no_violations(&r);
+    assert!(logged(&r, "safety", "K1 closed"));
+}

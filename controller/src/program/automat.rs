@@ -4,7 +4,7 @@
 use super::events::{HaltReason, LostReason, ProgramEventKind};
 use super::io::{overloaded, Edges, Inputs};
 use super::state::{Phase, Step};
-use super::{Program, COAST};
+use super::{Program, COAST, DOOR_LOCKOUT};
 use crate::dispatch::Dir;
 use asi_phy::SimTime;
 
@@ -98,6 +98,7 @@ impl Program {
                     self.choose_target(now);
                     if self.target != self.current
                         && now >= self.depart_after
+                        && now >= self.door_lockout_until
                         && door_closed
                         && inp.converter_ready
                         && !inp.converter_fault
@@ -129,6 +130,7 @@ impl Program {
                 if let Some(reason) = halt {
                     self.hold();
                     self.drive_off_at = now;
+                    self.door_halt(now, reason);
                     self.event(now, ProgramEventKind::Halted(reason));
                     self.phase = Phase::Service(Step::Halted { reason, braking });
                     // The edges of this scan still count.
@@ -137,7 +139,7 @@ impl Program {
                     if both {
                         self.arrive(now);
                     } else if e.vane_fall
-                        || now.saturating_duration_since(self.progress_at) > self.cfg.creep_watchdog
+                        || now.saturating_duration_since(self.progress_at) > self.cfg.level_watchdog
                     {
                         self.lose_now(now, LostReason::MissedLevel);
                     }
@@ -179,6 +181,7 @@ impl Program {
                         !inp.converter_fault && inp.converter_ready
                     }
                 };
+                let cleared = cleared && now >= self.door_lockout_until;
                 if cleared && door_closed && !overloaded && inp.estop_ok && self.lost {
                     if inp.converter_ready && !inp.converter_fault {
                         // The count is not trusted: find floor 1 first, then the target.
@@ -200,6 +203,14 @@ impl Program {
                 }
             }
             Step::StopFault => {}
+        }
+    }
+
+    /// The drive was taken off for `reason`: if the door opened during a run, no run starts
+    /// for [`DOOR_LOCKOUT`].
+    pub(super) fn door_halt(&mut self, now: SimTime, reason: HaltReason) {
+        if reason == HaltReason::DoorOpen {
+            self.door_lockout_until = now + DOOR_LOCKOUT;
         }
     }
 

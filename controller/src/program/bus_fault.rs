@@ -2,7 +2,7 @@
 //! or an AS-i power fail hold the cabin; the journey resumes if the program kept sight of the
 //! cabin, else initialisation finds it again.
 
-use super::events::ProgramEventKind;
+use super::events::{HaltReason, ProgramEventKind};
 use super::io::{Edges, Inputs};
 use super::state::{Phase, Step};
 use super::{Program, COAST};
@@ -70,6 +70,16 @@ impl Program {
                     self.dispatch.requeue(self.target);
                 }
                 self.start_init(now);
+                if self.stop_demand && inp.converter_ready {
+                    // STOP came during the bus fault and the drive still has power (the STOP
+                    // delay runs): the cabin at rest starts no run until the circuit is
+                    // restarted (initialisation's hold, as for any reason). Without power the
+                    // next scan's hold comes before anything can move.
+                    self.hold();
+                    self.init_held = Some(HaltReason::Stop);
+                    self.drive_off_at = now;
+                    self.event(now, ProgramEventKind::InitHeld(HaltReason::Stop));
+                }
             }
             _ => {}
         }
@@ -81,8 +91,14 @@ impl Program {
         self.progress_at = now;
         self.running_since = now;
         let braking = step == Step::Braking;
-        if let (Some(reason), Step::Travel | Step::Braking) = (self.cabin_blocks_motion(), step) {
-            // The door opened or the cabin was loaded during the bus fault: held, not resumed.
+        let reason = if self.stop_demand {
+            Some(HaltReason::Stop)
+        } else {
+            self.cabin_blocks_motion()
+        };
+        if let (Some(reason), Step::Travel | Step::Braking) = (reason, step) {
+            // STOP came, the door opened or the cabin was loaded during the bus fault: held,
+            // not resumed (a cabin at rest under STOP starts no run).
             self.drive_off_at = now;
             self.event(now, ProgramEventKind::Halted(reason));
             self.phase = Phase::Service(Step::Halted { reason, braking });

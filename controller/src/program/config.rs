@@ -41,6 +41,14 @@ pub struct ControllerConfig {
     /// its edge within this means a vane sensor lies. Default 6 s: the long track is 80 mm,
     /// 3.9 s at the creep speed (20.6 mm/s).
     pub creep_watchdog: SimDuration,
+    /// Braking to a floor's level that has not reached it this long after the vane began
+    /// means the level sensor lies: the cabin stops inside the vane instead of running on
+    /// to its far end. Default 2.5 s: the level comes 40 mm after the vane's start, 1.8 s on
+    /// (the ramp from the travel to the creep speed takes 0.25 s and 10 mm, then 30 mm at
+    /// 20.6 mm/s; a cabin word later, 1.9 s); after 2.5 s the cabin stands about 15 mm past
+    /// the level, within the vane's half-length that the judge allows a cabin stopping for
+    /// STOP (docs/safety.md).
+    pub level_watchdog: SimDuration,
     /// A vane sensor on for longer than this while the cabin runs at the travel or the
     /// initialisation speed is stuck on. Default 3 s: the long track (80 mm) passes in 1.35 s
     /// at the travel speed and 1.16 s at the initialisation speed; 3 s leave room for the
@@ -64,6 +72,7 @@ impl Default for ControllerConfig {
             dwell: SimDuration::from_secs(2),
             travel_watchdog: SimDuration::from_secs(9),
             creep_watchdog: SimDuration::from_secs(6),
+            level_watchdog: SimDuration::from_millis(2_500),
             stuck_on_after: SimDuration::from_secs(3),
         }
     }

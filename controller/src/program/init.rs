@@ -92,6 +92,9 @@ impl Program {
         };
         match (self.init_held, reason) {
             (None, Some(r)) => {
+                if self.out.run {
+                    self.door_halt(now, r);
+                }
                 self.hold();
                 self.init_held = Some(r);
                 self.drive_off_at = now;
@@ -104,6 +107,10 @@ impl Program {
                     self.init_held = Some(r);
                     self.event(now, ProgramEventKind::InitHeld(r));
                 }
+                return;
+            }
+            (Some(_), None) if now < self.door_lockout_until => {
+                self.hold();
                 return;
             }
             (Some(_), None) => {

@@ -50,6 +50,9 @@ pub struct Program {
     stop_pending: bool,
     /// A cabin request came in the STOP fault: restart pulses are due.
     restart_wanted: bool,
+    /// This scan's STOP demand: EStopOut off or the cabin's STOP button pressed. No run
+    /// starts while it lasts (seed 003 §6.3), whatever routine would start one.
+    stop_demand: bool,
     cabin: CabinWord,
     last_cabin_at: Option<SimTime>,
     restart_high: bool,
@@ -57,6 +60,9 @@ pub struct Program {
     initialised_at: Option<SimTime>,
     /// No departure before this time (dwell after an arrival).
     depart_after: SimTime,
+    /// No run starts before this time: the door opened during the last one
+    /// ([`DOOR_LOCKOUT`]).
+    door_lockout_until: SimTime,
     dispatch: Dispatcher,
     /// The floor number on the displays (Cislo_Patra): set at departure, on arrival and at the
     /// start of initialisation only (see `Program::update_display`).
@@ -99,6 +105,13 @@ pub struct Program {
 /// cabin word that shows the last edge can come a word time (140 ms at a 10 ms scan) later.
 const COAST: SimDuration = SimDuration::from_secs(1);
 
+/// After the door opened during travel, no run starts for this long after the halt. The judge
+/// adds up the time the cabin moves with the door open over any 10 s and allows 1 s
+/// (docs/safety.md); each opening costs up to about 0.6 s of motion (the cabin word, a scan,
+/// the converter's ramp), so two openings in one journey could add up to more. With the run
+/// after the halt [`COAST`] and 10 s later, no two such spans share a 10 s window.
+const DOOR_LOCKOUT: SimDuration = SimDuration::from_secs(11);
+
 impl Program {
     /// A program that has just been loaded and set to RUN.
     pub fn new(cfg: ControllerConfig) -> Result<Program, ControllerConfigError> {
@@ -111,12 +124,14 @@ impl Program {
             dir: None,
             stop_pending: false,
             restart_wanted: false,
+            stop_demand: false,
             cabin: CabinWord::default(),
             last_cabin_at: None,
             restart_high: false,
             next_restart: SimTime::ZERO,
             initialised_at: None,
             depart_after: SimTime::ZERO,
+            door_lockout_until: SimTime::ZERO,
             dispatch,
             shown_floor: 1,
             shown_dir: None,
@@ -155,6 +170,7 @@ impl Program {
         let edges = self.read_inputs(now, inp);
         self.out.overloaded = overloaded(inp);
         let stop_demand = !inp.estop_ok || self.cabin.stop;
+        self.stop_demand = stop_demand;
         let fresh = self
             .last_cabin_at
             .is_some_and(|t| now.saturating_duration_since(t) <= self.cfg.stale_after);
