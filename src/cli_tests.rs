@@ -284,6 +284,20 @@ fn a_campaign_whose_reader_goes_ends_quietly() {
 fn serve_names_its_bad_arguments_and_a_busy_port() {
     let err = fails(asi_lift().args(["serve", "--speed", "0"]));
     assert!(err.contains("--speed 0") && err.contains("max"), "{err}");
+    // A factor whose wall times do not fit a `Duration` is refused, not a panic.
+    let err = fails(asi_lift().args([
+        "serve",
+        "--speed",
+        "1e-30",
+        "--listen",
+        "127.0.0.1:0",
+        "--until",
+        "1s",
+    ]));
+    assert!(
+        err.contains("--speed 1e-30") && !err.contains("panicked"),
+        "{err}"
+    );
     let err = fails(asi_lift().args(["serve", "--listen", "localhost"]));
     assert!(err.contains("--listen localhost"), "{err}");
     let err = fails(asi_lift().args(["serve", "--ttk4145", "--controller", "builtin"]));

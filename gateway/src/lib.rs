@@ -46,6 +46,9 @@ pub enum GatewayError {
     /// The async runtime cannot start.
     #[error("cannot start the network runtime: {0}")]
     Runtime(std::io::Error),
+    /// The speed factor is out of bounds ([`Speed::factor`]).
+    #[error("{0}")]
+    Speed(String),
     /// The rig cannot be built.
     #[error("{0}")]
     Rig(String),
@@ -173,6 +176,7 @@ where
         ttk,
         http,
     } = listen;
+    cfg.speed.checked().map_err(GatewayError::Speed)?;
     let runtime = tokio::runtime::Builder::new_multi_thread()
         .worker_threads(1)
         .thread_name("asi-lift-gateway")

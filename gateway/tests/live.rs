@@ -41,6 +41,31 @@ fn start_with(toml: &str, owner: Owner, speed: Speed, ttk: bool) -> Running {
     gateway::start(make, cfg, loopback, ttk).expect("the gateway starts")
 }
 
+#[test]
+fn a_speed_factor_out_of_bounds_is_refused_at_the_start_not_a_panic_later() {
+    let sc = Scenario::from_toml("test.toml", QUIET).expect("a valid scenario");
+    let cfg = LiveConfig {
+        speed: Speed::Factor(1e-30),
+        owner: Owner::Builtin,
+        watchdog: SimDuration::from_millis(1000),
+        step: SimDuration::from_millis(1),
+    };
+    let loopback: SocketAddr = "127.0.0.1:0".parse().expect("an address");
+    match gateway::start(
+        move || Rig::new(sc).map_err(|e| e.to_string()),
+        cfg,
+        loopback,
+        None,
+    ) {
+        Err(e) => assert!(e.to_string().contains("speed factor 1e-30"), "{e}"),
+        Ok(running) => {
+            running.stop();
+            let _ = running.wait();
+            panic!("speed 1e-30 was accepted");
+        }
+    }
+}
+
 async fn connect(addr: SocketAddr) -> Context {
     tcp::connect(addr).await.expect("a connection")
 }

@@ -272,15 +272,18 @@ pub fn run(args: ServeArgs) -> Result<u8, String> {
     })
 }
 
-/// `--speed`: a positive factor or `max`.
+/// `--speed`: a factor within the live mode's bounds, or `max`.
 fn parse_speed(s: &str) -> Result<Speed, String> {
     if s == "max" {
         return Ok(Speed::Max);
     }
-    match s.parse::<f64>() {
-        Ok(x) if x.is_finite() && x > 0.0 && x <= 1000.0 => Ok(Speed::Factor(x)),
-        _ => Err(format!(
-            "--speed {s}: expected a factor above 0 and at most 1000 (simulated seconds per wall second) or `max`"
-        )),
-    }
+    let expected = || {
+        format!(
+            "--speed {s}: expected a factor from {} to {} (simulated seconds per wall second) or `max`",
+            gateway::live::MIN_SPEED,
+            gateway::live::MAX_SPEED
+        )
+    };
+    let x = s.parse::<f64>().map_err(|_| expected())?;
+    Speed::factor(x).map_err(|_| expected())
 }
