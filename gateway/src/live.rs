@@ -139,6 +139,8 @@ pub enum ToRig {
     Web(WebCall),
     /// A client connected.
     Connected,
+    /// A line for the run's log from the servers (`who`, the text).
+    Log(&'static str, String),
     /// End the run now (Ctrl-C).
     Stop,
 }
@@ -392,6 +394,10 @@ impl RigThread {
             }
             ToRig::Connected => {
                 self.connections += 1;
+                false
+            }
+            ToRig::Log(who, text) => {
+                rig.log_now(who, text);
                 false
             }
             ToRig::Stop => true,
