@@ -252,11 +252,12 @@ where
             move |s| net::serve_ttk(s, to_rig.clone()),
         ));
     }
-    if let Some((listener, _)) = http {
+    if let Some((listener, bound)) = http {
         let app = web::router(web::Web {
             snapshots,
             history,
             tx: tx.clone(),
+            hosts: std::sync::Arc::new(web::Hosts::new(bound, options.allow_hosts.clone())),
         });
         let timeout = options.header_timeout;
         runtime.spawn(net::accept_loop(

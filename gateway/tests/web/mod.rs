@@ -424,3 +424,66 @@ fn connections_beyond_the_bound_are_closed_and_the_others_are_served() {
     running.stop();
     running.wait();
 }
+
+#[test]
+fn a_foreign_host_name_is_refused_on_every_route_and_the_own_names_are_served() {
+    let options = gateway::Options {
+        allow_hosts: vec!["lab-pc.local".into()],
+        ..gateway::Options::default()
+    };
+    let running = start_with(Speed::Factor(1.0), options);
+    let addr = running.http_addr().expect("the live view's address");
+    let port = addr.port();
+    let request = |host: &str, path: &str, extra: &str| {
+        http(
+            addr,
+            &format!("GET {path} HTTP/1.1\r\nHost: {host}\r\n{extra}Connection: close\r\n\r\n"),
+        )
+    };
+    let upgrade = "Upgrade: websocket\r\nConnection: Upgrade\r\nSec-WebSocket-Key: \
+                   dGhlIHNhbXBsZSBub25jZQ==\r\nSec-WebSocket-Version: 13\r\n";
+    // DNS rebinding: the attacker's name resolves to this machine; Origin and Host agree.
+    let evil = format!("evil.example:{port}");
+    let evil_origin = format!("Origin: http://{evil}\r\n{upgrade}");
+    for path in ["/", "/index.html", "/app.js", "/style.css", "/nothing"] {
+        let (status, body) = request(&evil, path, "");
+        assert!(status.contains("403"), "{path}: {status}");
+        assert!(body.contains("--allow-host"), "{body}");
+    }
+    let (status, _) = request(&evil, "/ws", &evil_origin);
+    assert!(status.contains("403"), "the socket: {status}");
+    // No Host at all (HTTP/1.0) is refused too.
+    let (status, _) = http(addr, "GET / HTTP/1.0\r\n\r\n");
+    assert!(status.contains("403"), "{status}");
+    // The own names are served; the allow-list's name with the bound port too.
+    for host in [
+        addr.to_string(),
+        format!("localhost:{port}"),
+        format!("127.0.0.2:{port}"),
+        format!("lab-pc.local:{port}"),
+    ] {
+        let (status, _) = request(&host, "/", "");
+        assert!(status.contains("200"), "{host}: {status}");
+    }
+    let (status, _) = request(&format!("lab-pc.local:{}", port.wrapping_add(1)), "/", "");
+    assert!(status.contains("403"), "{status}");
+    // The socket still wants its Origin to be the Host.
+    let own = format!("localhost:{port}");
+    let (status, _) = request(
+        &own,
+        "/ws",
+        &format!("Origin: http://evil.example:{port}\r\n{upgrade}"),
+    );
+    assert!(status.contains("403"), "{status}");
+    let mut s = TcpStream::connect(addr).expect("a connection");
+    s.set_read_timeout(Some(Duration::from_secs(5)))
+        .expect("a timeout");
+    let req = format!("GET /ws HTTP/1.1\r\nHost: {own}\r\nOrigin: http://{own}\r\n{upgrade}\r\n");
+    s.write_all(req.as_bytes()).expect("the upgrade goes out");
+    let mut head = [0u8; 12];
+    s.read_exact(&mut head).expect("an answer");
+    assert_eq!(&head, b"HTTP/1.1 101");
+    drop(s);
+    running.stop();
+    running.wait();
+}
