@@ -162,6 +162,14 @@ pub struct Status {
     pub ended: bool,
 }
 
+/// Of each source of log lines that the clients drive, a live run keeps the first this many
+/// lines and the last this many, and says how many it left out between them
+/// ([`Rig::bound_log`]): a client may send the same command millions of times.
+pub const LOG_KEEP: usize = 500;
+/// The sources the clients drive: the TTK4145 front end, Modbus commands, the page's
+/// commands, the gateway's watchdog and the servers' own lines.
+const CLIENT_SOURCES: [&str; 6] = ["ttk4145", "client", "web", "gateway", "modbus", "http"];
+
 /// Lag below this is the granularity of the pacing, not falling behind.
 const LAG_REPORTED: Duration = Duration::from_millis(2);
 /// At `max` with the built-in controller: simulated time between looks at the channel.
@@ -342,6 +350,9 @@ struct RigThread {
 
 impl RigThread {
     fn new(mut rig: Rig, cfg: LiveConfig, view: Option<ViewOut>) -> RigThread {
+        for who in CLIENT_SOURCES {
+            rig.bound_log(who, LOG_KEEP, LOG_KEEP);
+        }
         let viewer = view.map(|out| Viewer {
             telegrams: view::observe(&mut rig),
             out,
