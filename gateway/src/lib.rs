@@ -20,6 +20,9 @@ pub mod ttk;
 pub mod view;
 pub mod web;
 
+#[cfg(test)]
+mod props;
+
 use crossbeam_channel::{Receiver, Sender};
 use live::{LiveConfig, Status, ToRig, ViewOut};
 use rig::{Report, Rig};

@@ -309,7 +309,7 @@ fn reply(id: Option<&Value>, result: Result<(), String>) -> String {
 
 /// Checks a message's envelope and size, hands the command to the rig thread and waits for
 /// its answer.
-async fn command(text: &str, tx: &Sender<ToRig>) -> String {
+pub(crate) async fn command(text: &str, tx: &Sender<ToRig>) -> String {
     if text.len() > MAX_COMMAND_BYTES {
         return reply(
             None,
