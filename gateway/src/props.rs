@@ -294,3 +294,93 @@ fn any_text_on_the_socket_gets_a_well_formed_reply() {
     drop(tx);
     rig_thread.join().expect("the rig thread ends");
 }
+
+/// Bytes a Modbus TCP client might send: frames with good headers around random PDUs, frames
+/// with bad headers, and anything at all.
+fn modbus_bytes() -> impl Strategy<Value = Vec<u8>> {
+    let frame = (
+        any::<u16>(),
+        prop_oneof![Just(0u16), any::<u16>()],
+        any::<u8>(),
+        prop_oneof![
+            vec(any::<u8>(), 0..12),
+            (1u8..=6, any::<u16>(), 0u16..130).prop_map(|(f, a, n)| [
+                [f].as_slice(),
+                &a.to_be_bytes(),
+                &n.to_be_bytes()
+            ]
+            .concat()),
+        ],
+        any::<bool>(),
+    )
+        .prop_map(|(tid, protocol, unit, pdu, honest)| {
+            let len = if honest {
+                pdu.len() as u16 + 1
+            } else {
+                tid % 300
+            };
+            [
+                tid.to_be_bytes().as_slice(),
+                &protocol.to_be_bytes(),
+                &len.to_be_bytes(),
+                &[unit],
+                &pdu,
+            ]
+            .concat()
+        });
+    prop_oneof![
+        vec(frame, 0..6).prop_map(|fs| fs.concat()),
+        vec(any::<u8>(), 0..64),
+    ]
+}
+
+#[test]
+fn any_bytes_on_a_modbus_connection_get_well_formed_frames_and_the_connection_ends() {
+    use tokio::io::{AsyncReadExt, AsyncWriteExt};
+    let runtime = tokio::runtime::Builder::new_current_thread()
+        .enable_all()
+        .build()
+        .expect("a runtime");
+    // The rig thread: the map itself serves the requests.
+    let (tx, rx) = crossbeam_channel::unbounded::<ToRig>();
+    let rig_thread = std::thread::spawn(move || {
+        let mut w = World::new();
+        while let Ok(m) = rx.recv() {
+            if let ToRig::Call(c) = m {
+                let World { rig, gw, at, .. } = &mut w;
+                let _ = c.reply.send(gw.serve(rig, *at, &c.request));
+                w.step();
+            }
+        }
+    });
+    runner(128)
+        .run(&modbus_bytes(), |bytes| {
+            let out = runtime.block_on(async {
+                let (mut client, server) = tokio::io::duplex(4096);
+                let conn = tokio::spawn(crate::net::serve_modbus(server, tx.clone()));
+                let _ = client.write_all(&bytes).await;
+                let _ = client.shutdown().await;
+                let mut out = Vec::new();
+                let read =
+                    tokio::time::timeout(Duration::from_secs(5), client.read_to_end(&mut out));
+                let ended = matches!(read.await, Ok(Ok(_)));
+                let _ = tokio::time::timeout(Duration::from_secs(5), conn).await;
+                (ended, out)
+            });
+            let (ended, out) = out;
+            prop_assert!(ended, "the connection did not end");
+            // The answers: whole frames, protocol 0, each length the rest of its frame.
+            let mut rest = out.as_slice();
+            while !rest.is_empty() {
+                prop_assert!(rest.len() >= 9, "a cut frame: {:?}", rest);
+                prop_assert_eq!(&rest[2..4], &[0u8, 0]);
+                let len = usize::from(u16::from_be_bytes([rest[4], rest[5]]));
+                prop_assert!((3..=254).contains(&len) && rest.len() >= 6 + len);
+                rest = &rest[6 + len..];
+            }
+            Ok(())
+        })
+        .expect("a connection takes any bytes");
+    drop(tx);
+    rig_thread.join().expect("the rig thread ends");
+}
