@@ -5,8 +5,8 @@
 //!
 //! The deterministic core (the rig and everything below it) has no clock and no network; this
 //! crate adds both: `live` paces the rig and serves requests between its moments, `map` is the
-//! register map, and the Modbus server (tokio-modbus on tokio) forwards each request to the rig
-//! thread over a crossbeam channel and waits for the answer. With `--http`, the live view
+//! register map, and the Modbus server (`net`: tokio, with tokio-modbus's request decoder)
+//! forwards each request to the rig thread over a crossbeam channel and waits for the answer. With `--http`, the live view
 //! (`web`, `view`, `command`): a page in the browser that shows the rig as it runs and sends
 //! it commands, over the same channel.
 

@@ -7,7 +7,8 @@
 //! command: `{"id": 1, "command": {"press": "cabin:3"}}`, at most
 //! [`MAX_COMMAND_BYTES`](crate::command::MAX_COMMAND_BYTES) of JSON text, handed to the rig
 //! thread and answered with `{"type": "reply", "id": 1, "ok": true}` or `"ok": false` and
-//! an `"error"` that names the key at fault. Nothing else is served: other paths are 404.
+//! an `"error"` that names the key at fault. Nothing else is served: other paths are 404, and
+//! every path is 403 to a `Host` that is not this server ([`Hosts`]).
 
 use crate::command::MAX_COMMAND_BYTES;
 use crate::live::{History, ToRig, WebCall};
