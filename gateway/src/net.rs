@@ -105,7 +105,8 @@ pub(crate) async fn accept_loop<A, H, F>(
     H: Fn(A::Stream) -> F + Send,
     F: Future<Output = ()> + Send + 'static,
 {
-    let permits = Arc::new(Semaphore::new(max));
+    // A semaphore holds at most `MAX_PERMITS`; more would panic, and would bound nothing.
+    let permits = Arc::new(Semaphore::new(max.min(Semaphore::MAX_PERMITS)));
     let mut backoff = wait.first;
     let mut failed = 0u64;
     loop {
@@ -382,6 +383,32 @@ mod tests {
             "{notes:?}"
         );
         assert!(notes[1].contains("after 12 failed tries"), "{notes:?}");
+    }
+
+    #[tokio::test(flavor = "current_thread")]
+    async fn a_bound_past_what_a_semaphore_holds_is_no_panic() {
+        let (tx, _rx) = crossbeam_channel::unbounded();
+        let script = Scripted(VecDeque::from([Ok(1)]));
+        let (done_tx, done) = tokio::sync::oneshot::channel();
+        let done_tx = std::sync::Mutex::new(Some(done_tx));
+        let task = tokio::spawn(accept_loop(
+            "test",
+            script,
+            usize::MAX,
+            BACKOFF,
+            tx,
+            move |_| {
+                let done_tx = done_tx.lock().ok().and_then(|mut d| d.take());
+                async move {
+                    if let Some(d) = done_tx {
+                        let _ = d.send(());
+                    }
+                }
+            },
+        ));
+        let served = tokio::time::timeout(Duration::from_secs(5), done).await;
+        assert!(matches!(served, Ok(Ok(()))), "{served:?}");
+        task.abort();
     }
 
     #[tokio::test(flavor = "current_thread")]
