@@ -284,12 +284,33 @@ fn a_campaign_whose_reader_goes_ends_quietly() {
 fn serve_names_its_bad_arguments_and_a_busy_port() {
     let err = fails(asi_lift().args(["serve", "--speed", "0"]));
     assert!(err.contains("--speed 0") && err.contains("max"), "{err}");
+    // A factor whose wall times do not fit a `Duration` is refused, not a panic.
+    let err = fails(asi_lift().args([
+        "serve",
+        "--speed",
+        "1e-30",
+        "--listen",
+        "127.0.0.1:0",
+        "--until",
+        "1s",
+    ]));
+    assert!(
+        err.contains("--speed 1e-30") && !err.contains("panicked"),
+        "{err}"
+    );
     let err = fails(asi_lift().args(["serve", "--listen", "localhost"]));
     assert!(err.contains("--listen localhost"), "{err}");
     let err = fails(asi_lift().args(["serve", "--ttk4145", "--controller", "builtin"]));
     assert!(err.contains("--ttk4145"), "{err}");
     let err = fails(asi_lift().args(["serve", "--step", "0ms", "--controller", "external"]));
     assert!(err.contains("--step"), "{err}");
+    let err = fails(asi_lift().args(["serve", "--allow-host", "lab-pc"]));
+    assert!(
+        err.contains("--allow-host") && err.contains("--http"),
+        "{err}"
+    );
+    let err = fails(asi_lift().args(["serve", "--http", "--allow-host", "a/b"]));
+    assert!(err.contains("--allow-host a/b"), "{err}");
     let err = fails(asi_lift().args(["serve", "--trace", "-"]));
     assert!(err.contains("--trace"), "{err}");
     let err = fails(asi_lift().args(["serve", "--http", "localhost"]));
@@ -348,7 +369,7 @@ fn assert_the_batch_run(mut live: serde_json::Value) {
 
 #[test]
 fn serve_with_the_live_view_gives_the_same_run_as_without() {
-    let (err, live) = serve_3s(&["--http", "127.0.0.1:0"]);
+    let (err, live) = serve_3s(&["--http", "127.0.0.1:0", "--allow-host", "lab-pc"]);
     assert!(err.contains("live view on http://127.0.0.1:"), "{err}");
     // Watching does not change the run.
     assert_the_batch_run(live);

@@ -105,6 +105,35 @@ pub struct FromSafety {
     pub estop_out: bool,
 }
 
+/// The load sensor's reading in the input image (slave 8): the level in D1..D0 (0 empty,
+/// 1 loaded, 2 full, 3 overloaded), and D2, "operation ready" (S-1.1), which is 0 when the
+/// slave is off the bus (the master zeroes the inputs of a slave not in LAS), without power or
+/// not ready. The built-in program and the TTK4145 front end both read it here.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct LoadReading {
+    /// D1..D0: 0 empty .. 3 overloaded.
+    pub level: u8,
+    /// The load cannot be read: D2 ("operation ready") is 0.
+    pub lost: bool,
+}
+
+impl LoadReading {
+    /// The load sensor's nibble in `input`.
+    pub fn of(input: &Image) -> LoadReading {
+        let nibble = SlaveAddr::a(address::LOAD_SENSOR).map_or(Nibble::ZERO, |a| input.nibble(a));
+        LoadReading {
+            level: nibble.get() & 0b11,
+            lost: !nibble.bit(2),
+        }
+    }
+
+    /// What the safety logic's "overloaded" input gets: overloaded, or a load that cannot be
+    /// read, which counts as its unsafe value.
+    pub fn overloaded(self) -> bool {
+        self.level >= 3 || self.lost
+    }
+}
+
 /// Standard signals to the safety logic.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct ToSafety {
@@ -214,12 +243,11 @@ impl Plc {
             });
         }
         let converter = SlaveAddr::a(address::CONVERTER).map_or(Nibble::ZERO, |a| input.nibble(a));
-        // D2 is the load sensor's "operation ready" bit (S-1.1): 0 when the slave is off the
-        // bus, without power or not ready, and then the load counts as unknown (overloaded).
-        let load_nibble =
-            SlaveAddr::a(address::LOAD_SENSOR).map_or(Nibble::ZERO, |a| input.nibble(a));
-        let load = load_nibble.get() & 0b11;
-        let load_lost = !load_nibble.bit(2);
+        // A load that cannot be read counts as unknown (overloaded): see `LoadReading`.
+        let LoadReading {
+            level: load,
+            lost: load_lost,
+        } = LoadReading::of(input);
 
         let out = self.program.scan(
             now,

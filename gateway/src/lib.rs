@@ -5,8 +5,8 @@
 //!
 //! The deterministic core (the rig and everything below it) has no clock and no network; this
 //! crate adds both: `live` paces the rig and serves requests between its moments, `map` is the
-//! register map, and the Modbus server (tokio-modbus on tokio) forwards each request to the rig
-//! thread over a crossbeam channel and waits for the answer. With `--http`, the live view
+//! register map, and the Modbus server (`net`: tokio, with tokio-modbus's request decoder)
+//! forwards each request to the rig thread over a crossbeam channel and waits for the answer. With `--http`, the live view
 //! (`web`, `view`, `command`): a page in the browser that shows the rig as it runs and sends
 //! it commands, over the same channel.
 
@@ -15,22 +15,23 @@
 pub mod command;
 pub mod live;
 pub mod map;
+pub mod net;
 pub mod ttk;
 pub mod view;
 pub mod web;
 
+#[cfg(test)]
+mod props;
+
 use crossbeam_channel::{Receiver, Sender};
-use live::{Call, LiveConfig, Status, ToRig, TtkCall, ViewOut};
+use live::{LiveConfig, Status, ToRig, ViewOut};
 use rig::{Report, Rig};
-use std::future::Future;
 use std::net::SocketAddr;
-use std::pin::Pin;
 use std::thread::JoinHandle;
-use tokio_modbus::server::tcp::{accept_tcp_connection, Server};
-use tokio_modbus::{ExceptionCode, Response, SlaveRequest};
 
 pub use live::Speed;
 pub use map::Owner;
+pub use net::Options;
 
 /// Why a live run cannot start.
 #[derive(Debug, thiserror::Error)]
@@ -46,6 +47,9 @@ pub enum GatewayError {
     /// The async runtime cannot start.
     #[error("cannot start the network runtime: {0}")]
     Runtime(std::io::Error),
+    /// The speed factor is out of bounds ([`Speed::factor`]).
+    #[error("{0}")]
+    Speed(String),
     /// The rig cannot be built.
     #[error("{0}")]
     Rig(String),
@@ -168,11 +172,25 @@ pub fn start_servers<F>(
 where
     F: FnOnce() -> Result<Rig, String> + Send + 'static,
 {
+    start_with(make_rig, cfg, listen, Options::default())
+}
+
+/// As [`start_servers`], with the servers' [`Options`].
+pub fn start_with<F>(
+    make_rig: F,
+    cfg: LiveConfig,
+    listen: Listen,
+    options: Options,
+) -> Result<Running, GatewayError>
+where
+    F: FnOnce() -> Result<Rig, String> + Send + 'static,
+{
     let Listen {
         modbus: listen,
         ttk,
         http,
     } = listen;
+    cfg.speed.checked().map_err(GatewayError::Speed)?;
     let runtime = tokio::runtime::Builder::new_multi_thread()
         .worker_threads(1)
         .thread_name("asi-lift-gateway")
@@ -216,35 +234,43 @@ where
         }
     }
 
+    let max = options.max_connections;
     let to_rig = tx.clone();
-    runtime.spawn(async move {
-        let server = Server::new(listener);
-        let on_connected = |stream, socket_addr| {
-            let tx = to_rig.clone();
-            async move {
-                let _ = tx.send(ToRig::Connected);
-                accept_tcp_connection(stream, socket_addr, move |_| {
-                    Ok(Some(ModbusService { tx: tx.clone() }))
-                })
-            }
-        };
-        // A connection that sends what is not Modbus TCP is closed; the others go on.
-        let on_process_error = |_err: std::io::Error| {};
-        let _ = server.serve(&on_connected, on_process_error).await;
-    });
+    runtime.spawn(net::accept_loop(
+        "modbus",
+        listener,
+        max,
+        net::BACKOFF,
+        tx.clone(),
+        move |s| net::serve_modbus(s, to_rig.clone()),
+    ));
     if let Some((listener, _)) = ttk {
-        runtime.spawn(serve_ttk(listener, tx.clone()));
+        let to_rig = tx.clone();
+        runtime.spawn(net::accept_loop(
+            "ttk4145",
+            listener,
+            max,
+            net::BACKOFF,
+            tx.clone(),
+            move |s| net::serve_ttk(s, to_rig.clone()),
+        ));
     }
-    if let Some((listener, _)) = http {
+    if let Some((listener, bound)) = http {
         let app = web::router(web::Web {
             snapshots,
             history,
             tx: tx.clone(),
+            hosts: std::sync::Arc::new(web::Hosts::new(bound, options.allow_hosts.clone())),
         });
-        runtime.spawn(async move {
-            // A connection that breaks or sends what is not HTTP ends alone; the server goes on.
-            let _ = axum::serve(listener, app).await;
-        });
+        let timeout = options.header_timeout;
+        runtime.spawn(net::accept_loop(
+            "http",
+            listener,
+            max,
+            net::BACKOFF,
+            tx.clone(),
+            move |s| net::serve_http(s, app.clone(), timeout),
+        ));
     }
     Ok(Running {
         addr,
@@ -255,66 +281,4 @@ where
         rig,
         runtime,
     })
-}
-
-/// One connection's service: hands each request to the rig thread and waits for its answer.
-struct ModbusService {
-    tx: Sender<ToRig>,
-}
-
-type Answer = Pin<Box<dyn Future<Output = Result<Response, ExceptionCode>> + Send>>;
-
-impl tokio_modbus::server::Service for ModbusService {
-    type Request = SlaveRequest<'static>;
-    type Response = Response;
-    type Exception = ExceptionCode;
-    type Future = Answer;
-
-    fn call(&self, req: Self::Request) -> Self::Future {
-        let (reply, answer) = tokio::sync::oneshot::channel();
-        let sent = self.tx.send(ToRig::Call(Call {
-            request: req.request.into_owned(),
-            reply,
-        }));
-        Box::pin(async move {
-            if sent.is_err() {
-                // The run has ended.
-                return Err(ExceptionCode::ServerDeviceFailure);
-            }
-            answer
-                .await
-                .unwrap_or(Err(ExceptionCode::ServerDeviceFailure))
-        })
-    }
-}
-
-/// The TTK4145 server: fixed 4-byte messages, each handed to the rig thread; a read's answer
-/// goes back, a write gets none.
-async fn serve_ttk(listener: tokio::net::TcpListener, tx: Sender<ToRig>) {
-    use tokio::io::{AsyncReadExt, AsyncWriteExt};
-    loop {
-        let Ok((mut stream, _)) = listener.accept().await else {
-            continue;
-        };
-        let tx = tx.clone();
-        let _ = tx.send(ToRig::Connected);
-        tokio::spawn(async move {
-            let mut msg = [0u8; 4];
-            while stream.read_exact(&mut msg).await.is_ok() {
-                let (reply, answer) = tokio::sync::oneshot::channel();
-                if tx.send(ToRig::Ttk(TtkCall { msg, reply })).is_err() {
-                    return;
-                }
-                match answer.await {
-                    Ok(Some(a)) => {
-                        if stream.write_all(&a).await.is_err() {
-                            return;
-                        }
-                    }
-                    Ok(None) => {}
-                    Err(_) => return,
-                }
-            }
-        });
-    }
 }

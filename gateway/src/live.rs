@@ -32,6 +32,33 @@ pub enum Speed {
     Max,
 }
 
+/// The slowest speed factor: a simulated millisecond per wall second.
+pub const MIN_SPEED: f64 = 0.001;
+/// The fastest speed factor.
+pub const MAX_SPEED: f64 = 1000.0;
+
+impl Speed {
+    /// The factor `x` if it is a number in [`MIN_SPEED`]..=[`MAX_SPEED`]; the error says what
+    /// is wrong. Outside it the pacing's wall times do not fit a `Duration`, or mean nothing.
+    pub fn factor(x: f64) -> Result<Speed, String> {
+        if x.is_finite() && (MIN_SPEED..=MAX_SPEED).contains(&x) {
+            Ok(Speed::Factor(x))
+        } else {
+            Err(format!(
+                "speed factor {x:?}: expected {MIN_SPEED} to {MAX_SPEED} simulated seconds per wall second"
+            ))
+        }
+    }
+
+    /// `self`, checked as [`Speed::factor`] checks a factor.
+    pub fn checked(self) -> Result<Speed, String> {
+        match self {
+            Speed::Factor(x) => Speed::factor(x),
+            Speed::Max => Ok(Speed::Max),
+        }
+    }
+}
+
 impl std::fmt::Display for Speed {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
@@ -112,6 +139,8 @@ pub enum ToRig {
     Web(WebCall),
     /// A client connected.
     Connected,
+    /// A line for the run's log from the servers (`who`, the text).
+    Log(&'static str, String),
     /// End the run now (Ctrl-C).
     Stop,
 }
@@ -132,6 +161,14 @@ pub struct Status {
     /// The run has ended (this is the last status).
     pub ended: bool,
 }
+
+/// Of each source of log lines that the clients drive, a live run keeps the first this many
+/// lines and the last this many, and says how many it left out between them
+/// ([`Rig::bound_log`]): a client may send the same command millions of times.
+pub const LOG_KEEP: usize = 500;
+/// The sources the clients drive: the TTK4145 front end, Modbus commands, the page's
+/// commands, the gateway's watchdog and the servers' own lines.
+const CLIENT_SOURCES: [&str; 6] = ["ttk4145", "client", "web", "gateway", "modbus", "http"];
 
 /// Lag below this is the granularity of the pacing, not falling behind.
 const LAG_REPORTED: Duration = Duration::from_millis(2);
@@ -220,7 +257,7 @@ pub fn run_with_view(
                     }
                 }
                 // Wait for a request until the next millisecond of simulated time is due.
-                let next = Duration::from_secs_f64(1e-3 / x).min(Duration::from_millis(1));
+                let next = wall_secs(1e-3 / x).min(Duration::from_millis(1));
                 match rx.recv_timeout(next) {
                     Ok(m) => stopped |= t.handle(m, at),
                     Err(RecvTimeoutError::Timeout) => {}
@@ -313,6 +350,9 @@ struct RigThread {
 
 impl RigThread {
     fn new(mut rig: Rig, cfg: LiveConfig, view: Option<ViewOut>) -> RigThread {
+        for who in CLIENT_SOURCES {
+            rig.bound_log(who, LOG_KEEP, LOG_KEEP);
+        }
         let viewer = view.map(|out| Viewer {
             telegrams: view::observe(&mut rig),
             out,
@@ -365,6 +405,10 @@ impl RigThread {
             }
             ToRig::Connected => {
                 self.connections += 1;
+                false
+            }
+            ToRig::Log(who, text) => {
+                rig.log_now(who, text);
                 false
             }
             ToRig::Stop => true,
@@ -430,13 +474,37 @@ fn status_of(
 /// How far simulated time `at` is behind the wall clock at speed `x`, in wall time.
 fn behind(start: Instant, sim0: SimTime, at: SimTime, x: f64) -> Duration {
     let due = sim0 + sim_of(start.elapsed().mul_f64(x));
-    wall_of(due.saturating_duration_since(at)).div_f64(x)
+    wall_secs(due.saturating_duration_since(at).as_secs_f64() / x)
+}
+
+/// `s` seconds of wall time; a span too long for a `Duration` (or not a number) is the
+/// longest one, never a panic.
+fn wall_secs(s: f64) -> Duration {
+    Duration::try_from_secs_f64(s).unwrap_or(Duration::MAX)
 }
 
 fn sim_of(d: Duration) -> SimDuration {
     SimDuration::from_nanos(u64::try_from(d.as_nanos()).unwrap_or(u64::MAX))
 }
 
-fn wall_of(d: SimDuration) -> Duration {
-    Duration::from_nanos(d.as_nanos())
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn speed_factors_outside_the_bounds_are_refused_and_the_pacing_never_panics() {
+        for x in [0.0, -1.0, 1e-30, 1e-4, 1000.5, f64::NAN, f64::INFINITY] {
+            let err = Speed::factor(x).expect_err("refused");
+            assert!(err.contains("speed factor"), "{err}");
+        }
+        assert_eq!(Speed::factor(MIN_SPEED), Ok(Speed::Factor(MIN_SPEED)));
+        assert_eq!(
+            Speed::Factor(1e-30).checked().map(|_| ()),
+            Speed::factor(1e-30).map(|_| ())
+        );
+        assert_eq!(wall_secs(1e27), Duration::MAX);
+        assert_eq!(wall_secs(f64::NAN), Duration::MAX);
+        let start = Instant::now();
+        assert!(behind(start, SimTime::ZERO, SimTime::ZERO, 1e-30) <= Duration::MAX);
+    }
 }

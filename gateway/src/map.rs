@@ -26,7 +26,7 @@
 //! | input registers | 1055 | the load sensor's level (slave 8, D1..D0: 0 empty .. 3 overloaded) | read |
 //! | holding registers | 0..243 | the output data image (table 4.1): host flags and slaves, mailbox 32..49, analog outputs 68..155 (S-7.3 set-point: word 68) | read/write |
 //! | holding registers | 1000 | to the safety logic: bit 0 restart, bit 1 overloaded (as coils 1000, 1001) | read/write |
-//! | holding registers | 1008 | watchdog time, ms (0 = off) | read/write |
+//! | holding registers | 1008 | watchdog time, ms (0 = off): outputs not written for this long go to zero, and the signals to the safety logic to their safe values, restart 0 and overloaded 1, until the next write | read/write |
 //! | holding registers | 2000..2009 | simulator commands (write only, read as 0): press a button, slave off/on line, load, door, reset, acknowledge, power fail, safe-link drop, rescue | write |
 //! | holding registers | 3000..3243 | the input data image again, for clients that read holding registers only | read |
 
@@ -110,6 +110,14 @@ const MAX_READ_WRITE_REGISTERS: u16 = 121;
 
 /// The default watchdog: outputs not written for this long go to zero.
 pub const DEFAULT_WATCHDOG: SimDuration = SimDuration::from_millis(1000);
+
+/// The signals to the safety logic while the watchdog is tripped: the safe values, as an
+/// unreadable safety input counts as its unsafe one (no restart of the STOP circuit; the
+/// cabin counts as overloaded, so K1 gets no power).
+pub const WATCHDOG_SIGNALS: ToSafety = ToSafety {
+    restart: false,
+    overloaded: true,
+};
 
 /// Who owns the output image.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -507,8 +515,8 @@ impl Gateway {
         rig.set_plc_signals(self.signals);
     }
 
-    /// Zeroes the output image if the outside controller has not written it for the
-    /// watchdog time by `now`.
+    /// Zeroes the output image and gives the safety logic [`WATCHDOG_SIGNALS`] if the outside
+    /// controller has not written it for the watchdog time by `now`.
     pub fn watch(&mut self, rig: &mut Rig, now: SimTime) {
         let Some(last) = self.last_write else {
             return;
@@ -525,7 +533,7 @@ impl Gateway {
         for w in 0..IMAGE_WORDS {
             image.set_word(w, 0);
         }
-        self.signals = ToSafety::default();
+        self.signals = WATCHDOG_SIGNALS;
         rig.set_plc_signals(self.signals);
         rig.log_now(
             "gateway",
@@ -656,6 +664,61 @@ pub fn button(v: u16) -> Option<Button> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::ttk::Ttk;
+    use rig::Scenario;
+
+    /// A rig with an outside controller at power-on, the cabin at floor 1.
+    fn external_rig() -> Rig {
+        let toml = "name = \"t\"\nduration = \"20s\"\n[lift]\nstart_mm = 0.0\n";
+        let sc = Scenario::from_toml("t.toml", toml).expect("a scenario");
+        Rig::new(sc).expect("a rig").with_external_controller()
+    }
+
+    /// Runs `rig` in 1 ms steps from `at` to `until`, as the live loop does.
+    fn run_to(rig: &mut Rig, gw: &mut Gateway, at: SimTime, until: SimTime) -> SimTime {
+        let mut ttk = Ttk::default();
+        let mut at = at;
+        while at < until {
+            let next = at + SimDuration::from_millis(1);
+            at = crate::live::advance(rig, gw, &mut ttk, at, next);
+        }
+        at
+    }
+
+    #[test]
+    fn a_tripped_watchdog_gives_the_safety_logic_its_safe_values() {
+        let mut rig = external_rig();
+        let mut gw = Gateway::new(Owner::External, SimDuration::from_millis(1000));
+        rig.act_now("test", &Action::Load(LoadLevel::Overloaded));
+        let signals = |gw: &mut Gateway, rig: &mut Rig, at, v| {
+            let w = Request::WriteSingleRegister(PLC_SIGNALS_REGISTER, v);
+            assert!(gw.serve(rig, at, &w).is_ok());
+        };
+        // The client pulses the restart and says "overloaded" for 2 s, then goes quiet.
+        let mut at = SimTime::ZERO;
+        signals(&mut gw, &mut rig, at, 3);
+        at = run_to(&mut rig, &mut gw, at, SimTime::from_millis(200));
+        while at < SimTime::from_millis(2_000) {
+            signals(&mut gw, &mut rig, at, 2);
+            at = run_to(&mut rig, &mut gw, at, at + SimDuration::from_millis(100));
+        }
+        assert!(!rig.lift().k1_closed(), "overloaded: K1 stays open");
+        at = run_to(&mut rig, &mut gw, at, SimTime::from_millis(6_000));
+        assert!(gw.watchdog_tripped());
+        // No restart, overloaded: K1 stays open; the map shows the values the safety logic has.
+        assert!(
+            !rig.lift().k1_closed(),
+            "K1 closed after the watchdog's trip"
+        );
+        let coils = gw.serve(&mut rig, at, &Request::ReadCoils(SAFETY_BITS, 2));
+        assert_eq!(coils, Ok(Response::ReadCoils(vec![false, true])));
+        let word = gw.serve(
+            &mut rig,
+            at,
+            &Request::ReadHoldingRegisters(PLC_SIGNALS_REGISTER, 1),
+        );
+        assert_eq!(word, Ok(Response::ReadHoldingRegisters(vec![2])));
+    }
 
     #[test]
     fn image_bits_follow_table_4_1() {

@@ -18,17 +18,16 @@
 //! | 8 | read stop → `[8, pressed, 0, 0]` | the cabin's STOP button |
 //! | 9 | read obstruction → `[9, active, 0, 0]` | the door is open |
 //!
-//! The overload goes to the safety logic from the load sensor's nibble (slave 8, D1..D0 = 3),
-//! as the built-in program sends it, at every message. Unknown opcodes and reads of a floor or button that does
+//! The overload goes to the safety logic from the load sensor's nibble as the built-in program
+//! reads it ([`LoadReading`]: D1..D0 = 3, or D2 "operation ready" = 0 when the sensor is off
+//! the bus or not ready, the unsafe value of an unreadable input), at every message. Unknown opcodes and reads of a floor or button that does
 //! not exist get no answer and count as exceptions.
 
 use crate::map::Gateway;
 use asi_master::plc_handshake::{CabinDisplayMaster, FloorStationMaster};
 use asi_phy::{SimDuration, SimTime, SlaveAddr};
-use controller::plc::ToSafety;
-use lab::address::{
-    CABIN_DISPLAY, CONVERTER, FLOOR_1, FLOOR_STATIONS, LOAD_SENSOR, SPEED_SETPOINT,
-};
+use controller::plc::{LoadReading, ToSafety};
+use lab::address::{CABIN_DISPLAY, CONVERTER, FLOOR_1, FLOOR_STATIONS, SPEED_SETPOINT};
 use lab::display::DisplayWord;
 use lab::setpoint::STANDSTILL_UA;
 use lift_model::Button;
@@ -91,14 +90,14 @@ impl Ttk {
         }
         let answer = self.dispatch(rig, at, msg);
         // The controller's signals to the safety logic: the restart pulse of a move, and the
-        // overload from the load sensor's nibble (slave 8, D1..D0 = 3), at every message.
-        let image = &rig.lab().bus.image();
-        let load = SlaveAddr::a(LOAD_SENSOR).map_or(0, |a| image.input.nibble(a).get() & 0b11);
+        // overload as the built-in program reads it (a load sensor that is off the bus or not
+        // ready counts as overloaded), at every message.
+        let load = LoadReading::of(&rig.lab().bus.image().input);
         gw.set_signals(
             rig,
             ToSafety {
                 restart: self.restart_until.is_some(),
-                overloaded: load == 3,
+                overloaded: load.overloaded(),
             },
         );
         if answer.is_none() && !(0..=5).contains(&msg[0]) {
@@ -263,6 +262,49 @@ mod tests {
     use crate::map::Owner;
     use lift_model::{DisplayId, DisplayState};
     use rig::Scenario;
+
+    #[test]
+    fn a_load_sensor_off_the_bus_counts_as_overloaded_and_the_cabin_stays() {
+        let toml = "name = \"t\"\nduration = \"10s\"\n[lift]\nstart_mm = 0.0\n";
+        let sc = Scenario::from_toml("t.toml", toml).expect("a scenario");
+        let mut rig = Rig::new(sc).expect("a rig").with_external_controller();
+        let mut gw = Gateway::new(Owner::External, SimDuration::from_secs(1));
+        let mut ttk = Ttk::default();
+        let mut at = SimTime::ZERO;
+        let mut run_to = |rig: &mut Rig, gw: &mut Gateway, ttk: &mut Ttk, until: SimTime| {
+            while at < until {
+                let next = at + SimDuration::from_millis(1);
+                at = crate::live::advance(rig, gw, ttk, at, next);
+                // A client polls the stop button, as course programs do.
+                ttk.serve(rig, gw, at, [8, 0, 0, 0]);
+            }
+            at
+        };
+        let t = run_to(&mut rig, &mut gw, &mut ttk, SimTime::from_millis(500));
+        rig.act_now(
+            "test",
+            &rig::scenario::Action::Fault(rig::scenario::Fault::SlaveOffline {
+                slave: lab::address::LOAD_SENSOR,
+            }),
+        );
+        let t = run_to(
+            &mut rig,
+            &mut gw,
+            &mut ttk,
+            t + SimDuration::from_millis(500),
+        );
+        let start_mm = rig.lift().position_mm();
+        ttk.serve(&mut rig, &mut gw, t, [1, 1, 0, 0]);
+        run_to(
+            &mut rig,
+            &mut gw,
+            &mut ttk,
+            t + SimDuration::from_millis(4_000),
+        );
+        assert!(!rig.lift().k1_closed(), "K1 closed with the load unknown");
+        let moved = rig.lift().position_mm() - start_mm;
+        assert!(moved.abs() < 1.0, "the cabin moved {moved} mm");
+    }
 
     #[test]
     fn the_floor_indicator_and_the_motor_show_on_the_labs_displays() {

@@ -445,7 +445,7 @@ pub fn build(rig: &Rig, run: Run, telegrams: Option<&Telegrams>) -> View {
     };
 
     let violations = rig.violations();
-    let log = rig.log_lines();
+    let log = rig.recent_log(LOG_LINES);
     View {
         kind: "view",
         t_s: (rig.now().as_secs_f64() * 1e3).round() / 1e3,
@@ -460,7 +460,7 @@ pub fn build(rig: &Rig, run: Run, telegrams: Option<&Telegrams>) -> View {
         last_violation: violations
             .last()
             .map(|v| format!("{:.3} s {}: {}", v.at_s, v.kind, v.detail)),
-        log: log[log.len().saturating_sub(LOG_LINES)..]
+        log: log
             .iter()
             .map(|l| format!("{:9.3} s  {}: {}", l.at_s, l.who, l.text))
             .collect(),

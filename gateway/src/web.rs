@@ -7,18 +7,21 @@
 //! command: `{"id": 1, "command": {"press": "cabin:3"}}`, at most
 //! [`MAX_COMMAND_BYTES`](crate::command::MAX_COMMAND_BYTES) of JSON text, handed to the rig
 //! thread and answered with `{"type": "reply", "id": 1, "ok": true}` or `"ok": false` and
-//! an `"error"` that names the key at fault. Nothing else is served: other paths are 404.
+//! an `"error"` that names the key at fault. Nothing else is served: other paths are 404, and
+//! every path is 403 to a `Host` that is not this server ([`Hosts`]).
 
 use crate::command::MAX_COMMAND_BYTES;
 use crate::live::{History, ToRig, WebCall};
 use axum::extract::ws::{Message, WebSocket, WebSocketUpgrade};
-use axum::extract::State;
+use axum::extract::{Request, State};
 use axum::http::{header, HeaderMap, HeaderValue, StatusCode};
+use axum::middleware::Next;
 use axum::response::{IntoResponse, Response};
 use axum::routing::get;
 use axum::Router;
 use crossbeam_channel::Sender;
 use serde_json::{json, Value};
+use std::net::{IpAddr, SocketAddr};
 use std::sync::Arc;
 use tokio::sync::watch;
 
@@ -33,6 +36,112 @@ pub const STYLE_CSS: &str = include_str!("../web/style.css");
 /// this size a message too long for a command gets an answer that says so.
 const MAX_FRAME_BYTES: usize = 64 * 1024;
 
+/// The `Host` values the live view answers to; any other gets 403 on every route, so that a
+/// page of another site cannot reach it through DNS rebinding (a name of the attacker's that
+/// resolves to this machine: the browser then sends that name as `Host` and as the page's
+/// `Origin`, which agree). Accepted: the bound address itself (`127.0.0.1:8080`), loopback
+/// (`localhost`, `127.x.x.x`, `[::1]`) with the bound port, any IP literal with the bound port
+/// when bound to all addresses (`0.0.0.0`, `[::]`: no name, nothing to rebind), and the
+/// names of the allow-list (`name` with the bound port, or `name:port`).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Hosts {
+    bound: SocketAddr,
+    allow: Vec<String>,
+}
+
+impl Hosts {
+    /// The hosts of a live view bound to `bound`, with the extra names `allow`.
+    pub fn new(bound: SocketAddr, allow: Vec<String>) -> Hosts {
+        Hosts { bound, allow }
+    }
+
+    /// Whether `name` is well-formed for the allow-list: a host name or IP address, with or
+    /// without `:port`.
+    pub fn valid_name(name: &str) -> bool {
+        authority(name).is_some()
+    }
+
+    /// Whether `host`, the value of a request's `Host` header, names this server.
+    pub fn accepts(&self, host: &str) -> bool {
+        let Some((name, port)) = authority(host) else {
+            return false;
+        };
+        let allowed = self.allow.iter().any(|a| match authority(a) {
+            Some((n, Some(p))) => n.eq_ignore_ascii_case(name) && port.unwrap_or(80) == p,
+            Some((n, None)) => {
+                n.eq_ignore_ascii_case(name) && port.unwrap_or(80) == self.bound.port()
+            }
+            None => false,
+        });
+        if allowed {
+            return true;
+        }
+        if port.unwrap_or(80) != self.bound.port() {
+            return false;
+        }
+        if name.eq_ignore_ascii_case("localhost") {
+            return true;
+        }
+        let ip = name
+            .strip_prefix('[')
+            .and_then(|n| n.strip_suffix(']'))
+            .unwrap_or(name)
+            .parse::<IpAddr>();
+        match ip {
+            Ok(ip) => ip.is_loopback() || ip == self.bound.ip() || self.bound.ip().is_unspecified(),
+            Err(_) => false,
+        }
+    }
+}
+
+/// A `Host` value's name (IPv6 literals in brackets) and port, if it is well-formed.
+fn authority(host: &str) -> Option<(&str, Option<u16>)> {
+    let (name, port) = if host.starts_with('[') {
+        let end = host.find(']')? + 1;
+        match &host[end..] {
+            "" => (&host[..end], None),
+            rest => (&host[..end], Some(rest.strip_prefix(':')?)),
+        }
+    } else {
+        match host.split_once(':') {
+            Some((n, p)) => (n, Some(p)),
+            None => (host, None),
+        }
+    };
+    let ok = |c: char| c.is_ascii_alphanumeric() || "-.[]:".contains(c);
+    if name.is_empty() || !name.chars().all(ok) || (!name.starts_with('[') && name.contains(':')) {
+        return None;
+    }
+    let port = port
+        .map(|p| p.parse::<u16>().ok())
+        .map_or(Some(None), |p| p.map(Some))?;
+    Some((name, port))
+}
+
+/// Refuses a request whose `Host` (or absolute URI's authority) does not name this server.
+async fn check_host(State(hosts): State<Arc<Hosts>>, req: Request, next: Next) -> Response {
+    let host = req
+        .headers()
+        .get(header::HOST)
+        .and_then(|h| h.to_str().ok());
+    let uri_host = req.uri().authority().map(|a| a.as_str());
+    let ok = match (host, uri_host) {
+        (Some(h), Some(u)) => hosts.accepts(h) && hosts.accepts(u),
+        (Some(h), None) | (None, Some(h)) => hosts.accepts(h),
+        (None, None) => false,
+    };
+    if ok {
+        return next.run(req).await;
+    }
+    (
+        StatusCode::FORBIDDEN,
+        [(header::CONTENT_TYPE, "text/plain; charset=utf-8")],
+        "forbidden: the live view answers only to its own address and loopback names \
+         (asi-lift serve --allow-host NAME adds a name)\n",
+    )
+        .into_response()
+}
+
 /// What every request of the live view shares.
 #[derive(Clone)]
 pub struct Web {
@@ -42,10 +151,14 @@ pub struct Web {
     pub history: History,
     /// The rig thread.
     pub tx: Sender<ToRig>,
+    /// The `Host` values it answers to.
+    pub hosts: Arc<Hosts>,
 }
 
-/// The live view's routes: the page, its script and style, the WebSocket; 404 for the rest.
+/// The live view's routes: the page, its script and style, the WebSocket; 404 for the rest,
+/// and 403 for all of them when the `Host` is not this server ([`Hosts`]).
 pub fn router(web: Web) -> Router {
+    let hosts = web.hosts.clone();
     Router::new()
         .route("/", get(index))
         .route("/index.html", get(index))
@@ -54,6 +167,7 @@ pub fn router(web: Web) -> Router {
         .route("/ws", get(socket))
         .fallback(not_found)
         .with_state(web)
+        .layer(axum::middleware::from_fn_with_state(hosts, check_host))
 }
 
 /// The page's security policy: its own script, style and socket only.
@@ -135,6 +249,7 @@ async fn serve_socket(mut socket: WebSocket, web: Web) {
         mut snapshots,
         history,
         tx,
+        hosts: _,
     } = web;
     let points: Vec<[f64; 3]> = history
         .lock()
@@ -195,7 +310,7 @@ fn reply(id: Option<&Value>, result: Result<(), String>) -> String {
 
 /// Checks a message's envelope and size, hands the command to the rig thread and waits for
 /// its answer.
-async fn command(text: &str, tx: &Sender<ToRig>) -> String {
+pub(crate) async fn command(text: &str, tx: &Sender<ToRig>) -> String {
     if text.len() > MAX_COMMAND_BYTES {
         return reply(
             None,
@@ -244,6 +359,50 @@ async fn command(text: &str, tx: &Sender<ToRig>) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn only_this_servers_own_names_are_hosts() {
+        let bound: SocketAddr = "127.0.0.1:8099".parse().expect("an address");
+        let hosts = Hosts::new(
+            bound,
+            vec!["lab-pc.local".into(), "proxy.example:443".into()],
+        );
+        for ok in [
+            "127.0.0.1:8099",
+            "localhost:8099",
+            "LOCALHOST:8099",
+            "127.1.2.3:8099",
+            "[::1]:8099",
+            "lab-pc.local:8099",
+            "proxy.example:443",
+        ] {
+            assert!(hosts.accepts(ok), "{ok}");
+        }
+        for bad in [
+            "evil.example:8099",
+            "evil.example",
+            "localhost:8080",
+            "localhost",
+            "127.0.0.1",
+            "10.0.0.1:8099",
+            "lab-pc.local:8100",
+            "proxy.example:8099",
+            "",
+            ":8099",
+            "127.0.0.1:8099:1",
+            "127.0.0.1:99999",
+            "[::1",
+            "[::1]x",
+            "::1:8099",
+            "localhost:8099/x",
+            "localhost.evil.example:8099",
+        ] {
+            assert!(!hosts.accepts(bad), "{bad}");
+        }
+        let any = Hosts::new("0.0.0.0:80".parse().expect("an address"), Vec::new());
+        assert!(any.accepts("192.168.1.20") && any.accepts("192.168.1.20:80"));
+        assert!(!any.accepts("evil.example") && !any.accepts("192.168.1.20:81"));
+    }
 
     #[test]
     fn only_pages_of_this_server_may_open_the_socket() {

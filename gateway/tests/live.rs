@@ -41,6 +41,31 @@ fn start_with(toml: &str, owner: Owner, speed: Speed, ttk: bool) -> Running {
     gateway::start(make, cfg, loopback, ttk).expect("the gateway starts")
 }
 
+#[test]
+fn a_speed_factor_out_of_bounds_is_refused_at_the_start_not_a_panic_later() {
+    let sc = Scenario::from_toml("test.toml", QUIET).expect("a valid scenario");
+    let cfg = LiveConfig {
+        speed: Speed::Factor(1e-30),
+        owner: Owner::Builtin,
+        watchdog: SimDuration::from_millis(1000),
+        step: SimDuration::from_millis(1),
+    };
+    let loopback: SocketAddr = "127.0.0.1:0".parse().expect("an address");
+    match gateway::start(
+        move || Rig::new(sc).map_err(|e| e.to_string()),
+        cfg,
+        loopback,
+        None,
+    ) {
+        Err(e) => assert!(e.to_string().contains("speed factor 1e-30"), "{e}"),
+        Ok(running) => {
+            running.stop();
+            let _ = running.wait();
+            panic!("speed 1e-30 was accepted");
+        }
+    }
+}
+
 async fn connect(addr: SocketAddr) -> Context {
     tcp::connect(addr).await.expect("a connection")
 }
@@ -594,4 +619,39 @@ fn a_ttk4145_controller_that_runs_with_the_door_open_is_stopped_by_the_safety_lo
     assert!(!r.final_state.moving);
     let cause = r.final_state.k1_open_cause.expect("a cause");
     assert!(cause.contains("overtravel"), "{cause}");
+}
+
+#[test]
+fn clients_that_repeat_themselves_for_ever_leave_a_bounded_log() {
+    let running = start_with(QUIET, Owner::External, Speed::Max, true);
+    // A TTK4145 client that toggles a lamp 20 000 times (each change is a log line).
+    let mut s = raw(running.ttk_addr().expect("a TTK4145 address"));
+    let mut batch = Vec::new();
+    for i in 0..20_000u32 {
+        batch.extend_from_slice(&[2, 2, 0, (i % 2) as u8]);
+    }
+    s.write_all(&batch).expect("sent");
+    assert_eq!(ttk(&mut s, [7, 0, 0, 0]), Some([7, 1, 0, 0]));
+    // A Modbus client that acknowledges 3000 times (each command is a log line).
+    let mut m = raw(running.local_addr());
+    for tid in 0..3000u16 {
+        let answer = ask(&mut m, tid, &[6, 0x07, 0xD6, 0, 1]);
+        assert_eq!(answer, [6, 0x07, 0xD6, 0, 1]);
+    }
+    running.stop();
+    let r = running.wait();
+    let keep = gateway::live::LOG_KEEP;
+    for (who, sent) in [("ttk4145", 20_000), ("client", 3000)] {
+        let lines: Vec<&str> = r
+            .log
+            .iter()
+            .filter(|l| l.who == who)
+            .map(|l| l.text.as_str())
+            .collect();
+        assert_eq!(lines.len(), 2 * keep + 1, "{who}");
+        let marker = format!("… {} lines left out", sent - 2 * keep);
+        assert!(lines[keep].starts_with(&marker), "{who}: {}", lines[keep]);
+    }
+    let live = r.live.expect("live");
+    assert_eq!(live.lamps.get("cabin lamp 1"), Some(&1));
 }

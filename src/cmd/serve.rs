@@ -44,6 +44,11 @@ pub struct ServeArgs {
     /// address is given here.
     #[arg(long, value_name = "ADDR", num_args = 0..=1, default_missing_value = "127.0.0.1:8080")]
     pub http: Option<String>,
+    /// A host name the live view answers to besides its own address and loopback (a name of
+    /// this machine, a proxy's): `NAME` with the live view's port, or `NAME:PORT`. Repeatable.
+    /// Other names get 403, against DNS rebinding (README.md, "Live view in the browser").
+    #[arg(long = "allow-host", value_name = "NAME")]
+    pub allow_hosts: Vec<String>,
     /// With an outside controller: the output image goes to zero when no client has written
     /// it for this long (simulated time; 0 = off).
     #[arg(long, value_name = "DURATION", default_value = "1s")]
@@ -113,6 +118,7 @@ pub fn run(args: ServeArgs) -> Result<u8, String> {
         controller,
         ttk4145,
         http,
+        allow_hosts,
         watchdog,
         step,
         until,
@@ -138,6 +144,17 @@ pub fn run(args: ServeArgs) -> Result<u8, String> {
         (None, Some(_)) => ControllerArg::External,
         (None, None) => ControllerArg::Builtin,
     };
+    if !allow_hosts.is_empty() && http.is_none() {
+        return Err("--allow-host: names the live view's hosts; give --http too".into());
+    }
+    if let Some(bad) = allow_hosts
+        .iter()
+        .find(|h| !gateway::web::Hosts::valid_name(h))
+    {
+        return Err(format!(
+            "--allow-host {bad}: expected a host name or IP address, optionally with :PORT"
+        ));
+    }
     let speed = parse_speed(&speed)?;
     let duration =
         |flag: &str, s: &str| s.parse::<SimDuration>().map_err(|e| format!("{flag}: {e}"));
@@ -197,7 +214,12 @@ pub fn run(args: ServeArgs) -> Result<u8, String> {
         ttk,
         http,
     };
-    let running = gateway::start_servers(make_rig, cfg, servers).map_err(|e| e.to_string())?;
+    let options = gateway::Options {
+        allow_hosts,
+        ..gateway::Options::default()
+    };
+    let running =
+        gateway::start_with(make_rig, cfg, servers, options).map_err(|e| e.to_string())?;
     running.stop_on_ctrl_c();
     let addr = running.local_addr();
     for a in std::iter::once(addr)
@@ -272,15 +294,18 @@ pub fn run(args: ServeArgs) -> Result<u8, String> {
     })
 }
 
-/// `--speed`: a positive factor or `max`.
+/// `--speed`: a factor within the live mode's bounds, or `max`.
 fn parse_speed(s: &str) -> Result<Speed, String> {
     if s == "max" {
         return Ok(Speed::Max);
     }
-    match s.parse::<f64>() {
-        Ok(x) if x.is_finite() && x > 0.0 && x <= 1000.0 => Ok(Speed::Factor(x)),
-        _ => Err(format!(
-            "--speed {s}: expected a factor above 0 and at most 1000 (simulated seconds per wall second) or `max`"
-        )),
-    }
+    let expected = || {
+        format!(
+            "--speed {s}: expected a factor from {} to {} (simulated seconds per wall second) or `max`",
+            gateway::live::MIN_SPEED,
+            gateway::live::MAX_SPEED
+        )
+    };
+    let x = s.parse::<f64>().map_err(|_| expected())?;
+    Speed::factor(x).map_err(|_| expected())
 }

@@ -17,6 +17,11 @@ type Socket =
 
 /// The lab lift standing at floor 1, with the live view, at `speed`.
 fn start(speed: Speed) -> Running {
+    start_with(speed, gateway::Options::default())
+}
+
+/// As [`start`], with the servers' `options`.
+fn start_with(speed: Speed, options: gateway::Options) -> Running {
     let toml = "name = \"web\"\nduration = \"10min\"\n[lift]\nstart_mm = 0.0\n";
     let sc = Scenario::from_toml("web.toml", toml).expect("a valid scenario");
     let make = move || Rig::new(sc).map_err(|e| e.to_string());
@@ -32,7 +37,7 @@ fn start(speed: Speed) -> Running {
         ttk: None,
         http: Some(loopback),
     };
-    gateway::start_servers(make, cfg, listen).expect("the gateway starts")
+    gateway::start_with(make, cfg, listen, options).expect("the gateway starts")
 }
 
 /// A plain HTTP/1.1 request; the status line and the body.
@@ -126,7 +131,9 @@ fn the_page_is_served_and_nothing_else() {
     let _ = s.read(&mut [0u8; 256]);
     let (status, _) = http(
         addr,
-        "POST / HTTP/1.1\r\nHost: x\r\nContent-Length: 3\r\nConnection: close\r\n\r\nabc",
+        &format!(
+            "POST / HTTP/1.1\r\nHost: {addr}\r\nContent-Length: 3\r\nConnection: close\r\n\r\nabc"
+        ),
     );
     assert!(status.contains("405"), "{status}");
     // A WebSocket that sends a frame of no known kind is closed; the server goes on.
@@ -329,4 +336,154 @@ async fn bad_commands_get_clear_errors_and_the_server_goes_on() {
     tokio::task::spawn_blocking(move || running.wait())
         .await
         .expect("the run ends");
+}
+
+/// Whether the server closes `s` within `within` (a read gives 0 bytes or an error other than
+/// a timeout).
+fn closed_within(s: &mut TcpStream, within: Duration) -> bool {
+    s.set_read_timeout(Some(within)).expect("a timeout");
+    let mut b = [0u8; 256];
+    loop {
+        match s.read(&mut b) {
+            Ok(0) => return true,
+            // An answer (408, 400) before the close is fine.
+            Ok(_) => {}
+            Err(e) => {
+                return !matches!(
+                    e.kind(),
+                    std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut
+                )
+            }
+        }
+    }
+}
+
+#[test]
+fn a_client_that_never_finishes_its_request_head_is_closed_after_the_timeout() {
+    let options = gateway::Options {
+        header_timeout: Duration::from_millis(300),
+        ..gateway::Options::default()
+    };
+    let running = start_with(Speed::Factor(1.0), options);
+    let addr = running.http_addr().expect("the live view's address");
+    let t0 = Instant::now();
+    let mut slow = TcpStream::connect(addr).expect("a connection");
+    slow.write_all(format!("GET / HTTP/1.1\r\nHost: {addr}\r\nX-Slow: ").as_bytes())
+        .expect("half a head goes out");
+    let mut silent = TcpStream::connect(addr).expect("a connection");
+    assert!(
+        closed_within(&mut slow, Duration::from_secs(5)),
+        "the slow head stays open"
+    );
+    assert!(
+        closed_within(&mut silent, Duration::from_secs(5)),
+        "the silent client stays open"
+    );
+    let took = t0.elapsed();
+    assert!(
+        took >= Duration::from_millis(250),
+        "closed before the timeout: {took:?}"
+    );
+    // A client that sends its request in time is served.
+    let (status, _) = get(addr, "/");
+    assert!(status.contains("200"), "{status}");
+    running.stop();
+    running.wait();
+}
+
+#[test]
+fn connections_beyond_the_bound_are_closed_and_the_others_are_served() {
+    let options = gateway::Options {
+        max_connections: 3,
+        ..gateway::Options::default()
+    };
+    let running = start_with(Speed::Factor(1.0), options);
+    let addr = running.http_addr().expect("the live view's address");
+    let held: Vec<TcpStream> = (0..3)
+        .map(|_| TcpStream::connect(addr).expect("a connection"))
+        .collect();
+    let mut beyond = TcpStream::connect(addr).expect("a connection");
+    assert!(
+        closed_within(&mut beyond, Duration::from_secs(5)),
+        "a fourth is served"
+    );
+    drop(held);
+    // The places are free again (the server sees the closes a moment later).
+    let t0 = Instant::now();
+    loop {
+        let (status, _) = get(addr, "/");
+        if status.contains("200") {
+            break;
+        }
+        assert!(
+            t0.elapsed() < Duration::from_secs(5),
+            "no place frees: {status}"
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    running.stop();
+    running.wait();
+}
+
+#[test]
+fn a_foreign_host_name_is_refused_on_every_route_and_the_own_names_are_served() {
+    let options = gateway::Options {
+        allow_hosts: vec!["lab-pc.local".into()],
+        ..gateway::Options::default()
+    };
+    let running = start_with(Speed::Factor(1.0), options);
+    let addr = running.http_addr().expect("the live view's address");
+    let port = addr.port();
+    let request = |host: &str, path: &str, extra: &str| {
+        http(
+            addr,
+            &format!("GET {path} HTTP/1.1\r\nHost: {host}\r\n{extra}Connection: close\r\n\r\n"),
+        )
+    };
+    let upgrade = "Upgrade: websocket\r\nConnection: Upgrade\r\nSec-WebSocket-Key: \
+                   dGhlIHNhbXBsZSBub25jZQ==\r\nSec-WebSocket-Version: 13\r\n";
+    // DNS rebinding: the attacker's name resolves to this machine; Origin and Host agree.
+    let evil = format!("evil.example:{port}");
+    let evil_origin = format!("Origin: http://{evil}\r\n{upgrade}");
+    for path in ["/", "/index.html", "/app.js", "/style.css", "/nothing"] {
+        let (status, body) = request(&evil, path, "");
+        assert!(status.contains("403"), "{path}: {status}");
+        assert!(body.contains("--allow-host"), "{body}");
+    }
+    let (status, _) = request(&evil, "/ws", &evil_origin);
+    assert!(status.contains("403"), "the socket: {status}");
+    // No Host at all (HTTP/1.0) is refused too.
+    let (status, _) = http(addr, "GET / HTTP/1.0\r\n\r\n");
+    assert!(status.contains("403"), "{status}");
+    // The own names are served; the allow-list's name with the bound port too.
+    for host in [
+        addr.to_string(),
+        format!("localhost:{port}"),
+        format!("127.0.0.2:{port}"),
+        format!("lab-pc.local:{port}"),
+    ] {
+        let (status, _) = request(&host, "/", "");
+        assert!(status.contains("200"), "{host}: {status}");
+    }
+    let (status, _) = request(&format!("lab-pc.local:{}", port.wrapping_add(1)), "/", "");
+    assert!(status.contains("403"), "{status}");
+    // The socket still wants its Origin to be the Host.
+    let own = format!("localhost:{port}");
+    let (status, _) = request(
+        &own,
+        "/ws",
+        &format!("Origin: http://evil.example:{port}\r\n{upgrade}"),
+    );
+    assert!(status.contains("403"), "{status}");
+    let mut s = TcpStream::connect(addr).expect("a connection");
+    s.set_read_timeout(Some(Duration::from_secs(5)))
+        .expect("a timeout");
+    let req = format!("GET /ws HTTP/1.1\r\nHost: {own}\r\nOrigin: http://{own}\r\n{upgrade}\r\n");
+    s.write_all(req.as_bytes()).expect("the upgrade goes out");
+    let mut head = [0u8; 12];
+    s.read_exact(&mut head).expect("an answer");
+    assert_eq!(&head, b"HTTP/1.1 101");
+    drop(s);
+    running.stop();
+    running.wait();
 }

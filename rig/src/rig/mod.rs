@@ -14,6 +14,7 @@ mod actions;
 mod drive;
 mod invariants;
 mod las;
+mod log_bound;
 mod operator;
 mod outputs;
 mod passengers;
@@ -164,6 +165,8 @@ pub struct Rig {
     external: Option<ToSafety>,
     /// The safe drive (`[drive] safe = true`).
     drive: Option<drive::SafeDriveGuard>,
+    /// The sources whose log lines are bounded ([`Rig::bound_log`]).
+    log_bounds: log_bound::LogBounds,
 }
 
 impl Rig {
@@ -239,6 +242,7 @@ impl Rig {
             bus_fault_since: None,
             external: None,
             drive: None,
+            log_bounds: log_bound::LogBounds::default(),
             sc,
         };
         rig.lift.set_load(SimTime::ZERO, rig.sc.load)?;
@@ -669,11 +673,14 @@ impl Rig {
     }
 
     fn log_at(&mut self, at: SimTime, who: &'static str, text: String) {
-        self.report.log.push(LogLine {
+        let line = LogLine {
             at_s: at.as_secs_f64(),
             who,
             text,
-        });
+        };
+        if let Some(line) = self.log_bounds.take(line) {
+            self.report.log.push(line);
+        }
     }
 
     /// Ends the run at the moment reached and returns its report (what [`Rig::run`] does at
@@ -731,6 +738,8 @@ impl Rig {
         if let Some(d) = self.drive.as_mut() {
             self.report.safety.drive = Some(d.finish());
         }
+        let held_back = self.log_bounds.drain();
+        self.report.log.extend(held_back);
         // Lines from different sources come in scan order; keep them in time order.
         self.report.log.sort_by(|a, b| a.at_s.total_cmp(&b.at_s));
         self.report
@@ -820,9 +829,28 @@ impl Rig {
     }
 
     /// The run's log so far (lines from different sources in the order they were written;
-    /// the report sorts them by time at the end).
+    /// the report sorts them by time at the end), without the lines a bounded source holds
+    /// back ([`Rig::bound_log`]).
     pub fn log_lines(&self) -> &[LogLine] {
         &self.report.log
+    }
+
+    /// The latest `n` lines of the run's log, those a bounded source holds back included,
+    /// oldest first.
+    pub fn recent_log(&self, n: usize) -> Vec<&LogLine> {
+        let log = &self.report.log;
+        let mut lines: Vec<&LogLine> = log[log.len().saturating_sub(n)..].iter().collect();
+        lines.extend(self.log_bounds.tails(n));
+        lines.sort_by(|a, b| a.at_s.total_cmp(&b.at_s));
+        let skip = lines.len().saturating_sub(n);
+        lines.split_off(skip)
+    }
+
+    /// Keeps only the first `first` and the last `last` log lines of `who` (a live run's
+    /// clients, which may send a command any number of times); the report says how many
+    /// lines between them were left out, at the time of the first.
+    pub fn bound_log(&mut self, who: &'static str, first: usize, last: usize) {
+        self.log_bounds.set(who, first, last);
     }
 
     /// The violations found so far.
