@@ -255,6 +255,42 @@ fn a_file_that_is_not_utf8_is_refused_at_its_place() {
 }
 
 #[test]
+fn endless_inputs_are_refused_with_a_clear_error_in_bounded_memory() {
+    let d = temp();
+    let cases: [(&[&str], &str); 6] = [
+        (
+            &["decode", "/dev/zero"],
+            "/dev/zero: line 1: the line is longer than 1 MiB",
+        ),
+        (
+            &["decode", "--format", "vcd", "/dev/zero"],
+            "/dev/zero: line 1: the line is longer than 1 MiB",
+        ),
+        (&["run", "/dev/zero"], "/dev/zero: larger than 16 MiB"),
+        (&["stand", "/dev/zero"], "/dev/zero: larger than 16 MiB"),
+        (
+            &["serve", "--listen", "127.0.0.1:0", "/dev/zero"],
+            "/dev/zero: larger than 16 MiB",
+        ),
+        (
+            &["campaign", "--runs", "1", "--profile", "/dev/zero"],
+            "--profile /dev/zero: larger than 16 MiB",
+        ),
+    ];
+    for (args, want) in cases {
+        let out = asi_lift()
+            .args(args)
+            .current_dir(d.path())
+            .output()
+            .expect("asi-lift runs");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{args:?}: {err}");
+        assert!(err.contains(want), "{args:?}: {err}");
+        assert!(err.len() < 400, "{args:?}: {err}");
+    }
+}
+
+#[test]
 fn a_campaign_whose_reader_goes_ends_quietly() {
     let d = temp();
     let (first, out) = head_1(

@@ -240,7 +240,7 @@ pub fn summarize_files(files: &[PathBuf], json: bool) -> Result<u8, String> {
         } else {
             f.display().to_string()
         };
-        texts.push((name, read_input(f)?));
+        texts.push((name, read_input(f, super::MAX_RESULTS_BYTES)?));
     }
     let s = summarize(&texts)?;
     print_out(&if json {

@@ -282,7 +282,7 @@ pub fn load_scenario(scenario: Option<&Path>) -> Result<(Scenario, Option<&Path>
     let sc = match (scenario, file) {
         (None, _) => Scenario::demo().map_err(|e| e.to_string())?,
         (Some(_), Some(path)) => {
-            let text = read_input(path)?;
+            let text = read_input(path, super::MAX_TOML_BYTES)?;
             Scenario::from_toml(&path.display().to_string(), &text).map_err(|e| e.to_string())?
         }
         (Some(name), None) => find(&name.to_string_lossy())

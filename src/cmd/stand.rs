@@ -68,7 +68,7 @@ fn load(scenario: &Path) -> Result<StandScenario, String> {
     let is_file =
         scenario == Path::new("-") || scenario.exists() || scenario.components().count() > 1;
     if is_file {
-        let text = read_input(scenario)?;
+        let text = read_input(scenario, super::MAX_TOML_BYTES)?;
         return StandScenario::from_toml(&scenario.display().to_string(), &text)
             .map_err(|e| e.to_string());
     }

@@ -40,7 +40,8 @@ impl DemodConfig {
         let err = |field, value: f32, rule| {
             Err(WaveformError {
                 field,
-                value: value as f64,
+                // The f32's shortest decimal (0.6, not 0.6000000238418579).
+                value: value.to_string().parse().unwrap_or(f64::from(value)),
                 rule,
             })
         };

@@ -8,7 +8,7 @@
 //! the one variable asked for are handed over, so a dump of a long run with many signals is
 //! followed in constant memory. Every error names its line.
 
-use asi_phy::waveform::CaptureError;
+use asi_phy::waveform::{excerpt, read_line_bounded, CaptureError};
 use core::fmt;
 use std::collections::HashSet;
 use std::io::BufRead;
@@ -201,7 +201,10 @@ impl<R: BufRead> VcdReader<R> {
                 return match cmd {
                     Some((kw, at, _)) => err(
                         line,
-                        format!("the file ends inside `{kw}` of line {at}: it has no `$end`"),
+                        format!(
+                            "the file ends inside `{}` of line {at}: it has no `$end`",
+                            excerpt(&kw)
+                        ),
                     ),
                     None if !seen => err(line, "the file is empty".into()),
                     None => err(
@@ -218,9 +221,9 @@ impl<R: BufRead> VcdReader<R> {
                     continue;
                 }
                 let cause = if tok.starts_with('#') {
-                    format!("`{tok}`: a time before `$enddefinitions`")
+                    format!("`{}`: a time before `$enddefinitions`", excerpt(tok))
                 } else {
-                    format!("`{tok}` is no VCD command (they start with `$`)")
+                    format!("`{}` is no VCD command (they start with `$`)", excerpt(tok))
                 };
                 return err(line, cause);
             };
@@ -230,7 +233,10 @@ impl<R: BufRead> VcdReader<R> {
                     if KEYWORDS.contains(&tok) {
                         return err(
                             line,
-                            format!("`{tok}` inside `{kw}` of line {at}: it has no `$end`"),
+                            format!(
+                                "`{tok}` inside `{}` of line {at}: it has no `$end`",
+                                excerpt(kw)
+                            ),
                         );
                     }
                     if args.len() < 16 {
@@ -246,7 +252,8 @@ impl<R: BufRead> VcdReader<R> {
                     timescale = Some(Timescale::parse(&text).ok_or_else(|| CaptureError {
                         line: at,
                         cause: format!(
-                            "`$timescale {text}`: expected 1, 10 or 100 of s, ms, us, ns, ps or fs"
+                            "`$timescale {}`: expected 1, 10 or 100 of s, ms, us, ns, ps or fs",
+                            excerpt(&text)
                         ),
                     })?);
                 }
@@ -266,7 +273,7 @@ impl<R: BufRead> VcdReader<R> {
                     };
                     let width: u32 = width.parse().map_err(|_| CaptureError {
                         line: at,
-                        cause: format!("`$var` width `{width}` is not a number"),
+                        cause: format!("`$var` width `{}` is not a number", excerpt(width)),
                     })?;
                     let mut path = scopes.join(".");
                     if !path.is_empty() {
@@ -344,7 +351,9 @@ impl<R: BufRead> VcdReader<R> {
                     b'r' => match text.parse::<f64>() {
                         Ok(v) => Value::Real(v),
                         Err(_) if tok != id => Value::Real(f64::NAN),
-                        Err(_) => return err(at, format!("`r{text}` is not a real number")),
+                        Err(_) => {
+                            return err(at, format!("`r{}` is not a real number", excerpt(&text)))
+                        }
                     },
                     _ => Value::Text,
                 };
@@ -367,7 +376,10 @@ impl<R: BufRead> VcdReader<R> {
                     }
                     b'#' => {
                         let Ok(t) = tok[1..].parse::<u64>() else {
-                            return err(line, format!("`{tok}` is not a time (#, then digits)"));
+                            return err(
+                                line,
+                                format!("`{}` is not a time (#, then digits)", excerpt(tok)),
+                            );
                         };
                         if let (true, Some(prev)) = (t < time, time_line) {
                             return err(
@@ -394,7 +406,10 @@ impl<R: BufRead> VcdReader<R> {
                     _ => {
                         return err(
                             line,
-                            format!("`{tok}` is no value change, time (#…) or command ($…)"),
+                            format!(
+                                "`{}` is no value change, time (#…) or command ($…)",
+                                excerpt(tok)
+                            ),
                         )
                     }
                 }
@@ -409,7 +424,10 @@ impl<R: BufRead> VcdReader<R> {
             } else if !ids.contains(code) {
                 return err(
                     line,
-                    format!("unknown identifier code `{code}`: no `$var` declares it"),
+                    format!(
+                        "unknown identifier code `{}`: no `$var` declares it",
+                        excerpt(code)
+                    ),
                 );
             }
         }
@@ -418,15 +436,19 @@ impl<R: BufRead> VcdReader<R> {
             return err(
                 at,
                 format!(
-                    "the file ends after the value `{}{text}`, before its identifier code",
-                    kind as char
+                    "the file ends after the value `{}{}`, before its identifier code",
+                    kind as char,
+                    excerpt(&text)
                 ),
             );
         }
         if let Some((kw, at)) = block.or(skip) {
             return err(
                 end,
-                format!("the file ends inside `{kw}` of line {at}: it has no `$end`"),
+                format!(
+                    "the file ends inside `{}` of line {at}: it has no `$end`",
+                    excerpt(&kw)
+                ),
             );
         }
         Ok(())
@@ -471,13 +493,8 @@ impl<R: BufRead> Tokens<R> {
             let mut bytes = core::mem::take(&mut self.buf).into_bytes();
             bytes.clear();
             let line = self.line + 1;
-            let n = self
-                .input
-                .read_until(b'\n', &mut bytes)
-                .map_err(|e| CaptureError {
-                    line,
-                    cause: e.to_string(),
-                })?;
+            // A line past the bound (a binary file, `/dev/zero`) is refused, not held.
+            let n = read_line_bounded(&mut self.input, &mut bytes, line)?;
             if n == 0 {
                 return Ok(None);
             }
@@ -667,5 +684,23 @@ mod tests {
             .and_then(|r| r.for_each_change("!", |_| Ok(())))
             .expect_err("not UTF-8");
         assert_eq!((e.line, e.cause.as_str()), (3, "not text (invalid UTF-8)"));
+    }
+
+    #[test]
+    fn a_line_past_the_bound_is_refused_and_a_long_token_quoted_short() {
+        // `/dev/zero`: one endless line, read only up to the bound.
+        let zeros = std::io::BufReader::new(std::io::repeat(0));
+        let e = VcdReader::new(zeros).err().expect("endless line");
+        assert_eq!(e.line, 1);
+        assert!(e.cause.contains("longer than 1 MiB"), "{e}");
+        // A huge value after the header: named, not echoed.
+        let text = format!(
+            "$var real 64 ! a $end $enddefinitions $end\n#1 r{} !\n",
+            "7x".repeat(200_000)
+        );
+        let e = changes(&text, "!").expect_err("not a number");
+        assert_eq!(e.line, 2);
+        assert!(e.cause.len() < 200, "{} bytes", e.cause.len());
+        assert!(e.cause.contains("7x7x…` is not a real number"), "{e}");
     }
 }

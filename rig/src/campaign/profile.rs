@@ -305,7 +305,7 @@ impl Profile {
                 ),
             ));
         }
-        let text = std::fs::read_to_string(path).map_err(|e| ProfileError::new(arg, e))?;
+        let text = read_bounded(path).map_err(|e| ProfileError::new(arg, e))?;
         let stem = path
             .file_stem()
             .map_or_else(|| arg.to_owned(), |s| s.to_string_lossy().into_owned());
@@ -551,6 +551,26 @@ impl fmt::Display for ProfileError {
 }
 
 impl std::error::Error for ProfileError {}
+
+/// The largest profile file read: a profile is a few hundred bytes, so a larger file
+/// (`/dev/zero`, a result file given by mistake) is refused before it fills memory.
+pub const MAX_PROFILE_BYTES: u64 = 16 << 20;
+
+/// The text of the file at `path`, at most [`MAX_PROFILE_BYTES`] of it.
+fn read_bounded(path: &std::path::Path) -> Result<String, String> {
+    use std::io::Read;
+    let mut bytes = Vec::new();
+    std::fs::File::open(path)
+        .and_then(|f| f.take(MAX_PROFILE_BYTES + 1).read_to_end(&mut bytes))
+        .map_err(|e| e.to_string())?;
+    if bytes.len() as u64 > MAX_PROFILE_BYTES {
+        return Err(format!(
+            "larger than {} MiB: not a profile file",
+            MAX_PROFILE_BYTES >> 20
+        ));
+    }
+    String::from_utf8(bytes).map_err(|e| format!("not UTF-8 text: {e}"))
+}
 
 #[cfg(test)]
 mod tests {
