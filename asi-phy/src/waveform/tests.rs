@@ -306,3 +306,35 @@ fn a_capture_read_as_a_stream_holds_a_prefix_and_reads_like_the_whole() {
     let e = r.read(&mut buf, 64).expect_err("uneven");
     assert_eq!(e.line, 5);
 }
+
+#[test]
+fn a_constant_span_pushed_at_once_demodulates_as_sample_by_sample() {
+    let wf = render(
+        train(20),
+        SimTime::ZERO,
+        SimTime::from_micros(120),
+        &WaveformConfig::default(),
+    )
+    .expect("ok");
+    // Telegram, a flat span on a raised level (the baseline must settle), an off-level span
+    // held inside a lobe, the telegram again; both ways alike, pulse for pulse.
+    let spans: [(f32, u64); 3] = [(1.0, 300_000), (-3.0, 50_000), (0.0, 400_000)];
+    let run = |bulk: bool| {
+        let mut d = Demodulator::for_waveform(DemodConfig::default(), &wf).expect("ok");
+        let mut got = Vec::new();
+        d.push(&wf.samples, |p| got.push(p));
+        for (v, n) in spans {
+            if bulk {
+                d.push_constant(v, n, |p| got.push(p));
+            } else {
+                d.push(&vec![v; n as usize], |p| got.push(p));
+            }
+        }
+        d.push(&wf.samples, |p| got.push(p));
+        d.finish(|p| got.push(p));
+        got
+    };
+    let (slow, fast) = (run(false), run(true));
+    assert!(slow.len() > 2 * train(20).iter().count(), "{slow:?}");
+    assert_eq!(fast, slow);
+}

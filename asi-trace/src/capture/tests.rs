@@ -752,3 +752,74 @@ fn a_quiet_start_longer_than_the_prefix_waits_for_the_first_pulses() {
         summary(&flat)
     );
 }
+
+/// A real VCD of the spec telegrams written on change: once from `#0`, then 20 times from
+/// `#gap_ns` (enough for the amplitude's estimate), the line at 0 V between: one long flat
+/// span.
+fn real_vcd_with_a_gap(gap_ns: u64) -> String {
+    let wf = spec_waveform();
+    let mut s = String::from(
+        "$timescale 1 ns $end\n$var real 64 % v $end\n$enddefinitions $end\n#0\n$dumpvars r0 % $end\n",
+    );
+    let mut last = 0.0;
+    let origins = std::iter::once(0).chain((0..20).map(|k| gap_ns + k * 170_000));
+    for origin in origins {
+        for (i, v) in wf.samples.iter().enumerate().take(1700) {
+            if *v != last {
+                let _ = writeln!(s, "#{}\nr{v} %", origin + 100 * i as u64);
+                last = *v;
+            }
+        }
+    }
+    let _ = writeln!(s, "#{}\nr0 %", gap_ns + 20 * 170_000);
+    s
+}
+
+#[test]
+fn a_long_flat_span_of_a_real_signal_is_run_through_at_once() {
+    // 6.8e10 grid points at 100 ns: one at a time, about 18 minutes.
+    for gap in [1_000_000_000, 1_000_000_000_000, 6_800_000_000_000] {
+        let s = real_vcd_with_a_gap(gap);
+        for nominal in [None, Some(2.5)] {
+            let opts = DecodeOptions {
+                nominal,
+                ..DecodeOptions::default()
+            };
+            let d = decode(&s, &opts).expect("decodes");
+            let origins = std::iter::once(0).chain((0..20).map(|k| (gap + k * 170_000) as i64));
+            let want: Vec<TelegramRecord> = origins
+                .flat_map(|origin| {
+                    spec_records().into_iter().map(move |t| TelegramRecord {
+                        t_ns: t.t_ns + origin,
+                        ..t
+                    })
+                })
+                .collect();
+            // Past 10^12 ns the pulse times carry some tens of ns of float rounding.
+            let slack = if gap > 1_000_000_000_000 { 50 } else { 0 };
+            assert_eq!(
+                d.telegrams.len(),
+                want.len(),
+                "gap {gap}, nominal {nominal:?}"
+            );
+            for (got, want) in d.telegrams.iter().zip(&want) {
+                assert!((got.t_ns - want.t_ns).abs() <= slack, "{got:?} {want:?}");
+                let got = TelegramRecord {
+                    t_ns: want.t_ns,
+                    ..got.clone()
+                };
+                assert_eq!(&got, want, "gap {gap}, nominal {nominal:?}");
+            }
+            let CaptureSource::Voltage { samples, .. } = d.source else {
+                panic!("{:?}", d.source)
+            };
+            assert_eq!(samples as u64, (gap + 20 * 170_000) / 100 + 1, "gap {gap}");
+        }
+    }
+    // The tiny VCD of a flat line that changes once, far out: a flat line, at once.
+    let tiny = "$timescale 1 ns $end\n$var real 64 ! v $end\n$enddefinitions $end\n\
+                #0\nr0 !\n#6800000000000\nr1 !\n";
+    let d = decode(tiny, &DecodeOptions::default()).expect("decodes");
+    assert!(d.telegrams.is_empty());
+    assert!(summary(&d).ends_with("a flat line"), "{}", summary(&d));
+}
