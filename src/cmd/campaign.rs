@@ -90,7 +90,7 @@ pub fn run(args: CampaignArgs) -> Result<u8, String> {
         profile,
         shrink_budget: args.shrink_budget,
     };
-    let count = plan.indices().count() as u64;
+    let count = plan.count();
     if count == 0 {
         // More shards than runs (an array larger than the campaign): nothing to do here.
         eprintln!(
