@@ -291,6 +291,30 @@ fn endless_inputs_are_refused_with_a_clear_error_in_bounded_memory() {
 }
 
 #[test]
+fn a_campaign_never_writes_over_its_profile() {
+    let d = temp();
+    let profile = d.path().join("p.toml");
+    let text = "base = \"smoke\"\n";
+    std::fs::write(&profile, text).expect("write");
+    let link = d.path().join("hard.toml");
+    std::fs::hard_link(&profile, &link).expect("hard link");
+    let dotted = d.path().join(".").join("p.toml");
+    for out in [&profile, &dotted, &link] {
+        let err = fails(
+            asi_lift()
+                .args(["campaign", "--runs", "1", "--force", "--profile"])
+                .arg(&profile)
+                .arg("--out")
+                .arg(out)
+                .arg("--failures")
+                .arg(d.path().join("f")),
+        );
+        assert!(err.contains("--profile") && err.contains("--out"), "{err}");
+        assert_eq!(std::fs::read_to_string(&profile).expect("kept"), text);
+    }
+}
+
+#[test]
 fn a_campaign_whose_reader_goes_ends_quietly() {
     let d = temp();
     let (first, out) = head_1(

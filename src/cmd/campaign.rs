@@ -105,6 +105,11 @@ pub fn run(args: CampaignArgs) -> Result<u8, String> {
         ));
     }
     let out_path = args.out.clone().unwrap_or_else(|| PathBuf::from("-"));
+    // The profile file is an input: no --force may truncate it.
+    let profile_file = Path::new(&args.profile);
+    if Profile::built_in(&args.profile).is_none() && profile_file.exists() {
+        super::output::refuse_inputs("--out", &out_path, &[("--profile", profile_file)])?;
+    }
     let mut out = open_output(&out_path, args.force)?;
     let out_name = if out_path == Path::new("-") {
         "standard output".to_string()

@@ -109,6 +109,31 @@ fn split(path: &Path) -> Result<(PathBuf, &std::ffi::OsStr), String> {
     Ok((dir, name))
 }
 
+/// Refuses the output `flag` at `path` when it names one of the `inputs` (flag and path), in
+/// any spelling: for an output written directly rather than through [`Outputs`] (a campaign's
+/// lines), which `--force` must not let truncate the file the command reads.
+pub fn refuse_inputs(flag: &str, path: &Path, inputs: &[(&str, &Path)]) -> Result<(), String> {
+    if path == Path::new("-") {
+        return Ok(());
+    }
+    let id = identity(path)?;
+    for &(what, input) in inputs {
+        if input == Path::new("-") || identity(input)? != id {
+            continue;
+        }
+        return Err(if input.as_os_str() == path.as_os_str() {
+            format!("{what} and {flag} both name {}", path.display())
+        } else {
+            format!(
+                "{what} {} and {flag} {} are the same file",
+                input.display(),
+                path.display()
+            )
+        });
+    }
+    Ok(())
+}
+
 /// One output being written.
 struct Pending {
     flag: &'static str,
