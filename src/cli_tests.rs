@@ -291,6 +291,31 @@ fn endless_inputs_are_refused_with_a_clear_error_in_bounded_memory() {
 }
 
 #[test]
+fn outputs_follow_the_umask_and_a_replaced_file_keeps_its_mode() {
+    use std::os::unix::fs::PermissionsExt;
+    let d = temp();
+    let report = d.path().join("r.txt");
+    let mode = |p: &Path| std::fs::metadata(p).expect("exists").permissions().mode() & 0o7777;
+    let run = |force: &str| {
+        let out = Command::new("sh")
+            .arg("-c")
+            .arg(format!(
+                "umask 027 && exec \"$0\" stand sto --report \"$1\" {force}"
+            ))
+            .arg(env!("CARGO_BIN_EXE_asi-lift"))
+            .arg(&report)
+            .output()
+            .expect("sh runs");
+        assert!(out.status.success(), "{out:?}");
+    };
+    run("");
+    assert_eq!(mode(&report), 0o640);
+    std::fs::set_permissions(&report, std::fs::Permissions::from_mode(0o664)).expect("chmod");
+    run("--force");
+    assert_eq!(mode(&report), 0o664);
+}
+
+#[test]
 fn a_campaign_never_writes_over_its_profile() {
     let d = temp();
     let profile = d.path().join("p.toml");

@@ -244,9 +244,12 @@ impl Outputs {
             Identity::New(place) => place,
         };
         let (dir, _) = split(&place)?;
+        // Created as any new file is, 0666 less the umask (not the temporary file's 0600): the
+        // output is the user's file once in place.
         let temp = tempfile::Builder::new()
             .prefix(".asi-lift-")
             .suffix(".part")
+            .permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666))
             .tempfile_in(&dir)
             .map_err(|e| format!("{flag} {}: cannot write there: {e}", path.display()))?;
         self.pending.push(Pending {
@@ -345,6 +348,12 @@ impl Outputs {
             if p.discarded {
                 // Dropped, the temporary file is deleted; the place keeps what it had.
                 continue;
+            }
+            // A file replaced keeps its mode.
+            if let Ok(m) = std::fs::metadata(&p.place) {
+                temp.as_file()
+                    .set_permissions(m.permissions())
+                    .map_err(|e| format!("{} {}: {e}", p.flag, p.shown.display()))?;
             }
             temp.as_file()
                 .sync_data()
