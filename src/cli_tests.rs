@@ -481,6 +481,79 @@ fn ctrl_c_ends_a_live_run_cleanly_with_its_report() {
     );
 }
 
+/// Sends `signal` (`INT`, `TERM`, `HUP`) to `child`, as a terminal, `kill` or docker does.
+fn send(child: &std::process::Child, signal: &str) {
+    let kill = Command::new("kill")
+        .arg(format!("-{signal}"))
+        .arg(child.id().to_string())
+        .status()
+        .expect("kill runs");
+    assert!(kill.success());
+}
+
+#[test]
+fn a_signal_ends_a_run_with_its_status_and_leaves_no_temporary_file() {
+    let d = temp();
+    let sc = d.path().join("long.toml");
+    std::fs::write(&sc, "duration = \"1h\"\n").expect("write");
+    // A file the run would replace: it keeps what it had.
+    let kept = d.path().join("t.jsonl");
+    std::fs::write(&kept, "mine\n").expect("write");
+    for (signal, status) in [("INT", 130), ("TERM", 143), ("HUP", 129)] {
+        let mut child = asi_lift()
+            .arg("run")
+            .arg(&sc)
+            .arg("--force")
+            .arg("--report")
+            .arg(d.path().join("r.txt"))
+            .arg("--trace")
+            .arg(&kept)
+            .arg("--vcd")
+            .arg(d.path().join("w.vcd"))
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+            .expect("asi-lift starts");
+        // The temporary files are made before the simulation: wait for them, and a moment
+        // of simulation with them growing.
+        while !files_in(d.path()).iter().any(|f| f.ends_with(".part")) {
+            std::thread::sleep(std::time::Duration::from_millis(20));
+        }
+        std::thread::sleep(std::time::Duration::from_millis(300));
+        send(&child, signal);
+        let got = child.wait().expect("asi-lift ends");
+        assert_eq!(got.code(), Some(status), "{signal}: {got:?}");
+        assert_eq!(files_in(d.path()), ["long.toml", "t.jsonl"], "{signal}");
+        assert_eq!(std::fs::read_to_string(&kept).expect("kept"), "mine\n");
+    }
+}
+
+#[test]
+fn sigterm_and_sighup_end_a_live_run_with_its_report_as_ctrl_c_does() {
+    for signal in ["TERM", "HUP"] {
+        let d = temp();
+        let report = d.path().join("r.txt");
+        let mut child = asi_lift()
+            .args(["serve", "--listen", "127.0.0.1:0", "--report"])
+            .arg(&report)
+            .stderr(Stdio::piped())
+            .stdout(Stdio::null())
+            .spawn()
+            .expect("asi-lift starts");
+        let mut err = BufReader::new(child.stderr.take().expect("its standard error"));
+        let mut line = String::new();
+        err.read_line(&mut line).expect("the first line");
+        assert!(line.contains("Modbus TCP gateway on"), "{line}");
+        std::thread::sleep(std::time::Duration::from_millis(500));
+        send(&child, signal);
+        let status = child.wait().expect("asi-lift ends");
+        assert!(status.success(), "{signal}: {status:?}");
+        let text = std::fs::read_to_string(&report).expect("the report is written");
+        assert!(text.contains("stopped by the operator"), "{signal}: {text}");
+        assert_eq!(files_in(d.path()), ["r.txt"], "{signal}");
+    }
+}
+
 /// The command in this process: [`asi_lift::run`] on parsed arguments, and the campaign's
 /// files.
 mod command {

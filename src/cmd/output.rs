@@ -13,8 +13,39 @@ use std::fs::File;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::Arc;
+use std::sync::{Arc, Mutex, PoisonError};
 use tempfile::NamedTempFile;
+
+/// The temporary files of the outputs being written, for [`clean_up_on_signals`] to remove.
+static TEMPS: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+
+fn temps() -> std::sync::MutexGuard<'static, Vec<PathBuf>> {
+    TEMPS.lock().unwrap_or_else(PoisonError::into_inner)
+}
+
+/// Makes SIGINT, SIGTERM and SIGHUP (Ctrl-C, `kill`, a closed terminal) end the command as
+/// they would, with the exit status 128 + the signal's number (130, 143, 129), but only after
+/// removing the temporary files of its outputs: an interrupted command leaves nothing behind,
+/// and the files at the outputs' places keep what they had.
+pub fn clean_up_on_signals() -> Result<(), String> {
+    use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
+    let mut signals = signal_hook::iterator::Signals::new([SIGINT, SIGTERM, SIGHUP])
+        .map_err(|e| format!("cannot handle signals: {e}"))?;
+    std::thread::Builder::new()
+        .name("signals".into())
+        .spawn(move || {
+            if let Some(signal) = signals.forever().next() {
+                // Held to the end: no output is moved into place meanwhile.
+                let temps = temps();
+                for p in temps.iter() {
+                    let _ = std::fs::remove_file(p);
+                }
+                std::process::exit(128 + signal);
+            }
+        })
+        .map_err(|e| format!("cannot handle signals: {e}"))?;
+    Ok(())
+}
 
 /// Standard output as an output stream: once its reader has gone, it takes everything quietly
 /// and says so through the flag, so that the command stops instead of failing on every write.
@@ -252,6 +283,7 @@ impl Outputs {
             .permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666))
             .tempfile_in(&dir)
             .map_err(|e| format!("{flag} {}: cannot write there: {e}", path.display()))?;
+        temps().push(temp.path().to_path_buf());
         self.pending.push(Pending {
             flag,
             place,
@@ -340,13 +372,17 @@ impl Outputs {
 
     /// Moves every file into place. Without `force`, a file that appeared at a place while the
     /// command ran is kept, and this output is reported instead of replacing it.
-    pub fn commit(self) -> Result<(), String> {
-        for p in self.pending {
+    pub fn commit(mut self) -> Result<(), String> {
+        for p in std::mem::take(&mut self.pending) {
             let Target::Temp(temp) = p.target else {
                 continue;
             };
+            // A signal now waits until this file is in place or gone.
+            let mut temps = temps();
+            temps.retain(|t| t != temp.path());
             if p.discarded {
                 // Dropped, the temporary file is deleted; the place keeps what it had.
+                drop(temp);
                 continue;
             }
             // A file replaced keeps its mode.
@@ -373,5 +409,19 @@ impl Outputs {
             })?;
         }
         Ok(())
+    }
+}
+
+impl Drop for Outputs {
+    /// The temporary files not moved into place go.
+    fn drop(&mut self) {
+        let mut temps = temps();
+        for p in &self.pending {
+            if let Target::Temp(t) = &p.target {
+                // Deleted here, under the lock, so that a signal finds it listed or gone.
+                let _ = std::fs::remove_file(t.path());
+                temps.retain(|x| x != t.path());
+            }
+        }
     }
 }

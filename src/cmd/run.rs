@@ -141,7 +141,9 @@ pub fn run(args: RunArgs) -> Result<u8, String> {
     let pulse_window = pulse_window
         .map(|w| parse_window("--pulse-window", &w))
         .transpose()?;
-    // Every output is checked, and its temporary file made, before the simulation.
+    // Every output is checked, and its temporary file made, before the simulation; an
+    // interrupted run removes them.
+    super::output::clean_up_on_signals()?;
     let mut outs = Outputs::new(force);
     if let Some(path) = file {
         outs.input("the scenario", path)?;

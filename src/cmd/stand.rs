@@ -42,6 +42,7 @@ pub fn run(args: StandArgs) -> Result<u8, String> {
         return Ok(0);
     };
     // Refuse a report file that exists, or that is the scenario itself, before running.
+    super::output::clean_up_on_signals()?;
     let mut outs = Outputs::new(args.force);
     if scenario.exists() {
         outs.input("the scenario", &scenario)?;
