@@ -316,6 +316,43 @@ fn outputs_follow_the_umask_and_a_replaced_file_keeps_its_mode() {
 }
 
 #[test]
+fn numbers_out_of_range_are_named_compactly_with_the_range() {
+    let d = temp();
+    let file = |name: &str, text: &str| {
+        let p = d.path().join(name);
+        std::fs::write(&p, text).expect("write");
+        p
+    };
+    let noise = file("noise.toml", "[bus]\npulse_error_rate = 1e308\n");
+    let start = file("start.toml", "[lift]\nstart_mm = 1e308\n");
+    let csv = file("v.csv", "0,1\n1e-7,1e308\n");
+    let flat = file("flat.csv", "0,0\n1e-7,0\n");
+    let cases: [(Vec<&std::ffi::OsStr>, &str); 4] = [
+        (
+            vec!["decode".as_ref(), "--nominal".as_ref(), "1e308".as_ref(), flat.as_ref()],
+            "1e308 is out of range: expected a positive number of volts up to 3.4028235e38",
+        ),
+        (
+            vec!["decode".as_ref(), csv.as_ref()],
+            "line 2: voltage 1e308 V is out of range: expected a finite voltage within ±3.4028235e38 V",
+        ),
+        (
+            vec!["run".as_ref(), noise.as_ref()],
+            "bus.pulse_error_rate: 1e308: a pulse error rate is a probability, 0..=1",
+        ),
+        (
+            vec!["run".as_ref(), start.as_ref()],
+            "lift.start_mm: 1e308 mm lies outside the shaft",
+        ),
+    ];
+    for (args, want) in cases {
+        let err = fails(asi_lift().args(&args));
+        assert!(err.contains(want), "{args:?}: {err}");
+        assert!(err.len() < 300, "{args:?}: {err}");
+    }
+}
+
+#[test]
 fn a_campaign_never_writes_over_its_profile() {
     let d = temp();
     let profile = d.path().join("p.toml");

@@ -219,7 +219,10 @@ impl Profile {
             }
             "noisy" => {
                 p.name = "noisy".into();
-                p.pulse_error_rate = Weights::new(vec![(0.0, 1), (1e-3, 1), (3e-3, 1), (1e-2, 1)]);
+                // Rates a lift still serves its calls at (README.md, "Line noise"): at 10⁻² no
+                // call is served, so every run of it failed the campaign; at 5·10⁻³ the calls
+                // are served, but with the generator's faults one run in 200 was not.
+                p.pulse_error_rate = Weights::new(vec![(0.0, 1), (1e-3, 1), (2e-3, 1), (3e-3, 1)]);
             }
             "smoke" => {
                 p.name = "smoke".into();
@@ -377,7 +380,10 @@ impl Profile {
         ] {
             if let Some(v) = value {
                 if !(0.0..=1.0).contains(&v) {
-                    return Err(err(format!("{field}: {v}: a chance is 0..1")));
+                    return Err(err(format!(
+                        "{field}: {}: a chance is 0..1",
+                        asi_phy::waveform::short_number(v)
+                    )));
                 }
                 *target = v;
             }
@@ -595,8 +601,10 @@ mod tests {
             .filter(|k| k.is_fault())
             .all(|k| quiet.event.weight(*k) == 0));
         assert_eq!(quiet.pulse_error_rate.choices().count(), 1);
+        // The noisy profile's line noise stays where a lift serves its calls.
         let noisy = Profile::built_in("noisy").expect("noisy");
-        assert_eq!(noisy.pulse_error_rate.weight(1e-2), 1);
+        assert!(noisy.pulse_error_rate.choices().all(|(r, _)| r <= 3e-3));
+        assert_eq!(noisy.pulse_error_rate.weight(3e-3), 1);
         assert!(Profile::built_in("loud").is_none());
     }
 
