@@ -823,3 +823,90 @@ fn a_long_flat_span_of_a_real_signal_is_run_through_at_once() {
     assert!(d.telegrams.is_empty());
     assert!(summary(&d).ends_with("a flat line"), "{}", summary(&d));
 }
+
+/// Random and mutated bytes into the capture decoders (CSV, VCD): never a panic, an `Ok` or an
+/// error of a line or two, in bounded time.
+mod fuzz {
+    use super::*;
+
+    fn mutate(text: &[u8], edits: &[(u8, usize, u8)]) -> Vec<u8> {
+        let mut b = text.to_vec();
+        for &(kind, at, byte) in edits {
+            let at = at % (b.len() + 1);
+            match kind % 4 {
+                0 if at < b.len() => b[at] = byte,
+                1 => b.insert(at, byte),
+                2 if at < b.len() => {
+                    b.remove(at);
+                }
+                _ => b.truncate(at),
+            }
+        }
+        b
+    }
+
+    /// Small captures the project writes: a wire VCD, a real VCD and a CSV of the spec
+    /// telegrams (the real VCD and the CSV cut to a few hundred samples, for speed).
+    fn seeds() -> &'static [String] {
+        static SEEDS: std::sync::OnceLock<Vec<String>> = std::sync::OnceLock::new();
+        SEEDS.get_or_init(|| {
+            let mut v: Vec<String> = spec_captures().into_iter().map(|(s, _)| s).collect();
+            for s in &mut v {
+                if s.len() > 6000 {
+                    let cut = s[..6000].rfind('\n').unwrap_or(0);
+                    s.truncate(cut + 1);
+                }
+            }
+            v
+        })
+    }
+
+    fn check(bytes: &[u8], format: Option<CaptureFormat>) -> Result<(), TestCaseError> {
+        let opts = DecodeOptions {
+            format,
+            ..DecodeOptions::default()
+        };
+        if let Err(e) = decode_capture(bytes, &opts) {
+            let m = e.to_string();
+            prop_assert!(m.len() < 600, "{} bytes: {}", m.len(), m);
+        }
+        Ok(())
+    }
+
+    fn formats() -> impl Strategy<Value = Option<CaptureFormat>> {
+        prop_oneof![
+            Just(None),
+            Just(Some(CaptureFormat::Csv)),
+            Just(Some(CaptureFormat::Vcd))
+        ]
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(500))]
+
+        #[test]
+        fn mutated_captures_decode_or_are_refused_clearly(
+            which in any::<prop::sample::Index>(),
+            edits in prop::collection::vec((any::<u8>(), any::<usize>(), any::<u8>()), 1..6),
+            format in formats(),
+        ) {
+            check(&mutate(which.get(seeds()).as_bytes(), &edits), format)?;
+        }
+
+        #[test]
+        fn random_bytes_decode_or_are_refused_clearly(
+            bytes in prop::collection::vec(any::<u8>(), 0..400),
+            format in formats(),
+        ) {
+            check(&bytes, format)?;
+        }
+
+        #[test]
+        fn random_vcd_like_text_decodes_or_is_refused_clearly(
+            text in "\\$timescale 1 (ns|ps|s) \\$end\n\\$var (real 64|wire 1) ! v \\$end\n\
+                     \\$enddefinitions \\$end\n(#[0-9]{1,16}\n|r-?[0-9.e]{1,8} !\n|[01xz]!\n){0,30}",
+        ) {
+            check(text.as_bytes(), None)?;
+        }
+    }
+}
