@@ -520,6 +520,16 @@ fn stream_vcd_voltage<R: BufRead>(
     let read = reader.for_each_change(&var.id, |c| {
         let v = match c.value {
             Value::Real(v) if v.is_finite() && (v as f32).is_finite() => v as f32,
+            Value::Real(v) => {
+                return Err(CaptureError {
+                    line: c.line,
+                    cause: format!(
+                        "{var}: {} is out of range: expected a finite voltage within ±{:e} V",
+                        asi_phy::waveform::short_number(v),
+                        f32::MAX
+                    ),
+                })
+            }
             _ => {
                 return Err(CaptureError {
                     line: c.line,

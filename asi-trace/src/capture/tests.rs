@@ -398,6 +398,11 @@ fn every_bad_capture_names_the_line() {
             5,
             "holds a real",
         ),
+        (
+            "$var real 64 % v $end\n$enddefinitions $end\n#0 r0 %\n#10 r1e308 %\n".into(),
+            4,
+            "v (real): 1e308 is out of range: expected a finite voltage within ±3.4028235e38 V",
+        ),
     ];
     for (text, line, cause) in cases {
         match decode(&text, &DecodeOptions::default()) {
