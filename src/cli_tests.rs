@@ -820,6 +820,12 @@ mod command {
             std::fs::read_to_string(&second).ok().as_deref(),
             Some("two")
         );
+        // A name taken by something endless is compared, not read whole.
+        std::os::unix::fs::symlink("/dev/zero", dir.join("run-000002-cd.toml")).expect("link");
+        assert_eq!(
+            write_reproducer(&dir, "run-000002-cd.toml", "three"),
+            Ok(dir.join("run-000002-cd-2.toml"))
+        );
         let _ = std::fs::remove_dir_all(&dir);
     }
 
