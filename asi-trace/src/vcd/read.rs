@@ -30,6 +30,13 @@ const KEYWORDS: [&str; 12] = [
     "$dumpvars",
 ];
 
+/// The most variables and the deepest scopes a header may declare: far more than any dump
+/// holds, a bound on the memory a header can take, whatever the file.
+pub const MAX_VARS: usize = 1 << 20;
+
+/// The deepest nesting of `$scope`s read (see [`MAX_VARS`]).
+pub const MAX_SCOPE_DEPTH: usize = 1 << 10;
+
 /// The length of one VCD time unit: `$timescale 10 ns $end` (1, 10 or 100 of s, ms, us, ns,
 /// ps or fs).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -258,6 +265,12 @@ impl<R: BufRead> VcdReader<R> {
                     })?);
                 }
                 "$scope" => match args.last() {
+                    _ if scopes.len() >= MAX_SCOPE_DEPTH => {
+                        return err(
+                            at,
+                            format!("`$scope` nested deeper than {MAX_SCOPE_DEPTH}: not a dump"),
+                        )
+                    }
                     Some(name) => scopes.push(name.clone()),
                     None => return err(at, "`$scope` without a name".into()),
                 },
@@ -268,6 +281,9 @@ impl<R: BufRead> VcdReader<R> {
                     })?;
                 }
                 "$var" => {
+                    if vars.len() >= MAX_VARS {
+                        return err(at, format!("more than {MAX_VARS} `$var`s: not a dump"));
+                    }
                     let [kind, width, id, name, ..] = args.as_slice() else {
                         return err(at, "`$var` needs TYPE WIDTH ID NAME before `$end`".into());
                     };
@@ -684,6 +700,18 @@ mod tests {
             .and_then(|r| r.for_each_change("!", |_| Ok(())))
             .expect_err("not UTF-8");
         assert_eq!((e.line, e.cause.as_str()), (3, "not text (invalid UTF-8)"));
+    }
+
+    #[test]
+    fn a_header_past_its_bounds_is_refused() {
+        let deep = "$scope module a $end\n".repeat(MAX_SCOPE_DEPTH + 1);
+        let e = VcdReader::new(deep.as_bytes()).err().expect("too deep");
+        assert_eq!(e.line, MAX_SCOPE_DEPTH + 1);
+        assert!(e.cause.contains("nested deeper than 1024"), "{e}");
+        let many = "$var wire 1 ! a $end\n".repeat(MAX_VARS + 1);
+        let e = VcdReader::new(many.as_bytes()).err().expect("too many");
+        assert_eq!(e.line, MAX_VARS + 1);
+        assert!(e.cause.contains("more than 1048576 `$var`s"), "{e}");
     }
 
     #[test]
