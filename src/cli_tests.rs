@@ -255,6 +255,128 @@ fn a_file_that_is_not_utf8_is_refused_at_its_place() {
 }
 
 #[test]
+fn endless_inputs_are_refused_with_a_clear_error_in_bounded_memory() {
+    let d = temp();
+    let cases: [(&[&str], &str); 6] = [
+        (
+            &["decode", "/dev/zero"],
+            "/dev/zero: line 1: the line is longer than 1 MiB",
+        ),
+        (
+            &["decode", "--format", "vcd", "/dev/zero"],
+            "/dev/zero: line 1: the line is longer than 1 MiB",
+        ),
+        (&["run", "/dev/zero"], "/dev/zero: larger than 16 MiB"),
+        (&["stand", "/dev/zero"], "/dev/zero: larger than 16 MiB"),
+        (
+            &["serve", "--listen", "127.0.0.1:0", "/dev/zero"],
+            "/dev/zero: larger than 16 MiB",
+        ),
+        (
+            &["campaign", "--runs", "1", "--profile", "/dev/zero"],
+            "--profile /dev/zero: larger than 16 MiB",
+        ),
+    ];
+    for (args, want) in cases {
+        let out = asi_lift()
+            .args(args)
+            .current_dir(d.path())
+            .output()
+            .expect("asi-lift runs");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{args:?}: {err}");
+        assert!(err.contains(want), "{args:?}: {err}");
+        assert!(err.len() < 400, "{args:?}: {err}");
+    }
+}
+
+#[test]
+fn outputs_follow_the_umask_and_a_replaced_file_keeps_its_mode() {
+    use std::os::unix::fs::PermissionsExt;
+    let d = temp();
+    let report = d.path().join("r.txt");
+    let mode = |p: &Path| std::fs::metadata(p).expect("exists").permissions().mode() & 0o7777;
+    let run = |force: &str| {
+        let out = Command::new("sh")
+            .arg("-c")
+            .arg(format!(
+                "umask 027 && exec \"$0\" stand sto --report \"$1\" {force}"
+            ))
+            .arg(env!("CARGO_BIN_EXE_asi-lift"))
+            .arg(&report)
+            .output()
+            .expect("sh runs");
+        assert!(out.status.success(), "{out:?}");
+    };
+    run("");
+    assert_eq!(mode(&report), 0o640);
+    std::fs::set_permissions(&report, std::fs::Permissions::from_mode(0o664)).expect("chmod");
+    run("--force");
+    assert_eq!(mode(&report), 0o664);
+}
+
+#[test]
+fn numbers_out_of_range_are_named_compactly_with_the_range() {
+    let d = temp();
+    let file = |name: &str, text: &str| {
+        let p = d.path().join(name);
+        std::fs::write(&p, text).expect("write");
+        p
+    };
+    let noise = file("noise.toml", "[bus]\npulse_error_rate = 1e308\n");
+    let start = file("start.toml", "[lift]\nstart_mm = 1e308\n");
+    let csv = file("v.csv", "0,1\n1e-7,1e308\n");
+    let flat = file("flat.csv", "0,0\n1e-7,0\n");
+    let cases: [(Vec<&std::ffi::OsStr>, &str); 4] = [
+        (
+            vec!["decode".as_ref(), "--nominal".as_ref(), "1e308".as_ref(), flat.as_ref()],
+            "1e308 is out of range: expected a positive number of volts up to 3.4028235e38",
+        ),
+        (
+            vec!["decode".as_ref(), csv.as_ref()],
+            "line 2: voltage 1e308 V is out of range: expected a finite voltage within ±3.4028235e38 V",
+        ),
+        (
+            vec!["run".as_ref(), noise.as_ref()],
+            "bus.pulse_error_rate: 1e308: a pulse error rate is a probability, 0..=1",
+        ),
+        (
+            vec!["run".as_ref(), start.as_ref()],
+            "lift.start_mm: 1e308 mm lies outside the shaft",
+        ),
+    ];
+    for (args, want) in cases {
+        let err = fails(asi_lift().args(&args));
+        assert!(err.contains(want), "{args:?}: {err}");
+        assert!(err.len() < 300, "{args:?}: {err}");
+    }
+}
+
+#[test]
+fn a_campaign_never_writes_over_its_profile() {
+    let d = temp();
+    let profile = d.path().join("p.toml");
+    let text = "base = \"smoke\"\n";
+    std::fs::write(&profile, text).expect("write");
+    let link = d.path().join("hard.toml");
+    std::fs::hard_link(&profile, &link).expect("hard link");
+    let dotted = d.path().join(".").join("p.toml");
+    for out in [&profile, &dotted, &link] {
+        let err = fails(
+            asi_lift()
+                .args(["campaign", "--runs", "1", "--force", "--profile"])
+                .arg(&profile)
+                .arg("--out")
+                .arg(out)
+                .arg("--failures")
+                .arg(d.path().join("f")),
+        );
+        assert!(err.contains("--profile") && err.contains("--out"), "{err}");
+        assert_eq!(std::fs::read_to_string(&profile).expect("kept"), text);
+    }
+}
+
+#[test]
 fn a_campaign_whose_reader_goes_ends_quietly() {
     let d = temp();
     let (first, out) = head_1(
@@ -415,6 +537,79 @@ fn ctrl_c_ends_a_live_run_cleanly_with_its_report() {
         text.contains("live               builtin controller at speed 1"),
         "{text}"
     );
+}
+
+/// Sends `signal` (`INT`, `TERM`, `HUP`) to `child`, as a terminal, `kill` or docker does.
+fn send(child: &std::process::Child, signal: &str) {
+    let kill = Command::new("kill")
+        .arg(format!("-{signal}"))
+        .arg(child.id().to_string())
+        .status()
+        .expect("kill runs");
+    assert!(kill.success());
+}
+
+#[test]
+fn a_signal_ends_a_run_with_its_status_and_leaves_no_temporary_file() {
+    let d = temp();
+    let sc = d.path().join("long.toml");
+    std::fs::write(&sc, "duration = \"1h\"\n").expect("write");
+    // A file the run would replace: it keeps what it had.
+    let kept = d.path().join("t.jsonl");
+    std::fs::write(&kept, "mine\n").expect("write");
+    for (signal, status) in [("INT", 130), ("TERM", 143), ("HUP", 129)] {
+        let mut child = asi_lift()
+            .arg("run")
+            .arg(&sc)
+            .arg("--force")
+            .arg("--report")
+            .arg(d.path().join("r.txt"))
+            .arg("--trace")
+            .arg(&kept)
+            .arg("--vcd")
+            .arg(d.path().join("w.vcd"))
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+            .expect("asi-lift starts");
+        // The temporary files are made before the simulation: wait for them, and a moment
+        // of simulation with them growing.
+        while !files_in(d.path()).iter().any(|f| f.ends_with(".part")) {
+            std::thread::sleep(std::time::Duration::from_millis(20));
+        }
+        std::thread::sleep(std::time::Duration::from_millis(300));
+        send(&child, signal);
+        let got = child.wait().expect("asi-lift ends");
+        assert_eq!(got.code(), Some(status), "{signal}: {got:?}");
+        assert_eq!(files_in(d.path()), ["long.toml", "t.jsonl"], "{signal}");
+        assert_eq!(std::fs::read_to_string(&kept).expect("kept"), "mine\n");
+    }
+}
+
+#[test]
+fn sigterm_and_sighup_end_a_live_run_with_its_report_as_ctrl_c_does() {
+    for signal in ["TERM", "HUP"] {
+        let d = temp();
+        let report = d.path().join("r.txt");
+        let mut child = asi_lift()
+            .args(["serve", "--listen", "127.0.0.1:0", "--report"])
+            .arg(&report)
+            .stderr(Stdio::piped())
+            .stdout(Stdio::null())
+            .spawn()
+            .expect("asi-lift starts");
+        let mut err = BufReader::new(child.stderr.take().expect("its standard error"));
+        let mut line = String::new();
+        err.read_line(&mut line).expect("the first line");
+        assert!(line.contains("Modbus TCP gateway on"), "{line}");
+        std::thread::sleep(std::time::Duration::from_millis(500));
+        send(&child, signal);
+        let status = child.wait().expect("asi-lift ends");
+        assert!(status.success(), "{signal}: {status:?}");
+        let text = std::fs::read_to_string(&report).expect("the report is written");
+        assert!(text.contains("stopped by the operator"), "{signal}: {text}");
+        assert_eq!(files_in(d.path()), ["r.txt"], "{signal}");
+    }
 }
 
 /// The command in this process: [`asi_lift::run`] on parsed arguments, and the campaign's
@@ -645,6 +840,12 @@ mod command {
         assert_eq!(
             std::fs::read_to_string(&second).ok().as_deref(),
             Some("two")
+        );
+        // A name taken by something endless is compared, not read whole.
+        std::os::unix::fs::symlink("/dev/zero", dir.join("run-000002-cd.toml")).expect("link");
+        assert_eq!(
+            write_reproducer(&dir, "run-000002-cd.toml", "three"),
+            Ok(dir.join("run-000002-cd-2.toml"))
         );
         let _ = std::fs::remove_dir_all(&dir);
     }

@@ -148,7 +148,10 @@ pub struct PulseErrorRate(f64);
 
 /// A pulse error rate that is no probability.
 #[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]
-#[error("{0}: a pulse error rate is a probability, 0..=1")]
+#[error(
+    "{}: a pulse error rate is a probability, 0..=1",
+    crate::waveform::short_number(*.0)
+)]
 pub struct PulseErrorRateError(pub f64);
 
 impl PulseErrorRate {

@@ -90,7 +90,7 @@ pub fn run(args: CampaignArgs) -> Result<u8, String> {
         profile,
         shrink_budget: args.shrink_budget,
     };
-    let count = plan.indices().count() as u64;
+    let count = plan.count();
     if count == 0 {
         // More shards than runs (an array larger than the campaign): nothing to do here.
         eprintln!(
@@ -105,6 +105,11 @@ pub fn run(args: CampaignArgs) -> Result<u8, String> {
         ));
     }
     let out_path = args.out.clone().unwrap_or_else(|| PathBuf::from("-"));
+    // The profile file is an input: no --force may truncate it.
+    let profile_file = Path::new(&args.profile);
+    if Profile::built_in(&args.profile).is_none() && profile_file.exists() {
+        super::output::refuse_inputs("--out", &out_path, &[("--profile", profile_file)])?;
+    }
     let mut out = open_output(&out_path, args.force)?;
     let out_name = if out_path == Path::new("-") {
         "standard output".to_string()
@@ -218,7 +223,7 @@ pub fn write_reproducer(dir: &Path, name: &str, text: &str) -> Result<PathBuf, S
                 return Ok(path);
             }
             Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {
-                if std::fs::read_to_string(&path).is_ok_and(|t| t == text) {
+                if same_text(&path, text) {
                     return Ok(path);
                 }
             }
@@ -231,6 +236,16 @@ pub fn write_reproducer(dir: &Path, name: &str, text: &str) -> Result<PathBuf, S
     ))
 }
 
+/// Whether the file at `path` holds `text`, reading no more than one byte past its length (the
+/// file may be anything: a device, a huge file of that name).
+fn same_text(path: &Path, text: &str) -> bool {
+    use std::io::Read;
+    let mut got = Vec::new();
+    std::fs::File::open(path)
+        .and_then(|f| f.take(text.len() as u64 + 1).read_to_end(&mut got))
+        .is_ok_and(|_| got == text.as_bytes())
+}
+
 /// `asi-lift campaign summarize`.
 pub fn summarize_files(files: &[PathBuf], json: bool) -> Result<u8, String> {
     let mut texts = Vec::new();
@@ -240,7 +255,7 @@ pub fn summarize_files(files: &[PathBuf], json: bool) -> Result<u8, String> {
         } else {
             f.display().to_string()
         };
-        texts.push((name, read_input(f)?));
+        texts.push((name, read_input(f, super::MAX_RESULTS_BYTES)?));
     }
     let s = summarize(&texts)?;
     print_out(&if json {

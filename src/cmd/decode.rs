@@ -27,7 +27,7 @@ pub struct DecodeArgs {
     #[arg(long)]
     pub json: bool,
     /// Nominal pulse amplitude in volts [default: estimated from the first 2^20 samples].
-    #[arg(long, value_name = "V")]
+    #[arg(long, value_name = "V", value_parser = parse_volts)]
     pub nominal: Option<f32>,
     /// What the receiver listens for.
     #[arg(long, value_enum, default_value_t = Listen::Both)]
@@ -141,4 +141,18 @@ pub fn run(args: DecodeArgs) -> Result<u8, String> {
         print_out(&format!("{}\n", stream_summary(&summary)))?;
     }
     Ok(0)
+}
+
+/// `--nominal`: a positive, finite amplitude in volts that a capture's samples (32-bit floats)
+/// can hold.
+fn parse_volts(s: &str) -> Result<f32, String> {
+    let range = format!("expected a positive number of volts up to {:e}", f32::MAX);
+    match s.parse::<f64>() {
+        Ok(v) if v > 0.0 && v <= f64::from(f32::MAX) => Ok(v as f32),
+        Ok(v) => Err(format!(
+            "{} is out of range: {range}",
+            asi_phy::waveform::short_number(v)
+        )),
+        Err(_) => Err(format!("not a number: {range}")),
+    }
 }

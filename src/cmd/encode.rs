@@ -49,6 +49,7 @@ pub fn run(args: EncodeArgs) -> Result<u8, String> {
                 seed,
                 ..WaveformConfig::default()
             };
+            super::output::clean_up_on_signals()?;
             let mut outs = Outputs::new(force);
             let sink = outs.add("--csv", &path)?;
             let text = waveform_csv(t, &cfg).map_err(|e| e.to_string())?;

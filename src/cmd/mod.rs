@@ -40,20 +40,41 @@ pub fn open_input(path: &Path) -> Result<(String, Box<dyn BufRead>), String> {
     Ok((name, Box::new(std::io::BufReader::new(f))))
 }
 
-/// The whole of a text file (`-` = standard input); text that is not UTF-8 is refused at the
-/// line and column of its first bad byte.
-pub fn read_input(path: &Path) -> Result<String, String> {
-    let (name, bytes) = if path == Path::new("-") {
-        let mut b = Vec::new();
-        std::io::stdin()
-            .read_to_end(&mut b)
-            .map_err(|e| format!("standard input: {e}"))?;
-        ("standard input".to_owned(), b)
+/// The largest TOML input read (a scenario, a stand scenario, a campaign profile): they are a
+/// few kB, so a larger one (`/dev/zero`, a capture given by mistake) is refused before it
+/// fills memory.
+pub const MAX_TOML_BYTES: u64 = 16 << 20;
+
+/// The largest campaign result file `campaign summarize` reads (a few hundred bytes a run:
+/// some million runs).
+pub const MAX_RESULTS_BYTES: u64 = 1 << 30;
+
+/// The whole of a text file (`-` = standard input), at most `max` bytes: a longer one is
+/// refused, having read no more than that. Text that is not UTF-8 is refused at the line and
+/// column of its first bad byte.
+pub fn read_input(path: &Path, max: u64) -> Result<String, String> {
+    let (name, mut input): (String, Box<dyn Read>) = if path == Path::new("-") {
+        (
+            "standard input".to_owned(),
+            Box::new(std::io::stdin().lock()),
+        )
     } else {
         let name = path.display().to_string();
-        let b = std::fs::read(path).map_err(|e| format!("{name}: {e}"))?;
-        (name, b)
+        let f = std::fs::File::open(path).map_err(|e| format!("{name}: {e}"))?;
+        (name, Box::new(f))
     };
+    let mut bytes = Vec::new();
+    input
+        .by_ref()
+        .take(max + 1)
+        .read_to_end(&mut bytes)
+        .map_err(|e| format!("{name}: {e}"))?;
+    if bytes.len() as u64 > max {
+        return Err(format!(
+            "{name}: larger than {} MiB, which is more than such a file holds: is it the right file?",
+            max >> 20
+        ));
+    }
     String::from_utf8(bytes).map_err(|e| {
         let good = &e.as_bytes()[..e.utf8_error().valid_up_to()];
         let line = good.iter().filter(|b| **b == b'\n').count() + 1;

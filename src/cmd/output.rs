@@ -13,8 +13,39 @@ use std::fs::File;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::Arc;
+use std::sync::{Arc, Mutex, PoisonError};
 use tempfile::NamedTempFile;
+
+/// The temporary files of the outputs being written, for [`clean_up_on_signals`] to remove.
+static TEMPS: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+
+fn temps() -> std::sync::MutexGuard<'static, Vec<PathBuf>> {
+    TEMPS.lock().unwrap_or_else(PoisonError::into_inner)
+}
+
+/// Makes SIGINT, SIGTERM and SIGHUP (Ctrl-C, `kill`, a closed terminal) end the command as
+/// they would, with the exit status 128 + the signal's number (130, 143, 129), but only after
+/// removing the temporary files of its outputs: an interrupted command leaves nothing behind,
+/// and the files at the outputs' places keep what they had.
+pub fn clean_up_on_signals() -> Result<(), String> {
+    use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
+    let mut signals = signal_hook::iterator::Signals::new([SIGINT, SIGTERM, SIGHUP])
+        .map_err(|e| format!("cannot handle signals: {e}"))?;
+    std::thread::Builder::new()
+        .name("signals".into())
+        .spawn(move || {
+            if let Some(signal) = signals.forever().next() {
+                // Held to the end: no output is moved into place meanwhile.
+                let temps = temps();
+                for p in temps.iter() {
+                    let _ = std::fs::remove_file(p);
+                }
+                std::process::exit(128 + signal);
+            }
+        })
+        .map_err(|e| format!("cannot handle signals: {e}"))?;
+    Ok(())
+}
 
 /// Standard output as an output stream: once its reader has gone, it takes everything quietly
 /// and says so through the flag, so that the command stops instead of failing on every write.
@@ -107,6 +138,31 @@ fn split(path: &Path) -> Result<(PathBuf, &std::ffi::OsStr), String> {
         _ => PathBuf::from("."),
     };
     Ok((dir, name))
+}
+
+/// Refuses the output `flag` at `path` when it names one of the `inputs` (flag and path), in
+/// any spelling: for an output written directly rather than through [`Outputs`] (a campaign's
+/// lines), which `--force` must not let truncate the file the command reads.
+pub fn refuse_inputs(flag: &str, path: &Path, inputs: &[(&str, &Path)]) -> Result<(), String> {
+    if path == Path::new("-") {
+        return Ok(());
+    }
+    let id = identity(path)?;
+    for &(what, input) in inputs {
+        if input == Path::new("-") || identity(input)? != id {
+            continue;
+        }
+        return Err(if input.as_os_str() == path.as_os_str() {
+            format!("{what} and {flag} both name {}", path.display())
+        } else {
+            format!(
+                "{what} {} and {flag} {} are the same file",
+                input.display(),
+                path.display()
+            )
+        });
+    }
+    Ok(())
 }
 
 /// One output being written.
@@ -219,11 +275,15 @@ impl Outputs {
             Identity::New(place) => place,
         };
         let (dir, _) = split(&place)?;
+        // Created as any new file is, 0666 less the umask (not the temporary file's 0600): the
+        // output is the user's file once in place.
         let temp = tempfile::Builder::new()
             .prefix(".asi-lift-")
             .suffix(".part")
+            .permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666))
             .tempfile_in(&dir)
             .map_err(|e| format!("{flag} {}: cannot write there: {e}", path.display()))?;
+        temps().push(temp.path().to_path_buf());
         self.pending.push(Pending {
             flag,
             place,
@@ -312,14 +372,24 @@ impl Outputs {
 
     /// Moves every file into place. Without `force`, a file that appeared at a place while the
     /// command ran is kept, and this output is reported instead of replacing it.
-    pub fn commit(self) -> Result<(), String> {
-        for p in self.pending {
+    pub fn commit(mut self) -> Result<(), String> {
+        for p in std::mem::take(&mut self.pending) {
             let Target::Temp(temp) = p.target else {
                 continue;
             };
+            // A signal now waits until this file is in place or gone.
+            let mut temps = temps();
+            temps.retain(|t| t != temp.path());
             if p.discarded {
                 // Dropped, the temporary file is deleted; the place keeps what it had.
+                drop(temp);
                 continue;
+            }
+            // A file replaced keeps its mode.
+            if let Ok(m) = std::fs::metadata(&p.place) {
+                temp.as_file()
+                    .set_permissions(m.permissions())
+                    .map_err(|e| format!("{} {}: {e}", p.flag, p.shown.display()))?;
             }
             temp.as_file()
                 .sync_data()
@@ -339,5 +409,19 @@ impl Outputs {
             })?;
         }
         Ok(())
+    }
+}
+
+impl Drop for Outputs {
+    /// The temporary files not moved into place go.
+    fn drop(&mut self) {
+        let mut temps = temps();
+        for p in &self.pending {
+            if let Target::Temp(t) = &p.target {
+                // Deleted here, under the lock, so that a signal finds it listed or gone.
+                let _ = std::fs::remove_file(t.path());
+                temps.retain(|x| x != t.path());
+            }
+        }
     }
 }

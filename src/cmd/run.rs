@@ -141,7 +141,9 @@ pub fn run(args: RunArgs) -> Result<u8, String> {
     let pulse_window = pulse_window
         .map(|w| parse_window("--pulse-window", &w))
         .transpose()?;
-    // Every output is checked, and its temporary file made, before the simulation.
+    // Every output is checked, and its temporary file made, before the simulation; an
+    // interrupted run removes them.
+    super::output::clean_up_on_signals()?;
     let mut outs = Outputs::new(force);
     if let Some(path) = file {
         outs.input("the scenario", path)?;
@@ -282,7 +284,7 @@ pub fn load_scenario(scenario: Option<&Path>) -> Result<(Scenario, Option<&Path>
     let sc = match (scenario, file) {
         (None, _) => Scenario::demo().map_err(|e| e.to_string())?,
         (Some(_), Some(path)) => {
-            let text = read_input(path)?;
+            let text = read_input(path, super::MAX_TOML_BYTES)?;
             Scenario::from_toml(&path.display().to_string(), &text).map_err(|e| e.to_string())?
         }
         (Some(name), None) => find(&name.to_string_lossy())

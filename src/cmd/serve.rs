@@ -9,9 +9,12 @@ use clap::ValueEnum;
 use gateway::live::LiveConfig;
 use gateway::{Owner, Speed};
 use rig::Rig;
+use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
 use std::io::{IsTerminal, Write};
 use std::net::SocketAddr;
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
 
 /// The arguments of `asi-lift serve`.
 #[derive(clap::Args)]
@@ -176,6 +179,13 @@ pub fn run(args: ServeArgs) -> Result<u8, String> {
         ControllerArg::External => Owner::External,
     };
 
+    // SIGTERM (docker stop, Kubernetes) and SIGHUP end the run as Ctrl-C does, with its
+    // report; so does any of them (Ctrl-C too) before the servers are up.
+    let stop = Arc::new(AtomicBool::new(false));
+    for signal in [SIGINT, SIGTERM, SIGHUP] {
+        signal_hook::flag::register(signal, Arc::clone(&stop))
+            .map_err(|e| format!("cannot handle signals: {e}"))?;
+    }
     let mut outs = Outputs::new(force);
     if let Some(path) = file {
         outs.input("the scenario", path)?;
@@ -248,6 +258,9 @@ pub fn run(args: ServeArgs) -> Result<u8, String> {
     );
     let terminal = std::io::stderr().is_terminal();
     for s in running.status().iter() {
+        if stop.swap(false, Ordering::Relaxed) {
+            running.stop();
+        }
         if terminal {
             eprint!(
                 "\r  simulated {:.1} s, {} requests, lag {:.1} ms, {} violations{}   ",

@@ -42,6 +42,7 @@ pub fn run(args: StandArgs) -> Result<u8, String> {
         return Ok(0);
     };
     // Refuse a report file that exists, or that is the scenario itself, before running.
+    super::output::clean_up_on_signals()?;
     let mut outs = Outputs::new(args.force);
     if scenario.exists() {
         outs.input("the scenario", &scenario)?;
@@ -68,7 +69,7 @@ fn load(scenario: &Path) -> Result<StandScenario, String> {
     let is_file =
         scenario == Path::new("-") || scenario.exists() || scenario.components().count() > 1;
     if is_file {
-        let text = read_input(scenario)?;
+        let text = read_input(scenario, super::MAX_TOML_BYTES)?;
         return StandScenario::from_toml(&scenario.display().to_string(), &text)
             .map_err(|e| e.to_string());
     }

@@ -75,6 +75,7 @@ pub fn run(args: TimingArgs) -> Result<u8, String> {
     } = args;
     let opts = timing_options(bus, extra_slaves, error_rate, seed, &duration, samples)?;
     // Refuse an existing SVG before spending the simulation on it.
+    super::output::clean_up_on_signals()?;
     let mut outs = Outputs::new(force);
     let svg_out = match &svg {
         Some(path) => Some((path, outs.add("--svg", path)?)),

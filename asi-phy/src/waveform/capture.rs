@@ -3,7 +3,59 @@
 
 use super::render::Waveform;
 use crate::time::SimTime;
-use std::io::BufRead;
+use std::borrow::Cow;
+use std::io::{BufRead, Read};
+
+/// The longest line a capture may hold, in bytes. A `time,voltage` line is some tens of bytes
+/// and a VCD line rarely more than a few kB: a longer one is no capture (a binary file,
+/// `/dev/zero`), and is refused before it fills memory.
+pub const MAX_LINE_BYTES: usize = 1 << 20;
+
+/// `text` as quoted in a message: whole when short, else its first 60 characters and `…`, so
+/// that a huge token does not fill the message.
+pub fn excerpt(text: &str) -> Cow<'_, str> {
+    match text.char_indices().nth(60) {
+        None => Cow::Borrowed(text),
+        Some((cut, _)) => Cow::Owned(format!("{}…", &text[..cut])),
+    }
+}
+
+/// `x` for a message, compactly: plain digits for everyday magnitudes (`0.5`, `1200`), else
+/// scientific notation (`1e308`, `2.5e-9`), so that no number fills a line.
+pub fn short_number(x: f64) -> String {
+    let a = x.abs();
+    if a == 0.0 || (1e-4..1e9).contains(&a) || !a.is_finite() {
+        format!("{x}")
+    } else {
+        format!("{x:e}")
+    }
+}
+
+/// Reads a line into `buf` as [`BufRead::read_until`] does, but at most [`MAX_LINE_BYTES`] of
+/// it: a longer line is an error naming line `line_no`, whatever the input's length.
+pub fn read_line_bounded(
+    input: &mut impl BufRead,
+    buf: &mut Vec<u8>,
+    line_no: usize,
+) -> Result<usize, CaptureError> {
+    let n = input
+        .take(MAX_LINE_BYTES as u64 + 1)
+        .read_until(b'\n', buf)
+        .map_err(|e| CaptureError {
+            line: line_no,
+            cause: e.to_string(),
+        })?;
+    if buf.len() > MAX_LINE_BYTES {
+        return Err(CaptureError {
+            line: line_no,
+            cause: format!(
+                "the line is longer than {} MiB: not a text capture",
+                MAX_LINE_BYTES >> 20
+            ),
+        });
+    }
+    Ok(n)
+}
 
 /// A capture read from a text file of `time,voltage` lines.
 #[derive(Clone, Debug, PartialEq)]
@@ -59,6 +111,8 @@ enum Parsed {
     NotSample { two_fields: bool },
     /// A sample.
     Sample(f64, f32),
+    /// Two numbers, one of them infinite, NaN or beyond a voltage's range.
+    OutOfRange { t: f64, v: f64 },
 }
 
 fn parse(l: &str) -> Parsed {
@@ -69,8 +123,11 @@ fn parse(l: &str) -> Parsed {
     let (Some(t), Some(v)) = (fields.next(), fields.next()) else {
         return Parsed::NotSample { two_fields: false };
     };
-    match (t.parse::<f64>(), v.parse::<f32>()) {
-        (Ok(t), Ok(v)) if t.is_finite() && v.is_finite() => Parsed::Sample(t, v),
+    match (t.parse::<f64>(), v.parse::<f64>()) {
+        (Ok(t), Ok(v)) if t.is_finite() && v.is_finite() && (v as f32).is_finite() => {
+            Parsed::Sample(t, v as f32)
+        }
+        (Ok(t), Ok(v)) => Parsed::OutOfRange { t, v },
         _ => Parsed::NotSample { two_fields: true },
     }
 }
@@ -108,6 +165,7 @@ impl<R: BufRead> CaptureReader<R> {
                     continue;
                 }
                 Parsed::NotSample { two_fields } => return Err(not_sample(line_no, l, two_fields)),
+                Parsed::OutOfRange { t, v } => return Err(out_of_range(line_no, t, v)),
             };
             if let Some(&(_, last)) = times.last() {
                 if t <= last {
@@ -125,13 +183,17 @@ impl<R: BufRead> CaptureReader<R> {
                 }
                 (None, Some((line, l))) if header_lines == 1 => (
                     line,
-                    format!("`{l}` is a header and no `time,voltage` sample follows"),
+                    format!(
+                        "`{}` is a header and no `time,voltage` sample follows",
+                        excerpt(&l)
+                    ),
                 ),
                 (None, Some((line, l))) => (
                     line,
                     format!(
-                        "no samples: `{l}` and the {} lines after it are not `time,voltage` \
+                        "no samples: `{}` and the {} lines after it are not `time,voltage` \
                          (seconds, volts)",
+                        excerpt(&l),
                         header_lines - 1
                     ),
                 ),
@@ -177,6 +239,7 @@ impl<R: BufRead> CaptureReader<R> {
                 Parsed::Skip => continue,
                 Parsed::Sample(t, v) => (t, v),
                 Parsed::NotSample { two_fields } => return Err(not_sample(line_no, l, two_fields)),
+                Parsed::OutOfRange { t, v } => return Err(out_of_range(line_no, t, v)),
             };
             let last = self.last.0;
             if t <= last {
@@ -193,13 +256,7 @@ impl<R: BufRead> CaptureReader<R> {
     fn next_line(&mut self) -> Result<Option<(usize, &str)>, CaptureError> {
         self.line.clear();
         let n = self.line_no + 1;
-        let got = self
-            .input
-            .read_until(b'\n', &mut self.line)
-            .map_err(|e| CaptureError {
-                line: n,
-                cause: e.to_string(),
-            })?;
+        let got = read_line_bounded(&mut self.input, &mut self.line, n)?;
         if got == 0 {
             return Ok(None);
         }
@@ -216,9 +273,27 @@ fn not_sample(line: usize, l: &str, two_fields: bool) -> CaptureError {
     CaptureError {
         line,
         cause: if two_fields {
-            format!("`{l}` is not two numbers (seconds, volts)")
+            format!("`{}` is not two numbers (seconds, volts)", excerpt(l))
         } else {
-            format!("expected `time,voltage`, found `{l}`")
+            format!("expected `time,voltage`, found `{}`", excerpt(l))
+        },
+    }
+}
+
+fn out_of_range(line: usize, t: f64, v: f64) -> CaptureError {
+    CaptureError {
+        line,
+        cause: if t.is_finite() {
+            format!(
+                "voltage {} V is out of range: expected a finite voltage within ±{:e} V",
+                short_number(v),
+                f32::MAX
+            )
+        } else {
+            format!(
+                "time {} s is out of range: expected a finite time in seconds",
+                short_number(t)
+            )
         },
     }
 }
@@ -226,7 +301,11 @@ fn not_sample(line: usize, l: &str, two_fields: bool) -> CaptureError {
 fn not_increasing(line: usize, t: f64, last: f64) -> CaptureError {
     CaptureError {
         line,
-        cause: format!("time {t} s does not increase (previous sample {last} s)"),
+        cause: format!(
+            "time {} s does not increase (previous sample {} s)",
+            short_number(t),
+            short_number(last)
+        ),
     }
 }
 

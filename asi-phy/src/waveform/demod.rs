@@ -40,7 +40,8 @@ impl DemodConfig {
         let err = |field, value: f32, rule| {
             Err(WaveformError {
                 field,
-                value: value as f64,
+                // The f32's shortest decimal (0.6, not 0.6000000238418579).
+                value: value.to_string().parse().unwrap_or(f64::from(value)),
                 rule,
             })
         };
@@ -241,6 +242,53 @@ impl Demodulator {
         if alpha > 0.0 {
             self.baseline = Some(base);
         }
+    }
+
+    /// Runs `n` samples of the one value `v` through the comparator, as [`Demodulator::push`]
+    /// of them would, in time bounded by the comparator's settling rather than by `n`: once a
+    /// block of them leaves the comparator's state as it was, every further one would too
+    /// (the baseline has settled and a lobe neither opens nor closes on a constant line), and
+    /// only the sample clock moves on. For a capture's long flat spans.
+    pub fn push_constant(&mut self, v: f32, n: u64, mut out: impl FnMut(Pulse)) {
+        const BLOCK: usize = 4096;
+        let block = [v; BLOCK];
+        let mut left = n;
+        while left > 0 {
+            let k = left.min(BLOCK as u64) as usize;
+            let before = self.state_bits();
+            self.push(&block[..k], &mut out);
+            left -= k as u64;
+            if k == BLOCK && self.state_bits() == before {
+                self.index += left;
+                return;
+            }
+        }
+    }
+
+    /// Everything of the state but the sample clock, bit for bit.
+    fn state_bits(&self) -> [u64; 10] {
+        let f = |x: f32| u64::from(x.to_bits());
+        let lobe = self.lobe.map_or([u64::MAX; 5], |l| {
+            [
+                u64::from(l.negative) << 32 | f(l.peak),
+                l.in_ignore.to_bits(),
+                l.out_ignore.to_bits(),
+                l.in_thr.to_bits(),
+                l.out_thr.to_bits(),
+            ]
+        });
+        [
+            self.baseline.map_or(u64::MAX, f),
+            f(self.prev),
+            f(self.threshold),
+            self.last_centre.map_or(u64::MAX, f64::to_bits),
+            lobe[0],
+            lobe[1],
+            lobe[2],
+            lobe[3],
+            lobe[4],
+            u64::from(self.lobe.is_some()),
+        ]
     }
 
     /// Ends the input: a pulse still in progress is closed and reported.

@@ -18,6 +18,9 @@ mod render;
 #[cfg(test)]
 mod tests;
 
-pub use capture::{read_capture, Capture, CaptureError, CaptureReader};
+pub use capture::{
+    excerpt, read_capture, read_line_bounded, short_number, Capture, CaptureError, CaptureReader,
+    MAX_LINE_BYTES,
+};
 pub use demod::{DemodConfig, Demodulator};
 pub use render::{render, NoiseBurst, Waveform, WaveformConfig, WaveformError};

@@ -174,7 +174,7 @@ fn bad_settings_are_rejected_with_the_field() {
     .expect_err("threshold");
     assert_eq!(
         e.to_string(),
-        "threshold = 0.6000000238418579: must lie within 0.45..=0.55 of the first pulse"
+        "threshold = 0.6: must lie within 0.45..=0.55 of the first pulse"
     );
     assert!(Demodulator::new(DemodConfig::default(), SimTime::ZERO, f64::NAN).is_err());
 }
@@ -195,6 +195,51 @@ fn reads_a_capture_and_names_the_bad_line() {
     assert_eq!(e.line, 3);
     let e = read_capture("0,1\n0,1\n").expect_err("not increasing");
     assert_eq!(e.line, 2);
+}
+
+#[test]
+fn a_line_past_the_bound_is_refused_before_it_fills_memory() {
+    // An endless line (`/dev/zero`): read only up to the bound, then refused at its line.
+    let zeros = std::io::BufReader::new(std::io::repeat(0));
+    let e = CaptureReader::open(zeros, 16).expect_err("endless line");
+    assert_eq!(e.line, 1);
+    assert!(e.cause.contains("longer than 1 MiB"), "{e}");
+    // A long line after good samples, read as a stream.
+    let text = format!("0,1\n1e-7,1\n2e-7,{}\n", "9".repeat(MAX_LINE_BYTES + 10));
+    let (mut r, _) = CaptureReader::open(text.as_bytes(), 2).expect("prefix");
+    let e = r.read(&mut Vec::new(), 10).expect_err("long line");
+    assert_eq!(e.line, 3);
+    assert!(e.cause.contains("longer than 1 MiB"), "{e}");
+    // A long token in a line within the bound is quoted cut short.
+    let text = format!("0,1\n1e-7,1\n2e-7 {}\n", "x".repeat(100_000));
+    let e = read_capture(&text).expect_err("bad line");
+    assert!(e.cause.len() < 200, "{e}");
+    assert!(e.cause.contains("xxx…`"), "{e}");
+}
+
+#[test]
+fn numbers_out_of_range_are_named_with_the_range_compactly() {
+    let e = read_capture("0,1\n1e-7,1e308\n").expect_err("too large");
+    assert_eq!(
+        (e.line, e.cause.as_str()),
+        (
+            2,
+            "voltage 1e308 V is out of range: expected a finite voltage within ±3.4028235e38 V"
+        )
+    );
+    let e = read_capture("0,1\n1e400,1\n").expect_err("inf time");
+    assert_eq!(
+        e.cause,
+        "time inf s is out of range: expected a finite time in seconds"
+    );
+    let e = read_capture("0,1\n1e300,1\n1e299,1\n").expect_err("back");
+    assert_eq!(
+        e.cause,
+        "time 1e299 s does not increase (previous sample 1e300 s)"
+    );
+    assert_eq!(short_number(0.5), "0.5");
+    assert_eq!(short_number(-1200.0), "-1200");
+    assert_eq!(short_number(2.5e-9), "2.5e-9");
 }
 
 #[test]
@@ -260,4 +305,36 @@ fn a_capture_read_as_a_stream_holds_a_prefix_and_reads_like_the_whole() {
     let (mut r, _) = CaptureReader::open(bad.as_bytes(), 3).expect("prefix");
     let e = r.read(&mut buf, 64).expect_err("uneven");
     assert_eq!(e.line, 5);
+}
+
+#[test]
+fn a_constant_span_pushed_at_once_demodulates_as_sample_by_sample() {
+    let wf = render(
+        train(20),
+        SimTime::ZERO,
+        SimTime::from_micros(120),
+        &WaveformConfig::default(),
+    )
+    .expect("ok");
+    // Telegram, a flat span on a raised level (the baseline must settle), an off-level span
+    // held inside a lobe, the telegram again; both ways alike, pulse for pulse.
+    let spans: [(f32, u64); 3] = [(1.0, 300_000), (-3.0, 50_000), (0.0, 400_000)];
+    let run = |bulk: bool| {
+        let mut d = Demodulator::for_waveform(DemodConfig::default(), &wf).expect("ok");
+        let mut got = Vec::new();
+        d.push(&wf.samples, |p| got.push(p));
+        for (v, n) in spans {
+            if bulk {
+                d.push_constant(v, n, |p| got.push(p));
+            } else {
+                d.push(&vec![v; n as usize], |p| got.push(p));
+            }
+        }
+        d.push(&wf.samples, |p| got.push(p));
+        d.finish(|p| got.push(p));
+        got
+    };
+    let (slow, fast) = (run(false), run(true));
+    assert!(slow.len() > 2 * train(20).iter().count(), "{slow:?}");
+    assert_eq!(fast, slow);
 }

@@ -520,6 +520,16 @@ fn stream_vcd_voltage<R: BufRead>(
     let read = reader.for_each_change(&var.id, |c| {
         let v = match c.value {
             Value::Real(v) if v.is_finite() && (v as f32).is_finite() => v as f32,
+            Value::Real(v) => {
+                return Err(CaptureError {
+                    line: c.line,
+                    cause: format!(
+                        "{var}: {} is out of range: expected a finite voltage within ±{:e} V",
+                        asi_phy::waveform::short_number(v),
+                        f32::MAX
+                    ),
+                })
+            }
             _ => {
                 return Err(CaptureError {
                     line: c.line,
@@ -565,9 +575,7 @@ fn stream_vcd_voltage<R: BufRead>(
     if let Some(cur) = g.cur {
         let span = ts.to_nanos_f64(cur.0 - g.first);
         let n = (span / g.period_ns).floor() as u64 + 1;
-        while g.next < n && !out.stopped {
-            g.emit(cur.1, out)?;
-        }
+        g.emit_n(cur.1, n.saturating_sub(g.next), out)?;
     }
     g.comp.push(&g.chunk, out)?;
     g.comp.finish(Some(var.path.clone()), out)
@@ -677,10 +685,35 @@ impl Running {
             });
         }
         let eps = self.period_ns * 1e-6;
+        // The points surely before the change at once (a long flat span is run through in
+        // bounded time), the last one or two by the exact rule.
+        let surely = (((at - eps) / self.period_ns).floor() as u64).saturating_sub(1);
+        self.emit_n(cur.1, surely.saturating_sub(self.next), out)?;
         while self.next as f64 * self.period_ns + eps < at && !out.stopped {
             self.emit(cur.1, out)?;
         }
         self.cur = Some(change);
+        Ok(())
+    }
+
+    /// `n` grid points of the value `v`. The comparator always gets whole chunks, as from
+    /// [`Running::emit`] one at a time; the whole chunks of a long span go in as one constant
+    /// run, in time bounded by the comparator's settling, not by `n`.
+    fn emit_n(&mut self, v: f32, mut n: u64, out: &mut Telegrams<'_>) -> Result<(), DecodeError> {
+        while n > 0 && !self.chunk.is_empty() && !out.stopped {
+            self.emit(v, out)?;
+            n -= 1;
+        }
+        let bulk = n / CHUNK as u64 * CHUNK as u64;
+        if bulk > 0 && !out.stopped {
+            self.comp.push_constant(v, bulk, out)?;
+            self.next += bulk;
+            n -= bulk;
+        }
+        while n > 0 && !out.stopped {
+            self.emit(v, out)?;
+            n -= 1;
+        }
         Ok(())
     }
 
@@ -708,7 +741,7 @@ struct Comparator {
     nominal: Option<f32>,
     held: Vec<f32>,
     /// The flat blocks before `held`: (value, count) runs.
-    quiet: Vec<(f32, u32)>,
+    quiet: Vec<(f32, u64)>,
     state: CompState,
     samples: u64,
 }
@@ -748,6 +781,44 @@ impl Comparator {
         Ok(())
     }
 
+    /// `n` samples of the one value `v`, as [`Comparator::push`] of them all would; `n` and
+    /// the samples pushed before are whole chunks, so that the held blocks are judged where
+    /// they would be. Time is bounded by the comparator's settling, not by `n`.
+    fn push_constant(
+        &mut self,
+        v: f32,
+        n: u64,
+        out: &mut Telegrams<'_>,
+    ) -> Result<(), DecodeError> {
+        self.samples += n;
+        let mut n = n;
+        if matches!(self.state, CompState::Holding) {
+            let k = n.min((PREFIX_SAMPLES - self.held.len()) as u64);
+            self.held.extend(std::iter::repeat_n(v, k as usize));
+            n -= k;
+            if self.held.len() >= PREFIX_SAMPLES {
+                self.judge(false, out)?;
+            }
+        }
+        match &mut self.state {
+            CompState::Running(d) => d.push_constant(v, n, |p| out.pulse(p)),
+            CompState::Flat => {}
+            CompState::Holding => {
+                // Whole blocks of one value are flat: quiet line, as judging each would find.
+                let whole = n / PREFIX_SAMPLES as u64 * PREFIX_SAMPLES as u64;
+                if whole > 0 {
+                    match self.quiet.last_mut() {
+                        Some((w, m)) if w.to_bits() == v.to_bits() => *m += whole,
+                        _ => self.quiet.push((v, whole)),
+                    }
+                }
+                self.held
+                    .extend(std::iter::repeat_n(v, (n - whole) as usize));
+            }
+        }
+        Ok(())
+    }
+
     /// Estimates the amplitude on the held block and starts the comparator, or keeps the
     /// block as quiet line; at the `end`, a line quiet throughout is flat.
     fn judge(&mut self, end: bool, out: &mut Telegrams<'_>) -> Result<(), DecodeError> {
@@ -755,7 +826,7 @@ impl Comparator {
         let Some(nominal_amplitude) = self.nominal.or_else(|| amplitude_of(&held)) else {
             for &v in &held {
                 match self.quiet.last_mut() {
-                    Some((w, n)) if w.to_bits() == v.to_bits() && *n < u32::MAX => *n += 1,
+                    Some((w, n)) if w.to_bits() == v.to_bits() => *n += 1,
                     _ => self.quiet.push((v, 1)),
                 }
             }
@@ -771,12 +842,21 @@ impl Comparator {
         };
         let mut d = Demodulator::new(cfg, self.start, self.period_ns)?;
         let mut buf = Vec::new();
-        for (v, n) in core::mem::take(&mut self.quiet) {
-            for _ in 0..n {
+        // Whether the comparator has had its first samples (which set its first baseline).
+        let mut started = false;
+        for (v, mut n) in core::mem::take(&mut self.quiet) {
+            while n > 0 {
+                if started && buf.is_empty() && n >= CHUNK as u64 {
+                    // The rest of a long run at once: the chunks' bounds no longer matter.
+                    d.push_constant(v, n, |p| out.pulse(p));
+                    break;
+                }
                 buf.push(v);
+                n -= 1;
                 if buf.len() == CHUNK {
                     d.push(&buf, |p| out.pulse(p));
                     buf.clear();
+                    started = true;
                 }
             }
         }

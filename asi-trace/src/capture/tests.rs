@@ -398,6 +398,11 @@ fn every_bad_capture_names_the_line() {
             5,
             "holds a real",
         ),
+        (
+            "$var real 64 % v $end\n$enddefinitions $end\n#0 r0 %\n#10 r1e308 %\n".into(),
+            4,
+            "v (real): 1e308 is out of range: expected a finite voltage within ±3.4028235e38 V",
+        ),
     ];
     for (text, line, cause) in cases {
         match decode(&text, &DecodeOptions::default()) {
@@ -751,4 +756,162 @@ fn a_quiet_start_longer_than_the_prefix_waits_for_the_first_pulses() {
         "{}",
         summary(&flat)
     );
+}
+
+/// A real VCD of the spec telegrams written on change: once from `#0`, then 20 times from
+/// `#gap_ns` (enough for the amplitude's estimate), the line at 0 V between: one long flat
+/// span.
+fn real_vcd_with_a_gap(gap_ns: u64) -> String {
+    let wf = spec_waveform();
+    let mut s = String::from(
+        "$timescale 1 ns $end\n$var real 64 % v $end\n$enddefinitions $end\n#0\n$dumpvars r0 % $end\n",
+    );
+    let mut last = 0.0;
+    let origins = std::iter::once(0).chain((0..20).map(|k| gap_ns + k * 170_000));
+    for origin in origins {
+        for (i, v) in wf.samples.iter().enumerate().take(1700) {
+            if *v != last {
+                let _ = writeln!(s, "#{}\nr{v} %", origin + 100 * i as u64);
+                last = *v;
+            }
+        }
+    }
+    let _ = writeln!(s, "#{}\nr0 %", gap_ns + 20 * 170_000);
+    s
+}
+
+#[test]
+fn a_long_flat_span_of_a_real_signal_is_run_through_at_once() {
+    // 6.8e10 grid points at 100 ns: one at a time, about 18 minutes.
+    for gap in [1_000_000_000, 1_000_000_000_000, 6_800_000_000_000] {
+        let s = real_vcd_with_a_gap(gap);
+        for nominal in [None, Some(2.5)] {
+            let opts = DecodeOptions {
+                nominal,
+                ..DecodeOptions::default()
+            };
+            let d = decode(&s, &opts).expect("decodes");
+            let origins = std::iter::once(0).chain((0..20).map(|k| (gap + k * 170_000) as i64));
+            let want: Vec<TelegramRecord> = origins
+                .flat_map(|origin| {
+                    spec_records().into_iter().map(move |t| TelegramRecord {
+                        t_ns: t.t_ns + origin,
+                        ..t
+                    })
+                })
+                .collect();
+            // Past 10^12 ns the pulse times carry some tens of ns of float rounding.
+            let slack = if gap > 1_000_000_000_000 { 50 } else { 0 };
+            assert_eq!(
+                d.telegrams.len(),
+                want.len(),
+                "gap {gap}, nominal {nominal:?}"
+            );
+            for (got, want) in d.telegrams.iter().zip(&want) {
+                assert!((got.t_ns - want.t_ns).abs() <= slack, "{got:?} {want:?}");
+                let got = TelegramRecord {
+                    t_ns: want.t_ns,
+                    ..got.clone()
+                };
+                assert_eq!(&got, want, "gap {gap}, nominal {nominal:?}");
+            }
+            let CaptureSource::Voltage { samples, .. } = d.source else {
+                panic!("{:?}", d.source)
+            };
+            assert_eq!(samples as u64, (gap + 20 * 170_000) / 100 + 1, "gap {gap}");
+        }
+    }
+    // The tiny VCD of a flat line that changes once, far out: a flat line, at once.
+    let tiny = "$timescale 1 ns $end\n$var real 64 ! v $end\n$enddefinitions $end\n\
+                #0\nr0 !\n#6800000000000\nr1 !\n";
+    let d = decode(tiny, &DecodeOptions::default()).expect("decodes");
+    assert!(d.telegrams.is_empty());
+    assert!(summary(&d).ends_with("a flat line"), "{}", summary(&d));
+}
+
+/// Random and mutated bytes into the capture decoders (CSV, VCD): never a panic, an `Ok` or an
+/// error of a line or two, in bounded time.
+mod fuzz {
+    use super::*;
+
+    fn mutate(text: &[u8], edits: &[(u8, usize, u8)]) -> Vec<u8> {
+        let mut b = text.to_vec();
+        for &(kind, at, byte) in edits {
+            let at = at % (b.len() + 1);
+            match kind % 4 {
+                0 if at < b.len() => b[at] = byte,
+                1 => b.insert(at, byte),
+                2 if at < b.len() => {
+                    b.remove(at);
+                }
+                _ => b.truncate(at),
+            }
+        }
+        b
+    }
+
+    /// Small captures the project writes: a wire VCD, a real VCD and a CSV of the spec
+    /// telegrams (the real VCD and the CSV cut to a few hundred samples, for speed).
+    fn seeds() -> &'static [String] {
+        static SEEDS: std::sync::OnceLock<Vec<String>> = std::sync::OnceLock::new();
+        SEEDS.get_or_init(|| {
+            let mut v: Vec<String> = spec_captures().into_iter().map(|(s, _)| s).collect();
+            for s in &mut v {
+                if s.len() > 6000 {
+                    let cut = s[..6000].rfind('\n').unwrap_or(0);
+                    s.truncate(cut + 1);
+                }
+            }
+            v
+        })
+    }
+
+    fn check(bytes: &[u8], format: Option<CaptureFormat>) -> Result<(), TestCaseError> {
+        let opts = DecodeOptions {
+            format,
+            ..DecodeOptions::default()
+        };
+        if let Err(e) = decode_capture(bytes, &opts) {
+            let m = e.to_string();
+            prop_assert!(m.len() < 600, "{} bytes: {}", m.len(), m);
+        }
+        Ok(())
+    }
+
+    fn formats() -> impl Strategy<Value = Option<CaptureFormat>> {
+        prop_oneof![
+            Just(None),
+            Just(Some(CaptureFormat::Csv)),
+            Just(Some(CaptureFormat::Vcd))
+        ]
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(500))]
+
+        #[test]
+        fn mutated_captures_decode_or_are_refused_clearly(
+            which in any::<prop::sample::Index>(),
+            edits in prop::collection::vec((any::<u8>(), any::<usize>(), any::<u8>()), 1..6),
+            format in formats(),
+        ) {
+            check(&mutate(which.get(seeds()).as_bytes(), &edits), format)?;
+        }
+
+        #[test]
+        fn random_bytes_decode_or_are_refused_clearly(
+            bytes in prop::collection::vec(any::<u8>(), 0..400),
+            format in formats(),
+        ) {
+            check(&bytes, format)?;
+        }
+
+        #[test]
+        fn random_vcd_like_text_decodes_or_is_refused_clearly(
+            text in "\\$timescale 1 (ns|ps|s) \\$end\n\\$var (real 64|wire 1) ! v \\$end\n\
+                     \\$enddefinitions \\$end\n(#[0-9]{1,16}\n|r-?[0-9.e]{1,8} !\n|[01xz]!\n){0,30}",
+        ) {
+            check(text.as_bytes(), None)?;
+        }
+    }
 }

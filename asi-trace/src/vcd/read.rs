@@ -8,7 +8,7 @@
 //! the one variable asked for are handed over, so a dump of a long run with many signals is
 //! followed in constant memory. Every error names its line.
 
-use asi_phy::waveform::CaptureError;
+use asi_phy::waveform::{excerpt, read_line_bounded, CaptureError};
 use core::fmt;
 use std::collections::HashSet;
 use std::io::BufRead;
@@ -29,6 +29,13 @@ const KEYWORDS: [&str; 12] = [
     "$dumpon",
     "$dumpvars",
 ];
+
+/// The most variables and the deepest scopes a header may declare: far more than any dump
+/// holds, a bound on the memory a header can take, whatever the file.
+pub const MAX_VARS: usize = 1 << 20;
+
+/// The deepest nesting of `$scope`s read (see [`MAX_VARS`]).
+pub const MAX_SCOPE_DEPTH: usize = 1 << 10;
 
 /// The length of one VCD time unit: `$timescale 10 ns $end` (1, 10 or 100 of s, ms, us, ns,
 /// ps or fs).
@@ -201,7 +208,10 @@ impl<R: BufRead> VcdReader<R> {
                 return match cmd {
                     Some((kw, at, _)) => err(
                         line,
-                        format!("the file ends inside `{kw}` of line {at}: it has no `$end`"),
+                        format!(
+                            "the file ends inside `{}` of line {at}: it has no `$end`",
+                            excerpt(&kw)
+                        ),
                     ),
                     None if !seen => err(line, "the file is empty".into()),
                     None => err(
@@ -218,9 +228,9 @@ impl<R: BufRead> VcdReader<R> {
                     continue;
                 }
                 let cause = if tok.starts_with('#') {
-                    format!("`{tok}`: a time before `$enddefinitions`")
+                    format!("`{}`: a time before `$enddefinitions`", excerpt(tok))
                 } else {
-                    format!("`{tok}` is no VCD command (they start with `$`)")
+                    format!("`{}` is no VCD command (they start with `$`)", excerpt(tok))
                 };
                 return err(line, cause);
             };
@@ -230,7 +240,10 @@ impl<R: BufRead> VcdReader<R> {
                     if KEYWORDS.contains(&tok) {
                         return err(
                             line,
-                            format!("`{tok}` inside `{kw}` of line {at}: it has no `$end`"),
+                            format!(
+                                "`{tok}` inside `{}` of line {at}: it has no `$end`",
+                                excerpt(kw)
+                            ),
                         );
                     }
                     if args.len() < 16 {
@@ -246,11 +259,18 @@ impl<R: BufRead> VcdReader<R> {
                     timescale = Some(Timescale::parse(&text).ok_or_else(|| CaptureError {
                         line: at,
                         cause: format!(
-                            "`$timescale {text}`: expected 1, 10 or 100 of s, ms, us, ns, ps or fs"
+                            "`$timescale {}`: expected 1, 10 or 100 of s, ms, us, ns, ps or fs",
+                            excerpt(&text)
                         ),
                     })?);
                 }
                 "$scope" => match args.last() {
+                    _ if scopes.len() >= MAX_SCOPE_DEPTH => {
+                        return err(
+                            at,
+                            format!("`$scope` nested deeper than {MAX_SCOPE_DEPTH}: not a dump"),
+                        )
+                    }
                     Some(name) => scopes.push(name.clone()),
                     None => return err(at, "`$scope` without a name".into()),
                 },
@@ -261,12 +281,15 @@ impl<R: BufRead> VcdReader<R> {
                     })?;
                 }
                 "$var" => {
+                    if vars.len() >= MAX_VARS {
+                        return err(at, format!("more than {MAX_VARS} `$var`s: not a dump"));
+                    }
                     let [kind, width, id, name, ..] = args.as_slice() else {
                         return err(at, "`$var` needs TYPE WIDTH ID NAME before `$end`".into());
                     };
                     let width: u32 = width.parse().map_err(|_| CaptureError {
                         line: at,
-                        cause: format!("`$var` width `{width}` is not a number"),
+                        cause: format!("`$var` width `{}` is not a number", excerpt(width)),
                     })?;
                     let mut path = scopes.join(".");
                     if !path.is_empty() {
@@ -344,7 +367,9 @@ impl<R: BufRead> VcdReader<R> {
                     b'r' => match text.parse::<f64>() {
                         Ok(v) => Value::Real(v),
                         Err(_) if tok != id => Value::Real(f64::NAN),
-                        Err(_) => return err(at, format!("`r{text}` is not a real number")),
+                        Err(_) => {
+                            return err(at, format!("`r{}` is not a real number", excerpt(&text)))
+                        }
                     },
                     _ => Value::Text,
                 };
@@ -367,7 +392,10 @@ impl<R: BufRead> VcdReader<R> {
                     }
                     b'#' => {
                         let Ok(t) = tok[1..].parse::<u64>() else {
-                            return err(line, format!("`{tok}` is not a time (#, then digits)"));
+                            return err(
+                                line,
+                                format!("`{}` is not a time (#, then digits)", excerpt(tok)),
+                            );
                         };
                         if let (true, Some(prev)) = (t < time, time_line) {
                             return err(
@@ -394,7 +422,10 @@ impl<R: BufRead> VcdReader<R> {
                     _ => {
                         return err(
                             line,
-                            format!("`{tok}` is no value change, time (#…) or command ($…)"),
+                            format!(
+                                "`{}` is no value change, time (#…) or command ($…)",
+                                excerpt(tok)
+                            ),
                         )
                     }
                 }
@@ -409,7 +440,10 @@ impl<R: BufRead> VcdReader<R> {
             } else if !ids.contains(code) {
                 return err(
                     line,
-                    format!("unknown identifier code `{code}`: no `$var` declares it"),
+                    format!(
+                        "unknown identifier code `{}`: no `$var` declares it",
+                        excerpt(code)
+                    ),
                 );
             }
         }
@@ -418,15 +452,19 @@ impl<R: BufRead> VcdReader<R> {
             return err(
                 at,
                 format!(
-                    "the file ends after the value `{}{text}`, before its identifier code",
-                    kind as char
+                    "the file ends after the value `{}{}`, before its identifier code",
+                    kind as char,
+                    excerpt(&text)
                 ),
             );
         }
         if let Some((kw, at)) = block.or(skip) {
             return err(
                 end,
-                format!("the file ends inside `{kw}` of line {at}: it has no `$end`"),
+                format!(
+                    "the file ends inside `{}` of line {at}: it has no `$end`",
+                    excerpt(&kw)
+                ),
             );
         }
         Ok(())
@@ -471,13 +509,8 @@ impl<R: BufRead> Tokens<R> {
             let mut bytes = core::mem::take(&mut self.buf).into_bytes();
             bytes.clear();
             let line = self.line + 1;
-            let n = self
-                .input
-                .read_until(b'\n', &mut bytes)
-                .map_err(|e| CaptureError {
-                    line,
-                    cause: e.to_string(),
-                })?;
+            // A line past the bound (a binary file, `/dev/zero`) is refused, not held.
+            let n = read_line_bounded(&mut self.input, &mut bytes, line)?;
             if n == 0 {
                 return Ok(None);
             }
@@ -667,5 +700,35 @@ mod tests {
             .and_then(|r| r.for_each_change("!", |_| Ok(())))
             .expect_err("not UTF-8");
         assert_eq!((e.line, e.cause.as_str()), (3, "not text (invalid UTF-8)"));
+    }
+
+    #[test]
+    fn a_header_past_its_bounds_is_refused() {
+        let deep = "$scope module a $end\n".repeat(MAX_SCOPE_DEPTH + 1);
+        let e = VcdReader::new(deep.as_bytes()).err().expect("too deep");
+        assert_eq!(e.line, MAX_SCOPE_DEPTH + 1);
+        assert!(e.cause.contains("nested deeper than 1024"), "{e}");
+        let many = "$var wire 1 ! a $end\n".repeat(MAX_VARS + 1);
+        let e = VcdReader::new(many.as_bytes()).err().expect("too many");
+        assert_eq!(e.line, MAX_VARS + 1);
+        assert!(e.cause.contains("more than 1048576 `$var`s"), "{e}");
+    }
+
+    #[test]
+    fn a_line_past_the_bound_is_refused_and_a_long_token_quoted_short() {
+        // `/dev/zero`: one endless line, read only up to the bound.
+        let zeros = std::io::BufReader::new(std::io::repeat(0));
+        let e = VcdReader::new(zeros).err().expect("endless line");
+        assert_eq!(e.line, 1);
+        assert!(e.cause.contains("longer than 1 MiB"), "{e}");
+        // A huge value after the header: named, not echoed.
+        let text = format!(
+            "$var real 64 ! a $end $enddefinitions $end\n#1 r{} !\n",
+            "7x".repeat(200_000)
+        );
+        let e = changes(&text, "!").expect_err("not a number");
+        assert_eq!(e.line, 2);
+        assert!(e.cause.len() < 200, "{} bytes", e.cause.len());
+        assert!(e.cause.contains("7x7x…` is not a real number"), "{e}");
     }
 }

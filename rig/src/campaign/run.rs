@@ -6,12 +6,12 @@ use super::generate::{generate, Generated};
 use super::profile::Profile;
 use super::shrink::{shrink, Case, Shrunk};
 use super::{digest, execute, judge, line, LineContext, RunLine, RunOutcome};
-use crossbeam_channel::{unbounded, Receiver, Sender};
+use crossbeam_channel::unbounded;
 use std::collections::BTreeMap;
 use std::fmt;
 use std::fmt::Write as _;
 use std::panic::{catch_unwind, AssertUnwindSafe};
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
 /// The K-th of N disjoint parts of a campaign (1-based K): the runs whose index i has
 /// i mod N = K − 1.
@@ -83,9 +83,26 @@ pub struct Plan {
 }
 
 impl Plan {
+    /// How many runs this plan's shard holds: the indices below `runs` that are K − 1 more
+    /// than a multiple of N.
+    pub fn count(&self) -> u64 {
+        let first = self.shard.k - 1;
+        if self.runs <= first {
+            0
+        } else {
+            (self.runs - 1 - first) / self.shard.n + 1
+        }
+    }
+
+    /// The index of the shard's `nth` run (0-based, below [`Plan::count`]): computed, not
+    /// searched, so a shard of a huge campaign starts at once.
+    pub fn index(&self, nth: u64) -> u64 {
+        self.shard.k - 1 + nth * self.shard.n
+    }
+
     /// The indices this plan runs, ascending.
-    pub fn indices(&self) -> impl Iterator<Item = u64> + '_ {
-        (0..self.runs).filter(|i| self.shard.contains(*i))
+    pub fn indices(&self) -> impl DoubleEndedIterator<Item = u64> + '_ {
+        (0..self.count()).map(|nth| self.index(nth))
     }
 }
 
@@ -255,31 +272,28 @@ pub fn run_campaign(
     sink: &mut dyn FnMut(Finished) -> Result<(), String>,
     progress: &mut dyn FnMut(&Finished),
 ) -> Result<(), Stopped> {
-    let indices: Vec<u64> = plan.indices().collect();
-    let jobs = jobs.clamp(1, indices.len().max(1));
-    let (work_tx, work_rx): (Sender<u64>, Receiver<u64>) = unbounded();
+    // The workers take the shard's runs by their place in it, from a shared counter: no list
+    // of the indices is made, so a shard of a huge campaign starts at once.
+    let count = plan.count();
+    let jobs = jobs.clamp(1, usize::try_from(count).unwrap_or(usize::MAX).max(1));
+    let taken = AtomicU64::new(0);
     let (done_tx, done_rx) = unbounded::<(u64, Finished)>();
-    for i in &indices {
-        // The receiver lives until the end of this function: sending cannot fail.
-        let _ = work_tx.send(*i);
-    }
-    drop(work_tx);
     let cancel = AtomicBool::new(false);
     std::thread::scope(|scope| {
         for w in 0..jobs {
-            let (work_rx, done_tx, cancel) = (work_rx.clone(), done_tx.clone(), &cancel);
+            let (done_tx, cancel, taken) = (done_tx.clone(), &cancel, &taken);
             let spawned = std::thread::Builder::new()
                 .name(format!("campaign-worker-{w}"))
-                .spawn_scoped(scope, move || {
-                    for i in work_rx.iter() {
-                        if cancel.load(Ordering::Relaxed) {
-                            break;
-                        }
-                        let f = catch_unwind(AssertUnwindSafe(|| run_one(plan, i)))
-                            .unwrap_or_else(|p| crashed(plan, i, &p));
-                        if done_tx.send((i, f)).is_err() {
-                            break;
-                        }
+                .spawn_scoped(scope, move || loop {
+                    let nth = taken.fetch_add(1, Ordering::Relaxed);
+                    if nth >= count || cancel.load(Ordering::Relaxed) {
+                        break;
+                    }
+                    let i = plan.index(nth);
+                    let f = catch_unwind(AssertUnwindSafe(|| run_one(plan, i)))
+                        .unwrap_or_else(|p| crashed(plan, i, &p));
+                    if done_tx.send((nth, f)).is_err() {
+                        break;
                     }
                 });
             if let Err(e) = spawned {
@@ -288,12 +302,13 @@ pub fn run_campaign(
             }
         }
         drop(done_tx);
+        // Finished runs by their place in the shard, until their turn comes.
         let mut pending: BTreeMap<u64, Finished> = BTreeMap::new();
-        let mut next = 0usize;
-        for (i, f) in done_rx.iter() {
+        let mut next = 0u64;
+        for (nth, f) in done_rx.iter() {
             progress(&f);
-            pending.insert(i, f);
-            while let Some(f) = indices.get(next).and_then(|i| pending.remove(i)) {
+            pending.insert(nth, f);
+            while let Some(f) = pending.remove(&next) {
                 next += 1;
                 if let Err(e) = sink(f) {
                     cancel.store(true, Ordering::Relaxed);
@@ -301,10 +316,9 @@ pub fn run_campaign(
                 }
             }
         }
-        if next < indices.len() {
+        if next < count {
             return Err(Stopped(format!(
-                "only {next} of {} runs finished (a worker thread died)",
-                indices.len()
+                "only {next} of {count} runs finished (a worker thread died)"
             )));
         }
         Ok(())
@@ -328,6 +342,35 @@ mod tests {
         let shards: Vec<Shard> = (1..=3).map(|k| Shard { k, n: 3 }).collect();
         for i in 0..30 {
             assert_eq!(shards.iter().filter(|s| s.contains(i)).count(), 1);
+        }
+    }
+
+    #[test]
+    fn a_shards_runs_are_computed_not_searched() {
+        let plan = |runs, k, n| Plan {
+            seed: 1,
+            runs,
+            shard: Shard { k, n },
+            profile: Profile::built_in("smoke").expect("smoke"),
+            shrink_budget: 0,
+        };
+        // The last of 10^12 shards of a campaign of 10^12 runs: found by walking the indices,
+        // its one run would take hours to reach.
+        let big = 1_000_000_000_000;
+        let last = plan(big, big, big);
+        assert_eq!(last.indices().next(), Some(big - 1));
+        assert_eq!(last.indices().next_back(), Some(big - 1));
+        let first = plan(big, 1, big);
+        assert_eq!(first.indices().next_back(), Some(0));
+        // The same runs as the filter over all indices, for small plans.
+        for runs in 0..12 {
+            for n in 1..6 {
+                for k in 1..=n {
+                    let p = plan(runs, k, n);
+                    let want: Vec<u64> = (0..runs).filter(|i| p.shard.contains(*i)).collect();
+                    assert_eq!(p.indices().collect::<Vec<_>>(), want, "{runs} {k}/{n}");
+                }
+            }
         }
     }
 }

@@ -557,7 +557,8 @@ fn read_lift(loc: &Locator<'_>, l: &RawLift, sc: &mut Scenario) -> Result<(), Sc
                 Some(s.span()),
                 "lift.start_mm",
                 format!(
-                    "{v} mm lies outside the shaft between the mechanical ends ({}..{} mm)",
+                    "{} mm lies outside the shaft between the mechanical ends ({}..{} mm)",
+                    asi_phy::waveform::short_number(v),
                     range.start(),
                     range.end()
                 ),

@@ -387,3 +387,82 @@ fn the_safe_drive_and_the_converter_runaway_are_read_and_checked() {
     assert!(err(&ev("{ kind = \"runaway\" }"))
         .contains("converter-runaway, converter-repaired, encoder-failed or encoder-repaired"));
 }
+
+/// Random and mutated bytes into the scenario reader: never a panic; an error names its file
+/// and says what is wrong in a line or two, whatever the input.
+mod fuzz {
+    use super::*;
+    use proptest::prelude::*;
+
+    /// The scenario files of the repository, read once.
+    fn files() -> &'static [String] {
+        static FILES: std::sync::OnceLock<Vec<String>> = std::sync::OnceLock::new();
+        FILES.get_or_init(|| {
+            let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenarios");
+            let mut names: Vec<_> = std::fs::read_dir(&dir)
+                .expect("scenarios/")
+                .filter_map(|e| e.ok().map(|e| e.path()))
+                .filter(|p| p.extension().is_some_and(|x| x == "toml"))
+                .collect();
+            names.sort();
+            names
+                .iter()
+                .map(|p| std::fs::read_to_string(p).expect("a scenario"))
+                .collect()
+        })
+    }
+
+    /// An edit of a text: a byte changed, inserted or removed, or a cut.
+    fn mutate(text: &[u8], edits: &[(u8, usize, u8)]) -> Vec<u8> {
+        let mut b = text.to_vec();
+        for &(kind, at, byte) in edits {
+            let at = at % (b.len() + 1);
+            match kind % 4 {
+                0 if at < b.len() => b[at] = byte,
+                1 => b.insert(at, byte),
+                2 if at < b.len() => {
+                    b.remove(at);
+                }
+                _ => b.truncate(at),
+            }
+        }
+        b
+    }
+
+    fn check(bytes: &[u8]) -> Result<(), TestCaseError> {
+        let text = String::from_utf8_lossy(bytes);
+        if let Err(e) = Scenario::from_toml("f.toml", &text) {
+            let m = e.to_string();
+            prop_assert!(m.starts_with("f.toml"), "{}", m);
+            prop_assert!(m.len() < 600, "{} bytes: {}", m.len(), m);
+        }
+        Ok(())
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(1000))]
+
+        #[test]
+        fn mutated_scenario_files_are_read_or_refused_clearly(
+            which in any::<prop::sample::Index>(),
+            edits in prop::collection::vec((any::<u8>(), any::<usize>(), any::<u8>()), 1..6),
+        ) {
+            let text = which.get(files());
+            check(&mutate(text.as_bytes(), &edits))?;
+        }
+
+        #[test]
+        fn random_bytes_are_refused_clearly(
+            bytes in prop::collection::vec(any::<u8>(), 0..300),
+        ) {
+            check(&bytes)?;
+        }
+
+        #[test]
+        fn random_toml_like_text_is_read_or_refused_clearly(
+            text in "(\\[[a-z_.\\[\\]]{0,12}\\]\n|[a-z_]{1,12} = [-+0-9a-z.e\"{}\\[\\], =:]{0,30}\n){0,12}",
+        ) {
+            check(text.as_bytes())?;
+        }
+    }
+}

@@ -126,7 +126,10 @@ fn speed(loc: &Locator<'_>, field: &str, s: &Spanned<f64>) -> Result<f64, Scenar
         Err(loc.error(
             Some(s.span()),
             field,
-            format!("{v} rev/s: the stand's speed field takes -{MAX_SPEED}..{MAX_SPEED} rev/s"),
+            format!(
+                "{} rev/s: the stand's speed field takes -{MAX_SPEED}..{MAX_SPEED} rev/s",
+                asi_phy::waveform::short_number(v)
+            ),
         ))
     }
 }
