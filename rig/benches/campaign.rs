@@ -23,6 +23,7 @@ fn main() {
         shard: Shard::ALL,
         profile,
         shrink_budget: 0,
+        referee: false,
     };
     let mut first: Option<Vec<String>> = None;
     let mut rates = Vec::new();

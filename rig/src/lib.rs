@@ -6,6 +6,7 @@
 //! `asi-lift` command, the tests and other front-ends use it.
 
 pub mod campaign;
+pub mod referee;
 pub mod report;
 pub mod rig;
 pub mod scenario;

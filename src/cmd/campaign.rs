@@ -67,6 +67,10 @@ pub struct CampaignArgs {
         allow_negative_numbers = true
     )]
     pub shrink_budget: u32,
+    /// Run the second referee beside every run: a hazard it finds in the plant that the
+    /// invariant watch did not name fails the run as a `disagreement` (a little slower).
+    #[arg(long)]
+    pub referee: bool,
     /// Overwrite the --out file if it exists.
     #[arg(long)]
     pub force: bool,
@@ -89,6 +93,7 @@ pub fn run(args: CampaignArgs) -> Result<u8, String> {
         shard: args.shard.unwrap_or(Shard::ALL),
         profile,
         shrink_budget: args.shrink_budget,
+        referee: args.referee,
     };
     let count = plan.count();
     if count == 0 {
@@ -180,7 +185,9 @@ pub fn run(args: CampaignArgs) -> Result<u8, String> {
         return Ok(0);
     }
     result.map_err(|e| e.0)?;
-    let failing = count - outcomes.get("ok").copied().unwrap_or(0);
+    let failing = count
+        - outcomes.get("ok").copied().unwrap_or(0)
+        - outcomes.get("attended").copied().unwrap_or(0);
     let by: Vec<String> = outcomes.iter().map(|(k, v)| format!("{v} {k}")).collect();
     eprintln!(
         "campaign seed {}, profile {}, shard {}: {count} runs: {}",

@@ -8,6 +8,7 @@ mod display_word;
 mod end_to_end;
 mod fast_path;
 mod line_noise;
+mod referee;
 mod roundtrip;
 mod safe_drive;
 mod safety_regressions;

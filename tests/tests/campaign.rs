@@ -40,6 +40,7 @@ fn plan(runs: u64, shard: Shard) -> Plan {
         shard,
         profile: short_profile(),
         shrink_budget: 3,
+        referee: false,
     }
 }
 
@@ -155,6 +156,7 @@ fn a_ci_campaign_of_300_runs_has_no_failure() {
         shard: Shard::ALL,
         profile: Profile::built_in("default").expect("default"),
         shrink_budget: 0,
+        referee: false,
     };
     let jobs = std::thread::available_parallelism().map_or(1, |n| n.get());
     let wall = std::time::Instant::now();

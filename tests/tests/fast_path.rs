@@ -99,7 +99,7 @@ fn agree(what: &str, sc: &Scenario, until: Option<SimDuration>, vcd: bool) {
     }
 }
 
-const SCENARIOS: [&str; 17] = [
+pub(crate) const SCENARIOS: [&str; 17] = [
     "busy",
     "demo",
     "door",

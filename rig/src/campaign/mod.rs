@@ -19,6 +19,7 @@ pub mod run;
 pub mod shrink;
 pub mod summary;
 
+use crate::referee::Referee;
 use crate::report::{round3, Report, ViolationKind};
 use crate::rig::Rig;
 use crate::scenario::Scenario;
@@ -34,6 +35,14 @@ use std::panic::{catch_unwind, AssertUnwindSafe};
 pub enum RunOutcome {
     /// No violation, and in service at the end (or not judged).
     Ok,
+    /// No violation and in service at the end, but only after the attendant's rounds
+    /// (rescue, acknowledge, reset): the lift needed a person to come back. Not a failure;
+    /// counted apart so that a campaign tells such runs from those that came back by
+    /// themselves.
+    Attended,
+    /// The second referee ([`crate::referee`], campaign option `--referee`) found a hazard
+    /// the invariant watch did not name: a blind spot of one of them.
+    Disagreement,
     /// The rig found a safety invariant broken.
     Violation,
     /// No violation, but the probe was not served or the controller did not end in a normal
@@ -47,8 +56,10 @@ pub enum RunOutcome {
 
 impl RunOutcome {
     /// Every outcome, in the order of the summary.
-    pub const ALL: [RunOutcome; 5] = [
+    pub const ALL: [RunOutcome; 7] = [
         RunOutcome::Ok,
+        RunOutcome::Attended,
+        RunOutcome::Disagreement,
         RunOutcome::Violation,
         RunOutcome::OutOfService,
         RunOutcome::Panic,
@@ -59,11 +70,21 @@ impl RunOutcome {
     pub fn name(self) -> &'static str {
         match self {
             RunOutcome::Ok => "ok",
+            RunOutcome::Attended => "attended",
+            RunOutcome::Disagreement => "disagreement",
             RunOutcome::Violation => "violation",
             RunOutcome::OutOfService => "out-of-service",
             RunOutcome::Panic => "panic",
             RunOutcome::Error => "error",
         }
+    }
+}
+
+impl RunOutcome {
+    /// Whether the run fails the campaign (and is shrunk to a reproducer): all but `ok` and
+    /// `attended`.
+    pub fn is_failure(self) -> bool {
+        !matches!(self, RunOutcome::Ok | RunOutcome::Attended)
     }
 }
 
@@ -96,10 +117,27 @@ pub enum Execution {
 /// Runs `sc` on the whole rig to its end; a panic is caught and becomes
 /// [`Execution::Panic`].
 pub fn execute(sc: &Scenario) -> Execution {
+    execute_with(sc, |rig| rig.run(None))
+}
+
+/// As [`execute`], with the second referee beside the rig ([`Referee::run`]); also its
+/// disagreements with the invariant watch (none after a panic or an error).
+pub fn execute_refereed(sc: &Scenario) -> (Execution, Vec<String>) {
+    let mut found = Vec::new();
+    let exec = execute_with(sc, |rig| {
+        let (report, referee) = Referee::run(rig, None);
+        found = referee.disagreements(&report);
+        report
+    });
+    if !matches!(exec, Execution::Report(_)) {
+        found.clear();
+    }
+    (exec, found)
+}
+
+fn execute_with(sc: &Scenario, run: impl FnOnce(Rig) -> Report) -> Execution {
     let sc = sc.clone();
-    let result = catch_unwind(AssertUnwindSafe(move || {
-        Rig::new(sc).map(|rig| rig.run(None))
-    }));
+    let result = catch_unwind(AssertUnwindSafe(move || Rig::new(sc).map(run)));
     match result {
         Ok(Ok(report)) => Execution::Report(Box::new(report)),
         Ok(Err(e)) => Execution::Error(e.to_string()),
@@ -171,6 +209,8 @@ pub fn judge(exec: &Execution, probe: Option<&Probe>) -> RunVerdict {
                 RunOutcome::Violation
             } else if in_service == Some(false) {
                 RunOutcome::OutOfService
+            } else if r.safety.attendant_rounds > 0 {
+                RunOutcome::Attended
             } else {
                 RunOutcome::Ok
             };
@@ -244,6 +284,10 @@ pub struct RunLine {
     pub error: Option<String>,
     /// The file name of the shrunk reproducer in the failures directory, for a failure.
     pub reproducer: Option<String>,
+    /// With `--referee`: the hazards the second referee found that the invariant watch did
+    /// not name (absent when the two agree).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub disagreements: Vec<String>,
 }
 
 impl RunLine {
@@ -342,6 +386,7 @@ pub fn line(ctx: LineContext<'_>, exec: &Execution, verdict: &RunVerdict) -> Run
         final_state: None,
         error: None,
         reproducer: None,
+        disagreements: Vec::new(),
     };
     match exec {
         Execution::Panic(m) | Execution::Error(m) => l.error = Some(m.clone()),

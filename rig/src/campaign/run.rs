@@ -5,7 +5,7 @@
 use super::generate::{generate, Generated};
 use super::profile::Profile;
 use super::shrink::{shrink, Case, Shrunk};
-use super::{digest, execute, judge, line, LineContext, RunLine, RunOutcome};
+use super::{digest, execute, execute_refereed, judge, line, LineContext, RunLine, RunOutcome};
 use crossbeam_channel::unbounded;
 use std::collections::BTreeMap;
 use std::fmt;
@@ -80,6 +80,9 @@ pub struct Plan {
     pub profile: Profile,
     /// Runs a failure may spend on shrinking (0: write the failing scenario as generated).
     pub shrink_budget: u32,
+    /// Run the second referee beside every run ([`crate::referee`]): a hazard it finds that
+    /// the invariant watch did not name fails the run as a `disagreement`.
+    pub referee: bool,
 }
 
 impl Plan {
@@ -133,8 +136,15 @@ pub fn run_one(plan: &Plan, index: u64) -> Finished {
     } = generate(plan.seed, index, &plan.profile);
     let text = scenario.to_toml();
     let dig = digest(&text);
-    let exec = execute(&scenario);
-    let verdict = judge(&exec, probe.as_ref());
+    let (exec, disagreements) = if plan.referee {
+        execute_refereed(&scenario)
+    } else {
+        (execute(&scenario), Vec::new())
+    };
+    let mut verdict = judge(&exec, probe.as_ref());
+    if !disagreements.is_empty() {
+        verdict.outcome = RunOutcome::Disagreement;
+    }
     let ctx = LineContext {
         index,
         runs: plan.runs,
@@ -143,13 +153,20 @@ pub fn run_one(plan: &Plan, index: u64) -> Finished {
         seed: scenario.seed,
         digest: dig.clone(),
     };
-    let line = line(ctx, &exec, &verdict);
-    if verdict.outcome == RunOutcome::Ok {
+    let mut line = line(ctx, &exec, &verdict);
+    if !verdict.outcome.is_failure() {
         return Finished {
             line,
             reproducer: None,
         };
     }
+    // A disagreement is kept as generated: the shrinker judges runs without the referee.
+    let budget = if disagreements.is_empty() {
+        plan.shrink_budget
+    } else {
+        0
+    };
+    line.disagreements = disagreements;
     let events_before = scenario.events.len();
     let duration_before = scenario.duration;
     let case = Case {
@@ -157,7 +174,7 @@ pub fn run_one(plan: &Plan, index: u64) -> Finished {
         tail,
         probe,
     };
-    let shrunk = shrink(case, exec, verdict, plan.shrink_budget);
+    let shrunk = shrink(case, exec, verdict, budget);
     let file_name = format!("run-{index:06}-{dig}.toml");
     let text = reproducer_text(
         plan,
@@ -212,6 +229,10 @@ fn reproducer_text(
         },
         super::Execution::Panic(m) => format!("panic: {m}"),
         super::Execution::Error(m) => format!("the rig refuses the scenario: {m}"),
+    };
+    let what = match line.disagreements.first() {
+        Some(d) => format!("the referee disagrees: {d} (watch: {what})"),
+        None => what,
     };
     let _ = writeln!(h, "# fails: {what}");
     let sc = &shrunk.case.scenario;
@@ -353,6 +374,7 @@ mod tests {
             shard: Shard { k, n },
             profile: Profile::built_in("smoke").expect("smoke"),
             shrink_budget: 0,
+            referee: false,
         };
         // The last of 10^12 shards of a campaign of 10^12 runs: found by walking the indices,
         // its one run would take hours to reach.

@@ -218,7 +218,7 @@ pub fn summarize(files: &[(String, String)]) -> Result<Summary, String> {
         s.transactions += l.bus.transactions;
         s.repeats += l.bus.repeats;
         s.simulated_s += l.simulated_s;
-        if l.outcome != RunOutcome::Ok {
+        if l.outcome.is_failure() {
             s.failures.push(Failure {
                 index: l.index,
                 outcome: l.outcome,

@@ -171,21 +171,25 @@ impl Window {
 
 /// The watch of one STOP: from EStopOut going off until it is on again (docs/safety.md,
 /// `stop-overrun`; seed 003 §6.3: the cabin stops at the nearest floor in its direction of
-/// travel).
+/// travel). Each rule allows a vane's half-length, so a cabin that levels at its floor, or a
+/// fault that a safety function stops within that, is not an overrun.
 #[derive(Clone, Debug, PartialEq)]
 struct StopEpisode {
     /// When EStopOut went off.
     since: SimTime,
     /// The cabin's height then, mm.
     from_mm: f64,
-    /// Up (`true`) or down when STOP came (or within [`STOP_GRACE`] of it), `None` at rest or
-    /// moved by hand.
+    /// Up (`true`) or down, for a run under way when STOP came (or within [`STOP_GRACE`] of
+    /// it, or taken over from the crank).
     direction: Option<bool>,
     /// The next floor in that direction more than a vane's half-length ahead when STOP came,
     /// and the height the cabin may not pass: its level plus that half-length onward.
     limit: Option<(u8, f64)>,
-    /// The cabin came to rest since STOP, after moving in its direction of travel.
-    rested: bool,
+    /// The farthest height reached in the direction of travel.
+    far_mm: f64,
+    /// Where the cabin rests (or rested before powered motion began): a run from here is a
+    /// new run.
+    rest_mm: Option<f64>,
     reported: bool,
 }
 
@@ -379,10 +383,11 @@ impl InvariantWatch {
         found
     }
 
-    /// The STOP watch: from EStopOut going off until it is on again, the cabin in powered
-    /// motion may go on to the next floor in its direction of travel that was more than a
-    /// vane's half-length ahead, and no further; it may not reverse, nor start again once
-    /// at rest. Returns the overrun, once per STOP.
+    /// The STOP watch: from EStopOut going off until it is on again, a run under way may go
+    /// on to the next floor in its direction of travel that was more than a vane's
+    /// half-length ahead, and that half-length past it; it may not go back more than that
+    /// half-length, and a cabin at rest may not start a run of more than that half-length.
+    /// Returns the overrun, once per STOP.
     fn stop_overrun(
         &mut self,
         t: SimTime,
@@ -394,38 +399,60 @@ impl InvariantWatch {
             self.stop_episode = None;
             return None;
         }
+        let x = o.position_mm;
         let e = self.stop_episode.get_or_insert(StopEpisode {
             since: t,
-            from_mm: o.position_mm,
+            from_mm: x,
             direction: None,
             limit: None,
-            rested: false,
+            far_mm: x,
+            rest_mm: None,
             reported: false,
         });
-        let under_way = t - e.since <= STOP_GRACE || taken_over;
-        if moving && e.direction.is_none() && !e.rested && under_way {
-            let up = o.velocity_mm_s > 0.0;
-            let from = if taken_over { o.position_mm } else { e.from_mm };
-            self.stop_episode.as_mut()?.direction = Some(up);
+        if !moving {
+            // At rest: the place a new run would start from; moved by hand: a new place once
+            // the crank leaves it.
+            e.rest_mm = if o.velocity_mm_s == 0.0 {
+                e.rest_mm.or(Some(x))
+            } else {
+                None
+            };
+            return None;
+        }
+        let up = o.velocity_mm_s > 0.0;
+        if e.direction.is_none() && (t - e.since <= STOP_GRACE || taken_over) {
+            let from = if taken_over { x } else { e.from_mm };
+            e.direction = Some(up);
+            e.far_mm = from;
+            e.rest_mm = None;
             let limit = self.limit_from(from, up);
             self.stop_episode.as_mut()?.limit = limit;
         }
         let half = self.vane_half_mm;
         let e = self.stop_episode.as_mut()?;
-        if !moving {
-            e.rested |= o.velocity_mm_s == 0.0 && e.direction.is_some();
-            return None;
+        if e.rest_mm.is_none() && e.direction.is_none() {
+            // Powered motion with no run under way and no rest seen: it starts here.
+            e.rest_mm = Some(x);
         }
         if e.reported {
             return None;
         }
-        let up = o.velocity_mm_s > 0.0;
-        let at = o.position_mm;
-        let why = match (e.direction, e.limit) {
-            (None, _) => format!("the cabin starts a run at {at:.1} mm after STOP"),
-            _ if e.rested => format!("the cabin starts a new run at {at:.1} mm after STOP"),
-            (Some(d), _) if d != up => format!("the cabin reverses at {at:.1} mm after STOP"),
-            (_, Some((floor, limit))) if (up && at > limit) || (!up && at < limit) => format!(
+        if let Some(d) = e.direction {
+            e.far_mm = if d { e.far_mm.max(x) } else { e.far_mm.min(x) };
+        }
+        let back = |d: bool| if d { e.far_mm - x } else { x - e.far_mm };
+        let passed = |d: bool, limit: f64| if d { x > limit } else { x < limit };
+        let why = match (e.rest_mm, e.direction, e.limit) {
+            (Some(rest), _, _) if (x - rest).abs() > half => format!(
+                "the cabin starts a run after STOP: {:+.1} mm from where it rested at {rest:.1} mm",
+                x - rest
+            ),
+            (_, Some(d), _) if back(d) > half => format!(
+                "the cabin reverses after STOP: {:.1} mm back from {:.1} mm",
+                back(d),
+                e.far_mm
+            ),
+            (_, Some(d), Some((floor, limit))) if passed(d, limit) => format!(
                 "the cabin passes floor {floor}, the next in its direction when STOP came, by more than {half} mm"
             ),
             _ => return None,
@@ -939,20 +966,31 @@ mod tests {
 
     #[test]
     fn after_stop_a_cabin_may_not_reverse_nor_start_again() {
-        let reverses = watch(&[
-            (0, stopped(cabin(500.0, 100.0))),
-            (100, stopped(cabin(505.0, -100.0))),
-        ]);
-        assert_eq!(reverses, [ViolationKind::StopOverrun]);
-        let restarts = watch(&[
-            (0, stopped(cabin(500.0, 100.0))),
-            (1_000, stopped(cabin(800.0, 0.0))),
-            (3_000, stopped(cabin(800.0, 10.0))),
-        ]);
-        assert_eq!(restarts, [ViolationKind::StopOverrun]);
+        // Each rule allows a vane's half-length (40 mm): levelling, or a fault a safety
+        // function stops within it.
+        let reverses = |back_mm: f64| {
+            watch(&[
+                (0, stopped(cabin(500.0, 100.0))),
+                (100, stopped(cabin(510.0, -100.0))),
+                (2_000, stopped(cabin(510.0 - back_mm, -100.0))),
+            ])
+        };
+        assert!(reverses(39.0).is_empty());
+        assert_eq!(reverses(41.0), [ViolationKind::StopOverrun]);
+        let restarts = |to_mm: f64| {
+            watch(&[
+                (0, stopped(cabin(500.0, 100.0))),
+                (1_000, stopped(cabin(800.0, 0.0))),
+                (3_000, stopped(cabin(800.0, 10.0))),
+                (6_000, stopped(cabin(to_mm, 10.0))),
+            ])
+        };
+        assert!(restarts(839.0).is_empty());
+        assert_eq!(restarts(841.0), [ViolationKind::StopOverrun]);
         let at_rest = watch(&[
             (0, stopped(cabin(400.0, 0.0))),
             (3_000, stopped(cabin(400.0, -10.0))),
+            (7_000, stopped(cabin(359.0, -10.0))),
         ]);
         assert_eq!(at_rest, [ViolationKind::StopOverrun]);
         // A run commanded just before STOP that starts just after it was under way: it may
@@ -969,6 +1007,7 @@ mod tests {
         let late = watch(&[
             (0, stopped(cabin(5.0, 0.0))),
             (201, stopped(cabin(5.0, 10.0))),
+            (5_000, stopped(cabin(46.0, 10.0))),
         ]);
         assert_eq!(late, [ViolationKind::StopOverrun]);
         // Restarted (EStopOut on again): a new run is the controller's to make.

@@ -891,6 +891,11 @@ impl Rig {
         &self.lift
     }
 
+    /// The safety logic's STOP delay (SS1): how long K1 may stay closed after STOP.
+    pub fn estop_delay(&self) -> SimDuration {
+        self.estop_delay
+    }
+
     /// The safety logic's EStopOut as the controller last got it (`true` = no STOP demand).
     pub fn estop_out(&self) -> bool {
         self.from_safety.estop_out
