@@ -313,7 +313,10 @@ pub fn run_with_view(
         mut viewer,
     } = t;
     if stopped {
-        rig.log_now("live", "stopped by the operator (Ctrl-C)".into());
+        rig.log_now(
+            "live",
+            "stopped by the operator (Ctrl-C or a termination signal)".into(),
+        );
     }
     let last = status_of(&rig, &gw, at, start, sim0, cfg.speed, true);
     if let Some(v) = viewer.as_mut() {
