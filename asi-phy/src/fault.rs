@@ -150,7 +150,7 @@ pub struct PulseErrorRate(f64);
 #[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]
 #[error(
     "{}: a pulse error rate is a probability, 0..=1",
-    crate::waveform::short_number(*.0)
+    crate::short_number(*.0)
 )]
 pub struct PulseErrorRateError(pub f64);
 

@@ -23,6 +23,7 @@ pub mod handshake;
 pub mod handshake_words;
 pub mod line;
 pub mod manchester;
+pub mod message;
 pub mod pulse;
 pub mod receiver;
 pub mod slave_id;
@@ -34,6 +35,7 @@ pub mod waveform;
 pub use fault::{FaultInjector, FaultRates, PulseErrorRate, PulseErrorRateError, PulseFault};
 pub use line::Transmission;
 pub use manchester::{HalfBits, Level};
+pub use message::short_number;
 pub use pulse::{Polarity, Pulse, PulseTrain};
 pub use receiver::{
     Check, Checks, Expect, Frame, LineDecoder, Listener, Received, Receiver, ReceiverConfig,

@@ -151,7 +151,7 @@ fn parse_volts(s: &str) -> Result<f32, String> {
         Ok(v) if v > 0.0 && v <= f64::from(f32::MAX) => Ok(v as f32),
         Ok(v) => Err(format!(
             "{} is out of range: {range}",
-            asi_phy::waveform::short_number(v)
+            asi_phy::short_number(v)
         )),
         Err(_) => Err(format!("not a number: {range}")),
     }

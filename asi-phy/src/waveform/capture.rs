@@ -2,6 +2,7 @@
 //! ([`read_capture`]) or as a stream ([`CaptureReader`]), which holds only a bounded prefix.
 
 use super::render::Waveform;
+use crate::message::short_number;
 use crate::time::SimTime;
 use std::borrow::Cow;
 use std::io::{BufRead, Read};
@@ -17,17 +18,6 @@ pub fn excerpt(text: &str) -> Cow<'_, str> {
     match text.char_indices().nth(60) {
         None => Cow::Borrowed(text),
         Some((cut, _)) => Cow::Owned(format!("{}…", &text[..cut])),
-    }
-}
-
-/// `x` for a message, compactly: plain digits for everyday magnitudes (`0.5`, `1200`), else
-/// scientific notation (`1e308`, `2.5e-9`), so that no number fills a line.
-pub fn short_number(x: f64) -> String {
-    let a = x.abs();
-    if a == 0.0 || (1e-4..1e9).contains(&a) || !a.is_finite() {
-        format!("{x}")
-    } else {
-        format!("{x:e}")
     }
 }
 

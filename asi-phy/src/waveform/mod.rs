@@ -19,8 +19,7 @@ mod render;
 mod tests;
 
 pub use capture::{
-    excerpt, read_capture, read_line_bounded, short_number, Capture, CaptureError, CaptureReader,
-    MAX_LINE_BYTES,
+    excerpt, read_capture, read_line_bounded, Capture, CaptureError, CaptureReader, MAX_LINE_BYTES,
 };
 pub use demod::{DemodConfig, Demodulator};
 pub use render::{render, NoiseBurst, Waveform, WaveformConfig, WaveformError};

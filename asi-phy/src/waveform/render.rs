@@ -38,7 +38,7 @@ impl Default for WaveformConfig {
 
 /// A bad waveform or demodulator setting: the field and why.
 #[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]
-#[error("{field} = {}: {rule}", super::capture::short_number(*.value))]
+#[error("{field} = {}: {rule}", crate::short_number(*.value))]
 pub struct WaveformError {
     /// The field at fault.
     pub field: &'static str,

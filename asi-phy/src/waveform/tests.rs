@@ -237,9 +237,6 @@ fn numbers_out_of_range_are_named_with_the_range_compactly() {
         e.cause,
         "time 1e299 s does not increase (previous sample 1e300 s)"
     );
-    assert_eq!(short_number(0.5), "0.5");
-    assert_eq!(short_number(-1200.0), "-1200");
-    assert_eq!(short_number(2.5e-9), "2.5e-9");
 }
 
 #[test]

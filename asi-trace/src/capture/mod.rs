@@ -525,7 +525,7 @@ fn stream_vcd_voltage<R: BufRead>(
                     line: c.line,
                     cause: format!(
                         "{var}: {} is out of range: expected a finite voltage within ±{:e} V",
-                        asi_phy::waveform::short_number(v),
+                        asi_phy::short_number(v),
                         f32::MAX
                     ),
                 })

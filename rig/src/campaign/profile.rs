@@ -382,7 +382,7 @@ impl Profile {
                 if !(0.0..=1.0).contains(&v) {
                     return Err(err(format!(
                         "{field}: {}: a chance is 0..1",
-                        asi_phy::waveform::short_number(v)
+                        asi_phy::short_number(v)
                     )));
                 }
                 *target = v;

@@ -558,7 +558,7 @@ fn read_lift(loc: &Locator<'_>, l: &RawLift, sc: &mut Scenario) -> Result<(), Sc
                 "lift.start_mm",
                 format!(
                     "{} mm lies outside the shaft between the mechanical ends ({}..{} mm)",
-                    asi_phy::waveform::short_number(v),
+                    asi_phy::short_number(v),
                     range.start(),
                     range.end()
                 ),

@@ -128,7 +128,7 @@ fn speed(loc: &Locator<'_>, field: &str, s: &Spanned<f64>) -> Result<f64, Scenar
             field,
             format!(
                 "{} rev/s: the stand's speed field takes -{MAX_SPEED}..{MAX_SPEED} rev/s",
-                asi_phy::waveform::short_number(v)
+                asi_phy::short_number(v)
             ),
         ))
     }
