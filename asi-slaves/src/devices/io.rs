@@ -53,8 +53,8 @@ impl Peripheral for IoModule {
 /// The converter's I/O module at address 7 (AC2258, four relay outputs; docs/lab-bus.md §3.6):
 /// out D0 = run, D1 = direction (1 up, 0 down); in D0 = converter ready, D1 = converter fault.
 ///
-/// asi-lift carries the lab's output bits in positive logic (1 = relay closed, seed 003 table
-/// 4.1), but the master's default outputs 1111 (activation, Data_Exchange_Active = 0, Offline)
+/// asi-lift carries the lab's output bits in positive logic (1 = relay closed, docs/lab-bus.md
+/// §3.1), but the master's default outputs 1111 (activation, Data_Exchange_Active = 0, Offline)
 /// are the wire value of the real bus, which a slave IC takes as its passive state: the ZMD
 /// "ASI for you" (ASI4U) datasheet, §3.7.1, has its data outputs as open-drain drivers whose
 /// register an IC reset sets to 0xF with the drivers off, so 1111 leaves the outputs as they
