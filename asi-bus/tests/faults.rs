@@ -182,10 +182,10 @@ fn slaves_without_power_drop_their_outputs_at_once() {
     // while the AS-i supply is down or the module is unplugged: the drive would run on.
     let mut lab = running_lab(40);
     lab.bus.image_mut().output.set_analog(10, 1, 11_000);
-    lab.bus
-        .image_mut()
-        .output
-        .set_nibble(asi_phy::SlaveAddr::a(7).expect("7"), Nibble::ALL);
+    lab.bus.image_mut().output.set_nibble(
+        asi_phy::SlaveAddr::a(7).expect("7"),
+        Nibble::from_low_bits(0b0011),
+    );
     lab.bus.advance_to(ms(100));
     assert!(lab.converter().expect("converter").run());
     assert_eq!(lab.analog_output().expect("out").current_ua(1), 11_000);
@@ -197,10 +197,10 @@ fn slaves_without_power_drop_their_outputs_at_once() {
     assert_eq!(lab.analog_output().expect("out").current_ua(1), 0);
 
     let mut lab = running_lab(40);
-    lab.bus
-        .image_mut()
-        .output
-        .set_nibble(asi_phy::SlaveAddr::a(7).expect("7"), Nibble::ALL);
+    lab.bus.image_mut().output.set_nibble(
+        asi_phy::SlaveAddr::a(7).expect("7"),
+        Nibble::from_low_bits(0b0011),
+    );
     lab.bus.advance_to(ms(100));
     assert!(lab.converter().expect("converter").run());
     let id = lab.slave_id(7).expect("converter I/O");

@@ -205,7 +205,10 @@ fn host_flag_offline_sends_default_outputs_then_stops() {
     let offline: Vec<_> = trace.iter().filter(|r| r.kind == TxKind::Offline).collect();
     assert_eq!(offline.len(), 11);
     assert!(offline.iter().all(|r| r.request.info() == 0b01111));
-    assert_eq!(lab.converter().expect("c").outputs().get(), 0b1111);
+    let c = lab.converter().expect("c");
+    assert_eq!(c.received().get(), 0b1111);
+    // 1111 is the slave IC's passive state: the converter's relays open (ZMD ASI4U §3.7.1).
+    assert!(!c.run() && !c.direction_up());
     assert_eq!(
         lab.bus.poll_at(),
         asi_phy::SimTime::MAX,

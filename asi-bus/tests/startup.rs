@@ -40,3 +40,39 @@ fn power_on_start_up_of_the_lab_bus() {
     assert_eq!(lab.bus.stats().cycle_min, us(cycle));
     insta::assert_snapshot!(lines(&trace));
 }
+
+/// Activation sends the converter's I/O slave (7) Write_Parameter and a Data_Exchange with the
+/// default outputs 1111, the passive state of the slave IC's outputs (ZMD ASI4U datasheet
+/// §3.7.1: an IC reset leaves 0xF in the data output register, drivers off): the telegram
+/// goes out, and the converter never sees run or up until the PLC commands them.
+#[test]
+fn activation_default_outputs_command_nothing_at_the_converter() {
+    let mut lab = LabLift::new().expect("lab");
+    lab.bus.enable_trace(10_000);
+    let mut trace = Vec::new();
+    while lab.bus.stats().cycles < 3 {
+        let t = lab.bus.poll_at();
+        lab.bus.advance_to(t);
+        trace.extend(lab.bus.drain_trace());
+        let c = lab.converter().expect("converter");
+        assert!(!c.run() && !c.direction_up(), "at {t}: {:?}", c.outputs());
+    }
+    let activation: Vec<_> = trace
+        .iter()
+        .filter(|r| r.kind == TxKind::Activation && r.request.address().get() == 7)
+        .map(|r| r.request.info())
+        .collect();
+    assert_eq!(
+        activation,
+        [0b11111, 0b01111],
+        "Write_Parameter, Data_Exchange 1111"
+    );
+    lab.bus
+        .image_mut()
+        .output
+        .set_nibble(a(7), asi_phy::Nibble::from_low_bits(0b0011));
+    let t = lab.bus.now() + us(5_000);
+    lab.bus.advance_to(t);
+    let c = lab.converter().expect("converter");
+    assert!(c.run() && c.direction_up());
+}

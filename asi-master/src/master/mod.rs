@@ -14,10 +14,11 @@
 //! slave; builds LDS; repeated until a slave is found) → activation (protected mode: the slaves
 //! of LPS whose codes match PCD; configuration mode: every detected slave but 0; each gets
 //! Write_Parameter with its projected parameter and a Data_Exchange with the default outputs
-//! 1111, then joins LAS) → normal operation. A normal cycle is: Data_Exchange with every LAS
-//! slot in ascending address; one management call (a mailbox job, else Read_Status of the next
-//! LAS slave round-robin, which keeps LPF); one inclusion call to the next address that is not
-//! activated (skipped when none is left).
+//! 1111, the slave IC's passive output state (docs/lab-bus.md §3.6), then joins LAS) → normal
+//! operation. A normal cycle is: Data_Exchange with every LAS slot in ascending address; one
+//! management call (a mailbox job, else Read_Status of the next LAS slave round-robin, which
+//! keeps LPF); one inclusion call to the next address that is not activated (skipped when none
+//! is left).
 //!
 //! **Decisions beyond the seed documents**:
 //! - Address 0 is an inclusion address only while some address 1..31 is free: with 31
