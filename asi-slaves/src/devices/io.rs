@@ -76,10 +76,15 @@ impl Converter {
     /// The relay outputs D3..D0 as the module drives them: the bits last received, or 0000
     /// (all open) after reset and while the master sends its default outputs.
     pub fn outputs(&self) -> Nibble {
-        if self.io.outputs == Converter::PASSIVE {
+        Converter::relays(self.io.outputs)
+    }
+    /// The relays D3..D0 a received output nibble closes: the nibble, or none for the
+    /// master's default outputs [`Converter::PASSIVE`].
+    pub fn relays(received: Nibble) -> Nibble {
+        if received == Converter::PASSIVE {
             Nibble::ZERO
         } else {
-            self.io.outputs
+            received
         }
     }
     /// The output bits as last received (0000 after reset).

@@ -17,9 +17,6 @@ const DOOR_BUDGET: SimDuration = SimDuration::from_millis(1000);
 const OVERLOAD_BUDGET: SimDuration = SimDuration::from_millis(1000);
 const OVERTRAVEL_BUDGET: SimDuration = SimDuration::from_millis(50);
 const STOP_MARGIN: SimDuration = SimDuration::from_millis(200);
-/// A run that starts this soon after STOP counts as under way when STOP came: the controller
-/// commanded it before it could see EStopOut go off (its scan, the bus, the converter).
-const STOP_GRACE: SimDuration = SimDuration::from_millis(200);
 /// How far the car may move at a floor with the door open before the watch calls it a
 /// violation (with the safe drive; README "Violations"): the safe drive's SOS holds it within
 /// 0.5 motor revolutions (5.0 mm), and its brake needs a little more.
@@ -42,6 +39,10 @@ pub(super) struct Observed {
     /// The safety logic's EStopOut as the controller gets it (`false`: stop at the next
     /// floor and start no run until the circuit is restarted).
     pub estop_out: bool,
+    /// The controller's command to run the converter as it last wrote it into the output
+    /// image (before the bus carries it to the slave): read only when STOP comes, to tell a
+    /// run commanded before it from one started after it.
+    pub run_commanded: bool,
     /// The cabin's height, mm.
     pub position_mm: f64,
     /// The floor whose level window the cabin is in, if any. Only read when
@@ -175,12 +176,14 @@ impl Window {
 /// fault that a safety function stops within that, is not an overrun.
 #[derive(Clone, Debug, PartialEq)]
 struct StopEpisode {
-    /// When EStopOut went off.
-    since: SimTime,
-    /// The cabin's height then, mm.
+    /// The cabin's height when EStopOut went off, mm.
     from_mm: f64,
-    /// Up (`true`) or down, for a run under way when STOP came (or within [`STOP_GRACE`] of
-    /// it, or taken over from the crank).
+    /// A run was under way then: the cabin moved under power, or the controller had already
+    /// commanded the converter to run (the cabin starts a little later: the bus, the
+    /// set-point's transfer, the converter's ramp).
+    under_way: bool,
+    /// Up (`true`) or down, for a run under way when STOP came (or taken over from the
+    /// crank), once the cabin moves.
     direction: Option<bool>,
     /// The next floor in that direction more than a vane's half-length ahead when STOP came,
     /// and the height the cabin may not pass: its level plus that half-length onward.
@@ -348,7 +351,7 @@ impl InvariantWatch {
         // Power taking over a cabin the crank moves (K1 closing during the turn) starts no
         // run: the cabin was under way.
         let taken_over = was_by_hand && moving;
-        if let Some(detail) = self.stop_overrun(t, &o, moving, taken_over) {
+        if let Some(detail) = self.stop_overrun(&o, moving, taken_over) {
             violation(ViolationKind::StopOverrun, detail);
         }
         if let Some((since, opened)) = self.stop_since {
@@ -390,7 +393,6 @@ impl InvariantWatch {
     /// Returns the overrun, once per STOP.
     fn stop_overrun(
         &mut self,
-        t: SimTime,
         o: &Observed,
         moving: bool,
         taken_over: bool,
@@ -401,8 +403,8 @@ impl InvariantWatch {
         }
         let x = o.position_mm;
         let e = self.stop_episode.get_or_insert(StopEpisode {
-            since: t,
             from_mm: x,
+            under_way: moving || o.run_commanded,
             direction: None,
             limit: None,
             far_mm: x,
@@ -410,9 +412,11 @@ impl InvariantWatch {
             reported: false,
         });
         if !moving {
-            // At rest: the place a new run would start from; moved by hand: a new place once
-            // the crank leaves it.
-            e.rest_mm = if o.velocity_mm_s == 0.0 {
+            // At rest: the place a new run would start from (but for a run commanded before
+            // STOP that has not begun yet); moved by hand: a new place once the crank leaves
+            // it.
+            let waiting = e.under_way && e.direction.is_none();
+            e.rest_mm = if o.velocity_mm_s == 0.0 && !waiting {
                 e.rest_mm.or(Some(x))
             } else {
                 None
@@ -420,7 +424,7 @@ impl InvariantWatch {
             return None;
         }
         let up = o.velocity_mm_s > 0.0;
-        if e.direction.is_none() && (t - e.since <= STOP_GRACE || taken_over) {
+        if e.direction.is_none() && ((e.under_way && e.rest_mm.is_none()) || taken_over) {
             let from = if taken_over { x } else { e.from_mm };
             e.direction = Some(up);
             e.far_mm = from;
@@ -558,6 +562,7 @@ mod tests {
             k1_closed: true,
             stop: false,
             estop_out: true,
+            run_commanded: false,
             position_mm,
             level_floor: ((390.0..=410.0).contains(&position_mm)).then_some(2),
             watch_unintended_movement: true,
@@ -592,7 +597,7 @@ mod tests {
     fn observed() -> impl proptest::strategy::Strategy<Value = Observed> {
         use proptest::prelude::*;
         (
-            (prop_oneof![Just(0.0), -30.0..30.0f64], any::<[bool; 9]>()),
+            (prop_oneof![Just(0.0), -30.0..30.0f64], any::<[bool; 10]>()),
             prop_oneof![Just(400.0), 370.0..430.0f64],
         )
             .prop_map(|((velocity_mm_s, b), position_mm)| Observed {
@@ -604,6 +609,7 @@ mod tests {
                 k1_closed: b[4],
                 stop: b[5],
                 estop_out: b[8],
+                run_commanded: b[9],
                 position_mm,
                 level_floor: b[6].then_some(2),
                 watch_unintended_movement: b[7],
@@ -993,23 +999,28 @@ mod tests {
             (7_000, stopped(cabin(359.0, -10.0))),
         ]);
         assert_eq!(at_rest, [ViolationKind::StopOverrun]);
-        // A run commanded just before STOP that starts just after it was under way: it may
-        // go on to the next floor (floor 2's vane, from floor 1), and no further.
+        // A run the controller commanded before STOP (the image's run bit on when EStopOut
+        // went off) that starts just after it was under way: it may go on to the next floor
+        // (floor 2's vane, from floor 1), and no further.
         let commanded = |until_mm: f64| {
+            let mut at_stop = stopped(cabin(5.0, 0.0));
+            at_stop.run_commanded = true;
             watch(&[
-                (0, stopped(cabin(5.0, 0.0))),
+                (0, at_stop),
                 (16, stopped(cabin(5.0, 10.0))),
                 (8_000, stopped(cabin(until_mm, 10.0))),
             ])
         };
         assert!(commanded(430.0).is_empty());
         assert_eq!(commanded(441.0), [ViolationKind::StopOverrun]);
-        let late = watch(&[
+        // A run started after STOP, however soon (the controller saw EStopOut go off and
+        // then commanded it), is a new run.
+        let after = watch(&[
             (0, stopped(cabin(5.0, 0.0))),
-            (201, stopped(cabin(5.0, 10.0))),
+            (1, stopped(cabin(5.0, 10.0))),
             (5_000, stopped(cabin(46.0, 10.0))),
         ]);
-        assert_eq!(late, [ViolationKind::StopOverrun]);
+        assert_eq!(after, [ViolationKind::StopOverrun]);
         // Restarted (EStopOut on again): a new run is the controller's to make.
         let restarted = watch(&[
             (0, stopped(cabin(500.0, 100.0))),

@@ -630,6 +630,7 @@ impl Rig {
             k1_closed: l.k1_closed(),
             stop: l.stop_channels() != [true, true],
             estop_out: self.from_safety.estop_out,
+            run_commanded: wiring::run_commanded(&self.lab),
             position_mm: l.position_mm(),
             level_floor: Observed::needs_level_floor(self.drive.is_some(), !l.door_closed())
                 .then(|| l.config().level_floor(l.position_mm()))
