@@ -2,19 +2,24 @@
 //! drive with the door open, past the end floors, reverse at full speed, toggle the run bit,
 //! ignore STOP, lie about the load, go quiet, write during a power fail or a safe-link drop.
 //! Each test asserts what the design promises (the safety logic contains it, the invariant
-//! watch names it, or both) and that nothing panics.
+//! watch names it, or both) and that nothing panics. A property test lets a random
+//! controller write the map for a simulated minute and holds the watch to an independent
+//! referee ([`referee`]).
 //!
-//! `cargo test -p gateway --test hostile`.
+//! `cargo test -p gateway --test hostile` (the big property test: `-- --ignored`).
 
 use asi_phy::{SimDuration, SimTime};
 use gateway::live::LiveConfig;
-use gateway::map::Owner;
+use gateway::map::{Gateway, Owner};
 use gateway::{Running, Speed};
 use rig::report::ViolationKind;
 use rig::{Report, Rig, Scenario};
+use std::collections::BTreeSet;
 use std::io::{Read, Write};
 use std::net::{SocketAddr, TcpStream};
 use std::time::Duration;
+
+mod referee;
 
 // ----- the harness --------------------------------------------------------------------------
 
@@ -316,6 +321,31 @@ start_mm = 0.0
     assert!((3.09..3.2).contains(&at), "named at {at} s");
 }
 
+#[test]
+fn with_the_safe_drive_driving_off_with_the_door_open_is_held_by_sos() {
+    // `[drive] safe = true`: the door open at a floor is SOS. A controller that drives off at
+    // full speed is stopped by the safe drive (STO through K1) within a fraction of a mm:
+    // contained, and no `unintended-movement` (more than 10 mm) to name.
+    let running = start(
+        "name = \"safe drive, door open\"\nduration = \"6s\"\n[lift]\nstart_mm = 400.0\ndoor = \"open\"\n[drive]\nsafe = true\n",
+        false,
+    );
+    run_plc(&running, 20_000, |_, now, _| {
+        Some(Outputs {
+            restart: power_on_pulse(now),
+            ..Outputs::drive(UP, FULL_UA)
+        })
+    });
+    let r = report(running);
+    assert_eq!(kinds(&r), [], "{:?}", r.violations);
+    let drive = r.safety.drive.as_ref().expect("the safe drive's report");
+    assert_eq!(drive.trips.len(), 1, "{drive:?}");
+    assert_eq!(drive.trips[0].function, "SOS");
+    assert!(!r.final_state.contactor_closed && !r.final_state.moving);
+    let moved = r.final_state.position_mm - 400.0;
+    assert!(moved.abs() < 0.1, "moved {moved} mm");
+}
+
 // ----- Modbus: the end floors --------------------------------------------------------------
 
 /// Drives at full speed in `dir` from `start_mm`, and once K1 has dropped keeps pulsing the
@@ -447,6 +477,12 @@ fn toggling_the_run_bit_with_the_door_open_adds_up_to_door_open_moving() {
 /// Drives up at travel speed from floor 1 and ignores STOP (pressed at 3 s for `hold`):
 /// the run stays commanded, and the restart is pulsed every 100 ms all along.
 fn ignore_stop(hold: &str) -> (Report, Vec<(SimTime, u16)>) {
+    stop_run(hold, false)
+}
+
+/// As [`ignore_stop`]; with `obey`, the run is off while EStopOut is (a ramp stop between
+/// floors, and no restart pulses until it is on again).
+fn stop_run(hold: &str, obey: bool) -> (Report, Vec<(SimTime, u16)>) {
     let toml = format!(
         r#"
 name = "STOP ignored"
@@ -464,6 +500,9 @@ hold = "{hold}"
     run_plc(&running, 40_000, |_, now, safety| {
         if seen.last().is_none_or(|&(_, s)| s != safety) {
             seen.push((now, safety));
+        }
+        if obey && safety & 1 == 0 && now > ms(1_000) {
+            return Some(Outputs::halt());
         }
         Some(Outputs {
             restart: power_on_pulse(now) || now.as_nanos() / 1_000_000 % 100 < 20,
@@ -504,6 +543,16 @@ fn a_controller_that_drives_on_through_a_held_stop_is_named_stop_overrun_and_k1_
     let x = r.final_state.position_mm;
     assert!((600.0..800.0).contains(&x), "stopped at {x} mm");
     assert!(r.safety.overtravel_reached.is_empty());
+}
+
+#[test]
+fn a_controller_that_halts_at_stop_is_not_named_and_k1_drops_after_the_delay() {
+    // The counterpart: the same run, the controller stopping as soon as EStopOut goes off.
+    let (r, _) = stop_run("12s", true);
+    assert_eq!(kinds(&r), [], "{:?}", r.violations);
+    let x = r.final_state.position_mm;
+    assert!((100.0..200.0).contains(&x), "stopped at {x} mm");
+    assert!(!r.final_state.contactor_closed && !r.final_state.moving);
 }
 
 #[test]
@@ -865,4 +914,242 @@ fn a_ttk4145_client_cannot_lie_about_the_load() {
         "{:?}",
         r.safety.trips
     );
+}
+
+// ----- a random controller against the referee ----------------------------------------------
+
+use proptest::prelude::*;
+use proptest::test_runner::{Config, TestRunner};
+use referee::{Referee, Sample};
+use tokio_modbus::Request;
+
+/// What the random controller does at one moment: change what its scan writes, or send one
+/// request of its own.
+#[derive(Clone, Debug)]
+enum Op {
+    /// The converter's nibble (run, up, …) its scan writes to register 1.
+    Converter(u16),
+    /// The set-point its scan writes to register 68, µA.
+    Setpoint(u16),
+    /// The signals its scan writes to register 1000 (bit 0 restart, bit 1 overloaded).
+    Signals(u16),
+    /// One coil: 28..31 the converter's bits, 1000 and 1001 the signals (its scan follows).
+    Coil(u16, bool),
+    /// Any output register, any value (its scan writes register 1 over it again).
+    Register(u16, u16),
+    /// A simulator command: register 2000 + k, value.
+    Command(u16, u16),
+    /// The watchdog time, ms.
+    Watchdog(u16),
+    /// Its scan stops (`true`) or starts again.
+    Quiet(bool),
+    /// Its scan pulses the STOP circuit's restart for 50 ms.
+    Restart,
+}
+
+fn op() -> impl Strategy<Value = Op> {
+    let setpoint = prop_oneof![
+        Just(0u16),
+        Just(4_000),
+        Just(6_000),
+        Just(10_000),
+        Just(20_000),
+        any::<u16>()
+    ];
+    let command = prop_oneof![
+        // Presses: STOP (held 300 ms), the cabin buttons.
+        3 => Just((0u16, 0x0400u16)),
+        1 => (1..=4u16).prop_map(|f| (0, 0x0100 | f)),
+        1 => (1..=12u16).prop_map(|a| (1, a)),
+        2 => (1..=12u16).prop_map(|a| (2, a)),
+        3 => (0..4u16).prop_map(|l| (3, l)),
+        4 => (0..2u16).prop_map(|d| (4, d)),
+        2 => Just((5u16, 1u16)),
+        2 => Just((6u16, 1u16)),
+        1 => (50..3_000u16).prop_map(|ms| (7, ms)),
+        1 => (50..1_000u16).prop_map(|ms| (8, ms)),
+        1 => Just((9u16, 1u16)),
+    ];
+    prop_oneof![
+        6 => prop_oneof![Just(0b11u16), Just(0b01), Just(0), 0..16u16].prop_map(Op::Converter),
+        3 => setpoint.prop_map(Op::Setpoint),
+        4 => (0..4u16).prop_map(Op::Signals),
+        2 => (prop_oneof![28..32u16, 1000..1002u16], any::<bool>())
+            .prop_map(|(c, v)| Op::Coil(c, v)),
+        1 => (0..244u16, any::<u16>()).prop_map(|(a, v)| Op::Register(a, v)),
+        5 => command.prop_map(|(k, v)| Op::Command(k, v)),
+        1 => prop_oneof![Just(0u16), Just(100), Just(1_000), Just(5_000)].prop_map(Op::Watchdog),
+        1 => any::<bool>().prop_map(Op::Quiet),
+        4 => Just(Op::Restart),
+    ]
+}
+
+/// A random controller's run: where the cabin starts, the door and the load, and what it does
+/// when (milliseconds after the one before).
+#[derive(Clone, Debug)]
+struct Plan {
+    start_mm: f64,
+    door_open: bool,
+    load: u8,
+    ops: Vec<(u64, Op)>,
+}
+
+fn plan(ops: usize) -> impl Strategy<Value = Plan> {
+    (
+        prop_oneof![
+            Just(0.0),
+            Just(400.0),
+            Just(800.0),
+            Just(1_200.0),
+            -40.0..1_240.0f64
+        ],
+        any::<bool>(),
+        prop_oneof![2 => Just(0u8), 1 => Just(3u8), 1 => 0..4u8],
+        proptest::collection::vec((prop_oneof![1..50u64, 1..3_000u64], op()), 1..ops),
+    )
+        .prop_map(|(start_mm, door_open, load, ops)| Plan {
+            start_mm,
+            door_open,
+            load,
+            ops,
+        })
+}
+
+/// The rig with an outside controller and the gateway's map in this process, stepped 1 ms at a
+/// time as the lockstep loop steps it, the referee sampling the plant at every step.
+struct Bench {
+    rig: Rig,
+    gw: Gateway,
+    at: SimTime,
+    referee: Referee,
+}
+
+impl Bench {
+    fn new(p: &Plan, duration_s: u32) -> Bench {
+        let load = ["empty", "loaded", "full", "overloaded"][usize::from(p.load % 4)];
+        let door = if p.door_open { "open" } else { "closed" };
+        let toml = format!(
+            "name = \"random controller\"\nduration = \"{duration_s}s\"\n[lift]\nstart_mm = {:.3}\nload = \"{load}\"\ndoor = \"{door}\"\n",
+            p.start_mm
+        );
+        let sc = Scenario::from_toml("random.toml", &toml).expect("a valid scenario");
+        let rig = Rig::new(sc).expect("a rig").with_external_controller();
+        let referee = Referee::new(&rig);
+        Bench {
+            rig,
+            gw: Gateway::new(Owner::External, SimDuration::from_millis(1000)),
+            at: SimTime::ZERO,
+            referee,
+        }
+    }
+
+    /// One request at the time reached (its answer does not matter: an exception is an
+    /// answer too).
+    fn serve(&mut self, req: &Request<'static>) {
+        let _ = self.gw.serve(&mut self.rig, self.at, req);
+    }
+
+    /// 1 ms on; `false` at the run's end.
+    fn step(&mut self) -> bool {
+        if self.at >= self.rig.end() {
+            return false;
+        }
+        let next = self.at + SimDuration::from_millis(1);
+        while self.rig.step_until(next).is_some() {}
+        self.gw.watch(&mut self.rig, next);
+        self.at = next;
+        self.referee.see(next, Sample::of(&self.rig));
+        true
+    }
+}
+
+/// Runs `p` for `duration_s` simulated seconds: the controller's scan every 10 ms (register 1,
+/// 68 and 1000, unless quiet) and its operations at their times. The watch's kinds, and the
+/// referee.
+fn random_run(p: &Plan, duration_s: u32) -> (BTreeSet<ViolationKind>, Referee) {
+    let mut b = Bench::new(p, duration_s);
+    let (mut converter, mut setpoint, mut signals, mut quiet) = (0u16, 4_000u16, 0u16, false);
+    // The restart pulse after power-on, as any PLC program gives it.
+    let mut restart_until = ms(200);
+    let mut ops = p.ops.iter();
+    let mut next_op = ops.next().map(|(gap, op)| (ms(*gap), op));
+    loop {
+        let t = b.at.as_nanos() / 1_000_000;
+        while let Some((at, op)) = next_op.filter(|(at, _)| *at <= b.at) {
+            match op {
+                Op::Converter(n) => converter = *n,
+                Op::Setpoint(v) => setpoint = *v,
+                Op::Signals(v) => signals = *v,
+                Op::Coil(c, v) => {
+                    let bit = |w: u16, k: u16| if *v { w | 1 << k } else { w & !(1 << k) };
+                    match c {
+                        28..=31 => converter = bit(converter, c - 28),
+                        _ => signals = bit(signals, c - 1000),
+                    }
+                    b.serve(&Request::WriteSingleCoil(*c, *v));
+                }
+                Op::Register(a, v) => b.serve(&Request::WriteSingleRegister(*a, *v)),
+                Op::Command(k, v) => b.serve(&Request::WriteSingleRegister(2000 + k, *v)),
+                Op::Watchdog(v) => b.serve(&Request::WriteSingleRegister(1008, *v)),
+                Op::Quiet(q) => quiet = *q,
+                Op::Restart => restart_until = b.at + SimDuration::from_millis(50),
+            }
+            next_op = ops
+                .next()
+                .map(|(gap, op)| (at + SimDuration::from_millis(*gap), op));
+        }
+        if !quiet && t % 10 == 0 {
+            b.serve(&Request::WriteSingleRegister(CONVERTER, converter));
+            b.serve(&Request::WriteSingleRegister(SETPOINT, setpoint));
+            let restart = u16::from(b.at < restart_until && b.at >= ms(100));
+            b.serve(&Request::WriteSingleRegister(SIGNALS, signals | restart));
+        }
+        if !b.step() {
+            break;
+        }
+    }
+    let named = b.rig.violations().iter().map(|v| v.kind).collect();
+    // The end of the run as the live loop ends it: no panic in the report either.
+    b.rig.set_end(b.at);
+    let report = b.rig.run(None);
+    let reported: BTreeSet<ViolationKind> = report.violations.iter().map(|v| v.kind).collect();
+    assert_eq!(reported, named);
+    (named, b.referee)
+}
+
+fn check_random_controllers(cases: u32, duration_s: u32) {
+    let mut runner = TestRunner::new(Config {
+        cases,
+        failure_persistence: None,
+        max_shrink_iters: 64,
+        ..Config::default()
+    });
+    let result = runner.run(&plan(120), |p| {
+        let (named, referee) = random_run(&p, duration_s);
+        if std::env::var_os("HOSTILE_DEBUG").is_some() {
+            eprintln!(
+                "named {named:?} definite {:?} possible {:?}",
+                referee.definite, referee.possible
+            );
+        }
+        prop_assert_eq!(referee.samples, u64::from(duration_s) * 1_000);
+        if let Err(e) = referee.check(&named) {
+            return Err(TestCaseError::fail(e));
+        }
+        Ok(())
+    });
+    if let Err(e) = result {
+        panic!("{e}");
+    }
+}
+
+#[test]
+fn a_random_controller_for_a_simulated_minute_is_judged_as_the_referee_judges() {
+    check_random_controllers(96, 60);
+}
+
+#[test]
+#[ignore = "the big version: 1000 random controllers, about 90 s in debug"]
+fn a_thousand_random_controllers_are_judged_as_the_referee_judges() {
+    check_random_controllers(1_000, 60);
 }
