@@ -315,3 +315,112 @@ fn next_limit(levels_mm: &[f64], x: f64, up: bool) -> Option<f64> {
             .map(|l| l - VANE_HALF_MM)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A referee of the lab shaft (floors at 0, 400, 800, 1200 mm; ends at −140 and 1340 mm).
+    fn lab() -> Referee {
+        Referee {
+            levels_mm: vec![0.0, 400.0, 800.0, 1_200.0],
+            ends_mm: (-140.0, 1_340.0),
+            door: Budget::default(),
+            load: Budget::default(),
+            overtravel_run: 0,
+            k1_since: None,
+            stop_edge_in_span: None,
+            stop_any_in_span: None,
+            last_stop: false,
+            episode: None,
+            definite: BTreeSet::new(),
+            possible: BTreeSet::new(),
+            samples: 0,
+        }
+    }
+
+    fn moving(position_mm: f64, velocity_mm_s: f64) -> Sample {
+        Sample {
+            position_mm,
+            velocity_mm_s,
+            door_open: false,
+            overloaded: false,
+            k1_closed: true,
+            stop: false,
+            estop_out: true,
+            overtravel: false,
+            crashes: 0,
+        }
+    }
+
+    /// Feeds `n` samples from `from_ms`, 1 ms apart, made by `f(ms)`.
+    fn feed(r: &mut Referee, from_ms: u64, n: u64, f: impl Fn(u64) -> Sample) {
+        for k in from_ms..from_ms + n {
+            r.see(SimTime::from_millis(k), f(k));
+        }
+    }
+
+    #[test]
+    fn door_open_under_power_is_definite_past_1050_ms_and_possible_past_950() {
+        let open = |_| Sample {
+            door_open: true,
+            ..moving(100.0, 30.0)
+        };
+        let mut r = lab();
+        feed(&mut r, 1, 951, open);
+        assert!(r.possible.contains(&ViolationKind::DoorOpenMoving));
+        assert!(r.definite.is_empty());
+        feed(&mut r, 952, 99, open);
+        assert!(r.definite.is_empty());
+        feed(&mut r, 1_051, 1, open);
+        assert!(r.definite.contains(&ViolationKind::DoorOpenMoving));
+        // With K1 open (the brake, the crank) it is never definite.
+        let mut r = lab();
+        feed(&mut r, 1, 5_000, |_| Sample {
+            door_open: true,
+            k1_closed: false,
+            ..moving(100.0, 30.0)
+        });
+        assert!(r.definite.is_empty());
+        assert!(r.check(&[ViolationKind::DoorOpenMoving].into()).is_ok());
+        assert!(r.check(&BTreeSet::new()).is_ok());
+        assert!(r.check(&[ViolationKind::StopOverrun].into()).is_err());
+    }
+
+    #[test]
+    fn the_budget_slides_over_10_s() {
+        // 0.9 s open now and 0.9 s open 10 s later: never more than 1.05 s within 10 s.
+        let mut r = lab();
+        let at = |k: u64| Sample {
+            door_open: k % 10_000 < 900,
+            ..moving(100.0, 30.0)
+        };
+        feed(&mut r, 0, 20_000, at);
+        assert!(r.definite.is_empty() && r.possible.is_empty());
+    }
+
+    #[test]
+    fn after_stop_the_next_floor_ahead_plus_40_mm_is_the_limit() {
+        assert_eq!(next_limit(&lab().levels_mm, 120.0, true), Some(440.0));
+        assert_eq!(next_limit(&lab().levels_mm, 370.0, true), Some(840.0));
+        assert_eq!(next_limit(&lab().levels_mm, 1_000.0, false), Some(760.0));
+        // 41 mm below a floor: the watch's sample and the referee's may differ; undecided.
+        assert_eq!(next_limit(&lab().levels_mm, 359.0, true), None);
+        // Passing 440 + 5 mm going up after STOP is definite; a stop short of it is not.
+        let stopped = |x: f64, v: f64| Sample {
+            estop_out: false,
+            ..moving(x, v)
+        };
+        let mut r = lab();
+        feed(&mut r, 0, 100, |k| stopped(120.0 + k as f64, 100.0));
+        feed(&mut r, 100, 1, |_| stopped(444.0, 100.0));
+        assert!(r.definite.is_empty());
+        feed(&mut r, 101, 1, |_| stopped(446.0, 100.0));
+        assert!(r.definite.contains(&ViolationKind::StopOverrun));
+        // Reversing is definite at once.
+        let mut r = lab();
+        feed(&mut r, 0, 10, |_| stopped(200.0, 100.0));
+        feed(&mut r, 10, 1, |_| stopped(200.0, -2.0));
+        assert!(r.definite.contains(&ViolationKind::StopOverrun));
+    }
+}
