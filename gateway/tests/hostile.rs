@@ -830,6 +830,25 @@ fn writes_during_a_safe_link_drop_are_taken_and_k1_stays_open_until_the_acknowle
     );
 }
 
+#[test]
+fn a_controller_that_takes_the_top_overtravel_sensor_off_the_bus_loses_k1() {
+    // Slave 12 (the top overtravel sensor) off the bus at 2 s (simulator command 2001) while
+    // the controller drives up: the safety monitor gets no code from it and
+    // drops its release within its tolerance time; K1 opens long before the top.
+    let (r, seen) = writes_through((2001, 12));
+    assert_eq!(kinds(&r), [], "{:?}", r.violations);
+    let dropped = seen
+        .iter()
+        .find(|(t, s)| *t > ms(2_000) && !k1_closed(*s))
+        .unwrap_or_else(|| panic!("K1 dropped: {seen:?}"));
+    assert!(dropped.0 < ms(2_200), "{seen:?}");
+    assert!(r.safety.overtravel_reached.is_empty());
+    assert!(!r.final_state.contactor_closed && !r.final_state.moving);
+    assert!(r.final_state.position_mm < 400.0);
+    let cause = r.final_state.k1_open_cause.clone().expect("a cause");
+    assert!(cause.contains("not heard"), "{cause}");
+}
+
 // ----- TTK4145 clients ---------------------------------------------------------------------------
 
 /// A TTK4145 message; the answer of a read (every message is one lockstep step).
