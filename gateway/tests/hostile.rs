@@ -253,9 +253,9 @@ fn driving_down_with_the_door_open_is_named_door_open_moving() {
     let running = start(
         r#"
 name = "down with the door open"
-duration = "20s"
+duration = "10s"
 [lift]
-start_mm = 800.0
+start_mm = 400.0
 door = "open"
 "#,
         false,
@@ -354,7 +354,7 @@ fn with_the_safe_drive_driving_off_with_the_door_open_is_held_by_sos() {
 /// 2005, 2006) while still commanding the run.
 fn past_the_end(start_mm: f64, dir: u16) -> Report {
     let toml =
-        format!("name = \"past the end\"\nduration = \"16s\"\n[lift]\nstart_mm = {start_mm:.1}\n");
+        format!("name = \"past the end\"\nduration = \"11s\"\n[lift]\nstart_mm = {start_mm:.1}\n");
     let running = start(&toml, false);
     let mut dropped_at = None;
     run_plc(&running, 40_000, |c, now, safety| {
@@ -405,7 +405,7 @@ fn driving_past_the_bottom_floor_at_full_speed_is_contained_at_the_overtravel_se
 #[test]
 fn reversing_at_full_speed_every_second_is_no_hazard_and_stays_in_the_shaft() {
     let running = start(
-        "name = \"reverse\"\nduration = \"15s\"\n[lift]\nstart_mm = 600.0\n",
+        "name = \"reverse\"\nduration = \"10s\"\n[lift]\nstart_mm = 600.0\n",
         false,
     );
     run_plc(&running, 40_000, |_, now, _| {
@@ -438,7 +438,7 @@ fn toggle_the_run_bit(c: &mut Client, now: SimTime) {
 #[test]
 fn toggling_the_run_bit_at_a_floor_with_the_door_closed_is_no_violation() {
     let running = start(
-        "name = \"toggle\"\nduration = \"12s\"\n[lift]\nstart_mm = 400.0\n",
+        "name = \"toggle\"\nduration = \"8s\"\n[lift]\nstart_mm = 400.0\n",
         false,
     );
     run_plc(&running, 40_000, |c, now, _| {
@@ -457,7 +457,7 @@ fn toggling_the_run_bit_at_a_floor_with_the_door_closed_is_no_violation() {
 #[test]
 fn toggling_the_run_bit_with_the_door_open_adds_up_to_door_open_moving() {
     let running = start(
-        "name = \"toggle, door open\"\nduration = \"12s\"\n[lift]\nstart_mm = 400.0\ndoor = \"open\"\n",
+        "name = \"toggle, door open\"\nduration = \"8s\"\n[lift]\nstart_mm = 400.0\ndoor = \"open\"\n",
         false,
     );
     run_plc(&running, 40_000, |c, now, _| {
@@ -702,20 +702,22 @@ fn a_controller_that_tells_the_truth_about_the_load_gets_no_power() {
 
 // ----- Modbus: going quiet --------------------------------------------------------------------
 
-/// Drives up from floor 1 at travel speed until 2 s, then only reads; with `watchdog_off` it
-/// turns the gateway's watchdog off first (holding register 1008 = 0).
+/// Drives up from floor 1 until 2 s, then only reads; with `watchdog_off` it turns the
+/// gateway's watchdog off first (holding register 1008 = 0) and drives at full speed, else at
+/// the travel speed.
 fn goes_quiet(watchdog_off: bool) -> Report {
     let running = start(
-        "name = \"quiet\"\nduration = \"30s\"\n[lift]\nstart_mm = 0.0\n",
+        "name = \"quiet\"\nduration = \"11s\"\n[lift]\nstart_mm = 0.0\n",
         false,
     );
+    let setpoint = if watchdog_off { FULL_UA } else { TRAVEL_UA };
     run_plc(&running, 40_000, |c, now, _| {
         if watchdog_off && now < ms(10) {
             assert!(c.write(1008, 0).is_ok(), "the watchdog off");
         }
         (now < ms(2_000)).then_some(Outputs {
             restart: power_on_pulse(now),
-            ..Outputs::drive(UP, TRAVEL_UA)
+            ..Outputs::drive(UP, setpoint)
         })
     });
     report(running)
@@ -891,10 +893,10 @@ fn ttk_regardless(running: &Running, dir: u8, messages: u32) -> (bool, bool) {
 #[test]
 fn a_ttk4145_client_that_drives_down_with_the_obstruction_on_is_named_door_open_moving() {
     let running = start(
-        "name = \"ttk door\"\nduration = \"1h\"\n[lift]\nstart_mm = 800.0\ndoor = \"open\"\n",
+        "name = \"ttk door\"\nduration = \"1h\"\n[lift]\nstart_mm = 400.0\ndoor = \"open\"\n",
         true,
     );
-    let (_, obstruction) = ttk_regardless(&running, 255, 20_000);
+    let (_, obstruction) = ttk_regardless(&running, 255, 10_000);
     let r = report(running);
     assert!(obstruction, "the client was told");
     assert_eq!(
@@ -950,10 +952,10 @@ hold = "12s"
 #[test]
 fn a_ttk4145_client_that_drives_past_the_top_floor_is_contained_at_the_sensor() {
     let running = start(
-        "name = \"ttk top\"\nduration = \"1h\"\n[lift]\nstart_mm = 0.0\n",
+        "name = \"ttk top\"\nduration = \"1h\"\n[lift]\nstart_mm = 800.0\n",
         true,
     );
-    ttk_regardless(&running, 1, 25_000);
+    ttk_regardless(&running, 1, 10_000);
     let r = report(running);
     assert_eq!(kinds(&r), [], "{:?}", r.violations);
     assert_eq!(ends(&r), ["top"]);
