@@ -22,7 +22,7 @@
 //! | k1-in-overtravel | an overtravel sensor tripped with K1 closed for 56 consecutive samples | for 40 |
 //! | mechanical-end | the plant recorded a crash at a mechanical end | the cabin within 1 mm of an end |
 //! | stop-ignored | a STOP channel opened and K1 stayed closed in every sample of the 9.35 s after | K1 closed for 9.25 s after a sample with a STOP channel open |
-//! | stop-overrun | while EStopOut is off: with K1 closed, the cabin passes the first floor level more than 40 mm (± 2 mm, else undecided) ahead of where it was when EStopOut went off, in the direction it moved then, by more than 45 mm; or it moves against that direction at more than 1 mm/s; or, at rest when EStopOut went off and for 250 ms after, or at rest after moving, it moves again (K1 closed, more than 1 mm/s) | the cabin moves at all while EStopOut is off |
+//! | stop-overrun | while EStopOut is off: with K1 closed, the cabin passes the first floor level more than 40 mm (± 2 mm, else undecided) ahead of where it was when EStopOut went off, in the direction it moved then, by more than 45 mm; or it goes back more than 45 mm from the farthest point in that direction; or, at rest when EStopOut went off with no run commanded, or at rest after moving, it moves more than 45 mm from where it rested (K1 closed) | the cabin moves at all while EStopOut is off |
 //!
 //! "Moving" is a velocity other than zero. The referee reads motion with K1 closed as powered
 //! (SPEC §6b: motion with K1 closed is always judged), which is why its definite verdicts need
@@ -48,6 +48,9 @@ pub struct Sample {
     pub stop: bool,
     /// The safety logic's EStopOut as the controller gets it (`false`: STOP demand).
     pub estop_out: bool,
+    /// The converter's run bit in the output image as the controller last wrote it (a run
+    /// commanded before STOP is under way even if the cabin starts later).
+    pub run_commanded: bool,
     /// An overtravel sensor is tripped.
     pub overtravel: bool,
     /// The plant's count of crashes at a mechanical end.
@@ -66,6 +69,7 @@ impl Sample {
             k1_closed: l.k1_closed(),
             stop: l.stop_channels() != [true, true],
             estop_out: rig.estop_out(),
+            run_commanded: rig.run_commanded(),
             overtravel: !l.overtravel_bottom_free() || !l.overtravel_top_free(),
             crashes: l.crashes().len(),
         }
@@ -114,8 +118,13 @@ struct StopEpisode {
     /// The direction of powered motion when it began (`Some(up)`), and the height the cabin
     /// may not pass (`None`: the next floor was too close to a vane's edge to decide).
     direction: Option<(bool, Option<f64>)>,
-    /// At rest when it began (and for the first 250 ms).
+    /// At rest when it began, with no run commanded.
     at_rest: bool,
+    /// Where the cabin rests (after its run, or from the start when at rest): a run from here
+    /// is a new run.
+    rest_mm: Option<f64>,
+    /// The farthest height reached in the direction of travel.
+    far_mm: f64,
     /// Came to rest after moving in its direction.
     rested: bool,
 }
@@ -234,42 +243,42 @@ impl Referee {
             self.episode = None;
             return;
         }
+        let x = s.position_mm;
         let e = self.episode.get_or_insert_with(|| StopEpisode {
             since: t,
             direction: None,
-            at_rest: !s.moving(),
+            at_rest: !s.moving() && !s.run_commanded,
+            rest_mm: None,
+            far_mm: x,
             rested: false,
         });
         let first = e.since == t;
         if first && s.powered_moving() {
             let up = s.velocity_mm_s > 0.0;
-            let limit = next_limit(&self.levels_mm, s.position_mm, up);
+            let limit = next_limit(&self.levels_mm, x, up);
             e.direction = Some((up, limit));
         }
-        let age = t.saturating_duration_since(e.since);
-        if e.at_rest && s.moving() && age <= SimDuration::from_millis(250) {
-            // Started within the watch's grace (or about it): not decided here.
-            e.at_rest = false;
+        if !s.moving() && (e.at_rest || e.direction.is_some()) {
+            e.rest_mm = e.rest_mm.or(Some(x));
+            e.rested |= e.direction.is_some();
         }
+        if !s.k1_closed && s.moving() {
+            // Moved by hand: no reference until it rests again.
+            e.rest_mm = None;
+        }
+        // Each rule allows a vane's half-length (40 mm), and 5 mm of margin here.
+        let allowance = VANE_HALF_MM + 5.0;
         let mut definite = false;
-        if let Some((up, limit)) = e.direction {
-            if !s.moving() {
-                e.rested = true;
+        if s.k1_closed && s.moving() {
+            if let Some(rest) = e.rest_mm {
+                definite |= (x - rest).abs() > allowance;
             }
-            let v = s.velocity_mm_s;
-            if s.k1_closed && v.abs() > 1.0 {
-                let reverses = (v > 0.0) != up;
-                let passes = limit.is_some_and(|l| {
-                    if up {
-                        s.position_mm > l + 5.0
-                    } else {
-                        s.position_mm < l - 5.0
-                    }
-                });
-                definite |= reverses || passes || e.rested;
+            if let Some((up, limit)) = e.direction {
+                e.far_mm = if up { e.far_mm.max(x) } else { e.far_mm.min(x) };
+                let back = if up { e.far_mm - x } else { x - e.far_mm };
+                let passes = limit.is_some_and(|l| if up { x > l + 5.0 } else { x < l - 5.0 });
+                definite |= back > allowance || passes;
             }
-        } else if e.at_rest && s.k1_closed && s.velocity_mm_s.abs() > 1.0 {
-            definite = true;
         }
         let possible = s.moving();
         self.flag(ViolationKind::StopOverrun, definite, possible);
@@ -348,6 +357,7 @@ mod tests {
             k1_closed: true,
             stop: false,
             estop_out: true,
+            run_commanded: false,
             overtravel: false,
             crashes: 0,
         }
@@ -417,10 +427,12 @@ mod tests {
         assert!(r.definite.is_empty());
         feed(&mut r, 101, 1, |_| stopped(446.0, 100.0));
         assert!(r.definite.contains(&ViolationKind::StopOverrun));
-        // Reversing is definite at once.
+        // Reversing is definite once the cabin is more than 45 mm back from its farthest point.
         let mut r = lab();
         feed(&mut r, 0, 10, |_| stopped(200.0, 100.0));
-        feed(&mut r, 10, 1, |_| stopped(200.0, -2.0));
+        feed(&mut r, 10, 1, |_| stopped(156.0, -2.0));
+        assert!(r.definite.is_empty());
+        feed(&mut r, 11, 1, |_| stopped(154.0, -2.0));
         assert!(r.definite.contains(&ViolationKind::StopOverrun));
     }
 }

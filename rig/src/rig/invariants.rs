@@ -391,12 +391,7 @@ impl InvariantWatch {
     /// half-length ahead, and that half-length past it; it may not go back more than that
     /// half-length, and a cabin at rest may not start a run of more than that half-length.
     /// Returns the overrun, once per STOP.
-    fn stop_overrun(
-        &mut self,
-        o: &Observed,
-        moving: bool,
-        taken_over: bool,
-    ) -> Option<String> {
+    fn stop_overrun(&mut self, o: &Observed, moving: bool, taken_over: bool) -> Option<String> {
         if o.estop_out {
             self.stop_episode = None;
             return None;

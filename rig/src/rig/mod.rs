@@ -892,6 +892,12 @@ impl Rig {
         &self.lift
     }
 
+    /// Whether the controller commands the converter to run: the run bit (slave 7, D0) in the
+    /// output image as it last wrote it, before the bus carries it to the slave.
+    pub fn run_commanded(&self) -> bool {
+        wiring::run_commanded(&self.lab)
+    }
+
     /// The safety logic's STOP delay (SS1): how long K1 may stay closed after STOP.
     pub fn estop_delay(&self) -> SimDuration {
         self.estop_delay
