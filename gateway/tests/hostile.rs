@@ -777,23 +777,27 @@ fn writes_through(fault: (u16, u16)) -> (Report, Vec<(SimTime, u16)>) {
     (report(running), seen)
 }
 
+/// K1 dropped within 200 ms of the fault at 2 s and stayed open to the end; the cabin stands.
+fn k1_drops_at_the_fault_and_stays_open(r: &Report, seen: &[(SimTime, u16)]) {
+    let dropped = seen
+        .iter()
+        .find(|(t, s)| *t > ms(2_000) && !k1_closed(*s))
+        .unwrap_or_else(|| panic!("K1 dropped: {seen:?}"));
+    assert!(dropped.0 < ms(2_200), "{seen:?}");
+    assert!(
+        seen.iter().all(|(t, s)| *t <= dropped.0 || !k1_closed(*s)),
+        "{seen:?}"
+    );
+    assert!(!r.final_state.contactor_closed && !r.final_state.moving);
+}
+
 #[test]
 fn writes_during_a_power_fail_are_taken_and_k1_stays_open_until_the_operator() {
     let (r, seen) = writes_through((2007, 2_000));
     assert_eq!(kinds(&r), [], "{:?}", r.violations);
     // K1 dropped within the power fail and stayed open to the end (the overtravel monitor
     // wants the operator's reset); the restart pulses do not bring it back.
-    let k1 = k1_closed;
-    let dropped = seen
-        .iter()
-        .find(|(t, s)| *t > ms(2_000) && !k1(*s))
-        .unwrap_or_else(|| panic!("K1 dropped: {seen:?}"));
-    assert!(dropped.0 < ms(2_200), "{seen:?}");
-    assert!(
-        seen.iter().all(|(t, s)| *t <= dropped.0 || !k1(*s)),
-        "{seen:?}"
-    );
-    assert!(!r.final_state.contactor_closed && !r.final_state.moving);
+    k1_drops_at_the_fault_and_stays_open(&r, &seen);
     // The sensors' safe codes were gone with the power: the monitor wants the operator.
     let cause = r.final_state.k1_open_cause.clone().expect("a cause");
     assert_eq!(cause, "overtravel monitor waiting for the operator's reset");
@@ -808,17 +812,7 @@ fn writes_during_a_power_fail_are_taken_and_k1_stays_open_until_the_operator() {
 fn writes_during_a_safe_link_drop_are_taken_and_k1_stays_open_until_the_acknowledge() {
     let (r, seen) = writes_through((2008, 500));
     assert_eq!(kinds(&r), [], "{:?}", r.violations);
-    let k1 = k1_closed;
-    let dropped = seen
-        .iter()
-        .find(|(t, s)| *t > ms(2_000) && !k1(*s))
-        .unwrap_or_else(|| panic!("K1 dropped: {seen:?}"));
-    assert!(dropped.0 < ms(2_200), "{seen:?}");
-    assert!(
-        seen.iter().all(|(t, s)| *t <= dropped.0 || !k1(*s)),
-        "{seen:?}"
-    );
-    assert!(!r.final_state.contactor_closed && !r.final_state.moving);
+    k1_drops_at_the_fault_and_stays_open(&r, &seen);
     let cause = r.final_state.k1_open_cause.clone().expect("a cause");
     assert!(
         cause.contains("COM_ERR") && cause.contains("ERR_ACK"),
