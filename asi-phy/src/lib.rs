@@ -28,6 +28,7 @@ pub mod pulse;
 pub mod receiver;
 pub mod slave_id;
 pub mod telegram;
+pub mod testing;
 pub mod time;
 pub mod timing;
 pub mod waveform;

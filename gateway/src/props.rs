@@ -24,7 +24,7 @@ fn external_rig() -> Rig {
 /// A runner of `cases` cases whose failures are not saved to files.
 fn runner(cases: u32) -> TestRunner {
     TestRunner::new(Config {
-        cases,
+        cases: asi_phy::testing::fuzz_cases(cases),
         failure_persistence: None,
         ..Config::default()
     })

@@ -887,7 +887,7 @@ mod fuzz {
     }
 
     proptest! {
-        #![proptest_config(ProptestConfig::with_cases(500))]
+        #![proptest_config(ProptestConfig::with_cases(asi_phy::testing::fuzz_cases(500)))]
 
         #[test]
         fn mutated_captures_decode_or_are_refused_clearly(

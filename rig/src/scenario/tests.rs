@@ -440,7 +440,7 @@ mod fuzz {
     }
 
     proptest! {
-        #![proptest_config(ProptestConfig::with_cases(1000))]
+        #![proptest_config(ProptestConfig::with_cases(asi_phy::testing::fuzz_cases(1000)))]
 
         #[test]
         fn mutated_scenario_files_are_read_or_refused_clearly(
