@@ -546,12 +546,13 @@ impl Gateway {
 }
 
 /// The register or bit addresses `a .. a + n`, or exception 02 past the 16-bit space.
-fn span(a: u16, n: usize) -> Result<std::ops::Range<u16>, ExceptionCode> {
+fn span(a: u16, n: usize) -> Result<impl Iterator<Item = u16> + Clone, ExceptionCode> {
     let end = usize::from(a) + n;
     if end > 1 << 16 {
         return Err(ExceptionCode::IllegalDataAddress);
     }
-    Ok(a..end as u16)
+    // Counted in usize: a span that ends at the last address (65535) is not empty.
+    Ok((usize::from(a)..end).map(|i| i as u16))
 }
 
 /// Reads `n` items from `a` with `get`; exception 03 for a count outside 1..=`max`, 02 if an
@@ -793,6 +794,16 @@ mod tests {
         assert_eq!(read(0, 126, 125, get), Err(ExceptionCode::IllegalDataValue));
         assert_eq!(
             read(65535, 2, 125, get),
+            Err(ExceptionCode::IllegalDataAddress)
+        );
+        // A span that ends exactly at the last address is read, not taken as empty (found by
+        // the fuzz-style test at a million cases: 65530 + 6 wrapped to 0).
+        assert_eq!(
+            read(65530, 6, 125, |i| Some(i)),
+            Ok((65530..=65535).collect())
+        );
+        assert_eq!(
+            read(65530, 6, 125, get),
             Err(ExceptionCode::IllegalDataAddress)
         );
     }
