@@ -53,7 +53,8 @@ pub struct CampaignArgs {
     /// Write the JSON lines to this file instead of standard output.
     #[arg(long, value_name = "FILE.jsonl")]
     pub out: Option<PathBuf>,
-    /// The generator's profile: a built-in (default, quiet, noisy, smoke) or a profile file.
+    /// The generator's profile: a built-in (default, quiet, noisy, smoke, safe-drive) or a
+    /// profile file.
     #[arg(long, value_name = "NAME|FILE", default_value = "default")]
     pub profile: String,
     /// Where the shrunk reproducers of failing runs go (created when needed).
