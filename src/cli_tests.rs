@@ -489,6 +489,18 @@ fn assert_the_batch_run(mut live: serde_json::Value) {
     assert_eq!(live, batch);
 }
 
+/// `serve` shows the log as the run goes on (on standard error, with the status line), as
+/// `run` prints it; `--quiet` keeps only the status.
+#[test]
+fn serve_shows_the_log_as_it_happens_unless_quiet() {
+    let (err, _) = serve_3s(&[]);
+    let line = "controller  initialisation: running down to find floor 1";
+    assert!(err.contains(line), "{err}");
+    assert!(err.contains("     0.160 s  controller"), "{err}");
+    let (err, _) = serve_3s(&["--quiet"]);
+    assert!(!err.contains(line), "{err}");
+}
+
 #[test]
 fn serve_with_the_live_view_gives_the_same_run_as_without() {
     let (err, live) = serve_3s(&["--http", "127.0.0.1:0", "--allow-host", "lab-pc"]);

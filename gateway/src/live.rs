@@ -16,7 +16,7 @@ use crate::ttk::Ttk;
 use crate::view::{self, Telegrams};
 use asi_phy::{SimDuration, SimTime};
 use crossbeam_channel::{Receiver, RecvTimeoutError, Sender, TryRecvError};
-use rig::report::LiveReport;
+use rig::report::{LiveReport, LogLine};
 use rig::{Report, Rig};
 use std::collections::VecDeque;
 use std::sync::{Arc, Mutex};
@@ -160,7 +160,15 @@ pub struct Status {
     pub watchdog_tripped: bool,
     /// The run has ended (this is the last status).
     pub ended: bool,
+    /// The log lines since the last status that went out, the newest [`STATUS_LOG`] of them
+    /// (for a terminal that shows the run as it happens; the report has them all).
+    pub log: Vec<LogLine>,
+    /// Lines since the last status that are not in `log`.
+    pub log_left_out: usize,
 }
+
+/// The most log lines a status carries.
+pub const STATUS_LOG: usize = 200;
 
 /// Of each source of log lines that the clients drive, a live run keeps the first this many
 /// lines and the last this many, and says how many it left out between them
@@ -235,6 +243,7 @@ pub fn run_with_view(
     let sim0 = t.rig.now();
     let mut at = t.rig.now();
     let mut last_status = Instant::now();
+    let mut log_sent = 0;
     let mut stopped = false;
     'run: while !stopped && at < t.rig.end() {
         match cfg.speed {
@@ -298,7 +307,8 @@ pub fn run_with_view(
         }
         if last_status.elapsed() >= STATUS_EVERY {
             last_status = Instant::now();
-            let _ = status.try_send(status_of(&t.rig, &t.gw, at, start, sim0, cfg.speed, false));
+            let s = status_of(&t.rig, &t.gw, at, start, sim0, cfg.speed, false);
+            send_with_log(status, s, &t.rig, &mut log_sent);
         }
         if let Some(v) = t.viewer.as_mut().filter(|v| v.due()) {
             let s = status_of(&t.rig, &t.gw, at, start, sim0, cfg.speed, false);
@@ -322,7 +332,7 @@ pub fn run_with_view(
     if let Some(v) = viewer.as_mut() {
         v.publish(&rig, run_of(&last, cfg));
     }
-    let _ = status.try_send(last);
+    send_with_log(status, last, &rig, &mut log_sent);
     // The moment at the end itself, as `asi-lift run` has it, then the report.
     rig.set_end(at);
     let mut report = rig.run(None);
@@ -438,6 +448,19 @@ pub(crate) fn advance(
 }
 
 /// The live view's line about the run.
+/// Sends `s` with the log lines after the first `sent`; counts them as sent if it went out
+/// (a status that finds the channel full waits for the next, and its lines with it).
+fn send_with_log(status: &Sender<Status>, mut s: Status, rig: &Rig, sent: &mut usize) {
+    let log = rig.log_lines();
+    let new = log.get(*sent..).unwrap_or_default();
+    let from = new.len().saturating_sub(STATUS_LOG);
+    s.log = new[from..].to_vec();
+    s.log_left_out = from;
+    if status.try_send(s).is_ok() {
+        *sent = log.len();
+    }
+}
+
 fn run_of(s: &Status, cfg: LiveConfig) -> view::Run {
     view::Run {
         speed: cfg.speed.to_string(),
@@ -471,6 +494,8 @@ fn status_of(
         violations: rig.violations().len(),
         watchdog_tripped: gw.watchdog_tripped(),
         ended,
+        log: Vec::new(),
+        log_left_out: 0,
     }
 }
 

@@ -494,6 +494,13 @@ pub struct LogLine {
     pub text: String,
 }
 
+impl std::fmt::Display for LogLine {
+    /// The line as the readable log prints it: time, who, what.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{:>10.3} s  {:<10}  {}", self.at_s, self.who, self.text)
+    }
+}
+
 impl Report {
     /// The report of a run at power-on, before anything happened: the scenario's name and
     /// seed, the cabin at `start_mm`.
@@ -577,7 +584,7 @@ impl Report {
         let mut s = String::new();
         let _ = writeln!(s, "scenario \"{}\", seed {}", self.scenario, self.seed);
         for l in &self.log {
-            let _ = writeln!(s, "{:>10.3} s  {:<10}  {}", l.at_s, l.who, l.text);
+            let _ = writeln!(s, "{l}");
         }
         s.push('\n');
         s + &self.summary_text()

@@ -60,6 +60,10 @@ pub struct ServeArgs {
     /// simulation.
     #[arg(long, value_name = "DURATION", default_value = "1ms")]
     pub step: String,
+    /// Show only the status line while the run goes on, not its log as it happens (the
+    /// report at the end has the whole log either way).
+    #[arg(long, short = 'q')]
+    pub quiet: bool,
     /// End the run at this simulated time (e.g. 60s, 10min) [default: Ctrl-C ends it].
     #[arg(long, value_name = "DURATION")]
     pub until: Option<String>,
@@ -124,6 +128,7 @@ pub fn run(args: ServeArgs) -> Result<u8, String> {
         allow_hosts,
         watchdog,
         step,
+        quiet,
         until,
         seed,
         report,
@@ -260,6 +265,21 @@ pub fn run(args: ServeArgs) -> Result<u8, String> {
     for s in running.status().iter() {
         if stop.swap(false, Ordering::Relaxed) {
             running.stop();
+        }
+        if !quiet {
+            // The log as it happens, above the status line on a terminal.
+            let clear = if terminal { "\r\x1b[K" } else { "" };
+            let mut err = std::io::stderr().lock();
+            for line in &s.log {
+                let _ = writeln!(err, "{clear}{line}");
+            }
+            if s.log_left_out > 0 {
+                let _ = writeln!(
+                    err,
+                    "{clear}      … {} more log lines in this second, in the report",
+                    s.log_left_out
+                );
+            }
         }
         if terminal {
             eprint!(
