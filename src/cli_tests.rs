@@ -460,12 +460,19 @@ fn serve_names_its_bad_arguments_and_a_busy_port() {
 /// `asi-lift serve --speed max --until 3s` on the demo with `extra` arguments: its standard
 /// error and its JSON report.
 fn serve_3s(extra: &[&str]) -> (String, serde_json::Value) {
+    let mut args = vec!["--speed", "max", "--until", "3s"];
+    args.extend_from_slice(extra);
+    serve_3s_at(&args)
+}
+
+/// A live run with `args` and no clients; its standard error and its JSON report.
+fn serve_3s_at(args: &[&str]) -> (String, serde_json::Value) {
     let d = temp();
     let report = d.path().join("r.json");
     let out = asi_lift()
-        .args(["serve", "--speed", "max", "--until", "3s"])
+        .arg("serve")
         .args(["--listen", "127.0.0.1:0"])
-        .args(extra)
+        .args(args)
         .args(["--format", "json", "--report"])
         .arg(&report)
         .output()
@@ -499,6 +506,15 @@ fn serve_shows_the_log_as_it_happens_unless_quiet() {
     assert!(err.contains("     0.160 s  controller"), "{err}");
     let (err, _) = serve_3s(&["--quiet"]);
     assert!(!err.contains(line), "{err}");
+}
+
+/// An outside controller at a speed factor above 1 is warned that its reactions come late.
+#[test]
+fn serve_warns_an_outside_controller_faster_than_real_time() {
+    let (err, _) = serve_3s_at(&["--controller", "external", "--speed", "2", "--until", "1s"]);
+    assert!(err.contains("warning: --speed 2"), "{err}");
+    let (err, _) = serve_3s_at(&["--controller", "external", "--speed", "1", "--until", "1s"]);
+    assert!(!err.contains("warning: --speed"), "{err}");
 }
 
 #[test]
