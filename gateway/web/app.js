@@ -8,6 +8,8 @@ const $ = (id) => document.getElementById(id);
 let socket = null;
 let nextId = 1;
 let shaftKey = "";
+// The cabin's height as drawn, mm.
+const CABIN_MM = 240;
 let shaftParts = null;
 let history = [];
 let last = null;
@@ -116,14 +118,16 @@ function el(name, attrs, parent) {
 function buildShaft(s) {
   const svg = $("shaft");
   svg.textContent = "";
-  const top = s.end_mm[1] + 60;
+  // The position is the cabin's floor; its roof is CABIN_MM above, so the top buffer, which
+  // the cabin's floor meets at the top end, is drawn where the roof meets it.
+  const top = s.end_mm[1] + CABIN_MM + 60;
   const bottom = s.end_mm[0] - 60;
   const y = (mm) => top - mm;
   svg.setAttribute("viewBox", `0 0 320 ${top - bottom}`);
   const W0 = 70, W1 = 250;
   el("rect", { x: W0, y: 0, width: W1 - W0, height: top - bottom, class: "shaft-bg" }, svg);
   // Mechanical ends (buffers).
-  el("rect", { x: W0, y: y(s.end_mm[1]) - 30, width: W1 - W0, height: 30, class: "end" }, svg);
+  el("rect", { x: W0, y: y(s.end_mm[1] + CABIN_MM) - 30, width: W1 - W0, height: 30, class: "end" }, svg);
   el("rect", { x: W0, y: y(s.end_mm[0]), width: W1 - W0, height: 30, class: "end" }, svg);
   // Floors.
   s.levels_mm.forEach((mm, i) => {
@@ -139,9 +143,9 @@ function buildShaft(s) {
   // Overtravel sensors.
   const ot = s.trip_mm.map((mm) =>
     el("polygon", { points: `${W1},${y(mm)} ${W1 + 24},${y(mm) - 12} ${W1 + 24},${y(mm) + 12}`, class: "ot" }, svg));
-  // The cabin: from its floor (the position) up 240 mm.
+  // The cabin: from its floor (the position) up CABIN_MM.
   const cabin = el("g", { id: "cabin" }, svg);
-  const body = el("rect", { x: 106, y: -240, width: 108, height: 240, class: "cabin" }, cabin);
+  const body = el("rect", { x: 106, y: -CABIN_MM, width: 108, height: CABIN_MM, class: "cabin" }, cabin);
   const door = el("rect", { x: 208, y: -200, width: 6, height: 200, class: "door" }, cabin);
   const load = el("text", { x: 160, y: -120, class: "cabin-text" }, cabin);
   const dir = el("text", { x: 160, y: -60, class: "cabin-text big" }, cabin);
