@@ -6,7 +6,7 @@ Start the rig without its own controller, then this program beside it:
     asi-lift serve fifo --controller external --speed max --until 120s
     python examples/controller.py                 # --host 127.0.0.1 --port 5020
 
-It runs the three nibble handshakes of the lab bus (docs/seed-003-handshakes.md), finds
+It runs the three nibble handshakes of the lab bus (book/src/handshakes.md), finds
 floor 1 (docs/controller.md §5.1), then serves the calls as the seed's FIFO control does
 (§5.3): cabin calls in the order pressed, then hall calls in the order pressed. It stops when
 the server ends the run. What it leaves out: the book, "A controller in Python".
