@@ -6,10 +6,10 @@ Start the rig without its own controller, then this program beside it:
     asi-lift serve fifo --controller external --speed max --until 120s
     python examples/controller.py                 # --host 127.0.0.1 --port 5020
 
-It runs the three nibble handshakes of the lab bus (docs/seed-003-handshakes.md), finds
+It runs the three nibble handshakes of the lab bus (book/src/handshakes.md), finds
 floor 1 (docs/controller.md §5.1), then serves the calls as the seed's FIFO control does
 (§5.3): cabin calls in the order pressed, then hall calls in the order pressed. It stops when
-the server ends the run. What it leaves out: README, "A controller in Python".
+the server ends the run. What it leaves out: the book, "A controller in Python".
 """
 
 import argparse
@@ -19,7 +19,7 @@ import time
 from pymodbus.client import ModbusTcpClient
 from pymodbus.exceptions import ModbusException
 
-# The gateway's registers (README, "The gateway's register map").
+# The gateway's registers (the book, "The gateway's register map").
 TIME = 1050         # input registers 1050..1053: simulated ms, high word first; 1054: safety bits
 ESTOP_OK = 1        # safety bit 0, EStopOut: 1 = the STOP circuit runs (no STOP demand)
 SIGNALS = 1000      # holding register: bit 0 restart of the STOP circuit, bit 1 overloaded

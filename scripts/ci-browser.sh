@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The live view in a real headless browser (README, "Live view in the browser"): installs
+# The live view in a real headless browser (the book, "Live view in the browser"): installs
 # Debian's chromium and chromium-driver if they are missing, starts chromedriver on a free
 # loopback port and runs the browser test (the `browser` feature of asi-lift-browser-test).
 # With ASI_LIFT_SCREENSHOT=FILE the test also writes a screenshot of the page during a trip.

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Live mode end to end (README, "A controller in Python"): examples/controller.py serves the
+# Live mode end to end (the book, "A controller in Python"): examples/controller.py serves the
 # calls of scenarios/fifo.toml through the gateway without violations, and
 # examples/check_gateway.py finds the gateway's input image and LAS as the bus trace has them.
 # Needs target/release/asi-lift (.ci/run builds it); installs pymodbus into target/ci-venv.

@@ -1,7 +1,7 @@
 //! The `asi-lift` command as a user runs it: the built binary, real files and a real pipe
-//! (README.md, "Outputs"); then its parts in this process, through the library (modules
-//! `command`, `output`, `plot`, `run`). These are all of the command's tests: the library and
-//! the binary have no unit-test builds of their own (Cargo.toml).
+//! (the book, "The bus, traces and waveforms"); then its parts in this process, through the
+//! library (modules `command`, `output`, `plot`, `run`). These are all of the command's tests:
+//! the library and the binary have no unit-test builds of their own (Cargo.toml).
 
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};

@@ -6,7 +6,7 @@
 //! Needs chromedriver at `CHROMEDRIVER_URL` (default `http://127.0.0.1:9515`) and chromium at
 //! `CHROMIUM` (default `/usr/bin/chromium`); `bash scripts/ci-browser.sh` provides both. With
 //! `ASI_LIFT_SCREENSHOT=FILE` it writes a screenshot of the page during the trip to FILE
-//! (README's `docs/live-view.png`).
+//! (`docs/live-view.png`, shown in the README and the book).
 
 use fantoccini::{Client, ClientBuilder, Locator};
 use gateway::live::LiveConfig;

@@ -1,4 +1,4 @@
-//! The commands of the live view's page (README, "Live view in the browser"): one JSON object
+//! The commands of the live view's page (the book, "Live view in the browser"): one JSON object
 //! with one action, in the words of a scenario file's `[[event]]` (`{"press": "cabin:3"}`,
 //! `{"fault": {"kind": "slave-offline", "slave": 7}}`, `{"load": "full"}`, `{"crank_mm": -20}`
 //! …) and checked by the scenario reader itself, so that the page can do what a scenario can

@@ -1,5 +1,5 @@
 //! The rig on the wall clock: its own thread, commands in and state out over
-//! crossbeam-channel (README, "Live mode").
+//! crossbeam-channel (the book, "Live mode and your own controller").
 //!
 //! The rig thread owns the rig and the gateway's state. Every request from a client reaches it
 //! as a message and is served between two moments of the simulation, at the simulated time

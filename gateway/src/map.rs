@@ -1,6 +1,6 @@
 //! The gateway's Modbus register map: the AS-i master's process image, lists, flags and
 //! diagnostics, the safety logic's signals to and from the PLC, and the simulator's command
-//! registers (README, "The gateway's register map").
+//! registers (the book, "The gateway's register map").
 //!
 //! The map follows the Bihl+Wiedemann AS-i/Modbus gateways: the images word for word in the
 //! layout of seed 003 table 4.1 (four slaves per register, the lowest address in the highest

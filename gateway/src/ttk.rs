@@ -1,5 +1,5 @@
 //! A second front end: the protocol of the TTK4145 lab elevator (NTNU's real-time course and
-//! its Simulator-v2), mapped onto the lab lift (README, "The TTK4145 front end").
+//! its Simulator-v2), mapped onto the lab lift (the book, "The TTK4145 front end").
 //!
 //! Every message is 4 bytes, `[opcode, a, b, c]`; reads get a 4-byte answer, writes none.
 //! Floors count from 0 (lab floor 1 is TTK floor 0); buttons are 0 hall up, 1 hall down,

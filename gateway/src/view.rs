@@ -1,4 +1,4 @@
-//! What the live view's page shows (README, "Live view in the browser"): one snapshot of the
+//! What the live view's page shows (the book, "Live view in the browser"): one snapshot of the
 //! rig as JSON, built on the rig thread every 40 ms of wall time and shared by every
 //! browser watching; and the rolling list of the last bus transactions that goes into it.
 

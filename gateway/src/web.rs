@@ -1,4 +1,4 @@
-//! The live view's web server (README, "Live view in the browser"): one page embedded in the
+//! The live view's web server (the book, "Live view in the browser"): one page embedded in the
 //! binary and a WebSocket at `/ws` on axum, on the gateway's tokio runtime.
 //!
 //! The rig thread publishes a snapshot every 40 ms of wall time ([`crate::live::ViewOut`]);

@@ -35,7 +35,7 @@ pub const ALL: [u8; 11] = [
 ];
 
 /// The slaves the cabin cannot move without: the cabin panel (STOP, door, vanes), the
-/// converter, the load sensor and the speed set-point (docs/controller-under-faults.md).
+/// converter, the load sensor and the speed set-point (book/src/controller-under-faults.md).
 pub const ESSENTIAL: [u8; 4] = [CABIN_PANEL, CONVERTER, LOAD_SENSOR, SPEED_SETPOINT];
 
 /// The addresses the lab lift leaves free, in the order extra I/O modules take them.

@@ -391,7 +391,7 @@ pub struct Violation {
     pub detail: String,
 }
 
-/// The invariants the rig watches (README "Violations"); in files by their names. Declared
+/// The invariants the rig watches (the book, "Violations"); in files by their names. Declared
 /// in the order of their names, which is their order in summaries.
 #[derive(
     Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, serde::Deserialize,
@@ -407,7 +407,7 @@ pub enum ViolationKind {
     #[serde(rename = "mechanical-end")]
     MechanicalEnd,
     /// Unintended movement: the car that stood at rest with the door open moved further than
-    /// a few mm (watched with the safe drive only; README "Violations").
+    /// a few mm (watched with the safe drive only; the book, "Violations").
     #[serde(rename = "unintended-movement")]
     UnintendedMovement,
     /// The cabin moves overloaded beyond the reaction budget.

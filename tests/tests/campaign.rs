@@ -146,7 +146,7 @@ fn the_kubernetes_job_shards_by_completion_index() {
 
 /// The CI campaign: a few hundred runs of the default profile without a violation, a
 /// panic or a lift out of service. 300 runs take about 124 s in the test profile on two cores
-/// (README.md, "Campaigns").
+/// (the book, "Campaigns").
 #[test]
 #[ignore = "run by .ci/run on the release build (asi-lift campaign --runs 300 --seed 2026)"]
 fn a_ci_campaign_of_300_runs_has_no_failure() {

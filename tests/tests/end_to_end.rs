@@ -483,15 +483,15 @@ fn a_held_hall_button_at_the_cabins_floor_is_served_once() {
 
 #[test]
 fn the_readme_example_scenario_runs_clean_and_ends_in_service() {
-    // The scenario file of README.md's "Scenario files", with every key the format has: it
-    // must show what it says, so no violation, no event after its end, and the lift serving
-    // again once everything is repaired.
-    let readme = include_str!("../../README.md");
-    let start = readme.find("### Scenario files").expect("the section");
+    // The scenario file of the book's "Scenario files" (book/src/scenarios.md, once README.md's),
+    // with every key the format has: it must show what it says, so no violation, no event after
+    // its end, and the lift serving again once everything is repaired.
+    let readme = include_str!("../../book/src/scenarios.md");
+    let start = readme.find("## Scenario files").expect("the section");
     let body = &readme[start..];
     let open = body.find("```toml\n").expect("the example") + "```toml\n".len();
     let close = body[open..].find("```").expect("its end") + open;
-    let sc = rig::Scenario::from_toml("README example", &body[open..close])
+    let sc = rig::Scenario::from_toml("book example", &body[open..close])
         .unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(sc.late_events().count(), 0);
     let r = run(sc);

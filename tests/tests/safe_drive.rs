@@ -205,7 +205,7 @@ fn a_scenario_with_the_safe_drive_and_a_runaway_reads_back_from_its_file() {
 
 #[test]
 fn a_campaign_with_the_safe_drive_has_no_violations() {
-    // A short version of the campaign the README reports (200 runs): 6 runs of the
+    // A short version of the campaign the book reports ("The safe drive on the lift") (200 runs): 6 runs of the
     // safe-drive profile, each on the whole rig with the safe drive.
     let profile = Profile::built_in("safe-drive").expect("built in");
     for index in 0..6 {
@@ -410,7 +410,7 @@ fn the_vcd_shows_the_functions_bits_under_rig_drive_safety() {
 
 #[test]
 fn slp_stops_a_runaway_on_the_journey_up_and_the_overtravel_sensor_backs_it() {
-    // README "The safe drive on the lift": a runaway up during the journey to floor 4.
+    // the book, "The safe drive on the lift": a runaway up during the journey to floor 4.
     let r = run_toml(
         "slp",
         "duration = \"40s\"\n[lift]\nstart_mm = 650.0\n[drive]\nsafe = true\n\

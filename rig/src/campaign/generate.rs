@@ -1,5 +1,5 @@
 //! The scenario generator of a campaign: a pure function of (campaign seed, run index,
-//! profile) to a valid [`Scenario`] (README.md, "Campaigns").
+//! profile) to a valid [`Scenario`] (the book, "Campaigns").
 //!
 //! A run has three parts on its timeline:
 //!
@@ -335,7 +335,7 @@ pub fn generate(campaign_seed: u64, index: u64, profile: &Profile) -> Generated 
         .pick(&mut rng)
         .unwrap_or(SimDuration::from_millis(10));
     // A start initialisation cannot handle by itself gets the operator's procedure first
-    // (README, "Start heights"): the power-on reset, the rescue (a crank back to the end
+    // (the book, "Start heights"): the power-on reset, the rescue (a crank back to the end
     // floor's level, up to 14 s at 10 mm/s), the safety reset and the acknowledge; the
     // activity begins after it.
     let rescue_first = needs_rescue(floors, start_mm);

@@ -301,7 +301,7 @@ impl RunLine {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct LineViolation {
-    /// Its kind (README.md, "Violations").
+    /// Its kind (the book, "Violations").
     pub kind: ViolationKind,
     /// When, seconds.
     pub at_s: f64,

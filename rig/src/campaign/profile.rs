@@ -14,7 +14,7 @@ use serde::Deserialize;
 use std::collections::BTreeMap;
 use std::fmt;
 
-/// The kinds of random event the generator draws (README.md, "Campaigns").
+/// The kinds of random event the generator draws (the book, "Campaigns").
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
 pub enum ActivityKind {
     /// A cabin call button (`press = "cabin:N"`).
@@ -219,7 +219,7 @@ impl Profile {
             }
             "noisy" => {
                 p.name = "noisy".into();
-                // Rates a lift still serves its calls at (README.md, "Line noise"): at 10⁻² no
+                // Rates a lift still serves its calls at (the book, "Line noise"): at 10⁻² no
                 // call is served, so every run of it failed the campaign; at 5·10⁻³ the calls
                 // are served, but with the generator's faults one run in 200 was not.
                 p.pulse_error_rate = Weights::new(vec![(0.0, 1), (1e-3, 1), (2e-3, 1), (3e-3, 1)]);

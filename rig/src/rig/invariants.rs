@@ -1,4 +1,4 @@
-//! The invariant watch: the judge of every run (README "Violations", docs/safety.md "What the
+//! The invariant watch: the judge of every run (the book, "Violations", docs/safety.md "What the
 //! judge calls a hazard"). It sees the plant as it is at each moment, whatever the controller,
 //! the safety logic or a flag says, and says when the guarded lift is unsafe: powered motion
 //! with the door open or overloaded, K1 closed with an overtravel sensor tripped, a controller
@@ -12,13 +12,13 @@ use std::collections::VecDeque;
 
 /// The sliding window over which the door and load budgets add up (docs/safety.md).
 pub(super) const WINDOW: SimDuration = SimDuration::from_secs(10);
-/// Reaction budgets of the invariants (see README "Violations").
+/// Reaction budgets of the invariants (see the book, "Violations").
 const DOOR_BUDGET: SimDuration = SimDuration::from_millis(1000);
 const OVERLOAD_BUDGET: SimDuration = SimDuration::from_millis(1000);
 const OVERTRAVEL_BUDGET: SimDuration = SimDuration::from_millis(50);
 const STOP_MARGIN: SimDuration = SimDuration::from_millis(200);
 /// How far the car may move at a floor with the door open before the watch calls it a
-/// violation (with the safe drive; README "Violations"): the safe drive's SOS holds it within
+/// violation (with the safe drive; the book, "Violations"): the safe drive's SOS holds it within
 /// 0.5 motor revolutions (5.0 mm), and its brake needs a little more.
 pub(super) const UNINTENDED_MOVEMENT_MM: f64 = 10.0;
 

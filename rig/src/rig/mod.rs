@@ -282,7 +282,7 @@ impl Rig {
     /// Runs the bus pulse-exact (`true`): every telegram through the pulse decoder, none of
     /// the fast paths. Reports, traces and wave outputs are the same either way (tested for
     /// every scenario and for random ones with faults); the exact path is what the speed of
-    /// the fast one is measured against (README, "Measured performance").
+    /// the fast one is measured against (`docs/dev/performance.md`).
     pub fn set_pulse_exact(&mut self, on: bool) {
         self.lab.bus.set_pulse_exact(on);
         self.every_moment = on;

@@ -88,7 +88,7 @@ pub enum Action {
     },
     /// The operator's safety reset button (overtravel recovery).
     Reset,
-    /// The operator's overtravel rescue (README, "Start heights"): if the cabin stands where
+    /// The operator's overtravel rescue (the book, "Start heights"): if the cabin stands where
     /// initialisation cannot find floor 1 by itself ([`needs_rescue`]: on or beyond an
     /// overtravel sensor, or below floor 1's vane) and K1 is open, the operator cranks it to
     /// the level of the nearer end floor; otherwise nothing.
@@ -96,7 +96,7 @@ pub enum Action {
     /// The operator's acknowledge of a safety group error (ERR_ACK).
     Ack,
     /// From now on a lift attendant answers every safety stop that an operator can answer
-    /// (README, "The attendant"): once K1 has been open for such a cause for a while, a round
+    /// (the book, "The attendant"): once K1 has been open for such a cause for a while, a round
     /// of the overtravel rescue, the acknowledge and the safety reset, repeated while K1 stays
     /// open. The safety logic alone decides whether a reset is taken.
     Attend,
@@ -153,7 +153,7 @@ pub enum Fault {
 /// steps of one scan each (seed 003 tables 4.6/4.7), so its inputs are up to about 15 scans
 /// old: at 20 ms a 300 ms press is always seen and initialisation sees floor 1's vane in time;
 /// at 25 ms some press phases are lost, at 30 ms initialisation can miss floor 1's level
-/// (measured; README, Scenario files).
+/// (measured; the book, "Scenario files").
 pub const PLC_SCAN_RANGE: std::ops::RangeInclusive<SimDuration> =
     SimDuration::from_millis(1)..=SimDuration::from_millis(20);
 
@@ -196,7 +196,7 @@ impl std::error::Error for ScenarioError {}
 /// above the floor-1 level: the whole shaft between the mechanical ends (docs/lift-plant.md: the
 /// overtravel sensors trip 60 mm beyond the end floors, the ends are 80 mm further), because
 /// a power-on after an overrun finds the cabin on or beyond a sensor; it is recovered by hand
-/// (README, Scenario files). The one place that says so: the scenario reader checks
+/// (the book, "Scenario files"). The one place that says so: the scenario reader checks
 /// `start_mm` against it and the campaign generator draws start positions from it.
 pub fn start_range_mm(floors: u8) -> RangeInclusive<f64> {
     let shaft = LiftConfig {
@@ -207,7 +207,7 @@ pub fn start_range_mm(floors: u8) -> RangeInclusive<f64> {
 }
 
 /// Whether a cabin standing at `position_mm` needs the operator's rescue before initialisation
-/// can find floor 1 by itself (README, "Start heights"). It does not from the bottom of floor
+/// can find floor 1 by itself (the book, "Start heights"). It does not from the bottom of floor
 /// 1's vane up to the top overtravel sensor; below that (beyond the bottom sensor, or between
 /// it and the vane, where the run down ends on the sensor) and beyond the top sensor it does.
 pub fn needs_rescue(floors: u8, position_mm: f64) -> bool {
