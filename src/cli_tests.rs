@@ -1308,3 +1308,198 @@ fn stand_writes_its_report_to_a_file_and_keeps_what_exists() {
         .expect("kept")
         .starts_with("function"));
 }
+
+/// Every subcommand a user can type, as `asi-lift --help` lists them: named here, not read
+/// from the definition, so that a subcommand lost from the command fails the tests below.
+const SUBCOMMANDS: [&str; 10] = [
+    "run",
+    "scenarios",
+    "encode",
+    "decode",
+    "serve",
+    "timing",
+    "stand",
+    "campaign",
+    "completions",
+    "man",
+];
+
+/// The subcommands of the command's definition, for the generated files to be checked against
+/// (a new one is covered without a change here).
+fn defined_subcommands() -> Vec<String> {
+    use clap::CommandFactory;
+    let names: Vec<String> = asi_lift::Cli::command()
+        .get_subcommands()
+        .map(|c| c.get_name().to_owned())
+        .collect();
+    for name in SUBCOMMANDS {
+        assert!(names.iter().any(|n| n == name), "{name} is gone");
+    }
+    names
+}
+
+fn stdout_of(args: &[&str]) -> String {
+    let out = asi_lift().args(args).output().expect("asi-lift runs");
+    assert!(out.status.success(), "{args:?}: {out:?}");
+    String::from_utf8(out.stdout).expect("UTF-8")
+}
+
+/// What bash offers after `words` (the last one being completed) with `script` loaded, as
+/// the shell does on Tab: the function `complete` registered for asi-lift, called with the
+/// line's words.
+fn bash_offers(script: &Path, words: &[&str]) -> Vec<String> {
+    let driver = r#"
+        source "$1" || exit 1
+        shift
+        f=$(complete -p asi-lift | sed -E 's/.*-F ([^ ]+).*/\1/')
+        COMP_WORDS=("$@")
+        COMP_CWORD=$(($# - 1))
+        COMP_LINE="$*"
+        COMP_POINT=${#COMP_LINE}
+        "$f" asi-lift "${COMP_WORDS[COMP_CWORD]}" "${COMP_WORDS[COMP_CWORD-1]}"
+        printf '%s\n' "${COMPREPLY[@]}"
+    "#;
+    let out = Command::new("bash")
+        .args(["-c", driver, "bash"])
+        .arg(script)
+        .arg("asi-lift")
+        .args(words)
+        .output()
+        .expect("bash runs");
+    assert!(out.status.success(), "{words:?}: {out:?}");
+    String::from_utf8(out.stdout)
+        .expect("UTF-8")
+        .lines()
+        .map(String::from)
+        .collect()
+}
+
+#[test]
+fn the_bash_completion_offers_every_subcommand_and_is_valid_bash() {
+    let d = temp();
+    let file = d.path().join("asi-lift.bash");
+    std::fs::write(&file, stdout_of(&["completions", "bash"])).expect("write");
+    let check = Command::new("bash")
+        .arg("-n")
+        .arg(&file)
+        .output()
+        .expect("bash runs");
+    assert!(check.status.success(), "{check:?}");
+
+    let offered = bash_offers(&file, &[""]);
+    for name in defined_subcommands() {
+        assert!(offered.contains(&name), "{name} not offered: {offered:?}");
+    }
+    assert_eq!(bash_offers(&file, &["sc"]), ["scenarios"]);
+    assert!(bash_offers(&file, &["scenarios", ""]).contains(&"show".to_owned()));
+    assert!(bash_offers(&file, &["campaign", ""]).contains(&"summarize".to_owned()));
+    assert!(bash_offers(&file, &["run", "--un"]).contains(&"--until".to_owned()));
+    let shells = bash_offers(&file, &["completions", ""]);
+    for shell in ["bash", "zsh", "fish", "elvish", "powershell"] {
+        assert!(shells.contains(&shell.to_owned()), "{shells:?}");
+    }
+}
+
+#[test]
+fn every_shell_has_a_completion_naming_the_command_and_an_unknown_one_is_refused() {
+    for shell in ["bash", "zsh", "fish", "elvish", "powershell"] {
+        let script = stdout_of(&["completions", shell]);
+        assert!(script.contains("asi-lift"), "{shell}: {script}");
+        assert!(script.contains("campaign"), "{shell}: no subcommands");
+    }
+    let err = fails(asi_lift().args(["completions", "tcsh"]));
+    assert!(err.contains("invalid value 'tcsh'"), "{err}");
+    assert!(
+        err.contains("[possible values: bash, elvish, fish, powershell, zsh]"),
+        "{err}"
+    );
+    let err = fails(asi_lift().arg("completions"));
+    assert!(err.contains("<SHELL>"), "{err}");
+}
+
+/// The roff of a page without the quote-character definitions (`.ie`/`.el`) that
+/// clap_mangen puts before the title, for every roff to read an apostrophe alike.
+fn after_prelude(page: &str) -> &str {
+    let start = page.find(".TH ").expect("a .TH line");
+    assert!(
+        page[..start]
+            .lines()
+            .all(|l| l.starts_with(".ie ") || l.starts_with(".el ")),
+        "{}",
+        &page[..start]
+    );
+    &page[start..]
+}
+
+#[test]
+fn the_man_page_is_roff_and_names_every_subcommand() {
+    let page = stdout_of(&["man"]);
+    let page = after_prelude(&page);
+    assert!(page.starts_with(".TH asi-lift 1 "), "{page}");
+    assert!(page.contains("\n.SH NAME\n"), "{page}");
+    assert!(page.contains("\n.SH SUBCOMMANDS\n"), "{page}");
+    for name in defined_subcommands() {
+        // roff escapes a hyphen as \-.
+        let reference = format!("asi\\-lift\\-{}(1)", name.replace('-', "\\-"));
+        assert!(page.contains(&reference), "no {reference} in\n{page}");
+    }
+}
+
+#[test]
+fn man_out_writes_a_page_per_subcommand_and_keeps_what_exists() {
+    let d = temp();
+    let dir = d.path().join("man1");
+    let out = asi_lift()
+        .args(["man", "--out"])
+        .arg(&dir)
+        .output()
+        .expect("runs");
+    assert!(out.status.success(), "{out:?}");
+    assert!(out.stdout.is_empty(), "{out:?}");
+    let mut expected: Vec<String> = defined_subcommands()
+        .iter()
+        .map(|n| format!("asi-lift-{n}.1"))
+        .chain(
+            [
+                "asi-lift.1",
+                "asi-lift-scenarios-show.1",
+                "asi-lift-campaign-summarize.1",
+            ]
+            .map(String::from),
+        )
+        .collect();
+    expected.sort();
+    assert_eq!(files_in(&dir), expected);
+    for f in &expected {
+        let page = std::fs::read_to_string(dir.join(f)).expect("read");
+        let title = f.trim_end_matches(".1");
+        assert!(
+            after_prelude(&page).starts_with(&format!(".TH {title} 1 ")),
+            "{f}: {page}"
+        );
+    }
+    let run_page = std::fs::read_to_string(dir.join("asi-lift-run.1")).expect("read");
+    assert!(run_page.contains("\\-\\-until"), "{run_page}");
+
+    // A page that exists is kept without --force, and no other page is written either.
+    std::fs::write(dir.join("asi-lift-run.1"), "mine").expect("write");
+    std::fs::remove_file(dir.join("asi-lift.1")).expect("remove");
+    let err = fails(asi_lift().args(["man", "--out"]).arg(&dir));
+    assert!(err.contains("asi-lift-run.1 exists; pass --force"), "{err}");
+    assert_eq!(
+        std::fs::read_to_string(dir.join("asi-lift-run.1")).expect("read"),
+        "mine"
+    );
+    assert!(!dir.join("asi-lift.1").exists());
+    let out = asi_lift()
+        .args(["man", "--force", "--out"])
+        .arg(&dir)
+        .output()
+        .expect("runs");
+    assert!(out.status.success(), "{out:?}");
+    assert_eq!(
+        std::fs::read(dir.join("asi-lift-run.1")).expect("read"),
+        run_page.as_bytes()
+    );
+    assert_eq!(files_in(&dir), expected);
+}

@@ -6,7 +6,7 @@
 
 pub mod cmd;
 
-use clap::{Parser, Subcommand};
+use clap::{CommandFactory, Parser, Subcommand};
 
 /// asi-lift: the AS-Interface laboratory lift, simulated to the bit and to the millisecond.
 #[derive(Parser)]
@@ -69,6 +69,12 @@ enum Command {
         #[command(flatten)]
         args: cmd::campaign::CampaignArgs,
     },
+    /// Print the shell completion script for bash, zsh, fish, elvish or powershell
+    /// (`asi-lift completions bash > ~/.local/share/bash-completion/completions/asi-lift`).
+    Completions(cmd::completions::CompletionsArgs),
+    /// Print the manual page in roff (`asi-lift man | man -l -`), or write one page per
+    /// subcommand into a directory with `--out DIR`.
+    Man(cmd::man::ManArgs),
 }
 
 /// Runs the command `cli`: its exit code, or the message of the error that stopped it.
@@ -87,5 +93,7 @@ pub fn run(cli: Cli) -> Result<u8, String> {
                 cmd::campaign::summarize_files(&files, json)
             }
         },
+        Command::Completions(args) => cmd::completions::run(args, Cli::command()),
+        Command::Man(args) => cmd::man::run(args, Cli::command()),
     }
 }

@@ -3,8 +3,10 @@
 //! is given ([`output`]).
 
 pub mod campaign;
+pub mod completions;
 pub mod decode;
 pub mod encode;
+pub mod man;
 pub mod output;
 pub mod plot;
 pub mod run;
