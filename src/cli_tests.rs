@@ -1280,3 +1280,22 @@ fn stand_writes_its_report_to_a_file_and_keeps_what_exists() {
         .expect("kept")
         .starts_with("function"));
 }
+
+/// `--trace -` without `--report`: the trace alone on standard output, the summary on standard
+/// error (standard output is a stream, not refused as wanted twice).
+#[test]
+fn a_trace_on_standard_output_sends_the_summary_to_standard_error() {
+    let out = asi_lift()
+        .args(["run", "--until", "1s", "--trace", "-"])
+        .output()
+        .expect("asi-lift runs");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{:?}: {stderr}", out.status);
+    assert!(stderr.contains("summary after 1.000 s"), "{stderr}");
+    assert!(!stdout.contains("summary"), "{stdout}");
+    assert!(stdout.lines().count() > 100, "{stdout}");
+    // JSON wants a file: the summary is text.
+    let err = fails(asi_lift().args(["run", "--until", "1s", "--trace", "-", "--format", "json"]));
+    assert!(err.contains("--report FILE"), "{err}");
+}

@@ -28,9 +28,10 @@ pub struct RunArgs {
     /// duration.
     #[arg(long, value_name = "DURATION")]
     pub until: Option<String>,
-    /// Where the report goes: a file, or `-` for standard output.
-    #[arg(long, value_name = "FILE|-", default_value = "-")]
-    pub report: PathBuf,
+    /// Where the report goes: a file, or `-` for standard output [default: standard output;
+    /// when the trace or the plot goes there, only the summary, to standard error].
+    #[arg(long, value_name = "FILE|-")]
+    pub report: Option<PathBuf>,
     /// The report's format.
     #[arg(long, value_enum, default_value_t = Format::Text)]
     pub format: Format,
@@ -148,7 +149,26 @@ pub fn run(args: RunArgs) -> Result<u8, String> {
     if let Some(path) = file {
         outs.input("the scenario", path)?;
     }
-    let report_sink = outs.add("--report", &report)?;
+    // Standard output is a stream: when the trace or the plot takes it and no --report is
+    // given, the report is only its summary, on standard error.
+    let stdout = Some(Path::new("-"));
+    let stream_on_stdout = trace.as_deref() == stdout || plot.as_deref() == stdout;
+    let report = match report {
+        Some(r) => Some(r),
+        None if stream_on_stdout => {
+            if format == Format::Json {
+                return Err(
+                    "--format json: the trace or the plot takes standard output; give the report a file with --report FILE".into(),
+                );
+            }
+            None
+        }
+        None => Some(PathBuf::from("-")),
+    };
+    let report_sink = report
+        .as_deref()
+        .map(|p| outs.add("--report", p))
+        .transpose()?;
     let trace_sink = trace
         .as_deref()
         .map(|p| outs.add("--trace", p))
@@ -206,7 +226,9 @@ pub fn run(args: RunArgs) -> Result<u8, String> {
         // other outputs, cut short, are not put in place.
         return Ok(0);
     }
-    outs.write_all(&report_sink, &report_body(&rep, format)?)?;
+    if let Some(sink) = &report_sink {
+        outs.write_all(sink, &report_body(&rep, format)?)?;
+    }
     if let (Some(sink), Some(mut samples)) = (&plot_sink, samples) {
         samples.finish(&rep);
         let svg = plot::draw(&samples, &rep).map_err(|e| {
@@ -231,16 +253,19 @@ pub fn run(args: RunArgs) -> Result<u8, String> {
     if let Some(lost) = lost {
         return Err(lost);
     }
-    if report != Path::new("-") {
-        let summary = format!(
+    let summary = match report.as_deref() {
+        None => Some(rep.summary_text()),
+        Some(r) if r != Path::new("-") => Some(format!(
             "{}report written to {}\n",
             rep.summary_text(),
-            report.display()
-        );
+            r.display()
+        )),
+        Some(_) => None,
+    };
+    if let Some(summary) = summary {
         // Human text goes to standard error when a data stream (the trace, the plot) is on
         // standard output; a reader that has gone (`| head`) is no error.
-        let stdout = Some(Path::new("-"));
-        if trace.as_deref() == stdout || plot.as_deref() == stdout {
+        if stream_on_stdout {
             eprint!("{summary}");
         } else {
             print_out(&summary)?;
