@@ -1299,3 +1299,41 @@ fn a_trace_on_standard_output_sends_the_summary_to_standard_error() {
     let err = fails(asi_lift().args(["run", "--until", "1s", "--trace", "-", "--format", "json"]));
     assert!(err.contains("--report FILE"), "{err}");
 }
+
+/// A character device takes any number of writers: two outputs may both name /dev/null. A
+/// FIFO would interleave them, and stays refused.
+#[test]
+fn two_outputs_may_share_a_device_but_not_a_fifo() {
+    let out = asi_lift()
+        .args([
+            "run",
+            "--until",
+            "1s",
+            "--report",
+            "/dev/null",
+            "--plot",
+            "/dev/null",
+        ])
+        .output()
+        .expect("asi-lift runs");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{:?}: {err}", out.status);
+    let d = temp();
+    let fifo = d.path().join("f");
+    let made = Command::new("mkfifo").arg(&fifo).status().expect("mkfifo");
+    assert!(made.success());
+    // A reader, so that opening the FIFO to write it does not wait for ever.
+    let reader = {
+        let fifo = fifo.clone();
+        std::thread::spawn(move || std::fs::read(fifo).expect("read the FIFO"))
+    };
+    let err = fails(
+        asi_lift()
+            .args(["run", "--until", "1s", "--report"])
+            .arg(&fifo)
+            .arg("--trace")
+            .arg(&fifo),
+    );
+    assert!(err.contains("--report") && err.contains("--trace"), "{err}");
+    assert!(reader.join().expect("the reader").is_empty());
+}
