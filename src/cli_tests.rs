@@ -1337,3 +1337,34 @@ fn two_outputs_may_share_a_device_but_not_a_fifo() {
     assert!(err.contains("--report") && err.contains("--trace"), "{err}");
     assert!(reader.join().expect("the reader").is_empty());
 }
+
+/// `--plot run.png` is refused before the run, naming --plot and the format drawn, rather than
+/// writing SVG under a PNG name; `.svg` and a name without an extension are drawn.
+#[test]
+fn a_plot_with_another_extension_than_svg_is_refused() {
+    let d = temp();
+    let png = d.path().join("run.png");
+    let err = fails(
+        asi_lift()
+            .args(["run", "--until", "1s", "--plot"])
+            .arg(&png),
+    );
+    assert!(
+        err.contains("--plot") && err.contains("run.png") && err.contains(".svg"),
+        "{err}"
+    );
+    assert!(files_in(d.path()).is_empty(), "{:?}", files_in(d.path()));
+    let svg = d.path().join("run.SVG");
+    let out = asi_lift()
+        .args(["run", "--until", "1s", "--report", "/dev/null", "--plot"])
+        .arg(&svg)
+        .output()
+        .expect("asi-lift runs");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = std::fs::read_to_string(&svg).expect("the SVG");
+    assert!(text.starts_with("<svg"), "{}", &text[..text.len().min(80)]);
+}

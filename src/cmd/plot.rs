@@ -184,6 +184,22 @@ pub fn button_floor(button: &str) -> Option<u8> {
     button.rsplit_once(':')?.1.parse().ok()
 }
 
+/// Refuses a `--plot` file whose extension names another image format than SVG (`run.png`):
+/// the plot is drawn as SVG only (plotters' bitmap backend would pull in the image and PNG
+/// encoders), and an SVG under a `.png` name is a file no viewer opens. A name without an
+/// extension (`/dev/null`, `-`) gets SVG.
+pub fn check_extension(path: &std::path::Path) -> Result<(), String> {
+    match path.extension().and_then(|e| e.to_str()) {
+        None => Ok(()),
+        Some(e) if e.eq_ignore_ascii_case("svg") => Ok(()),
+        Some(_) => Err(format!(
+            "--plot {}: the plot is drawn as SVG only; name the file .svg (e.g. run.svg), \
+             then convert it if need be (rsvg-convert -o run.png run.svg)",
+            path.display()
+        )),
+    }
+}
+
 /// Draws the run as SVG.
 pub fn draw(samples: &Samples, rep: &Report) -> Result<String, String> {
     let mut svg = String::new();

@@ -62,7 +62,8 @@ pub struct RunArgs {
     pub pulse_window: Option<String>,
     /// Draw the run as SVG: cabin position and velocity over time with the floors, vanes and
     /// overtravel trip points, the calls pressed and served, K1, the safety trips and the
-    /// bus's repeats per transaction.
+    /// bus's repeats per transaction. SVG only: another extension (`.png`) is refused; a
+    /// name without one (`/dev/null`, `-`) gets SVG.
     #[arg(long, value_name = "FILE.svg")]
     pub plot: Option<PathBuf>,
     /// Overwrite the report, trace, VCD, CSV and plot files if they exist.
@@ -175,6 +176,9 @@ pub fn run(args: RunArgs) -> Result<u8, String> {
         .transpose()?;
     let vcd_sink = vcd.as_deref().map(|p| outs.add("--vcd", p)).transpose()?;
     let csv_sink = csv.as_deref().map(|p| outs.add("--csv", p)).transpose()?;
+    if let Some(p) = &plot {
+        plot::check_extension(p)?;
+    }
     let plot_sink = plot.as_deref().map(|p| outs.add("--plot", p)).transpose()?;
     let end = SimTime::ZERO + until.map_or(sc.duration, |u| u.min(sc.duration));
     if vcd.is_some() {
