@@ -1368,3 +1368,35 @@ fn a_plot_with_another_extension_than_svg_is_refused() {
     let text = std::fs::read_to_string(&svg).expect("the SVG");
     assert!(text.starts_with("<svg"), "{}", &text[..text.len().min(80)]);
 }
+
+/// The plot's legend counts the safety trips as the summary does: what tripped, not the
+/// records of K1 opening (the overtravel scenario: 2 trips, K1 opened once).
+#[test]
+fn the_plot_counts_safety_trips_as_the_summary_does() {
+    let d = temp();
+    let svg = d.path().join("p.svg");
+    let out = asi_lift()
+        .args(["run", "overtravel", "--report", "/dev/null", "--plot"])
+        .arg(&svg)
+        .output()
+        .expect("asi-lift runs");
+    let summary = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let line = summary
+        .lines()
+        .find(|l| l.trim_start().starts_with("safety trips"))
+        .expect("the summary's trips");
+    let n: usize = line
+        .split_whitespace()
+        .nth(2)
+        .expect("a count")
+        .parse()
+        .expect("a number");
+    assert!(n > 0, "{line}");
+    let text = std::fs::read_to_string(&svg).expect("the SVG");
+    assert!(text.contains(&format!("safety trip ({n})")), "{line}");
+}

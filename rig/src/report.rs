@@ -252,6 +252,15 @@ pub struct SafetyReport {
     pub drive: Option<DriveReport>,
 }
 
+impl SafetyReport {
+    /// The trips as the operator sees them: what tripped. The records of their consequences
+    /// (K1 opening, the STOP delay running out: [`TripKind::PowerOff`]) are left out, so a
+    /// trip counts once wherever it is counted (the summary, the plot).
+    pub fn causes(&self) -> impl Iterator<Item = &Trip> {
+        self.trips.iter().filter(|t| t.kind != TripKind::PowerOff)
+    }
+}
+
 /// The cabin reached an overtravel sensor under power.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct OvertravelReached {
@@ -683,12 +692,7 @@ impl Report {
         }
         // A safety stop as the operator sees it: what tripped; K1 opening and the STOP delay
         // running out are its consequences, counted apart.
-        let causes: Vec<&Trip> = self
-            .safety
-            .trips
-            .iter()
-            .filter(|t| t.kind != TripKind::PowerOff)
-            .collect();
+        let causes: Vec<&Trip> = self.safety.causes().collect();
         let power_off = self
             .safety
             .trips

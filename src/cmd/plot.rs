@@ -520,7 +520,9 @@ fn velocity_panel(
         s.samples.iter().map(|p| (p.t_s, p.velocity_mm_s)),
         VELOCITY.stroke_width(2),
     ))?;
-    chart.draw_series(rep.safety.trips.iter().map(|trip| {
+    // What tripped, as the summary counts it; K1 opening shows in its own line.
+    let trips: Vec<_> = rep.safety.causes().collect();
+    chart.draw_series(trips.iter().map(|trip| {
         PathElement::new(
             [(trip.at_s, -vmax), (trip.at_s, vmax)],
             TRIP.stroke_width(2),
@@ -533,7 +535,7 @@ fn velocity_panel(
             (Swatch::Line(K1, 2), "K1, drive power (right axis)".into()),
             (
                 Swatch::Mark(TRIP),
-                match rep.safety.trips.len() {
+                match trips.len() {
                     0 => "safety trip (none)".into(),
                     n => format!("safety trip ({n})"),
                 },
