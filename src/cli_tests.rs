@@ -1400,3 +1400,32 @@ fn the_plot_counts_safety_trips_as_the_summary_does() {
     let text = std::fs::read_to_string(&svg).expect("the SVG");
     assert!(text.contains(&format!("safety trip ({n})")), "{line}");
 }
+
+/// Counts of one take the singular, and the summary says what its two call counts count:
+/// the stops that served a call, and the presses they answered (overtravel: one press, K1
+/// opened once).
+#[test]
+fn the_summary_counts_in_words_that_fit_the_number() {
+    let out = asi_lift()
+        .args(["run", "overtravel"])
+        .output()
+        .expect("asi-lift runs");
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    for slip in ["1 presses", "1 times", "1 trips", "1 runs"] {
+        assert!(!text.contains(slip), "{slip}: {text}");
+    }
+    assert!(
+        text.contains("calls served       1 (answering 1 of 1 press of call buttons)"),
+        "{text}"
+    );
+    assert!(text.contains("K1 opened 1 time)"), "{text}");
+    assert!(
+        text.contains("mean over 1 press answered, 0 unanswered"),
+        "{text}"
+    );
+}
