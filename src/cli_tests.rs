@@ -792,7 +792,9 @@ mod command {
                     assert_ne!(v["outcome"], "ok");
                     let file = dir.join("failures").join(name);
                     let text = std::fs::read_to_string(&file).expect("reproducer");
-                    assert!(text.contains("# reproduce: asi-lift run"), "{text}");
+                    // The command works from where the campaign was started.
+                    let command = format!("# reproduce: asi-lift run {failures}/{name}\n");
+                    assert!(text.contains(&command), "{text}");
                     Scenario::from_toml(name, &text).expect("a valid scenario");
                 }
                 None => assert_eq!(v["outcome"], "ok"),

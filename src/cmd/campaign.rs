@@ -95,6 +95,7 @@ pub fn run(args: CampaignArgs) -> Result<u8, String> {
         profile,
         shrink_budget: args.shrink_budget,
         referee: args.referee,
+        failures: args.failures.clone(),
     };
     let count = plan.count();
     if count == 0 {

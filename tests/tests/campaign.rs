@@ -41,6 +41,7 @@ fn plan(runs: u64, shard: Shard) -> Plan {
         profile: short_profile(),
         shrink_budget: 3,
         referee: false,
+        failures: "failures".into(),
     }
 }
 
