@@ -1431,3 +1431,30 @@ fn the_summary_counts_in_words_that_fit_the_number() {
         "{text}"
     );
 }
+
+/// `run --until` later than the scenario's duration extends the run to it, as `serve --until`
+/// does, rather than being ignored.
+#[test]
+fn run_until_beyond_the_scenarios_end_extends_the_run() {
+    let d = temp();
+    let sc = d.path().join("s.toml");
+    std::fs::write(&sc, "duration = \"1s\"\n").expect("write");
+    let summary = |until: &str| {
+        let out = asi_lift()
+            .arg("run")
+            .arg(&sc)
+            .args(["--until", until])
+            .output()
+            .expect("asi-lift runs");
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        String::from_utf8_lossy(&out.stdout).into_owned()
+    };
+    let longer = summary("2s");
+    assert!(longer.contains("summary after 2.000 s"), "{longer}");
+    let shorter = summary("500ms");
+    assert!(shorter.contains("summary after 0.500 s"), "{shorter}");
+}

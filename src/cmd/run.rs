@@ -24,8 +24,8 @@ pub struct RunArgs {
     /// Use this seed instead of the scenario's.
     #[arg(long)]
     pub seed: Option<u64>,
-    /// Stop the simulation at this time (e.g. 30s, 2min) if earlier than the scenario's
-    /// duration.
+    /// End the simulation at this time (e.g. 30s, 2min): earlier than the scenario's
+    /// duration, it stops the run there; later, it extends the run to it.
     #[arg(long, value_name = "DURATION")]
     pub until: Option<String>,
     /// Where the report goes: a file, or `-` for standard output [default: standard output;
@@ -139,6 +139,11 @@ pub fn run(args: RunArgs) -> Result<u8, String> {
                 .map_err(|e| format!("--until: {e}"))?,
         ),
     };
+    // Later than the scenario's end, --until extends the run (as `serve --until` does): the
+    // lift stands at its last state and the bus keeps cycling.
+    if let Some(u) = until {
+        sc.duration = sc.duration.max(u);
+    }
     let window = parse_window("--waveform-window", &waveform_window)?;
     let pulse_window = pulse_window
         .map(|w| parse_window("--pulse-window", &w))
