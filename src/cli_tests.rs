@@ -1458,3 +1458,21 @@ fn run_until_beyond_the_scenarios_end_extends_the_run() {
     let shorter = summary("500ms");
     assert!(shorter.contains("summary after 0.500 s"), "{shorter}");
 }
+
+/// The help texts stand on their own after `cargo install`, where no README or docs/ directory
+/// comes along: they name the guide's chapters, not the repository's files.
+#[test]
+fn no_help_text_points_into_the_repository() {
+    use clap::CommandFactory;
+    fn walk(cmd: &mut clap::Command, path: &str) {
+        let help = cmd.render_long_help().to_string();
+        for file in ["README", "docs/", ".md"] {
+            assert!(!help.contains(file), "{path} --help names {file}:\n{help}");
+        }
+        for sub in cmd.get_subcommands_mut() {
+            let name = format!("{path} {}", sub.get_name());
+            walk(sub, &name);
+        }
+    }
+    walk(&mut asi_lift::Cli::command(), "asi-lift");
+}

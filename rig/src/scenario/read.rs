@@ -626,7 +626,7 @@ fn read_controller(
                 "controller.scan",
                 "must lie within 1..20 ms: the cabin word takes 14 scans, and beyond \
                  20 ms a 300 ms press or the vane edge initialisation needs can pass \
-                 unseen (README, Scenario files)",
+                 unseen",
             ));
         }
     }
