@@ -103,7 +103,7 @@ pub fn run(args: CampaignArgs) -> Result<u8, String> {
         eprintln!(
             "asi-lift: --shard {}: the campaign's {} leave this shard empty",
             plan.shard,
-            rig::report::count(plan.runs as u64, "run", "runs")
+            rig::report::count(plan.runs, "run", "runs")
         );
     }
     if args.failures.exists() && !args.failures.is_dir() {
@@ -197,7 +197,7 @@ pub fn run(args: CampaignArgs) -> Result<u8, String> {
         plan.seed,
         plan.profile.name,
         plan.shard,
-        rig::report::count(count as u64, "run", "runs"),
+        rig::report::count(count, "run", "runs"),
         by.join(", ")
     );
     if failing > 0 {

@@ -258,7 +258,7 @@ impl Summary {
             self.campaign_seed,
             self.profile,
             self.runs,
-            count(self.campaign_runs as u64, "run", "runs"),
+            count(self.campaign_runs, "run", "runs"),
             if self.missing > 0 {
                 format!(" ({} missing: not every shard given)", self.missing)
             } else {
@@ -328,7 +328,7 @@ impl Summary {
             row(
                 &mut t,
                 "  of them the safe drive's",
-                format!("{} in {}", d.trips, count(d.runs as u64, "run", "runs")),
+                format!("{} in {}", d.trips, count(d.runs, "run", "runs")),
             );
         }
         row(
@@ -337,7 +337,7 @@ impl Summary {
             format!(
                 "{} in {}",
                 self.attendant_rounds,
-                count(self.attended_runs as u64, "run", "runs")
+                count(self.attended_runs, "run", "runs")
             ),
         );
         row(
