@@ -945,8 +945,11 @@ mod command {
         let e = run_cli(&["--until", "1s", "--plot", &b, "--report", &r]).expect_err("bad path");
         assert!(e.contains(&b), "{e}");
         assert!(!report.exists());
-        let e = run_cli(&["--until", "1s", "--plot", "-"]).expect_err("two on stdout");
-        assert!(e.contains("--plot"), "{e}");
+        // Standard output takes one stream: a report asked there too is refused (without
+        // --report, the summary goes to standard error).
+        let e =
+            run_cli(&["--until", "1s", "--plot", "-", "--report", "-"]).expect_err("two on stdout");
+        assert!(e.contains("--plot") && e.contains("--report"), "{e}");
         assert_eq!(
             run_cli(&["--until", "1s", "--plot", &p, "--report", &r, "--force"]),
             Ok(0)
