@@ -240,6 +240,16 @@ fn events_after_the_end_are_warned_of() {
         err.contains("late.toml:3: the event at 5 s comes at or after the scenario's end (1 s)"),
         "{err}"
     );
+    // A run extended past the event (`--until`) has it happen: no warning.
+    let out = asi_lift()
+        .arg("run")
+        .arg(&sc)
+        .args(["--until", "6s"])
+        .output()
+        .expect("runs");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(!err.contains("never happens"), "{err}");
 }
 
 #[test]

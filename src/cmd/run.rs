@@ -122,7 +122,14 @@ pub fn run(args: RunArgs) -> Result<u8, String> {
         force,
         pulse_exact,
     } = args;
-    let (mut sc, file) = load_scenario(scenario.as_deref())?;
+    let until = match until {
+        None => None,
+        Some(u) => Some(
+            u.parse::<SimDuration>()
+                .map_err(|e| format!("--until: {e}"))?,
+        ),
+    };
+    let (mut sc, file) = load_scenario(scenario.as_deref(), until)?;
     if let Some(s) = seed {
         sc.seed = s;
     }
@@ -131,18 +138,6 @@ pub fn run(args: RunArgs) -> Result<u8, String> {
             AlgorithmArg::Fifo => controller::Algorithm::Fifo,
             AlgorithmArg::Collective => controller::Algorithm::Collective,
         };
-    }
-    let until = match until {
-        None => None,
-        Some(u) => Some(
-            u.parse::<SimDuration>()
-                .map_err(|e| format!("--until: {e}"))?,
-        ),
-    };
-    // Later than the scenario's end, --until extends the run (as `serve --until` does): the
-    // lift stands at its last state and the bus keeps cycling.
-    if let Some(u) = until {
-        sc.duration = sc.duration.max(u);
     }
     let window = parse_window("--waveform-window", &waveform_window)?;
     let pulse_window = pulse_window
@@ -309,13 +304,17 @@ pub fn trace_form(form: Option<TraceForm>, path: &Path) -> TraceFormat {
 }
 
 /// The scenario named on the command line: a file if there is one by that name (`-` for
-/// standard input), else a built-in scenario, else the demo; with the file's path. Warns of
-/// events at or after the scenario's end.
-pub fn load_scenario(scenario: Option<&Path>) -> Result<(Scenario, Option<&Path>), String> {
+/// standard input), else a built-in scenario, else the demo; with the file's path. An
+/// `extend_to` later than its duration (`run --until`) extends it, as `serve --until` does.
+/// Warns of events at or after the end, so only of those that really never happen.
+pub fn load_scenario(
+    scenario: Option<&Path>,
+    extend_to: Option<SimDuration>,
+) -> Result<(Scenario, Option<&Path>), String> {
     // A file if there is one by that name, else a built-in scenario.
     let is_file = |p: &Path| p == Path::new("-") || p.exists() || p.components().count() > 1;
     let file = scenario.filter(|p| is_file(p));
-    let sc = match (scenario, file) {
+    let mut sc = match (scenario, file) {
         (None, _) => Scenario::demo().map_err(|e| e.to_string())?,
         (Some(_), Some(path)) => {
             let text = read_input(path, super::MAX_TOML_BYTES)?;
@@ -326,6 +325,9 @@ pub fn load_scenario(scenario: Option<&Path>) -> Result<(Scenario, Option<&Path>
             .scenario()
             .map_err(|e| e.to_string())?,
     };
+    if let Some(u) = extend_to {
+        sc.duration = sc.duration.max(u);
+    }
     for e in sc.late_events() {
         let place = file.map_or_else(
             || sc.name.clone(),

@@ -171,7 +171,7 @@ pub fn run(args: ServeArgs) -> Result<u8, String> {
         );
     }
     let until = until.map(|u| duration("--until", &u)).transpose()?;
-    let (mut sc, file) = load_scenario(scenario.as_deref())?;
+    let (mut sc, file) = load_scenario(scenario.as_deref(), None)?;
     if let Some(s) = seed {
         sc.seed = s;
     }
