@@ -240,6 +240,16 @@ fn events_after_the_end_are_warned_of() {
         err.contains("late.toml:3: the event at 5 s comes at or after the scenario's end (1 s)"),
         "{err}"
     );
+    // A run extended past the event (`--until`) has it happen: no warning.
+    let out = asi_lift()
+        .arg("run")
+        .arg(&sc)
+        .args(["--until", "6s"])
+        .output()
+        .expect("runs");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(!err.contains("never happens"), "{err}");
 }
 
 #[test]
@@ -820,7 +830,9 @@ mod command {
                     assert_ne!(v["outcome"], "ok");
                     let file = dir.join("failures").join(name);
                     let text = std::fs::read_to_string(&file).expect("reproducer");
-                    assert!(text.contains("# reproduce: asi-lift run"), "{text}");
+                    // The command works from where the campaign was started.
+                    let command = format!("# reproduce: asi-lift run {failures}/{name}\n");
+                    assert!(text.contains(&command), "{text}");
                     Scenario::from_toml(name, &text).expect("a valid scenario");
                 }
                 None => assert_eq!(v["outcome"], "ok"),
@@ -971,8 +983,11 @@ mod command {
         let e = run_cli(&["--until", "1s", "--plot", &b, "--report", &r]).expect_err("bad path");
         assert!(e.contains(&b), "{e}");
         assert!(!report.exists());
-        let e = run_cli(&["--until", "1s", "--plot", "-"]).expect_err("two on stdout");
-        assert!(e.contains("--plot"), "{e}");
+        // Standard output takes one stream: a report asked there too is refused (without
+        // --report, the summary goes to standard error).
+        let e =
+            run_cli(&["--until", "1s", "--plot", "-", "--report", "-"]).expect_err("two on stdout");
+        assert!(e.contains("--plot") && e.contains("--report"), "{e}");
         assert_eq!(
             run_cli(&["--until", "1s", "--plot", &p, "--report", &r, "--force"]),
             Ok(0)
@@ -1502,4 +1517,198 @@ fn man_out_writes_a_page_per_subcommand_and_keeps_what_exists() {
         run_page.as_bytes()
     );
     assert_eq!(files_in(&dir), expected);
+}
+
+/// `--trace -` without `--report`: the trace alone on standard output, the summary on standard
+/// error (standard output is a stream, not refused as wanted twice).
+#[test]
+fn a_trace_on_standard_output_sends_the_summary_to_standard_error() {
+    let out = asi_lift()
+        .args(["run", "--until", "1s", "--trace", "-"])
+        .output()
+        .expect("asi-lift runs");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{:?}: {stderr}", out.status);
+    assert!(stderr.contains("summary after 1.000 s"), "{stderr}");
+    assert!(!stdout.contains("summary"), "{stdout}");
+    assert!(stdout.lines().count() > 100, "{stdout}");
+    // JSON wants a file: the summary is text.
+    let err = fails(asi_lift().args(["run", "--until", "1s", "--trace", "-", "--format", "json"]));
+    assert!(err.contains("--report FILE"), "{err}");
+}
+
+/// A character device takes any number of writers: two outputs may both name /dev/null. A
+/// FIFO would interleave them, and stays refused.
+#[test]
+fn two_outputs_may_share_a_device_but_not_a_fifo() {
+    let out = asi_lift()
+        .args([
+            "run",
+            "--until",
+            "1s",
+            "--report",
+            "/dev/null",
+            "--plot",
+            "/dev/null",
+        ])
+        .output()
+        .expect("asi-lift runs");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{:?}: {err}", out.status);
+    let d = temp();
+    let fifo = d.path().join("f");
+    let made = Command::new("mkfifo").arg(&fifo).status().expect("mkfifo");
+    assert!(made.success());
+    // A reader, so that opening the FIFO to write it does not wait for ever.
+    let reader = {
+        let fifo = fifo.clone();
+        std::thread::spawn(move || std::fs::read(fifo).expect("read the FIFO"))
+    };
+    let err = fails(
+        asi_lift()
+            .args(["run", "--until", "1s", "--report"])
+            .arg(&fifo)
+            .arg("--trace")
+            .arg(&fifo),
+    );
+    assert!(err.contains("--report") && err.contains("--trace"), "{err}");
+    assert!(reader.join().expect("the reader").is_empty());
+}
+
+/// `--plot run.png` is refused before the run, naming --plot and the format drawn, rather than
+/// writing SVG under a PNG name; `.svg` and a name without an extension are drawn.
+#[test]
+fn a_plot_with_another_extension_than_svg_is_refused() {
+    let d = temp();
+    let png = d.path().join("run.png");
+    let err = fails(
+        asi_lift()
+            .args(["run", "--until", "1s", "--plot"])
+            .arg(&png),
+    );
+    assert!(
+        err.contains("--plot") && err.contains("run.png") && err.contains(".svg"),
+        "{err}"
+    );
+    assert!(files_in(d.path()).is_empty(), "{:?}", files_in(d.path()));
+    let svg = d.path().join("run.SVG");
+    let out = asi_lift()
+        .args(["run", "--until", "1s", "--report", "/dev/null", "--plot"])
+        .arg(&svg)
+        .output()
+        .expect("asi-lift runs");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = std::fs::read_to_string(&svg).expect("the SVG");
+    assert!(text.starts_with("<svg"), "{}", &text[..text.len().min(80)]);
+}
+
+/// The plot's legend counts the safety trips as the summary does: what tripped, not the
+/// records of K1 opening (the overtravel scenario: 2 trips, K1 opened once).
+#[test]
+fn the_plot_counts_safety_trips_as_the_summary_does() {
+    let d = temp();
+    let svg = d.path().join("p.svg");
+    let out = asi_lift()
+        .args(["run", "overtravel", "--report", "/dev/null", "--plot"])
+        .arg(&svg)
+        .output()
+        .expect("asi-lift runs");
+    let summary = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let line = summary
+        .lines()
+        .find(|l| l.trim_start().starts_with("safety trips"))
+        .expect("the summary's trips");
+    let n: usize = line
+        .split_whitespace()
+        .nth(2)
+        .expect("a count")
+        .parse()
+        .expect("a number");
+    assert!(n > 0, "{line}");
+    let text = std::fs::read_to_string(&svg).expect("the SVG");
+    assert!(text.contains(&format!("safety trip ({n})")), "{line}");
+}
+
+/// Counts of one take the singular, and the summary says what its two call counts count:
+/// the stops that served a call, and the presses they answered (overtravel: one press, K1
+/// opened once).
+#[test]
+fn the_summary_counts_in_words_that_fit_the_number() {
+    let out = asi_lift()
+        .args(["run", "overtravel"])
+        .output()
+        .expect("asi-lift runs");
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    for slip in ["1 presses", "1 times", "1 trips", "1 runs"] {
+        assert!(!text.contains(slip), "{slip}: {text}");
+    }
+    assert!(
+        text.contains("calls served       1 (answering 1 of 1 press of call buttons)"),
+        "{text}"
+    );
+    assert!(text.contains("K1 opened 1 time)"), "{text}");
+    assert!(
+        text.contains("mean over 1 press answered, 0 unanswered"),
+        "{text}"
+    );
+}
+
+/// `run --until` later than the scenario's duration extends the run to it, as `serve --until`
+/// does, rather than being ignored.
+#[test]
+fn run_until_beyond_the_scenarios_end_extends_the_run() {
+    let d = temp();
+    let sc = d.path().join("s.toml");
+    std::fs::write(&sc, "duration = \"1s\"\n").expect("write");
+    let summary = |until: &str| {
+        let out = asi_lift()
+            .arg("run")
+            .arg(&sc)
+            .args(["--until", until])
+            .output()
+            .expect("asi-lift runs");
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        String::from_utf8_lossy(&out.stdout).into_owned()
+    };
+    let longer = summary("2s");
+    assert!(longer.contains("summary after 2.000 s"), "{longer}");
+    let shorter = summary("500ms");
+    assert!(shorter.contains("summary after 0.500 s"), "{shorter}");
+}
+
+/// The help texts stand on their own after `cargo install`, where no README or docs/ directory
+/// comes along: they name the guide's chapters, not the repository's files.
+#[test]
+fn no_help_text_points_into_the_repository() {
+    use clap::CommandFactory;
+    fn walk(cmd: &mut clap::Command, path: &str) {
+        let help = cmd.render_long_help().to_string();
+        for file in ["README", "docs/", ".md"] {
+            assert!(!help.contains(file), "{path} --help names {file}:\n{help}");
+        }
+        for sub in cmd.get_subcommands_mut() {
+            let name = format!("{path} {}", sub.get_name());
+            walk(sub, &name);
+        }
+    }
+    walk(&mut asi_lift::Cli::command(), "asi-lift");
 }

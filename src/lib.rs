@@ -45,21 +45,23 @@ enum Command {
     /// found" and exits with 0.
     Decode(cmd::decode::DecodeArgs),
     /// Run the lab lift live, on the wall clock, behind a virtual AS-i gateway that speaks
-    /// Modbus TCP (README.md, "Live mode"): a client watches the built-in controller, or with
+    /// Modbus TCP (the asi-lift guide, chapter "Live mode"): a client watches the built-in controller, or with
     /// `--controller external` is the PLC itself. Ctrl-C or `--until` ends the run and writes
     /// the report.
     Serve(cmd::serve::ServeArgs),
-    /// Timing analysis (docs/timing.md): transaction and cycle time, per-slave update period,
+    /// Timing analysis (the asi-lift guide, chapter "Timing"): transaction and cycle time, per-slave update period,
     /// repeats, handshake word times and end-to-end latencies, analytic and simulated side by
     /// side, compared with the textbook cycle time T = (n + 2) · 154 µs.
     Timing(cmd::timing::TimingArgs),
-    /// The teaching stand of seed 000 (README.md, "The teaching stand"): a servo axis whose
-    /// safe drive (STO, SOS, SS1, SS2, SLS, SLI, SDI) is requested by a light curtain. Runs a
-    /// stand scenario (a file or a built-in name: one per test guide) and prints what a
-    /// student sees: the HMI page's states, the stopwatch, torque and speed, with times.
+    /// The teaching stand of seed 000 (the asi-lift guide, chapter "The teaching stand"): a
+    /// servo axis whose safe drive (STO, SOS, SS1, SS2, SLS, SLI, SDI) is requested by a
+    /// light curtain. Runs a stand scenario (a file or a built-in name: one per test guide)
+    /// and prints what a student sees: the HMI page's states, the stopwatch, torque and
+    /// speed, with times.
     /// Without an argument it lists the built-in ones.
     Stand(cmd::stand::StandArgs),
-    /// Run many random valid scenarios on the whole rig (README.md, "Campaigns"): one JSON
+    /// Run many random valid scenarios on the whole rig (the asi-lift guide, chapter
+    /// "Campaigns"): one JSON
     /// line per run, every failure shrunk to a scenario file that reproduces it; or merge
     /// result files with `campaign summarize`.
     #[command(args_conflicts_with_subcommands = true)]

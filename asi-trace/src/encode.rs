@@ -3,7 +3,7 @@
 
 use asi_phy::waveform::{render, WaveformConfig};
 use asi_phy::{
-    Address, BusTiming, HalfBits, Nibble, PulseTrain, Request, Response, Select, SimDuration,
+    Address, BusTiming, Call, HalfBits, Nibble, PulseTrain, Request, Response, Select, SimDuration,
     SimTime,
 };
 use std::fmt::Write as _;
@@ -13,6 +13,10 @@ use std::fmt::Write as _;
 pub enum LineTelegram {
     /// A master request.
     Request(Request),
+    /// A Data_Exchange or Write_Parameter to an A/B slave (`dexg 7B 001`): the request alone
+    /// does not say so (its I3, the select bit, is an output bit to a standard slave), so the
+    /// slave named is kept for the description.
+    AbRequest(Request, Select),
     /// A slave response.
     Response(Response),
 }
@@ -85,13 +89,15 @@ pub fn parse_call(args: &[String]) -> Result<LineTelegram, CallError> {
         "dexg" | "wpar" => {
             let (a, sel) = parse_address(arg(0, "an address")?)?;
             let v = parse_nibble(arg(1, "a value")?)?;
-            let r = match (call.as_str(), sel) {
-                ("dexg", None) => Request::data_exchange(a, v)?,
-                ("dexg", Some(s)) => Request::data_exchange_ab(a, s, v)?,
-                (_, None) => Request::write_parameter(a, v)?,
-                (_, Some(s)) => Request::write_parameter_ab(a, s, v)?,
+            let t = match (call.as_str(), sel) {
+                ("dexg", None) => LineTelegram::Request(Request::data_exchange(a, v)?),
+                ("dexg", Some(s)) => {
+                    LineTelegram::AbRequest(Request::data_exchange_ab(a, s, v)?, s)
+                }
+                (_, None) => LineTelegram::Request(Request::write_parameter(a, v)?),
+                (_, Some(s)) => LineTelegram::AbRequest(Request::write_parameter_ab(a, s, v)?, s),
             };
-            (LineTelegram::Request(r), 2)
+            (t, 2)
         }
         "adra" => {
             let (a, _) = parse_address(arg(0, "the new address")?)?;
@@ -132,7 +138,9 @@ pub fn parse_call(args: &[String]) -> Result<LineTelegram, CallError> {
 pub fn pulse_train(t: LineTelegram) -> PulseTrain {
     let h = BusTiming::default().half_bit();
     match t {
-        LineTelegram::Request(r) => PulseTrain::request(r, SimTime::ZERO, h),
+        LineTelegram::Request(r) | LineTelegram::AbRequest(r, _) => {
+            PulseTrain::request(r, SimTime::ZERO, h)
+        }
         LineTelegram::Response(r) => PulseTrain::response(r, SimTime::ZERO, h),
     }
 }
@@ -143,6 +151,24 @@ pub fn describe(t: LineTelegram) -> String {
     let (bits, halves) = match t {
         LineTelegram::Request(r) => {
             let _ = writeln!(s, "call        {}", r.call());
+            (r.to_string(), HalfBits::from(r))
+        }
+        LineTelegram::AbRequest(r, select) => {
+            // The A/B slave's three outputs or parameters D2..D0; I3 is the select bit.
+            let low3 = |n: Nibble| n.get() & 0b111;
+            let _ = match r.call() {
+                Call::DataExchange { address, data } => writeln!(
+                    s,
+                    "call        Data_Exchange {address}{select} out={:03b}",
+                    low3(data)
+                ),
+                Call::WriteParameter { address, parameter } => writeln!(
+                    s,
+                    "call        Write_Parameter {address}{select} P={:03b}",
+                    low3(parameter)
+                ),
+                other => writeln!(s, "call        {other}"),
+            };
             (r.to_string(), HalfBits::from(r))
         }
         LineTelegram::Response(r) => {
@@ -239,6 +265,16 @@ mod tests {
             parse_call(&args("dexg 0 1")),
             Err(CallError::LineTelegram(_))
         ));
+    }
+
+    #[test]
+    fn describe_names_the_ab_slave() {
+        let d = describe(parse_call(&args("dexg 7B 0001")).expect("call"));
+        assert!(d.contains("call        Data_Exchange 7B out=001\n"), "{d}");
+        let d = describe(parse_call(&args("wpar 7A 5")).expect("call"));
+        assert!(d.contains("call        Write_Parameter 7A P=101\n"), "{d}");
+        let d = describe(parse_call(&args("dexg 7 0001")).expect("call"));
+        assert!(d.contains("call        Data_Exchange 7 out=0001\n"), "{d}");
     }
 
     #[test]

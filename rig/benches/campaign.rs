@@ -24,6 +24,7 @@ fn main() {
         profile,
         shrink_budget: 0,
         referee: false,
+        failures: "failures".into(),
     };
     let mut first: Option<Vec<String>> = None;
     let mut rates = Vec::new();

@@ -252,6 +252,22 @@ pub struct SafetyReport {
     pub drive: Option<DriveReport>,
 }
 
+/// `n` and the noun `one` in the number `n` takes: "1 press", "3 presses", "0 presses" (the
+/// plural `many` given, as English spells it).
+pub fn count(n: impl Into<u64>, one: &str, many: &str) -> String {
+    let n = n.into();
+    format!("{n} {}", if n == 1 { one } else { many })
+}
+
+impl SafetyReport {
+    /// The trips as the operator sees them: what tripped. The records of their consequences
+    /// (K1 opening, the STOP delay running out: [`TripKind::PowerOff`]) are left out, so a
+    /// trip counts once wherever it is counted (the summary, the plot).
+    pub fn causes(&self) -> impl Iterator<Item = &Trip> {
+        self.trips.iter().filter(|t| t.kind != TripKind::PowerOff)
+    }
+}
+
 /// The cabin reached an overtravel sensor under power.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct OvertravelReached {
@@ -624,22 +640,27 @@ impl Report {
                 format!("floor {}", stops.join(", then "))
             }
         );
+        // Two counts that differ: the stops that served a stored call, and the passengers'
+        // presses (a press on a call already pending waits with it, and is answered by the
+        // same stop). Each line says which it counts.
+        let presses = self.passengers.len() as u64;
+        let w = self.waits();
         let _ = writeln!(
             s,
-            "  calls served       {} (of {} presses of call buttons)",
+            "  calls served       {} (answering {} of {} of call buttons)",
             self.served.len(),
-            self.passengers.len()
+            presses - w.unserved as u64,
+            count(presses, "press", "presses"),
         );
         if !self.passengers.is_empty() {
-            let w = self.waits();
             let show = |m: Option<f64>| m.map_or("none".to_string(), |v| format!("{v:.1} s"));
             let _ = writeln!(
                 s,
-                "  passenger waits    hall calls {}, cabin calls {}, all {} (mean over {} presses, {} unanswered)",
+                "  passenger waits    hall calls {}, cabin calls {}, all {} (mean over {} answered, {} unanswered)",
                 show(w.hall_mean_s),
                 show(w.cabin_mean_s),
                 show(w.all_mean_s),
-                self.passengers.len(),
+                count(presses - w.unserved as u64, "press", "presses"),
                 w.unserved
             );
         }
@@ -684,18 +705,15 @@ impl Report {
         for d in &b.dropouts {
             let _ = writeln!(
                 s,
-                "  slave {:<2} left LAS  {} times, out {:.3} s",
-                d.address, d.count, d.out_of_las_s
+                "  slave {:<2} left LAS  {}, out {:.3} s",
+                d.address,
+                count(d.count, "time", "times"),
+                d.out_of_las_s
             );
         }
         // A safety stop as the operator sees it: what tripped; K1 opening and the STOP delay
         // running out are its consequences, counted apart.
-        let causes: Vec<&Trip> = self
-            .safety
-            .trips
-            .iter()
-            .filter(|t| t.kind != TripKind::PowerOff)
-            .collect();
+        let causes: Vec<&Trip> = self.safety.causes().collect();
         let power_off = self
             .safety
             .trips
@@ -711,9 +729,9 @@ impl Report {
         };
         let _ = writeln!(
             s,
-            "  safety trips       {} (K1 opened{by} {power_off} {})",
+            "  safety trips       {} (K1 opened{by} {})",
             causes.len(),
-            if power_off == 1 { "time" } else { "times" }
+            count(power_off as u64, "time", "times")
         );
         const SHOWN: usize = 5;
         for t in causes.iter().take(SHOWN) {
@@ -723,7 +741,11 @@ impl Report {
             let _ = writeln!(s, "    … and {} more", causes.len() - SHOWN);
         }
         if let Some(d) = &self.safety.drive {
-            let _ = writeln!(s, "  safe drive         {} trips", d.trips.len());
+            let _ = writeln!(
+                s,
+                "  safe drive         {}",
+                count(d.trips.len() as u64, "trip", "trips")
+            );
             for t in d.trips.iter().take(SHOWN) {
                 let _ = writeln!(
                     s,

@@ -95,13 +95,15 @@ pub fn run(args: CampaignArgs) -> Result<u8, String> {
         profile,
         shrink_budget: args.shrink_budget,
         referee: args.referee,
+        failures: args.failures.clone(),
     };
     let count = plan.count();
     if count == 0 {
         // More shards than runs (an array larger than the campaign): nothing to do here.
         eprintln!(
-            "asi-lift: --shard {}: the campaign's {} runs leave this shard empty",
-            plan.shard, plan.runs
+            "asi-lift: --shard {}: the campaign's {} leave this shard empty",
+            plan.shard,
+            rig::report::count(plan.runs, "run", "runs")
         );
     }
     if args.failures.exists() && !args.failures.is_dir() {
@@ -191,16 +193,17 @@ pub fn run(args: CampaignArgs) -> Result<u8, String> {
         - outcomes.get("attended").copied().unwrap_or(0);
     let by: Vec<String> = outcomes.iter().map(|(k, v)| format!("{v} {k}")).collect();
     eprintln!(
-        "campaign seed {}, profile {}, shard {}: {count} runs: {}",
+        "campaign seed {}, profile {}, shard {}: {}: {}",
         plan.seed,
         plan.profile.name,
         plan.shard,
+        rig::report::count(count, "run", "runs"),
         by.join(", ")
     );
     if failing > 0 {
         eprintln!(
-            "{} reproducers written to {}",
-            written.len(),
+            "{} written to {}",
+            rig::report::count(written.len() as u64, "reproducer", "reproducers"),
             args.failures.display()
         );
         return Ok(EXIT_VIOLATIONS);

@@ -91,7 +91,11 @@ enum Kind {
     File,
     /// A directory.
     Dir,
-    /// A device or a pipe.
+    /// A character device (`/dev/null`): written directly, and it takes any number of
+    /// writers, so two outputs may name it.
+    Device,
+    /// A pipe or another special file: written directly, but two outputs would interleave
+    /// in it.
     Stream,
 }
 
@@ -111,11 +115,13 @@ fn identity(path: &Path) -> Result<Identity, String> {
         return Ok(Identity::Std);
     }
     if let Ok(m) = std::fs::metadata(path) {
-        use std::os::unix::fs::MetadataExt;
+        use std::os::unix::fs::{FileTypeExt, MetadataExt};
         let kind = if m.is_file() {
             Kind::File
         } else if m.is_dir() {
             Kind::Dir
+        } else if m.file_type().is_char_device() {
+            Kind::Device
         } else {
             Kind::Stream
         };
@@ -148,6 +154,10 @@ pub fn refuse_inputs(flag: &str, path: &Path, inputs: &[(&str, &Path)]) -> Resul
         return Ok(());
     }
     let id = identity(path)?;
+    // A character device (`/dev/null`) read and written is no file truncated.
+    if matches!(id, Identity::Inode(.., Kind::Device)) {
+        return Ok(());
+    }
     for &(what, input) in inputs {
         if input == Path::new("-") || identity(input)? != id {
             continue;
@@ -229,7 +239,11 @@ impl Outputs {
     /// cannot be written.
     pub fn add(&mut self, flag: &'static str, path: &Path) -> Result<Sink, String> {
         let id = identity(path)?;
-        if let Some((other, other_path, _)) = self.seen.iter().find(|(_, _, i)| *i == id) {
+        // A character device takes what each writer gives it (`/dev/null` its share of
+        // everything): only a file or a pipe cannot serve two.
+        let shared = matches!(id, Identity::Inode(.., Kind::Device));
+        if let Some((other, other_path, _)) = self.seen.iter().find(|(_, _, i)| *i == id && !shared)
+        {
             return Err(if id == Identity::Std {
                 format!("{other} and {flag} both want standard output: give one a file")
             } else if other_path.as_os_str() == path.as_os_str() {
@@ -248,7 +262,7 @@ impl Outputs {
             Identity::Inode(.., Kind::Dir) => {
                 return Err(format!("{flag} {}: a directory", path.display()));
             }
-            Identity::Inode(.., Kind::Stream) => {
+            Identity::Inode(.., Kind::Stream | Kind::Device) => {
                 let f = std::fs::OpenOptions::new()
                     .write(true)
                     .open(path)

@@ -184,6 +184,22 @@ pub fn button_floor(button: &str) -> Option<u8> {
     button.rsplit_once(':')?.1.parse().ok()
 }
 
+/// Refuses a `--plot` file whose extension names another image format than SVG (`run.png`):
+/// the plot is drawn as SVG only (plotters' bitmap backend would pull in the image and PNG
+/// encoders), and an SVG under a `.png` name is a file no viewer opens. A name without an
+/// extension (`/dev/null`, `-`) gets SVG.
+pub fn check_extension(path: &std::path::Path) -> Result<(), String> {
+    match path.extension().and_then(|e| e.to_str()) {
+        None => Ok(()),
+        Some(e) if e.eq_ignore_ascii_case("svg") => Ok(()),
+        Some(_) => Err(format!(
+            "--plot {}: the plot is drawn as SVG only; name the file .svg (e.g. run.svg), \
+             then convert it if need be (rsvg-convert -o run.png run.svg)",
+            path.display()
+        )),
+    }
+}
+
 /// Draws the run as SVG.
 pub fn draw(samples: &Samples, rep: &Report) -> Result<String, String> {
     let mut svg = String::new();
@@ -504,7 +520,9 @@ fn velocity_panel(
         s.samples.iter().map(|p| (p.t_s, p.velocity_mm_s)),
         VELOCITY.stroke_width(2),
     ))?;
-    chart.draw_series(rep.safety.trips.iter().map(|trip| {
+    // What tripped, as the summary counts it; K1 opening shows in its own line.
+    let trips: Vec<_> = rep.safety.causes().collect();
+    chart.draw_series(trips.iter().map(|trip| {
         PathElement::new(
             [(trip.at_s, -vmax), (trip.at_s, vmax)],
             TRIP.stroke_width(2),
@@ -517,7 +535,7 @@ fn velocity_panel(
             (Swatch::Line(K1, 2), "K1, drive power (right axis)".into()),
             (
                 Swatch::Mark(TRIP),
-                match rep.safety.trips.len() {
+                match trips.len() {
                     0 => "safety trip (none)".into(),
                     n => format!("safety trip ({n})"),
                 },

@@ -24,13 +24,14 @@ pub struct RunArgs {
     /// Use this seed instead of the scenario's.
     #[arg(long)]
     pub seed: Option<u64>,
-    /// Stop the simulation at this time (e.g. 30s, 2min) if earlier than the scenario's
-    /// duration.
+    /// End the simulation at this time (e.g. 30s, 2min): earlier than the scenario's
+    /// duration, it stops the run there; later, it extends the run to it.
     #[arg(long, value_name = "DURATION")]
     pub until: Option<String>,
-    /// Where the report goes: a file, or `-` for standard output.
-    #[arg(long, value_name = "FILE|-", default_value = "-")]
-    pub report: PathBuf,
+    /// Where the report goes: a file, or `-` for standard output [default: standard output;
+    /// when the trace or the plot goes there, only the summary, to standard error].
+    #[arg(long, value_name = "FILE|-")]
+    pub report: Option<PathBuf>,
     /// The report's format.
     #[arg(long, value_enum, default_value_t = Format::Text)]
     pub format: Format,
@@ -61,7 +62,8 @@ pub struct RunArgs {
     pub pulse_window: Option<String>,
     /// Draw the run as SVG: cabin position and velocity over time with the floors, vanes and
     /// overtravel trip points, the calls pressed and served, K1, the safety trips and the
-    /// bus's repeats per transaction.
+    /// bus's repeats per transaction. SVG only: another extension (`.png`) is refused; a
+    /// name without one (`/dev/null`, `-`) gets SVG.
     #[arg(long, value_name = "FILE.svg")]
     pub plot: Option<PathBuf>,
     /// Overwrite the report, trace, VCD, CSV and plot files if they exist.
@@ -120,7 +122,14 @@ pub fn run(args: RunArgs) -> Result<u8, String> {
         force,
         pulse_exact,
     } = args;
-    let (mut sc, file) = load_scenario(scenario.as_deref())?;
+    let until = match until {
+        None => None,
+        Some(u) => Some(
+            u.parse::<SimDuration>()
+                .map_err(|e| format!("--until: {e}"))?,
+        ),
+    };
+    let (mut sc, file) = load_scenario(scenario.as_deref(), until)?;
     if let Some(s) = seed {
         sc.seed = s;
     }
@@ -130,13 +139,6 @@ pub fn run(args: RunArgs) -> Result<u8, String> {
             AlgorithmArg::Collective => controller::Algorithm::Collective,
         };
     }
-    let until = match until {
-        None => None,
-        Some(u) => Some(
-            u.parse::<SimDuration>()
-                .map_err(|e| format!("--until: {e}"))?,
-        ),
-    };
     let window = parse_window("--waveform-window", &waveform_window)?;
     let pulse_window = pulse_window
         .map(|w| parse_window("--pulse-window", &w))
@@ -148,13 +150,35 @@ pub fn run(args: RunArgs) -> Result<u8, String> {
     if let Some(path) = file {
         outs.input("the scenario", path)?;
     }
-    let report_sink = outs.add("--report", &report)?;
+    // Standard output is a stream: when the trace or the plot takes it and no --report is
+    // given, the report is only its summary, on standard error.
+    let stdout = Some(Path::new("-"));
+    let stream_on_stdout = trace.as_deref() == stdout || plot.as_deref() == stdout;
+    let report = match report {
+        Some(r) => Some(r),
+        None if stream_on_stdout => {
+            if format == Format::Json {
+                return Err(
+                    "--format json: the trace or the plot takes standard output; give the report a file with --report FILE".into(),
+                );
+            }
+            None
+        }
+        None => Some(PathBuf::from("-")),
+    };
+    let report_sink = report
+        .as_deref()
+        .map(|p| outs.add("--report", p))
+        .transpose()?;
     let trace_sink = trace
         .as_deref()
         .map(|p| outs.add("--trace", p))
         .transpose()?;
     let vcd_sink = vcd.as_deref().map(|p| outs.add("--vcd", p)).transpose()?;
     let csv_sink = csv.as_deref().map(|p| outs.add("--csv", p)).transpose()?;
+    if let Some(p) = &plot {
+        plot::check_extension(p)?;
+    }
     let plot_sink = plot.as_deref().map(|p| outs.add("--plot", p)).transpose()?;
     let end = SimTime::ZERO + until.map_or(sc.duration, |u| u.min(sc.duration));
     if vcd.is_some() {
@@ -206,7 +230,9 @@ pub fn run(args: RunArgs) -> Result<u8, String> {
         // other outputs, cut short, are not put in place.
         return Ok(0);
     }
-    outs.write_all(&report_sink, &report_body(&rep, format)?)?;
+    if let Some(sink) = &report_sink {
+        outs.write_all(sink, &report_body(&rep, format)?)?;
+    }
     if let (Some(sink), Some(mut samples)) = (&plot_sink, samples) {
         samples.finish(&rep);
         let svg = plot::draw(&samples, &rep).map_err(|e| {
@@ -231,16 +257,19 @@ pub fn run(args: RunArgs) -> Result<u8, String> {
     if let Some(lost) = lost {
         return Err(lost);
     }
-    if report != Path::new("-") {
-        let summary = format!(
+    let summary = match report.as_deref() {
+        None => Some(rep.summary_text()),
+        Some(r) if r != Path::new("-") => Some(format!(
             "{}report written to {}\n",
             rep.summary_text(),
-            report.display()
-        );
+            r.display()
+        )),
+        Some(_) => None,
+    };
+    if let Some(summary) = summary {
         // Human text goes to standard error when a data stream (the trace, the plot) is on
         // standard output; a reader that has gone (`| head`) is no error.
-        let stdout = Some(Path::new("-"));
-        if trace.as_deref() == stdout || plot.as_deref() == stdout {
+        if stream_on_stdout {
             eprint!("{summary}");
         } else {
             print_out(&summary)?;
@@ -275,13 +304,17 @@ pub fn trace_form(form: Option<TraceForm>, path: &Path) -> TraceFormat {
 }
 
 /// The scenario named on the command line: a file if there is one by that name (`-` for
-/// standard input), else a built-in scenario, else the demo; with the file's path. Warns of
-/// events at or after the scenario's end.
-pub fn load_scenario(scenario: Option<&Path>) -> Result<(Scenario, Option<&Path>), String> {
+/// standard input), else a built-in scenario, else the demo; with the file's path. An
+/// `extend_to` later than its duration (`run --until`) extends it, as `serve --until` does.
+/// Warns of events at or after the end, so only of those that really never happen.
+pub fn load_scenario(
+    scenario: Option<&Path>,
+    extend_to: Option<SimDuration>,
+) -> Result<(Scenario, Option<&Path>), String> {
     // A file if there is one by that name, else a built-in scenario.
     let is_file = |p: &Path| p == Path::new("-") || p.exists() || p.components().count() > 1;
     let file = scenario.filter(|p| is_file(p));
-    let sc = match (scenario, file) {
+    let mut sc = match (scenario, file) {
         (None, _) => Scenario::demo().map_err(|e| e.to_string())?,
         (Some(_), Some(path)) => {
             let text = read_input(path, super::MAX_TOML_BYTES)?;
@@ -292,6 +325,9 @@ pub fn load_scenario(scenario: Option<&Path>) -> Result<(Scenario, Option<&Path>
             .scenario()
             .map_err(|e| e.to_string())?,
     };
+    if let Some(u) = extend_to {
+        sc.duration = sc.duration.max(u);
+    }
     for e in sc.late_events() {
         let place = file.map_or_else(
             || sc.name.clone(),

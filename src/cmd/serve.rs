@@ -1,5 +1,5 @@
 //! `asi-lift serve`: the rig on the wall clock with a virtual AS-i/Modbus TCP gateway, for
-//! an outside controller or a client that watches the built-in one (README, "Live mode").
+//! an outside controller or a client that watches the built-in one (the asi-lift guide, chapter "Live mode").
 
 use super::output::Outputs;
 use super::run::{load_scenario, report_body, trace_form, Format, TraceForm};
@@ -37,19 +37,21 @@ pub struct ServeArgs {
     #[arg(long, value_enum)]
     pub controller: Option<ControllerArg>,
     /// Also serve the TTK4145 lab elevator protocol (4-byte messages) on this address, for
-    /// the course's elevator controllers (README.md, "The TTK4145 front end"); the built-in
+    /// the course's elevator controllers (the asi-lift guide, chapter "The TTK4145 front
+    /// end"); the built-in
     /// program is off then.
     #[arg(long, value_name = "ADDR", num_args = 0..=1, default_missing_value = "127.0.0.1:15657")]
     pub ttk4145: Option<String>,
     /// Also serve the live view, a page that shows the rig as it runs and lets a browser press
-    /// its buttons and inject faults (README.md, "Live view in the browser"), on this address
+    /// its buttons and inject faults (the asi-lift guide, chapter "Live view in the browser"),
+    /// on this address
     /// [default: off; 127.0.0.1:8080 when given without an address]. Only loopback unless an
     /// address is given here.
     #[arg(long, value_name = "ADDR", num_args = 0..=1, default_missing_value = "127.0.0.1:8080")]
     pub http: Option<String>,
     /// A host name the live view answers to besides its own address and loopback (a name of
     /// this machine, a proxy's): `NAME` with the live view's port, or `NAME:PORT`. Repeatable.
-    /// Other names get 403, against DNS rebinding (README.md, "Live view in the browser").
+    /// Other names get 403 (Forbidden), against DNS rebinding.
     #[arg(long = "allow-host", value_name = "NAME")]
     pub allow_hosts: Vec<String>,
     /// With an outside controller: the output image goes to zero when no client has written
@@ -174,7 +176,7 @@ pub fn run(args: ServeArgs) -> Result<u8, String> {
         );
     }
     let until = until.map(|u| duration("--until", &u)).transpose()?;
-    let (mut sc, file) = load_scenario(scenario.as_deref())?;
+    let (mut sc, file) = load_scenario(scenario.as_deref(), None)?;
     if let Some(s) = seed {
         sc.seed = s;
     }

@@ -41,6 +41,7 @@ fn plan(runs: u64, shard: Shard) -> Plan {
         profile: short_profile(),
         shrink_budget: 3,
         referee: false,
+        failures: "failures".into(),
     }
 }
 
@@ -157,6 +158,7 @@ fn a_ci_campaign_of_300_runs_has_no_failure() {
         profile: Profile::built_in("default").expect("default"),
         shrink_budget: 0,
         referee: false,
+        failures: "failures".into(),
     };
     let jobs = std::thread::available_parallelism().map_or(1, |n| n.get());
     let wall = std::time::Instant::now();

@@ -83,6 +83,9 @@ pub struct Plan {
     /// Run the second referee beside every run ([`crate::referee`]): a hazard it finds that
     /// the invariant watch did not name fails the run as a `disagreement`.
     pub referee: bool,
+    /// The directory the reproducers go to, as the user named it: each one's header prints
+    /// the command that runs it from where the campaign was started.
+    pub failures: std::path::PathBuf,
 }
 
 impl Plan {
@@ -251,9 +254,24 @@ fn reproducer_text(
             super::SERVICE_STATES.map(|s| s.name()).join(", ")
         );
     }
-    let _ = writeln!(h, "# reproduce: asi-lift run {file_name}");
+    let _ = writeln!(
+        h,
+        "# reproduce: asi-lift run {}",
+        shell_word(&plan.failures.join(file_name).to_string_lossy())
+    );
     h.push('\n');
     h + &sc.to_toml()
+}
+
+/// `word` as one word of a POSIX shell command: as it is if it holds only characters no shell
+/// reads specially, else in single quotes (a quote within as `'\''`).
+fn shell_word(word: &str) -> String {
+    let plain = |c: char| c.is_ascii_alphanumeric() || "_-./+,:@%=".contains(c);
+    if !word.is_empty() && word.chars().all(plain) {
+        word.to_string()
+    } else {
+        format!("'{}'", word.replace('\'', "'\\''"))
+    }
 }
 
 /// The line of a run whose generator or shrinker panicked (the simulation's own panics are
@@ -367,6 +385,16 @@ mod tests {
     }
 
     #[test]
+    fn a_reproducers_path_is_one_shell_word() {
+        assert_eq!(
+            shell_word("out/run-000001-ab.toml"),
+            "out/run-000001-ab.toml"
+        );
+        assert_eq!(shell_word("my runs/r.toml"), "'my runs/r.toml'");
+        assert_eq!(shell_word("it's/r.toml"), "'it'\\''s/r.toml'");
+    }
+
+    #[test]
     fn a_shards_runs_are_computed_not_searched() {
         let plan = |runs, k, n| Plan {
             seed: 1,
@@ -375,6 +403,7 @@ mod tests {
             profile: Profile::built_in("smoke").expect("smoke"),
             shrink_budget: 0,
             referee: false,
+            failures: "failures".into(),
         };
         // The last of 10^12 shards of a campaign of 10^12 runs: found by walking the indices,
         // its one run would take hours to reach.

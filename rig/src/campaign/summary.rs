@@ -2,6 +2,7 @@
 //! shards), merged into one table.
 
 use super::{p95, RunLine, RunOutcome};
+use crate::report::count;
 use crate::report::ViolationKind;
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -253,11 +254,11 @@ impl Summary {
         let mut t = String::new();
         let _ = writeln!(
             t,
-            "campaign seed {}, profile {}: {} of {} runs{}, {:.0} simulated s",
+            "campaign seed {}, profile {}: {} of {}{}, {:.0} simulated s",
             self.campaign_seed,
             self.profile,
             self.runs,
-            self.campaign_runs,
+            count(self.campaign_runs, "run", "runs"),
             if self.missing > 0 {
                 format!(" ({} missing: not every shard given)", self.missing)
             } else {
@@ -327,13 +328,17 @@ impl Summary {
             row(
                 &mut t,
                 "  of them the safe drive's",
-                format!("{} in {} runs", d.trips, d.runs),
+                format!("{} in {}", d.trips, count(d.runs, "run", "runs")),
             );
         }
         row(
             &mut t,
             "attendant rounds",
-            format!("{} in {} runs", self.attendant_rounds, self.attended_runs),
+            format!(
+                "{} in {}",
+                self.attendant_rounds,
+                count(self.attended_runs, "run", "runs")
+            ),
         );
         row(
             &mut t,

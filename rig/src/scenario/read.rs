@@ -547,6 +547,20 @@ fn read_lift(loc: &Locator<'_>, l: &RawLift, sc: &mut Scenario) -> Result<(), Sc
                 format!("{v}: the lift has {MIN_FLOORS}..{MAX_FLOORS} floors"),
             ));
         }
+        // The plant could have more floors, but the rig wires the lab bus, whose floor
+        // stations stop at four: refused here, with the file and line, rather than by the
+        // controller when the rig is built.
+        let stations = lab::address::FLOOR_STATIONS;
+        if v > i64::from(stations) {
+            return Err(loc.error(
+                Some(f.span()),
+                "lift.floors",
+                format!(
+                    "{v}: the lab bus has floor stations for {MIN_FLOORS}..{stations} floors \
+                     (addresses 1..{stations})"
+                ),
+            ));
+        }
         sc.floors = v as u8;
     }
     if let Some(s) = &l.start_mm {
@@ -612,7 +626,7 @@ fn read_controller(
                 "controller.scan",
                 "must lie within 1..20 ms: the cabin word takes 14 scans, and beyond \
                  20 ms a 300 ms press or the vane edge initialisation needs can pass \
-                 unseen (README, Scenario files)",
+                 unseen",
             ));
         }
     }

@@ -90,6 +90,16 @@ fn errors_name_the_file_the_line_and_the_field() {
 }
 
 #[test]
+fn more_floors_than_the_lab_bus_has_stations_for_are_refused_at_their_line() {
+    let e = err("seed = 1\n[lift]\nfloors = 5\n");
+    assert!(
+        e.starts_with("t.toml:3:10: lift.floors: 5: the lab bus has floor stations for 2..4"),
+        "{e}"
+    );
+    assert!(Scenario::from_toml("t.toml", "[lift]\nfloors = 4\n").is_ok());
+}
+
+#[test]
 fn errors_of_the_toml_reader_name_the_table_and_quote_little() {
     // A value the TOML reader refuses is named with its table, not only its key.
     let e = err("[bus]\nextra_slaves = 1\n[lift]\nfloors = 99999999999999999999\n");
@@ -209,7 +219,8 @@ mod round_trip {
     }
 
     prop_compose! {
-        fn lift()(floors in 2..=24u8)(
+        // The rig's lab bus has floor stations for up to four floors.
+        fn lift()(floors in 2..=lab::address::FLOOR_STATIONS)(
             floors in Just(floors),
             start in start_range_mm(floors),
             events in proptest::collection::vec(event(floors), 0..12),
