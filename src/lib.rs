@@ -45,7 +45,7 @@ enum Command {
     /// found" and exits with 0.
     Decode(cmd::decode::DecodeArgs),
     /// Run the lab lift live, on the wall clock, behind a virtual AS-i gateway that speaks
-    /// Modbus TCP (the asi-lift guide, chapter "Live mode"): a client watches the built-in controller, or with
+    /// Modbus TCP (the asi-lift guide, chapter "Live mode and your own controller"): a client watches the built-in controller, or with
     /// `--controller external` is the PLC itself. Ctrl-C or `--until` ends the run and writes
     /// the report.
     Serve(cmd::serve::ServeArgs),
@@ -53,7 +53,7 @@ enum Command {
     /// repeats, handshake word times and end-to-end latencies, analytic and simulated side by
     /// side, compared with the textbook cycle time T = (n + 2) · 154 µs.
     Timing(cmd::timing::TimingArgs),
-    /// The teaching stand of seed 000 (the asi-lift guide, chapter "The teaching stand"): a
+    /// The teaching stand of the SafeMOTION thesis (the asi-lift guide, chapter "The teaching stand"): a
     /// servo axis whose safe drive (STO, SOS, SS1, SS2, SLS, SLI, SDI) is requested by a
     /// light curtain. Runs a stand scenario (a file or a built-in name: one per test guide)
     /// and prints what a student sees: the HMI page's states, the stopwatch, torque and

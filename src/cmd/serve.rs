@@ -1,5 +1,5 @@
 //! `asi-lift serve`: the rig on the wall clock with a virtual AS-i/Modbus TCP gateway, for
-//! an outside controller or a client that watches the built-in one (the asi-lift guide, chapter "Live mode").
+//! an outside controller or a client that watches the built-in one (the asi-lift guide, chapter "Live mode and your own controller").
 
 use super::output::Outputs;
 use super::run::{load_scenario, report_body, trace_form, Format, TraceForm};
