@@ -678,7 +678,7 @@ mod command {
         };
         for (name, start) in [
             ("run", "Run the lab lift"),
-            ("stand", "The teaching stand of seed 000"),
+            ("stand", "The teaching stand of the SafeMOTION thesis"),
             ("campaign", "Run many random valid scenarios"),
             ("serve", ""),
             ("timing", "Timing analysis"),
