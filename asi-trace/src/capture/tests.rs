@@ -834,21 +834,7 @@ fn a_long_flat_span_of_a_real_signal_is_run_through_at_once() {
 mod fuzz {
     use super::*;
 
-    fn mutate(text: &[u8], edits: &[(u8, usize, u8)]) -> Vec<u8> {
-        let mut b = text.to_vec();
-        for &(kind, at, byte) in edits {
-            let at = at % (b.len() + 1);
-            match kind % 4 {
-                0 if at < b.len() => b[at] = byte,
-                1 => b.insert(at, byte),
-                2 if at < b.len() => {
-                    b.remove(at);
-                }
-                _ => b.truncate(at),
-            }
-        }
-        b
-    }
+    use asi_phy::testing::mutate;
 
     /// Small captures the project writes: a wire VCD, a real VCD and a CSV of the spec
     /// telegrams (the real VCD and the CSV cut to a few hundred samples, for speed).

@@ -72,12 +72,7 @@ pub(super) enum Finding {
     Violation(ViolationKind, String),
     /// The cabin reached an overtravel sensor under power (K1 closed): contained by the
     /// safety logic, not a violation, but a failure of the controller (docs/safety.md).
-    OvertravelReached {
-        /// The top sensor (else the bottom one).
-        top: bool,
-        /// The cabin's height then, mm.
-        position_mm: f64,
-    },
+    OvertravelReached,
 }
 
 /// How long a condition held within the last [`WINDOW`]: the spans it held, kept while they
@@ -374,13 +369,7 @@ impl InvariantWatch {
             }
         }
         if o.overtravel_tripped && !self.overtravel_was && o.k1_closed {
-            let middle = (self.levels_mm.first().copied().unwrap_or(0.0)
-                + self.levels_mm.last().copied().unwrap_or(0.0))
-                / 2.0;
-            found.push(Finding::OvertravelReached {
-                top: o.position_mm > middle,
-                position_mm: o.position_mm,
-            });
+            found.push(Finding::OvertravelReached);
         }
         self.overtravel_was = o.overtravel_tripped;
         found
@@ -575,7 +564,7 @@ mod tests {
             .into_iter()
             .filter_map(|f| match f {
                 Finding::Violation(k, _) => Some(k),
-                Finding::OvertravelReached { .. } => None,
+                Finding::OvertravelReached => None,
             })
             .collect()
     }
@@ -1070,13 +1059,7 @@ mod tests {
             (20, tripped(cabin(1_262.0, 50.0), false)),
             (2_000, tripped(cabin(1_265.0, 0.0), false)),
         ]);
-        assert_eq!(
-            found,
-            [Finding::OvertravelReached {
-                top: true,
-                position_mm: 1_261.0
-            }]
-        );
+        assert_eq!(found, [Finding::OvertravelReached]);
         // Reached by the crank (K1 open): nothing to count.
         let mut crank = tripped(cabin(-61.0, -10.0), false);
         crank.hand_cranking = true;

@@ -609,9 +609,7 @@ impl Rig {
         for found in self.watch.check(t, seen, self.estop_delay) {
             match found {
                 Finding::Violation(kind, detail) => self.violation(t, kind, detail),
-                Finding::OvertravelReached { top, position_mm } => {
-                    self.overtravel_reached(t, top, position_mm);
-                }
+                Finding::OvertravelReached => self.overtravel_reached(t),
             }
         }
         self.quiet
@@ -650,8 +648,13 @@ impl Rig {
 
     /// The cabin reached an overtravel sensor under power: contained by the safety logic, but
     /// a failure of the controller that a judge of it wants counted (docs/safety.md).
-    fn overtravel_reached(&mut self, t: SimTime, top: bool, position_mm: f64) {
-        let end = if top { "top" } else { "bottom" };
+    fn overtravel_reached(&mut self, t: SimTime) {
+        let end = if self.lift.overtravel_top_free() {
+            "bottom"
+        } else {
+            "top"
+        };
+        let position_mm = self.lift.position_mm();
         self.log_at(
             t,
             "rig",

@@ -423,22 +423,7 @@ mod fuzz {
         })
     }
 
-    /// An edit of a text: a byte changed, inserted or removed, or a cut.
-    fn mutate(text: &[u8], edits: &[(u8, usize, u8)]) -> Vec<u8> {
-        let mut b = text.to_vec();
-        for &(kind, at, byte) in edits {
-            let at = at % (b.len() + 1);
-            match kind % 4 {
-                0 if at < b.len() => b[at] = byte,
-                1 => b.insert(at, byte),
-                2 if at < b.len() => {
-                    b.remove(at);
-                }
-                _ => b.truncate(at),
-            }
-        }
-        b
-    }
+    use asi_phy::testing::mutate;
 
     fn check(bytes: &[u8]) -> Result<(), TestCaseError> {
         let text = String::from_utf8_lossy(bytes);
