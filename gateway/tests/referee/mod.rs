@@ -158,10 +158,18 @@ impl Referee {
     /// A referee of the shaft of `rig`.
     pub fn new(rig: &Rig) -> Referee {
         let c = rig.lift().config();
-        let levels_mm = (1..=c.floors).filter_map(|f| c.floor_level_mm(f)).collect();
+        Referee::of_shaft(
+            (1..=c.floors).filter_map(|f| c.floor_level_mm(f)).collect(),
+            (c.end_position_mm(End::Bottom), c.end_position_mm(End::Top)),
+        )
+    }
+
+    /// A referee of a shaft with the floors' levels `levels_mm` and the mechanical ends
+    /// `ends_mm` (bottom, top).
+    fn of_shaft(levels_mm: Vec<f64>, ends_mm: (f64, f64)) -> Referee {
         Referee {
             levels_mm,
-            ends_mm: (c.end_position_mm(End::Bottom), c.end_position_mm(End::Top)),
+            ends_mm,
             door: Budget::default(),
             load: Budget::default(),
             overtravel_run: 0,
@@ -331,21 +339,7 @@ mod tests {
 
     /// A referee of the lab shaft (floors at 0, 400, 800, 1200 mm; ends at −140 and 1340 mm).
     fn lab() -> Referee {
-        Referee {
-            levels_mm: vec![0.0, 400.0, 800.0, 1_200.0],
-            ends_mm: (-140.0, 1_340.0),
-            door: Budget::default(),
-            load: Budget::default(),
-            overtravel_run: 0,
-            k1_since: None,
-            stop_edge_in_span: None,
-            stop_any_in_span: None,
-            last_stop: false,
-            episode: None,
-            definite: BTreeSet::new(),
-            possible: BTreeSet::new(),
-            samples: 0,
-        }
+        Referee::of_shaft(vec![0.0, 400.0, 800.0, 1_200.0], (-140.0, 1_340.0))
     }
 
     fn moving(position_mm: f64, velocity_mm_s: f64) -> Sample {
