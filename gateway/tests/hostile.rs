@@ -556,16 +556,13 @@ fn a_controller_that_halts_at_stop_is_not_named_and_k1_drops_after_the_delay() {
     assert!(!r.final_state.contactor_closed && !r.final_state.moving);
 }
 
-/// Judge defect (SPEC §6b, stop-overrun: "… or starts a new run, before STOP is released and
-/// the circuit restarted"). The cabin stands at floor 1; STOP is pressed at 3 s and held. The
-/// controller sees EStopOut go off at 3.000 s and only then starts a run up at the travel speed,
-/// which it ends 6 s later, short of floor 2's limit (about 360 mm). The cabin starts moving at
-/// 3.036 s, within the watch's 200 ms `STOP_GRACE`, so the watch counts the run as under way
-/// when STOP came and allows it to the next floor: nothing is named. A controller that reacts
-/// to STOP by starting a run within about 160 ms (the converter starts the cabin about 36 ms
-/// after the write) makes a whole new trip to the next floor under a held STOP unjudged. The
-/// plant knows when the converter's run input came on (after STOP here); the grace could be
-/// tied to that instead of to the cabin's first motion.
+/// SPEC §6b, stop-overrun: "… or starts a new run, before STOP is released and the circuit
+/// restarted". The cabin stands at floor 1; STOP is pressed at 3 s and held. The controller sees
+/// EStopOut go off and only then starts a run up at the travel speed, which it ends 6 s later,
+/// short of floor 2's limit. The cabin starts moving about 36 ms after STOP, but the run was not
+/// commanded before it (the converter's run bit was off in the image when EStopOut went off):
+/// a new run, named however soon it starts. A watch that took any run starting within a grace
+/// time after STOP as under way named nothing here.
 #[test]
 fn a_run_started_after_the_controller_saw_stop_is_named_stop_overrun() {
     let running = start(
