@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
-# The user guide (book/, mdBook): builds it with a pinned mdbook and checks that no internal
-# link of the HTML is broken. mdbook only renders book/src, so a link that leaves it builds
-# fine and is broken on the page; scripts/check-book-links.py catches that.
+# The user guide (book/, mdBook): builds it with a pinned mdbook, checks that no internal
+# link of the HTML is broken, and runs the examples it and the README show. mdbook only
+# renders book/src, so a link that leaves it builds fine and is broken on the page;
+# scripts/check-book-links.py catches that.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 # Pinned, so that every machine renders the same book and a new release cannot break CI.
@@ -17,3 +18,6 @@ fi
 set -x
 "$mdbook" build book
 python3 scripts/check-book-links.py book/book
+# The examples the guide and the README show, run as a reader would, with the release build.
+cargo build --release --bin asi-lift
+python3 scripts/check-examples.py target/release/asi-lift

@@ -172,9 +172,13 @@ fn decode_prints_as_it_goes_and_a_reader_that_goes_ends_it_quietly() {
         "{}",
         String::from_utf8_lossy(&run.stderr)
     );
-    for json in [false, true] {
+    for (json, signal) in [(false, true), (true, true), (false, false)] {
         let mut cmd = asi_lift();
-        cmd.args(["decode", "--signal", "manchester"]).arg(&vcd);
+        cmd.arg("decode").arg(&vcd);
+        // asi-lift's own VCD is read from its pulse wire when no signal is named.
+        if signal {
+            cmd.args(["--signal", "manchester"]);
+        }
         if json {
             cmd.arg("--json");
         }
@@ -1278,6 +1282,28 @@ fn stand_lists_reports_json_and_names_errors() {
     );
     let err = fails(asi_lift().args(["stand", "nonesuch"]));
     assert!(err.contains("there are sto, sos, ss1"), "{err}");
+    let err = fails(asi_lift().args(["stand", "show", "nonesuch"]));
+    assert!(err.contains("there are sto, sos, ss1"), "{err}");
+}
+
+/// `asi-lift stand show NAME` prints the built-in scenario as a file that runs as the
+/// built-in one does, to copy and edit.
+#[test]
+fn stand_show_prints_a_file_that_runs_as_the_built_in_one() {
+    let d = temp();
+    let shown = asi_lift()
+        .args(["stand", "show", "ss1"])
+        .output()
+        .expect("runs");
+    assert!(shown.status.success(), "{shown:?}");
+    let text = String::from_utf8(shown.stdout).expect("UTF-8");
+    assert!(text.contains("function = \"ss1\""), "{text}");
+    let file = d.path().join("my-guide.toml");
+    std::fs::write(&file, &text).expect("write");
+    let from_file = asi_lift().arg("stand").arg(&file).output().expect("runs");
+    let built_in = asi_lift().args(["stand", "ss1"]).output().expect("runs");
+    assert!(from_file.status.success(), "{from_file:?}");
+    assert_eq!(from_file.stdout, built_in.stdout);
 }
 
 /// `asi-lift stand --report FILE` writes what it would print; a file that exists is kept

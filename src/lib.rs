@@ -58,8 +58,15 @@ enum Command {
     /// light curtain. Runs a stand scenario (a file or a built-in name: one per test guide)
     /// and prints what a student sees: the HMI page's states, the stopwatch, torque and
     /// speed, with times.
-    /// Without an argument it lists the built-in ones.
-    Stand(cmd::stand::StandArgs),
+    /// Without an argument it lists the built-in ones; `stand show NAME` prints one as its
+    /// file, to copy and edit.
+    #[command(args_conflicts_with_subcommands = true)]
+    Stand {
+        #[command(subcommand)]
+        action: Option<cmd::stand::StandAction>,
+        #[command(flatten)]
+        args: cmd::stand::StandArgs,
+    },
     /// Run many random valid scenarios on the whole rig (the asi-lift guide, chapter
     /// "Campaigns"): one JSON
     /// line per run, every failure shrunk to a scenario file that reproduces it; or merge
@@ -88,7 +95,10 @@ pub fn run(cli: Cli) -> Result<u8, String> {
         Command::Decode(args) => cmd::decode::run(args),
         Command::Timing(args) => cmd::timing::run(args),
         Command::Serve(args) => cmd::serve::run(args),
-        Command::Stand(args) => cmd::stand::run(args),
+        Command::Stand { action, args } => match action {
+            None => cmd::stand::run(args),
+            Some(cmd::stand::StandAction::Show { name }) => cmd::stand::show(&name),
+        },
         Command::Campaign { action, args } => match action {
             None => cmd::campaign::run(args),
             Some(cmd::campaign::CampaignAction::Summarize { files, json }) => {

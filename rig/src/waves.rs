@@ -15,6 +15,7 @@ use crate::report::round3;
 use asi_master::record::{describe_request, TransactionRecord};
 use asi_phy::waveform::{render, WaveformConfig};
 use asi_phy::{BusTiming, Polarity, Pulse, SimDuration, SimTime};
+use asi_trace::vcd;
 use asi_trace::vcd::write::{Sample, VarId, VarKind, VcdWriter};
 use std::fmt::Write as _;
 use std::io::{self, Write};
@@ -238,13 +239,13 @@ struct Ids {
 }
 
 fn declare(w: &mut VcdWriter<Box<dyn Write>>) -> Ids {
-    const BUS: &[&str] = &["rig", "bus"];
+    const BUS: &[&str] = vcd::BUS_SCOPE;
     const PLANT: &[&str] = &["rig", "plant"];
     const CTL: &[&str] = &["rig", "controller"];
     const SAFETY: &[&str] = &["rig", "safety"];
     Ids {
-        manchester: w.var_every_record(BUS, "manchester", VarKind::Wire(1)),
-        line_voltage: w.var(BUS, "line_voltage", VarKind::Real),
+        manchester: w.var_every_record(BUS, vcd::PULSE_WIRE, VarKind::Wire(1)),
+        line_voltage: w.var(BUS, vcd::LINE_VOLTAGE, VarKind::Real),
         request: w.var(BUS, "request", VarKind::Wire(14)),
         call: w.var(BUS, "call", VarKind::Text),
         address: w.var(BUS, "address", VarKind::Wire(5)),

@@ -19,7 +19,8 @@ pub struct DecodeArgs {
     #[arg(long, value_enum)]
     pub format: Option<InputFormat>,
     /// The VCD signal: its name (`line_voltage`) or dotted path (`rig.bus.line_voltage`);
-    /// needed when the file has more than one.
+    /// needed when the file has more than one, except in asi-lift's own VCD, whose pulse wire
+    /// `rig.bus.manchester` (the whole run) is read by default.
     #[arg(long, value_name = "NAME")]
     pub signal: Option<String>,
     /// Write one JSON object per telegram and line (t_ns, type, bits, call, address, info,

@@ -3,9 +3,21 @@
 
 use super::output::Outputs;
 use super::{print_out, read_input};
+use rig::scenario::builtin::Builtin;
 use rig::stand::builtin::{find, stand_scenario, STAND_BUILTINS};
 use rig::stand::{run as run_stand, StandScenario};
 use std::path::{Path, PathBuf};
+
+/// What `asi-lift stand` does besides running a scenario.
+#[derive(clap::Subcommand)]
+pub enum StandAction {
+    /// Print a built-in stand scenario as its TOML file, to copy and edit
+    /// (`asi-lift stand show ss1 > my-guide.toml`).
+    Show {
+        /// The scenario's name, as `asi-lift stand` lists it.
+        name: String,
+    },
+}
 
 /// The arguments of `asi-lift stand`.
 #[derive(clap::Args)]
@@ -37,7 +49,10 @@ pub fn run(args: StandArgs) -> Result<u8, String> {
         for b in STAND_BUILTINS {
             text.push_str(&format!("{:width$}  {}\n", b.name, b.summary()));
         }
-        text.push_str("\nasi-lift stand NAME runs one (seed 000's test guides, appendix A).\n");
+        text.push_str(
+            "\nasi-lift stand NAME runs one (seed 000's test guides, appendix A); asi-lift stand \
+             show NAME prints it.\n",
+        );
         print_out(&text)?;
         return Ok(0);
     };
@@ -73,13 +88,22 @@ fn load(scenario: &Path) -> Result<StandScenario, String> {
         return StandScenario::from_toml(&scenario.display().to_string(), &text)
             .map_err(|e| e.to_string());
     }
-    let name = scenario.to_string_lossy();
-    let b = find(&name).ok_or_else(|| {
+    stand_scenario(builtin(&scenario.to_string_lossy())?).map_err(|e| e.to_string())
+}
+
+/// Prints the built-in stand scenario `name` as its file.
+pub fn show(name: &str) -> Result<u8, String> {
+    print_out(builtin(name)?.text)?;
+    Ok(0)
+}
+
+/// The built-in stand scenario `name`, or an error that lists the names.
+fn builtin(name: &str) -> Result<&'static Builtin, String> {
+    find(name).ok_or_else(|| {
         let names: Vec<&str> = STAND_BUILTINS.iter().map(|b| b.name).collect();
         format!(
             "{name}: no built-in stand scenario of that name (and no file {name} here); there are {}",
             names.join(", ")
         )
-    })?;
-    stand_scenario(b).map_err(|e| e.to_string())
+    })
 }

@@ -391,13 +391,20 @@ fn stream_vcd(
     }
 }
 
-/// The variable `wanted` names, or the only one if no name is given.
+/// The variable `wanted` names; if no name is given, the only one, or in a file of asi-lift's
+/// own the pulse wire ([`crate::vcd::PULSE_WIRE`]), which holds the whole run where the line
+/// voltage holds only the waveform window.
 fn choose_signal<'v>(vars: &'v [Var], wanted: Option<&str>) -> Result<&'v Var, DecodeError> {
     let listed = |vs: &[&Var]| vs.iter().map(|v| v.to_string()).collect::<Vec<_>>();
     let all: Vec<&Var> = vars.iter().collect();
     let Some(wanted) = wanted else {
-        return match all.as_slice() {
-            [one] => Ok(one),
+        let pulse_wire = crate::vcd::BUS_SCOPE.join(".") + "." + crate::vcd::PULSE_WIRE;
+        let own = vars
+            .iter()
+            .find(|v| v.path == pulse_wire && v.width == 1 && !v.is_real() && !v.is_string());
+        return match (all.as_slice(), own) {
+            ([one], _) => Ok(one),
+            (_, Some(own)) => Ok(own),
             _ => Err(DecodeError::NoSignal {
                 wanted: None,
                 available: listed(&all),

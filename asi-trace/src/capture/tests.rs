@@ -473,6 +473,33 @@ fn the_signal_is_named_and_must_carry_the_line() {
     }
 }
 
+/// asi-lift's own VCD holds many signals; without `--signal` its pulse wire, which holds the
+/// whole run, is read, and a lookalike elsewhere in the file does not count.
+#[test]
+fn asi_lifts_own_vcd_is_read_from_its_pulse_wire() {
+    let text = |path_of_wire: &str| {
+        let (outer, inner) = path_of_wire.split_once('.').expect("scope.scope");
+        format!(
+            "$timescale 1 ns $end\n$scope module {outer} $end\n$scope module {inner} $end\n\
+             $var wire 1 ! manchester $end\n$var real 64 \" line_voltage $end\n\
+             $var wire 1 # repeat $end\n$upscope $end\n$upscope $end\n$enddefinitions $end\n\
+             #0\n1!\n0#\n"
+        )
+    };
+    let own = decode(&text("rig.bus"), &DecodeOptions::default()).expect("own VCD");
+    assert_eq!(
+        own.source,
+        CaptureSource::Wire {
+            signal: "rig.bus.manchester".into()
+        }
+    );
+    let other = decode(&text("top.line"), &DecodeOptions::default());
+    assert!(
+        matches!(other, Err(DecodeError::NoSignal { wanted: None, .. })),
+        "{other:?}"
+    );
+}
+
 #[test]
 fn the_format_comes_from_the_content_or_the_name() {
     assert_eq!(
