@@ -1504,6 +1504,7 @@ fn man_out_writes_a_page_per_subcommand_and_keeps_what_exists() {
             [
                 "asi-lift.1",
                 "asi-lift-scenarios-show.1",
+                "asi-lift-stand-show.1",
                 "asi-lift-campaign-summarize.1",
             ]
             .map(String::from),
