@@ -42,7 +42,7 @@ impl fmt::Display for GroupState {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub struct GroupErrors {
     /// At least one module of the group has an error; FALSE means no module has one (the
-    /// seed's Czech FALSE text, "all modules are faulty", is inverted: docs/seed-errors.md).
+    /// seed's Czech FALSE text, "all modules are faulty", is inverted: docs/source-errors.md).
     pub fb_err: bool,
     /// At least one connection of the group reports an error.
     pub com_err: bool,

@@ -8,7 +8,7 @@ use crate::kl6904::signal::Contact;
 /// Parameters of a MON module (seed 004 §4.5.3).
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct MonConfig {
-    /// MonIn1..4 (four inputs, docs/seed-errors.md): `None` = not activated, else the contact type.
+    /// MonIn1..4 (four inputs, docs/source-errors.md): `None` = not activated, else the contact type.
     pub inputs: [Option<Contact>; 4],
     /// Discrepancy time of pairs MonIn1/2 and MonIn3/4; non-zero makes a pair.
     pub discrepancy: [SimDuration; 2],

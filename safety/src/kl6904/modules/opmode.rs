@@ -1,4 +1,4 @@
-//! The OPMODE function module (seed 004 §4.3; docs/seed-errors.md; docs/safety-logic.md §1.6).
+//! The OPMODE function module (seed 004 §4.3; docs/source-errors.md; docs/safety-logic.md §1.6).
 
 use asi_phy::{SimDuration, SimTime};
 
@@ -37,7 +37,7 @@ pub struct OpModeOutputs {
 /// The KL6904 operating-mode selector.
 ///
 /// Only when exactly one active input is 1 is its output set; with no input or more than one
-/// input set all outputs are 0 (docs/seed-errors.md corrects the seed's "one or more").
+/// input set all outputs are 0 (docs/source-errors.md corrects the seed's "one or more").
 ///
 /// **Decisions** (docs/safety-logic.md §10 point 6, not specified in detail):
 /// - the discrepancy time bounds how long the selection may be invalid (none or several inputs
