@@ -8,7 +8,8 @@ use crate::sensor::{End, VaneSensor};
 
 /// The fewest floors a lift has.
 pub const MIN_FLOORS: u8 = 2;
-/// The most floors: the display word carries floor numbers 1..24 (docs/lab-bus.md, seed 003 table 4.2).
+/// The most floors: the display word carries floor numbers 1..24 (docs/lab-bus.md, table 4.2 of the
+/// lift thesis).
 pub const MAX_FLOORS: u8 = lab::display::MAX_FLOOR;
 /// The longest length this model accepts, in mm (100 m): keeps every time and position
 /// computation far from overflow.
@@ -17,8 +18,8 @@ pub const MAX_LENGTH_MM: f64 = 100_000.0;
 /// (either way): the window in which the rig counts an arrival and the tests judge a stop.
 pub const LEVEL_WINDOW_MM: f64 = 10.0;
 
-/// The lift as built (docs/lift-plant.md geometry; seed 003 §6.3, §6.4). All lengths in mm, positions of
-/// the cabin measured upward from the level of floor 1.
+/// The lift as built (docs/lift-plant.md geometry; §6.3, §6.4 of the lift thesis). All lengths in
+/// mm, positions of the cabin measured upward from the level of floor 1.
 ///
 /// Defaults are docs/lift-plant.md's decisions for the lab lift: 4 floors 400 mm apart, vanes with a
 /// ±40 mm long and a ±10 mm short sensor track, overtravel trip 60 mm beyond the end floors,
@@ -264,9 +265,9 @@ impl LiftConfig {
     /// The track `(from, to)` in mm, both ends inclusive, on which `sensor` is on at `floor`;
     /// `None` for a floor the lift does not have.
     ///
-    /// docs/lift-plant.md, seed 003 §6.4: at floors 2..N the right sensor (Snimac_2) has the long track
-    /// and the left (Snimac_1) the short one; the floor-1 vane is turned 90° to the left, so
-    /// there the left sensor has the long track.
+    /// docs/lift-plant.md, §6.4 of the lift thesis: at floors 2..N the right sensor (Snimac_2) has
+    /// the long track and the left (Snimac_1) the short one; the floor-1 vane is turned 90° to the
+    /// left, so there the left sensor has the long track.
     pub fn vane_track_mm(&self, sensor: VaneSensor, floor: u8) -> Option<(f64, f64)> {
         (1..=self.floors)
             .contains(&floor)

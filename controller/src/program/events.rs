@@ -90,7 +90,7 @@ pub enum ProgramEventKind {
     Served(ServedCall),
     /// STOP in the cabin: the target becomes the next floor in the direction of travel.
     StopDemanded {
-        /// The target given up (FIFO: the request is dropped, as in the seed).
+        /// The target given up (FIFO: the request is dropped, as in the lift thesis).
         dropped: Option<u8>,
         /// The floor the cabin will stop at.
         stop_at: u8,
@@ -167,7 +167,7 @@ pub struct Event {
 /// The vane sensors at the start of initialisation, which decide how it proceeds.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum InitStart {
-    /// No vane, or only the right sensor: the seed's routine (down at 11000 µA).
+    /// No vane, or only the right sensor: the lift thesis' routine (down at 11000 µA).
     Seed,
     /// Only the left sensor: inside floor 1's long track, above or below level.
     Floor1Track,

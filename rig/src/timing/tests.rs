@@ -22,7 +22,7 @@ fn exact(f: &Figure, v: f64) {
     }
 }
 
-/// Without errors every cycle is the model's formula (docs/master.md), which is the seed's
+/// Without errors every cycle is the model's formula (docs/master.md), which is the lift thesis'
 /// (n + 2) · 154 µs wherever an inclusion address is left; 31 slaves leave none.
 #[test]
 fn clean_buses_run_the_model_formula_exactly() {
@@ -42,7 +42,7 @@ fn clean_buses_run_the_model_formula_exactly() {
         assert_eq!(r.repeats.expected, 0.0);
         assert_eq!(r.cycle_histogram.counts.iter().sum::<u64>(), r.cycles);
         // Each slave is served every cycle, an A/B slave every second one: 64 · 154 µs,
-        // the seed's formula for 62 slaves (≤ 10 ms).
+        // the lift thesis' formula for 62 slaves (≤ 10 ms).
         let per_slave = if bus == BusChoice::AbPairs { 2.0 } else { 1.0 };
         exact(&r.slave_update_us, per_slave * model);
     }

@@ -348,7 +348,8 @@ impl<'p> Verifier<'p> {
         standard_outputs
     }
 
-    /// DECOUPLE: an input used needs its output linked, and the other way round (seed 004 §4.6).
+    /// DECOUPLE: an input used needs its output linked, and the other way round (§4.6 of the KL6904
+    /// manual).
     pub(super) fn check_decouple(&mut self) {
         let p = self.p;
         for (index, m) in p.modules.iter().enumerate() {
