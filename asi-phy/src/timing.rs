@@ -198,7 +198,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn defaults_give_the_seeds_154_us_transaction() {
+    fn defaults_give_the_thesis_154_us_transaction() {
         let t = BusTiming::default();
         assert_eq!(t.transaction(), SimDuration::from_micros(154));
         assert_eq!(t.unanswered_transaction(), SimDuration::from_micros(154));

@@ -16,7 +16,7 @@ pub enum VaneSensor {
 
 impl VaneSensor {
     /// The lift thesis' variable name: `Snimac_1` (left) or `Snimac_2` (right).
-    pub fn seed_name(self) -> &'static str {
+    pub fn thesis_name(self) -> &'static str {
         match self {
             VaneSensor::Left => "Snimac_1",
             VaneSensor::Right => "Snimac_2",
@@ -30,7 +30,7 @@ impl fmt::Display for VaneSensor {
             VaneSensor::Left => "left",
             VaneSensor::Right => "right",
         };
-        write!(f, "{} ({side})", self.seed_name())
+        write!(f, "{} ({side})", self.thesis_name())
     }
 }
 

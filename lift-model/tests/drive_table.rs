@@ -83,7 +83,7 @@ fn table_6_6_row_10000() {
 }
 
 #[test]
-fn seed_6_4_row_11000() {
+fn section_6_4_row_11000() {
     check_row(11000, "15.400", "6.930", "0.2772", "68.797");
     // §6.4 equations (3) and (5) print four decimals: 6.9300 rev/s and 68.7971 mm/s.
     let drive = DriveConfig::default();

@@ -55,7 +55,7 @@ fn down_onto_floor_1_the_left_sensor_rises_first_and_the_right_within_2_s_at_600
 }
 
 #[test]
-fn the_seed_initialisation_finds_floor_1_within_its_2_s_timer() {
+fn the_thesis_initialisation_finds_floor_1_within_its_2_s_timer() {
     // Table 6.3 of the lift thesis: run down at 11000; on the left sensor rising, 6000 and a 2 s
     // timer; the right sensor rising while the timer runs means floor 1. Here the controller reacts
     // 50 ms late (AS-i handshake and PLC scan), then 6000 ramps down from 68.8 mm/s.

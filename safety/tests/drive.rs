@@ -855,7 +855,7 @@ fn slp_needs_a_multi_turn_encoder() {
 }
 
 #[test]
-fn demo_parameters_are_valid_and_as_in_the_seed() {
+fn demo_parameters_are_valid_and_as_in_the_safemotion_thesis() {
     let c = DriveSafetyConfig::demo();
     assert_eq!(c.validate(), Ok(()));
     assert_eq!(DriveSafetyConfig::demo_without_encoder().validate(), Ok(()));

@@ -15,13 +15,13 @@ impl Program {
             (true, false) => InitStart::Floor1Track,
             // Last seen inside floor 1's vane moving down, or below it moving up: below it.
             (false, false) if self.in_floor1_vane => InitStart::BelowFloor1,
-            _ => InitStart::Seed,
+            _ => InitStart::ThesisRoutine,
         };
         let step = match start {
             InitStart::Level => InitStep::Probe,
             InitStart::Floor1Track => InitStep::Floor1Down,
             InitStart::BelowFloor1 => InitStep::Floor1Up,
-            InitStart::Seed => InitStep::Run,
+            InitStart::ThesisRoutine => InitStep::Run,
         };
         self.initialised_at = None;
         self.init_held = None;
