@@ -103,7 +103,7 @@ pub fn analyse(opts: &TimingOptions) -> Result<TimingReport, AnalysisError> {
         cycles,
         transactions,
         transaction_us: c.spacing.figure(1e-3).analytic(model.transaction_us),
-        seed_cycle_us: model.thesis_cycle_us(),
+        thesis_cycle_us: model.thesis_cycle_us(),
         cycle_us,
         cycle_histogram: histogram(&cycle_values, 1.0, 40),
         slave_update_us,

@@ -118,7 +118,7 @@ pub struct TimingReport {
     /// Transaction time (start to start), µs.
     pub transaction_us: Figure,
     /// The lift thesis' cycle T = (n + 2) · 154 µs.
-    pub seed_cycle_us: f64,
+    pub thesis_cycle_us: f64,
     /// Cycle time: analytic = the model's formula (plus the expected repeats with errors).
     pub cycle_us: Figure,
     /// Cycle times, µs.

@@ -36,7 +36,7 @@ fn clean_buses_run_the_model_formula_exactly() {
         let r = analyse(&opts(bus, 0.0, 1, 0)).expect("analysis");
         exact(&r.transaction_us, 154.0);
         exact(&r.cycle_us, model);
-        assert_eq!(r.seed_cycle_us, seed);
+        assert_eq!(r.thesis_cycle_us, seed);
         assert!(r.cycles > 150, "{bus:?}: {}", r.cycles);
         assert_eq!(r.repeats.count, 0);
         assert_eq!(r.repeats.expected, 0.0);
@@ -54,7 +54,7 @@ fn clean_buses_run_the_model_formula_exactly() {
 fn the_lab_bus_without_errors() {
     let r = analyse(&opts(BusChoice::Lab { extra: 0 }, 0.0, 2, 3)).expect("analysis");
     exact(&r.cycle_us, 2002.0);
-    assert_eq!(r.seed_cycle_us, 2002.0);
+    assert_eq!(r.thesis_cycle_us, 2002.0);
     exact(&r.slave_update_us, 2002.0);
     let lab = r.lab.expect("lab figures");
     exact(&lab.analog_value_ms, 7.0 * 2.002);
@@ -204,7 +204,7 @@ fn the_outputs_show_every_figure() {
     let text = r.to_text();
     for want in [
         "transaction",
-        "seed: T = (n + 2)",
+        "thesis: T = (n + 2)",
         "per-slave",
         "error model",
     ] {
