@@ -69,7 +69,7 @@ impl Default for LiftConfig {
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum LiftConfigError {
     /// Fewer than 2 or more than 24 floors.
-    #[error("floors = {floors}: the lift needs 2 to 24 floors (the display word carries floor numbers 1..24, docs/lab-bus.md)")]
+    #[error("floors = {floors}: the lift needs 2 to 24 floors (the display word carries floor numbers 1..24; see the asi-lift guide, chapter \"The handshakes and displays\")")]
     FloorCount {
         /// The number given.
         floors: u8,
@@ -107,7 +107,7 @@ pub enum LiftConfigError {
         slip: f64,
     },
     /// The short track is not shorter than the long one.
-    #[error("short_track_half_mm = {short_mm:?} must be less than long_track_half_mm = {long_mm:?}: floor 1 is recognised by its long track rising first (docs/lift-plant.md)")]
+    #[error("short_track_half_mm = {short_mm:?} must be less than long_track_half_mm = {long_mm:?}: floor 1 is recognised by its long track rising first (the lift thesis, §6.4)")]
     TrackLengths {
         /// The short half length given.
         short_mm: f64,
@@ -115,7 +115,7 @@ pub enum LiftConfigError {
         long_mm: f64,
     },
     /// Two tracks of one sensor touch or overlap, so the sensor would not drop between floors.
-    #[error("vanes overlap: the {sensor} tracks of floors {lower_floor} and {upper_floor} touch or overlap (floor {lower_floor} ends at {lower_top_mm:?} mm, floor {upper_floor} starts at {upper_bottom_mm:?} mm); the sensor must drop between floors or the controller's floor counting (docs/controller.md) misses one: raise floor_pitch_mm or shorten the tracks")]
+    #[error("vanes overlap: the {sensor} tracks of floors {lower_floor} and {upper_floor} touch or overlap (floor {lower_floor} ends at {lower_top_mm:?} mm, floor {upper_floor} starts at {upper_bottom_mm:?} mm); the sensor must drop between floors or the controller's floor counting (the lift thesis, tables 6.4 and 6.5) misses one: raise floor_pitch_mm or shorten the tracks")]
     VanesOverlap {
         /// The sensor whose tracks collide.
         sensor: VaneSensor,

@@ -142,7 +142,7 @@ impl<'p> Verifier<'p> {
                     self.err(
                         Rule::Dangling,
                         Item::Group { index, name: g.name.clone() },
-                        "ERR_ACK is not connected; acknowledgement is never automatic, so it must be (docs/safety-logic.md)".into(),
+                        "ERR_ACK is not connected; acknowledgement is never automatic, so it must be (the KL6904 manual, §3.1)".into(),
                     );
                     None
                 }
@@ -293,7 +293,7 @@ impl<'p> Verifier<'p> {
                 self.err(
                     Rule::SignalKind,
                     item.clone(),
-                    format!("a Local-Out takes a module output, not the group output `{}` (docs/safety-logic.md)", o.source),
+                    format!("a Local-Out takes a module output, not the group output `{}` (the KL6904 manual, §2–§3)", o.source),
                 );
                 continue;
             }
