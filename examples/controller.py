@@ -7,7 +7,7 @@ Start the rig without its own controller, then this program beside it:
     python examples/controller.py                 # --host 127.0.0.1 --port 5020
 
 It runs the three nibble handshakes of the lab bus (book/src/handshakes.md), finds
-floor 1 (docs/controller.md §5.1), then serves the calls as the seed's FIFO control does
+floor 1 (docs/controller.md §5.1), then serves the calls as the lift thesis' FIFO control does
 (§5.3): cabin calls in the order pressed, then hall calls in the order pressed. It stops when
 the server ends the run. What it leaves out: the book, "A controller in Python".
 """
@@ -33,7 +33,7 @@ STANDSTILL, CREEP, TRAVEL, INIT = 4000, 6000, 10000, 11000
 SCAN_MS = 10                    # the PLC scan (docs/controller.md)
 DWELL_MS = 2000                 # the cabin stands 2 s at a floor before it departs (§5.3)
 
-# Step codes of the handshakes (seed 003 tables 4.3, 4.5, 4.7).
+# Step codes of the handshakes (tables 4.3, 4.5, 4.7 of the lift thesis).
 FOUR_STEPS = [0b111, 0b010, 0b001, 0b000]
 SEVEN_STEPS = [0b111, 0b101, 0b100, 0b011, 0b010, 0b001, 0b000]
 HALL_UP, HALL_DOWN, HALL_BOTH = 0b101, 0b100, 0b011
@@ -50,7 +50,7 @@ def set_nibble(words, a, v):
 
 
 def display_word(floor, up=False, down=False, moving=False):
-    """D10..D1 (seed 003 table 4.2): floor, up, down, moving, fault, even parity."""
+    """D10..D1 (table 4.2 of the lift thesis): floor, up, down, moving, fault, even parity."""
     w = floor << 5 | up << 4 | down << 3 | moving << 2
     return w | bin(w).count("1") % 2
 

@@ -1213,7 +1213,7 @@ mod run {
     }
 }
 
-/// `asi-lift stand ss1` (seed 000, guide A.4): the page's states with their times, the
+/// `asi-lift stand ss1` (the SafeMOTION thesis, guide A.4): the page's states with their times, the
 /// stopwatch, the torque; twice the same output; exit code 0 (the stand only shows).
 #[test]
 fn stand_ss1_prints_what_the_student_sees() {
@@ -1722,6 +1722,9 @@ fn run_until_beyond_the_scenarios_end_extends_the_run() {
     assert!(shorter.contains("summary after 0.500 s"), "{shorter}");
 }
 
+/// What names a file of the repository in a text the user reads.
+const REPOSITORY_FILES: [&str; 3] = ["README", "docs/", ".md"];
+
 /// The help texts stand on their own after `cargo install`, where no README or docs/ directory
 /// comes along: they name the guide's chapters, not the repository's files.
 #[test]
@@ -1729,7 +1732,7 @@ fn no_help_text_points_into_the_repository() {
     use clap::CommandFactory;
     fn walk(cmd: &mut clap::Command, path: &str) {
         let help = cmd.render_long_help().to_string();
-        for file in ["README", "docs/", ".md"] {
+        for file in REPOSITORY_FILES {
             assert!(!help.contains(file), "{path} --help names {file}:\n{help}");
         }
         for sub in cmd.get_subcommands_mut() {
@@ -1738,4 +1741,67 @@ fn no_help_text_points_into_the_repository() {
         }
     }
     walk(&mut asi_lift::Cli::command(), "asi-lift");
+}
+
+/// Nor do the error messages that cite where a rule comes from: they name the guide's chapter
+/// or the source document's section (the lift's configuration, the safety project's verifier).
+#[test]
+fn no_error_message_points_into_the_repository() {
+    use lift_model::{LiftConfigError, VaneSensor};
+    use safety::kl6904::connection::PartnerKind;
+    use safety::kl6904::project::{ModuleDesc, ModuleKind};
+    use safety::kl6904::signal::{GroupOutput, SignalRef};
+    let mut messages: Vec<String> = [
+        LiftConfigError::FloorCount { floors: 25 },
+        LiftConfigError::TrackLengths {
+            short_mm: 40.0,
+            long_mm: 10.0,
+        },
+        LiftConfigError::VanesOverlap {
+            sensor: VaneSensor::Right,
+            lower_floor: 1,
+            upper_floor: 2,
+            lower_top_mm: 210.0,
+            upper_bottom_mm: 190.0,
+        },
+    ]
+    .iter()
+    .map(ToString::to_string)
+    .collect();
+    // A safety project that breaks the rules whose messages cite the KL6904 manual: no ERR_ACK,
+    // an ESTOP without Restart, an AND with one input, a Local-Out fed by a group output.
+    let ms = asi_phy::SimDuration::from_millis;
+    let mut project = safety::kl6904::Project::new("p", 1)
+        .group("g", SignalRef::standard("ack"))
+        .connection("t", "g", PartnerKind::Kl1904, 2, ms(100), &["a"])
+        .module(
+            ModuleDesc::new(ModuleKind::Estop, "estop", "g")
+                .input("EStopIn1", SignalRef::twinsafe("t", "a")),
+        )
+        .module(
+            ModuleDesc::new(ModuleKind::And, "and", "g")
+                .input("AndIn1", SignalRef::fb("estop", "EStopOut")),
+        )
+        .local_output(1, "k1", "g", SignalRef::group("g", GroupOutput::FbErr));
+    project.groups[0].err_ack = None;
+    let errors = project.verify().expect_err("the project breaks four rules");
+    messages.extend(errors.iter().map(|e| e.message.clone()));
+    for cites in [
+        "KL6904 manual, §3.1",
+        "§4.1",
+        "§4.4",
+        "§2–§3",
+        "asi-lift guide",
+        "thesis",
+    ] {
+        assert!(
+            messages.iter().any(|m| m.contains(cites)),
+            "no message cites {cites}: {messages:#?}"
+        );
+    }
+    for m in &messages {
+        for file in REPOSITORY_FILES {
+            assert!(!m.contains(file), "an error message names {file}: {m}");
+        }
+    }
 }

@@ -1,4 +1,4 @@
-//! The lab lift's bus, ready-made (docs/lab-bus.md table; seed 003 table 3.1).
+//! The lab lift's bus, ready-made (docs/lab-bus.md table; table 3.1 of the lift thesis).
 //!
 //! | address | device |
 //! |---|---|

@@ -1,5 +1,5 @@
 //! asi-bus: the AS-Interface segment of asi-lift, master and slaves on one pulse-level line
-//! (docs/architecture.md–3; seed 003 §3).
+//! (docs/architecture.md–3; §3 of the lift thesis).
 //!
 //! Sans-IO and deterministic: the [`Bus`] ties asi-master's [`Master`](asi_master::Master),
 //! asi-phy's [`Medium`](asi_phy::line::Medium) and asi-slaves' [`Slave`](asi_slaves::Slave)s and

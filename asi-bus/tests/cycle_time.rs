@@ -1,5 +1,5 @@
-//! Cycle time in simulation against the seed's T = (n + 2) · 154 µs (seed 003 §2.1, formula
-//! (1); docs/master.md, §7).
+//! Cycle time in simulation against T = (n + 2) · 154 µs (the lift thesis, §2.1, formula (1);
+//! docs/master.md, §7).
 
 use crate::common::*;
 use asi_bus::Bus;
@@ -26,7 +26,7 @@ fn cycle_is_n_plus_2_transactions_for_1_to_30_slaves_and_32_for_31() {
         assert_eq!(s.cycle_min, us(want * 154), "n = {n}");
         assert_eq!(s.cycle_max, us(want * 154), "n = {n}");
         assert_eq!(s.repeats, 0);
-        // 31 slaves: 4.928 ms, within the seed's "≤ 5 ms for 31 slaves".
+        // 31 slaves: 4.928 ms, within the lift thesis' "≤ 5 ms for 31 slaves".
         assert!(s.cycle_max <= SimDuration::from_millis(5));
     }
 }
@@ -56,8 +56,8 @@ fn each_repeat_adds_one_transaction_time() {
     assert!(!trace[i - 1].request_failed.is_empty());
 }
 
-/// 62 A/B slaves: 31 slots + 1 management call a cycle (no inclusion address is left), and
-/// each slave is served every second cycle: 64 · 154 µs = 9.856 ms (≤ 10 ms, seed 003 §2.1).
+/// 62 A/B slaves: 31 slots + 1 management call a cycle (no inclusion address is left), and each
+/// slave is served every second cycle: 64 · 154 µs = 9.856 ms (≤ 10 ms, §2.1 of the lift thesis).
 #[test]
 fn sixty_two_ab_slaves_see_twice_the_cycle() {
     let b_codes = asi_phy::SlaveCodes {

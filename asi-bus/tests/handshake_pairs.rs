@@ -150,8 +150,8 @@ fn table_4_6_example() -> CabinPanelState {
     }
 }
 
-/// Seed 003 table 4.7, worked vector: the master's requests `K111`, `K101`, `K100`, `K011`,
-/// `K010`, `K001`, `K000` with K toggling at every step, and the slave's answers: the K it
+/// Table 4.7 of the lift thesis, worked vector: the master's requests `K111`, `K101`, `K100`,
+/// `K011`, `K010`, `K001`, `K000` with K toggling at every step, and the slave's answers: the K it
 /// answers to on D3, then E3E2E1, D16..D14, ..., D1 O V of table 4.6.
 #[test]
 fn table_4_7_request_and_answer_nibbles() {

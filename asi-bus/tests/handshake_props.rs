@@ -141,7 +141,7 @@ proptest! {
         prop_assert!(updates.iter().all(|&u| u == want));
     }
 
-    /// Seed 003 table 4.7 over a lossy bus: any panel word (all 29 signal bits, so every
+    /// Table 4.7 of the lift thesis over a lossy bus: any panel word (all 29 signal bits, so every
     /// 32-bit word of table 4.6 with a right parity) arrives intact whatever Data_Exchanges
     /// lose their request or their response and whatever PLC scans come late or twice. The
     /// slave's module answers from its pins one exchange late, as the AC2726 does.

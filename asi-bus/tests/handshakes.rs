@@ -1,5 +1,5 @@
 //! The lab lift's handshakes over the simulated bus, with the PLC side stepped from the
-//! process image every 10 ms scan (docs/lab-bus.md, §5; seed 003 tables 4.2–4.7, 2.2).
+//! process image every 10 ms scan (docs/lab-bus.md, §5; tables 4.2–4.7, 2.2 of the lift thesis).
 
 use crate::common::*;
 use asi_bus::lab::LabLift;
@@ -51,8 +51,9 @@ fn exchanges_with(trace: &[TransactionRecord], n: u8) -> Vec<TransactionRecord> 
         .collect()
 }
 
-/// Seed 003 table 4.3: the floor slave requests 111, 010, 001, 000; the PLC answers D10..D8,
-/// D7..D5, D4..D2, D1 O V toggling K; between words the slave reports its buttons (101 = up).
+/// Table 4.3 of the lift thesis: the floor slave requests 111, 010, 001, 000; the PLC answers
+/// D10..D8, D7..D5, D4..D2, D1 O V toggling K; between words the slave reports its buttons
+/// (101 = up).
 #[test]
 fn floor_display_word_and_up_button() {
     let mut lab = running_lab(29);
@@ -94,8 +95,8 @@ fn floor_display_word_and_up_button() {
     insta::assert_snapshot!(folded(&exchanges_with(&trace, 1)));
 }
 
-/// Seed 003 tables 4.6/4.7: the PLC requests the cabin word in two 7-step halves (E = 000,
-/// E = 001) and checks its parity.
+/// Tables 4.6/4.7 of the lift thesis: the PLC requests the cabin word in two 7-step halves
+/// (E = 000, E = 001) and checks its parity.
 #[test]
 fn cabin_32_bit_button_word() {
     let mut lab = running_lab(29);
@@ -143,7 +144,7 @@ fn cabin_display_word() {
     );
 }
 
-/// Seed 003 table 2.2: the master itself moves the analog output word to the AC2618 in 7
+/// Table 2.2 of the lift thesis: the master itself moves the analog output word to the AC2618 in 7
 /// cycles (integrated S-7.3, CTT1); channel 1 carries Rychlost = 11000 µA.
 #[test]
 fn one_s73_value_to_the_current_loop_output() {

@@ -1,5 +1,5 @@
-//! The process image against seed 003 table 4.1 on the running lab bus: where each slave's
-//! nibble and each flag sits, host flags in output word 0, analog words (docs/master.md).
+//! The process image against table 4.1 of the lift thesis on the running lab bus: where each
+//! slave's nibble and each flag sits, host flags in output word 0, analog words (docs/master.md).
 
 use crate::common::*;
 use asi_bus::lab::LabLift;

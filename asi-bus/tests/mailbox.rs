@@ -1,4 +1,4 @@
-//! Host jobs through the command mailbox in parameter words 32..49 (seed 003 table 4.1;
+//! Host jobs through the command mailbox in parameter words 32..49 (table 4.1 of the lift thesis;
 //! src/mailbox.rs protocol).
 
 use crate::common::*;

@@ -1,5 +1,5 @@
 //! The projected configuration and the master's settings (docs/master.md, docs/asi.md
-//! §5.1, §6.1; seed 003 §2.2.3).
+//! §5.1, §6.1; §2.2.3 of the lift thesis).
 
 use crate::lists::SlaveList;
 use asi_phy::{BusTiming, Nibble, SimDuration, SlaveAddr, SlaveCodes};
@@ -171,7 +171,7 @@ pub struct MasterConfig {
     /// LDS (docs/master.md decision: 3).
     pub max_failed_cycles: u8,
     /// The AS-i supply voltage below which APF is set and the master goes offline.
-    /// **Decision**: 22.0 V (the AS-i supply delivers 29.5..31.6 V, seed 003 §2.2.1).
+    /// **Decision**: 22.0 V (the AS-i supply delivers 29.5..31.6 V, §2.2.1 of the lift thesis).
     pub apf_threshold_volts: f64,
     /// Time from power return (or leaving offline) to the first detection call, while the
     /// slaves come out of reset. **Decision**: 5 ms.

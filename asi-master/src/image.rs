@@ -1,5 +1,5 @@
-//! The host interface: input and output data images in the word layout of seed 003 table 4.1
-//! (Bihl+Wiedemann BWU1488 master; docs/master.md "Input data image").
+//! The host interface: input and output data images in the word layout of table 4.1 of the lift
+//! thesis (Bihl+Wiedemann BWU1488 master; docs/master.md "Input data image").
 //!
 //! | words | content |
 //! |---|---|
@@ -7,12 +7,12 @@
 //! | 16..31 | network 2 (not used by the lab lift; always 0) |
 //! | 32..49 | network 1 parameters: word 32 = command (bits 15..8), toggle T (bit 7), result (bits 6..0); words 33..49 = parameter bytes 1..34, the odd byte in the high half |
 //! | 50..67 | network 2 parameters (unused) |
-//! | 68..155 | network 1 analog values, slave 10..31, 4 channels each: word 68 + 4·(addr − 10) + (channel − 1) (seed's "81" for slave 10 channel 4 is the typo for 71) |
+//! | 68..155 | network 1 analog values, slave 10..31, 4 channels each: word 68 + 4·(addr − 10) + (channel − 1) (the lift thesis' "81" for slave 10 channel 4 is the typo for 71) |
 //! | 156..243 | network 2 analog values (unused) |
 //!
-//! Input flags (seed 003 table 4.1 notes): F0 ConfigError (1 = error), F1 APF (1 = power
-//! fail), F2 PeripheryFault (1 = fault), F3 ConfigurationActive **inverted as the seed says**
-//! (0 = configuration mode active, 1 = not active, i.e. protected mode).
+//! Input flags (the notes of table 4.1 of the lift thesis): F0 ConfigError (1 = error), F1 APF
+//! (1 = power fail), F2 PeripheryFault (1 = fault), F3 ConfigurationActive **inverted as the lift
+//! thesis says** (0 = configuration mode active, 1 = not active, i.e. protected mode).
 //!
 //! The output image mirrors the layout: output nibbles at the same positions, the command
 //! mailbox at 32..49, analog output values at 68..155. Output word 0 bits 15..12 carry the
@@ -21,7 +21,8 @@
 use asi_phy::Nibble;
 use asi_phy::SlaveAddr;
 
-/// Number of words in each image (seed 003 §4: 244 words for master revision 1.3 and later).
+/// Number of words in each image (§4 of the lift thesis: 244 words for master revision 1.3 and
+/// later).
 pub const IMAGE_WORDS: usize = 244;
 /// First word of network 1's parameter (mailbox) area.
 pub const MAILBOX_WORD: usize = 32;
@@ -41,7 +42,7 @@ pub const F2_PERIPHERY_FAULT: u16 = 1 << 14;
 /// Input flag F3, ConfigurationActive, in word 0 (0 = configuration mode active).
 pub const F3_CONFIGURATION_NOT_ACTIVE: u16 = 1 << 15;
 
-/// Where a slave's nibble sits: the word and the bit shift of D0 (seed 003 table 4.1).
+/// Where a slave's nibble sits: the word and the bit shift of D0 (table 4.1 of the lift thesis).
 ///
 /// Slave `n` is slot `n` of its half (slot 0 is the flag nibble), 4 slots per word with the
 /// lowest slot in the highest bits: word = n / 4 (+ 8 for B), shift = 12 − 4·(n mod 4).
@@ -60,7 +61,7 @@ pub const fn nibble_position(a: SlaveAddr) -> Option<(usize, u32)> {
 }
 
 /// The analog word of slave `address` (10..=31), `channel` (1..=4): 68 + 4·(addr − 10) +
-/// (channel − 1) (seed 003 table 4.1).
+/// (channel − 1) (table 4.1 of the lift thesis).
 pub const fn analog_word(address: u8, channel: u8) -> Option<usize> {
     if address < ANALOG_FIRST_SLAVE || address > 31 || channel < 1 || channel > 4 {
         return None;
@@ -251,7 +252,7 @@ mod tests {
         SlaveAddr::b(n).expect("address")
     }
 
-    /// Seed 003 table 4.1, row by row: word 0 = flags, 1/1A, 2/2A, 3/3A; word 1 = 4..7;
+    /// Table 4.1 of the lift thesis, row by row: word 0 = flags, 1/1A, 2/2A, 3/3A; word 1 = 4..7;
     /// word 7 = 28..31; word 15 = 28B..31B.
     #[test]
     fn slave_nibbles_sit_where_table_4_1_puts_them() {
@@ -334,8 +335,8 @@ mod tests {
         assert_eq!(F3_CONFIGURATION_NOT_ACTIVE, 0x8000);
     }
 
-    /// Seed 003 table 4.1: analog words of slaves 10..31 from word 68, four per slave, slave
-    /// 31 channel 4 at word 155 (and slave 10 channel 4 at 71, not the seed's typo 81).
+    /// Table 4.1 of the lift thesis: analog words of slaves 10..31 from word 68, four per slave,
+    /// slave 31 channel 4 at word 155 (and slave 10 channel 4 at 71, not the lift thesis' typo 81).
     #[test]
     fn analog_words_of_slaves_10_to_31() {
         assert_eq!(analog_word(10, 1), Some(68));

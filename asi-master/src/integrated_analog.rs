@@ -1,19 +1,20 @@
-//! The master's integrated S-7.3 analog transfer (seed 003 §2.3, table 2.2; docs/asi.md §6.3; docs/lab-bus.md).
+//! The master's integrated S-7.3 analog transfer (§2.3, table 2.2 of the lift thesis; docs/asi.md
+//! §6.3; docs/lab-bus.md).
 //!
 //! A 16-bit value travels with its channel E3..E1, overflow O and valid V in 7 steps of 3 data
 //! bits plus the control bit K: E3E2E1 | D16..D14 | D13..D11 | D10..D8 | D7..D5 | D4..D2 |
 //! D1 O V. The step handshake is the one of [`asi_phy::handshake`] (requester code on D2..D0,
 //! answerer K on D3 and data on D2..D0) with the seven codes of table 4.5.
 //!
-//! Direction (**Decision**, following seed tables 4.5 and 4.7 which use this layout): for an
-//! output slave (master → slave) the slave requests and the master answers; for an input slave
-//! the master requests and the slave answers. The master runs its side itself (integrated
-//! analog, master profile M3/M4 with CTT1) and steps it on every Data_Exchange with the slave;
-//! the slave's firmware reacts within the same telegram, so one value takes 7 cycles.
+//! Direction (**Decision**, following tables 4.5 and 4.7 of the lift thesis which use this layout):
+//! for an output slave (master → slave) the slave requests and the master answers; for an input
+//! slave the master requests and the slave answers. The master runs its side itself (integrated
+//! analog, master profile M3/M4 with CTT1) and steps it on every Data_Exchange with the slave; the
+//! slave's firmware reacts within the same telegram, so one value takes 7 cycles.
 //!
-//! Channels (**Decision**): E3..E1 is the channel number 1..4 in binary (seed: "binary number
-//! of the channel 1 to 4"); the master sends the channels of an output slave in turn, an input
-//! slave sends its channels in turn. Values with O = 1 are written to the image as 0x7FFF
+//! Channels (**Decision**): E3..E1 is the channel number 1..4 in binary (the lift thesis: "binary
+//! number of the channel 1 to 4"); the master sends the channels of an output slave in turn, an
+//! input slave sends its channels in turn. Values with O = 1 are written to the image as 0x7FFF
 //! (overflow), values with V = 0 leave the image word unchanged.
 //!
 //! This module is the master's side ([`S73OutputMaster`], [`S73InputMaster`]); the slave's

@@ -1,5 +1,5 @@
 //! asi-master: the AS-Interface master of asi-lift, its process image and host interface
-//! (docs/master.md, §3, §7; seed 003 §2.2.3, §2.3, §3, §4).
+//! (docs/master.md, §3, §7; §2.2.3, §2.3, §3, §4 of the lift thesis).
 //!
 //! Sans-IO and deterministic, in the manner of smoltcp and quinn-proto: the [`Master`] is a
 //! state machine driven by simulated time passed in; nothing reads a clock, spawns a thread or
@@ -7,9 +7,9 @@
 //! carries them (the `asi-bus` crate) puts its requests on asi-phy's line and hands it the
 //! responses.
 //!
-//! Modules, one per concept: [`image`] (seed 003 table 4.1 word layout), [`lists`] (LDS, LAS,
-//! LPS, LCS, LPF, flags), [`config`] (projected configuration, settings), [`master`] (phases and
-//! cycle), [`mailbox`] (host jobs), [`record`] (transaction records and statistics),
+//! Modules, one per concept: [`image`] (the word layout of table 4.1 of the lift thesis), [`lists`]
+//! (LDS, LAS, LPS, LCS, LPF, flags), [`config`] (projected configuration, settings), [`master`]
+//! (phases and cycle), [`mailbox`] (host jobs), [`record`] (transaction records and statistics),
 //! [`integrated_analog`] (the master's side of S-7.3), [`plc_handshake`] (the PLC side of
 //! tables 4.2–4.7).
 

@@ -1,7 +1,7 @@
-//! The command mailbox in parameter words 32..49 (seed 003 table 4.1 "Příkaz | T | Výsledek";
-//! docs/master.md).
+//! The command mailbox in parameter words 32..49 (table 4.1 of the lift thesis "Příkaz | T |
+//! Výsledek"; docs/master.md).
 //!
-//! **Protocol** (decision; the seed gives only the word layout): the PLC writes the request
+//! **Protocol** (decision; the lift thesis gives only the word layout): the PLC writes the request
 //! bytes into output words 33..49 (byte 1 in the high half of word 33), then the command into
 //! output word 32 bits 15..8 and *toggles* T (bit 7). The master takes a job when the output T
 //! differs from the T of its last result. When the job is done it writes the response bytes into

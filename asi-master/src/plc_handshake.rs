@@ -1,6 +1,6 @@
-//! The master (PLC) side of the lab lift's nibble handshakes (seed 003 tables 4.2–4.7): the
-//! `*Master` types the `controller` crate drives from the process image, built on the engines of
-//! [`asi_phy::handshake`] and the words of [`asi_phy::handshake_words`]. The device side is
+//! The master (PLC) side of the lab lift's nibble handshakes (tables 4.2–4.7 of the lift thesis):
+//! the `*Master` types the `controller` crate drives from the process image, built on the engines
+//! of [`asi_phy::handshake`] and the words of [`asi_phy::handshake_words`]. The device side is
 //! `asi_slaves::device_handshake`.
 
 use asi_phy::handshake::{
@@ -54,7 +54,7 @@ impl DisplaySender {
     }
 }
 
-/// The master (PLC) side of a floor station, seed 003 table 4.3: answers the slave's word
+/// The master (PLC) side of a floor station, table 4.3 of the lift thesis: answers the slave's word
 /// requests with the display word and collects button reports.
 #[derive(Clone, Debug)]
 pub struct FloorStationMaster {
@@ -146,8 +146,8 @@ impl FloorStationMaster {
     }
 }
 
-/// The master (PLC) side of the cabin display, seed 003 tables 4.4/4.5: answers the slave's
-/// seven step requests with the display word.
+/// The master (PLC) side of the cabin display, tables 4.4/4.5 of the lift thesis: answers the
+/// slave's seven step requests with the display word.
 #[derive(Clone, Debug)]
 pub struct CabinDisplayMaster {
     sender: DisplaySender,
@@ -188,8 +188,9 @@ impl CabinDisplayMaster {
     }
 }
 
-/// The master (PLC) side of the cabin panel, seed 003 table 4.7: requests the 32-bit word in
-/// two 7-step halves (E = 000, then E = 001) with K in its own request, and checks its parity.
+/// The master (PLC) side of the cabin panel, table 4.7 of the lift thesis: requests the 32-bit
+/// word in two 7-step halves (E = 000, then E = 001) with K in its own request, and checks its
+/// parity.
 ///
 /// On the bus, one half is the request sequence `K111`, `K101`, `K100`, `K011`, `K010`, `K001`,
 /// `K000` with K toggling at every step (for example `0111`, `1101`, `0100`, `1011`, `0010`,

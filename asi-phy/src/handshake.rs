@@ -1,5 +1,6 @@
-//! The engines of the lab lift's nibble handshakes (seed 003 §4, tables 4.2–4.7; docs/lab-bus.md),
-//! both sides, as plain state machines over 4-bit values with no dependency on the bus.
+//! The engines of the lab lift's nibble handshakes (§4, tables 4.2–4.7 of the lift thesis;
+//! docs/lab-bus.md), both sides, as plain state machines over 4-bit values with no dependency on
+//! the bus.
 //!
 //! **Nibble use** (docs/lab-bus.md decision), two kinds of handshake:
 //! - **The answerer owns K** (floor stations, table 4.3; cabin display, table 4.5; S-7.3 of
@@ -18,14 +19,14 @@
 //! PLC scan that is faster than the AS-i cycle, a repeated telegram, a lost response) without
 //! advancing.
 //!
-//! **Decisions beyond the seed documents**:
-//! - Code `110` is used by no sequence of the seed; in the handshakes where the answerer owns
-//!   K it is the *sync* code. A requester starts (and restarts after a reset) with `110`; the
+//! **Decisions beyond the source documents**:
+//! - Code `110` is used by no sequence of the lift thesis; in the handshakes where the answerer
+//!   owns K it is the *sync* code. A requester starts (and restarts after a reset) with `110`; the
 //!   answerer acknowledges it with K toggled and data 000. This makes the first K change a
-//!   requester sees after power-up harmless. A requester that sees no K change for
-//!   `stall_limit` steps switches code (to `110`, or from `110` to the first step), so that a
-//!   requester and an answerer that lost step (for example one of them was reset while the
-//!   other waited) always recover.
+//!   requester sees after power-up harmless. A requester that sees no K change for `stall_limit`
+//!   steps switches code (to `110`, or from `110` to the first step), so that a requester and an
+//!   answerer that lost step (for example one of them was reset while the other waited) always
+//!   recover.
 //! - Where the requester owns K there is no sync code (table 4.7 has none): the requester
 //!   starts with the K that differs from the D3 it sees, the answerer refuses requests out of
 //!   sequence, and a requester without an echo for `stall_limit` steps starts a new word with K
@@ -41,11 +42,11 @@
 
 use crate::Nibble;
 
-/// The sync code (used by no step sequence of seed 003).
+/// The sync code (used by no step sequence of the lift thesis).
 pub const SYNC_CODE: u8 = 0b110;
-/// Floor slave step codes, seed 003 table 4.3: D10..D8, D7..D5, D4..D2, D1 O V.
+/// Floor slave step codes, table 4.3 of the lift thesis: D10..D8, D7..D5, D4..D2, D1 O V.
 pub const FOUR_STEPS: [u8; 4] = [0b111, 0b010, 0b001, 0b000];
-/// Seven-step codes, seed 003 tables 4.5 and 4.7 (the S-7.3 layout of table 2.2).
+/// Seven-step codes, tables 4.5 and 4.7 of the lift thesis (the S-7.3 layout of table 2.2).
 pub const SEVEN_STEPS: [u8; 7] = [0b111, 0b101, 0b100, 0b011, 0b010, 0b001, 0b000];
 /// Floor slave code between words: the up button is pressed (table 4.3).
 pub const CODE_UP: u8 = 0b101;
@@ -290,7 +291,7 @@ impl Answerer {
 }
 
 /// The requesting side of a handshake in which the *requester* owns the toggle bit K: the
-/// master side of the cabin button slave, seed 003 table 4.7 ("K 1 1 1", "K 1 0 1", ...).
+/// master side of the cabin button slave, table 4.7 of the lift thesis ("K 1 1 1", "K 1 0 1", ...).
 ///
 /// The request nibble is K on D3 and the step code on D2..D0; K toggles with every new
 /// request. **Decision** (docs/lab-bus.md, revised): the answerer echoes the K it answers to on D3
@@ -409,7 +410,7 @@ pub enum EchoEvent {
     },
 }
 
-/// The answering side of a handshake whose requester owns K (seed 003 table 4.7): answers
+/// The answering side of a handshake whose requester owns K (table 4.7 of the lift thesis): answers
 /// each request with the K it answers to on D3 (the echo) and 3 data bits on D2..D0.
 ///
 /// **Decision** on which requests are answered, so that the requester never takes an answer

@@ -1,14 +1,14 @@
-//! The words the lab lift's nibble handshakes carry (seed 003 tables 4.2–4.7; S-7.3), shared by
-//! the master (PLC) side and the device side: the display word's bits, the cabin panel's 32-bit word,
-//! the S-7.3 analog value and seven-step layout, and the log of words a receiver took.
+//! The words the lab lift's nibble handshakes carry (tables 4.2–4.7 of the lift thesis; S-7.3),
+//! shared by the master (PLC) side and the device side: the display word's bits, the cabin panel's
+//! 32-bit word, the S-7.3 analog value and seven-step layout, and the log of words a receiver took.
 
-/// The 10 bits D10..D1 of a display word (seed 003 tables 4.2, 4.4; its fields are the lab
-/// crate's `DisplayWord`) as the handshakes carry it: bits above D10 are not part of it.
+/// The 10 bits D10..D1 of a display word (tables 4.2, 4.4 of the lift thesis; its fields are the
+/// lab crate's `DisplayWord`) as the handshakes carry it: bits above D10 are not part of it.
 pub const DISPLAY_BITS: u16 = (1 << 10) - 1;
 
-/// **Decision** on O and V closing a word (seed 003 tables 4.3, 4.5; S-7.3 meaning of table
-/// 2.2): O = 0 (value in range), V = 1 (valid data). A receiver ignores a word with V = 0, O = 1
-/// or a parity error and keeps showing the last good one.
+/// **Decision** on O and V closing a word (tables 4.3, 4.5 of the lift thesis; S-7.3 meaning of
+/// table 2.2): O = 0 (value in range), V = 1 (valid data). A receiver ignores a word with V = 0,
+/// O = 1 or a parity error and keeps showing the last good one.
 pub const OV_VALID: u32 = 0b01;
 
 /// The 12 bits of a floor word transfer: D10..D1 O V.
@@ -17,7 +17,8 @@ pub const fn floor_transport(bits: u16) -> u32 {
     (((bits & DISPLAY_BITS) as u32) << 2) | OV_VALID
 }
 
-/// The 21 bits of a 7-step transfer (S-7.3 layout, seed 003 table 2.2): E3..E1, D16..D1, O, V.
+/// The 21 bits of a 7-step transfer (S-7.3 layout, table 2.2 of the lift thesis): E3..E1, D16..D1,
+/// O, V.
 pub const fn seven_step_word(e: u8, d16: u16, overflow: bool, valid: bool) -> u32 {
     (((e & 7) as u32) << 18) | ((d16 as u32) << 2) | ((overflow as u32) << 1) | valid as u32
 }
@@ -84,7 +85,7 @@ pub fn cabin_transport(bits: u16) -> u32 {
     seven_step_word(CABIN_DISPLAY_CHANNEL, bits & DISPLAY_BITS, false, true)
 }
 
-/// The cabin's buttons and sensors as one 32-bit word travels them (seed 003 table 4.6).
+/// The cabin's buttons and sensors as one 32-bit word travels them (table 4.6 of the lift thesis).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub struct CabinPanelState {
     /// Floor buttons 1..24: bit n − 1 = floor n.

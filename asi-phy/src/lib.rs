@@ -1,4 +1,5 @@
-//! asi-phy: the AS-Interface physical and link layer of asi-lift (docs/physical-layer.md, seed 003 §2.2).
+//! asi-phy: the AS-Interface physical and link layer of asi-lift (docs/physical-layer.md, §2.2 of
+//! the lift thesis).
 //!
 //! Telegrams ([`Request`], [`Response`]) become Manchester half-bits ([`HalfBits`]), then APM
 //! pulses on the 3 µs grid ([`PulseTrain`]), then a sampled line voltage ([`waveform`]); the

@@ -1,4 +1,5 @@
-//! Manchester II coding of telegram bits (docs/physical-layer.md "Pulse model"; seed 003 §2.2.1).
+//! Manchester II coding of telegram bits (docs/physical-layer.md "Pulse model"; §2.2.1 of the lift
+//! thesis).
 //!
 //! The line idles high. A bit 0 is sent as low-then-high, a bit 1 as high-then-low, so every bit
 //! cell has a transition at its middle. [`HalfBits`] holds the level of each half-bit cell.

@@ -1,5 +1,5 @@
 //! Alternating Pulse Modulation: Manchester edges as line pulses on the half-bit grid (docs/physical-layer.md
-//! "Pulse model"; docs/asi.md §1.2; seed 003 §2.2.1, figure 2.1).
+//! "Pulse model"; docs/asi.md §1.2; §2.2.1, figure 2.1 of the lift thesis).
 //!
 //! Every Manchester edge becomes one sin²-shaped voltage pulse: a falling edge (transmit current
 //! switched on) a negative pulse, a rising edge a positive one. The line idles high, so the

@@ -1,5 +1,5 @@
-//! A slave's address and identification codes, as the telegrams carry them (docs/asi.md
-//! §5.2, §6.1; seed 003 §2.2.3): what a master projects and lists, and what a slave holds.
+//! A slave's address and identification codes, as the telegrams carry them (docs/asi.md §5.2, §6.1;
+//! §2.2.3 of the lift thesis): what a master projects and lists, and what a slave holds.
 
 use crate::{Address, Nibble, Select};
 use core::fmt;
@@ -76,7 +76,7 @@ impl fmt::Display for SlaveAddr {
 }
 
 /// The four identification codes of a slave: IO configuration, ID code, extended ID1 and ID2
-/// (seed 003 §2.2.3; docs/asi.md §6.1). The profile is written `S-IO.ID.ID2`.
+/// (§2.2.3 of the lift thesis; docs/asi.md §6.1). The profile is written `S-IO.ID.ID2`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct SlaveCodes {
     /// IO configuration (direction of D0..D3).

@@ -2,7 +2,7 @@
 //!
 //! All spans are measured between pulses: a request occupies 14 bit times from its first pulse
 //! (start of the start bit) to its last (end of the end bit), a response 7. With the defaults a
-//! transaction takes 84 + 18 + 42 + 10 = 154 µs, the seed's figure (seed 003 §2.1), and a
+//! transaction takes 84 + 18 + 42 + 10 = 154 µs, the figure of the lift thesis (§2.1), and a
 //! request that gets no answer takes the same slot: 84 + 60 + 10 = 154 µs.
 
 use crate::time::SimDuration;
@@ -198,7 +198,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn defaults_give_the_seeds_154_us_transaction() {
+    fn defaults_give_the_thesis_154_us_transaction() {
         let t = BusTiming::default();
         assert_eq!(t.transaction(), SimDuration::from_micros(154));
         assert_eq!(t.unanswered_transaction(), SimDuration::from_micros(154));

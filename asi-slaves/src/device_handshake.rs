@@ -1,5 +1,5 @@
-//! The device side of the lab lift's nibble handshakes (seed 003 tables 4.2–4.7): the `*Slave`
-//! types inside the slave devices of [`crate::devices`], built on the engines of
+//! The device side of the lab lift's nibble handshakes (tables 4.2–4.7 of the lift thesis): the
+//! `*Slave` types inside the slave devices of [`crate::devices`], built on the engines of
 //! [`asi_phy::handshake`] and the words of [`asi_phy::handshake_words`]. The master (PLC) side is
 //! `asi_master::plc_handshake`.
 
@@ -13,8 +13,8 @@ use asi_phy::handshake_words::{
 };
 use asi_phy::Nibble;
 
-/// The device side of a floor station, seed 003 table 4.3: requests the display word in four
-/// steps and reports the buttons between words.
+/// The device side of a floor station, table 4.3 of the lift thesis: requests the display word in
+/// four steps and reports the buttons between words.
 ///
 /// A button press is latched until it has been reported, so a press shorter than a word is
 /// not lost; a held button is reported after every word.
@@ -106,7 +106,8 @@ impl FloorStationSlave {
     }
 }
 
-/// The device side of the cabin display (seed 003 table 4.5): requests the word in 7 steps.
+/// The device side of the cabin display (table 4.5 of the lift thesis): requests the word in
+/// 7 steps.
 #[derive(Clone, Debug)]
 pub struct CabinDisplaySlave {
     requester: Requester,
@@ -157,8 +158,8 @@ impl CabinDisplaySlave {
     }
 }
 
-/// The device side of the cabin panel (seed 003 tables 4.6/4.7): answers the master's step
-/// requests ([`EchoAnswerer`]); the two halves of one 32-bit word are sampled together when
+/// The device side of the cabin panel (tables 4.6/4.7 of the lift thesis): answers the master's
+/// step requests ([`EchoAnswerer`]); the two halves of one 32-bit word are sampled together when
 /// half 0 starts, and the halves alternate with every half answered to its last step.
 #[derive(Clone, Debug)]
 pub struct CabinPanelSlave {

@@ -1,6 +1,6 @@
-//! asi-slaves: the AS-Interface slaves of asi-lift (docs/master.md, §3; seed 003 §2.3, §3, §4): the
-//! slave IC, the lab lift's slave devices, the device side of the nibble handshakes and of
-//! S-7.3, and the passive Safety at Work monitor.
+//! asi-slaves: the AS-Interface slaves of asi-lift (docs/master.md, §3; §2.3, §3, §4 of the lift
+//! thesis): the slave IC, the lab lift's slave devices, the device side of the nibble handshakes
+//! and of S-7.3, and the passive Safety at Work monitor.
 //!
 //! Sans-IO and deterministic: every type is a state machine driven by the telegrams and the
 //! simulated time it is handed; nothing reads a clock. A slave knows nothing of the master: this

@@ -1,13 +1,13 @@
-//! Where the cabin goes next: the seed's FIFO memories or the collective selective control.
+//! Where the cabin goes next: the lift thesis' FIFO memories or the collective selective control.
 //!
-//! - **FIFO** (seed 003 §6.6, the "modified single-memory push-button control"): cabin requests
-//!   first, in the order pressed; hall calls are stored meanwhile and served afterwards, in
-//!   their order; both hall buttons call the cabin to their floor. The target is fixed when the
+//! - **FIFO** (§6.6 of the lift thesis, the "modified single-memory push-button control"): cabin
+//!   requests first, in the order pressed; hall calls are stored meanwhile and served afterwards,
+//!   in their order; both hall buttons call the cabin to their floor. The target is fixed when the
 //!   cabin departs.
-//! - **Collective selective** (seed 003 §5.2.3, SIMPLEX): calls are served in the order the
-//!   cabin reaches them, cabin and hall alike; a hall call is answered only in its direction,
-//!   or when it is the last call that way; then the direction reverses. The decision to stop
-//!   is taken floor by floor, at each floor's first vane edge.
+//! - **Collective selective** (§5.2.3 of the lift thesis, SIMPLEX): calls are served in the order
+//!   the cabin reaches them, cabin and hall alike; a hall call is answered only in its direction,
+//!   or when it is the last call that way; then the direction reverses. The decision to stop is
+//!   taken floor by floor, at each floor's first vane edge.
 //!
 //! **Decision** (both): a stop at a floor serves every stored call for that floor that the stop
 //! can serve, so a passenger who pressed twice (cabin and hall) is not served twice.
@@ -20,10 +20,10 @@ use serde::{Deserialize, Serialize};
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Algorithm {
-    /// Seed 003 §6.6: cabin FIFO first, then hall FIFO.
+    /// §6.6 of the lift thesis: cabin FIFO first, then hall FIFO.
     #[default]
     Fifo,
-    /// Seed 003 §5.2.3: collective selective in both directions.
+    /// §5.2.3 of the lift thesis: collective selective in both directions.
     Collective,
 }
 

@@ -1,8 +1,9 @@
-//! The request memories FIFO_Kabina and FIFO_Patra (seed 003 §6.5, table 6.1: `INT[4]`).
+//! The request memories FIFO_Kabina and FIFO_Patra (§6.5, table 6.1 of the lift thesis: `INT[4]`).
 //!
-//! The seed loads them with the FIFO Load instruction and unloads the next target with FIFO
-//! Unload when the cabin stands at its target. docs/controller.md adds: a floor already queued is not
-//! queued again. A full memory refuses the request, as FFL does when its done bit is set.
+//! The lift thesis' program loads them with the FIFO Load instruction and unloads the next target
+//! with FIFO Unload when the cabin stands at its target. docs/controller.md adds: a floor already
+//! queued is not queued again. A full memory refuses the request, as FFL does when its done bit is
+//! set.
 
 /// What happened to a request offered to a [`RequestFifo`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

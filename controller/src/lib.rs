@@ -1,14 +1,14 @@
-//! controller: the lab lift's PLC program (seed 003 §6; docs/controller.md).
+//! controller: the lab lift's PLC program (§6 of the lift thesis; docs/controller.md).
 //!
-//! The program runs with a fixed scan (10 ms by default), asynchronous to the AS-i cycle, and
-//! reads and writes only the master's process image (seed table 4.1) and the few standard
-//! signals it exchanges with the safety logic. Its routines follow the seed (figure 6.1): read
-//! inputs and run the master side of the handshakes, safety checks, initialisation once
-//! (table 6.3), the automat (tables 6.4, 6.5) with the FIFO request memories (§6.5), and write
-//! the outputs (converter run and direction, speed set-point, displays).
+//! The program runs with a fixed scan (10 ms by default), asynchronous to the AS-i cycle, and reads
+//! and writes only the master's process image (table 4.1 of the lift thesis) and the few standard
+//! signals it exchanges with the safety logic. Its routines follow the lift thesis (figure 6.1):
+//! read inputs and run the master side of the handshakes, safety checks, initialisation once
+//! (table 6.3), the automat (tables 6.4, 6.5) with the FIFO request memories (§6.5), and write the
+//! outputs (converter run and direction, speed set-point, displays).
 //!
 //! - [`program`]: the logic over plain inputs and outputs, testable on its own;
-//! - [`dispatch`]: the seed's FIFO memories and the collective selective control (§5.2.3);
+//! - [`dispatch`]: the lift thesis' FIFO memories and the collective selective control (§5.2.3);
 //! - [`fifo`]: FIFO_Kabina and FIFO_Patra;
 //! - [`plc`]: the I/O routines over the master's process image and the handshakes.
 

@@ -1,10 +1,10 @@
 //! The PLC around the program: the routines that read and write the AS-i master's process image
-//! (seed 003 §6.2, "Komunikuj"), the master side of the handshakes of seed tables 4.2–4.7, and
-//! the standard signals exchanged with the safety logic.
+//! (§6.2 of the lift thesis, "Komunikuj"), the master side of the handshakes of tables 4.2–4.7 of
+//! the lift thesis, and the standard signals exchanged with the safety logic.
 //!
-//! The program reads and writes only the image words of seed table 4.1: the flag nibble of
-//! word 0, one nibble per slave, the analog output word of the speed set-point, and the command
-//! mailbox (words 32..49) to read the LAS when the master flags a configuration error.
+//! The program reads and writes only the image words of table 4.1 of the lift thesis: the flag
+//! nibble of word 0, one nibble per slave, the analog output word of the speed set-point, and the
+//! command mailbox (words 32..49) to read the LAS when the master flags a configuration error.
 //!
 //! **Which slaves the lift needs** (decision): F0 (ConfigError) says that *some* projected
 //! slave is missing, not which. While F0 is set the PLC reads the LAS with the mailbox command
@@ -92,10 +92,10 @@ impl LasReader {
 }
 
 /// Scans without the echo of the PLC's own K after which the PLC starts a new cabin button
-/// word (seed 003 table 4.7; docs/lab-bus.md): a step normally completes within a scan or two; a panel
-/// that was reset or re-admitted in the middle of a word refuses the request out of sequence,
-/// which only a new word recovers (250 ms instead of the engine's default 2.5 s at a 10 ms
-/// scan).
+/// word (table 4.7 of the lift thesis; docs/lab-bus.md): a step normally completes within a scan or
+/// two; a panel that was reset or re-admitted in the middle of a word refuses the request out of
+/// sequence, which only a new word recovers (250 ms instead of the engine's default 2.5 s at a
+/// 10 ms scan).
 pub const PANEL_STALL_LIMIT: u32 = 25;
 
 /// Standard signals from the safety logic.

@@ -1,5 +1,5 @@
-//! The program against the lift plant directly, without the bus: each 10 ms scan reads the
-//! plant's signals and writes the converter. Tests the logic of seed tables 6.3–6.5; the full
+//! The program against the lift plant directly, without the bus: each 10 ms scan reads the plant's
+//! signals and writes the converter. Tests the logic of tables 6.3–6.5 of the lift thesis; the full
 //! rig with the AS-i handshakes and the safety logic is tested in the workspace's tests crate.
 
 use crate::common;
@@ -118,7 +118,7 @@ fn initialised(start_mm: f64) -> Loop {
 #[test]
 fn initialises_from_every_kind_of_start_height() {
     // Between floors, in floor 1's long track above and below level, level at floor 1 (the
-    // case the seed's routine cannot handle), level at floors 2 and 4, inside floor 3's vane.
+    // case the lift thesis' routine cannot handle), level at floors 2 and 4, inside floor 3's vane.
     for start in [650.0, 25.0, -25.0, 0.0, 400.0, 1200.0, 830.0, 1100.0] {
         let l = initialised(start);
         assert!(

@@ -1,5 +1,6 @@
-//! What the floor and cabin displays show (seed 003 tables 6.3–6.5; docs/controller.md): the program
-//! against the lift plant, without the bus, every display word of every 10 ms scan recorded.
+//! What the floor and cabin displays show (tables 6.3–6.5 of the lift thesis; docs/controller.md):
+//! the program against the lift plant, without the bus, every display word of every 10 ms scan
+//! recorded.
 //!
 //! The rule the tables give: the current floor is shown at departure and on arrival
 //! ("Aktuální patro → Jede", "Dobrždění → Aktuální patro"), not while floors are passed;
@@ -136,7 +137,7 @@ fn initialised(start_mm: f64) -> Loop {
 /// ("Zobrazení směru jízdy dolů") stops the motor and still shows floor 1 and "down".
 #[test]
 fn initialisation_shows_floor_1_and_down_to_its_last_step() {
-    // Between floors 2 and 3: the seed's routine runs down past floor 2's vane to floor 1.
+    // Between floors 2 and 3: the lift thesis' routine runs down past floor 2's vane to floor 1.
     let l = initialised(650.0);
     assert_eq!(
         l.shown(0),

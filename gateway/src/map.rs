@@ -2,11 +2,11 @@
 //! diagnostics, the safety logic's signals to and from the PLC, and the simulator's command
 //! registers (the book, "The gateway's register map").
 //!
-//! The map follows the Bihl+Wiedemann AS-i/Modbus gateways: the images word for word in the
-//! layout of seed 003 table 4.1 (four slaves per register, the lowest address in the highest
-//! bits), one coil or discrete input per data bit, the lists as bit lists. Every request is
-//! checked whole before anything is written: a request is served completely or answered with
-//! an exception and changes nothing.
+//! The map follows the Bihl+Wiedemann AS-i/Modbus gateways: the images word for word in the layout
+//! of table 4.1 of the lift thesis (four slaves per register, the lowest address in the highest
+//! bits), one coil or discrete input per data bit, the lists as bit lists. Every request is checked
+//! whole before anything is written: a request is served completely or answered with an exception
+//! and changes nothing.
 //!
 //! | table | addresses | content | access |
 //! |---|---|---|---|

@@ -10,7 +10,7 @@
 //! | 0 | reload config | nothing |
 //! | 1 | motor direction `a` = 1 up, 0 stop, 255 (−1) down | the converter (slave 7: D0 run, D1 up) and the speed set-point (slave 10) through the AS-i output image: travel 10000 µA, stop = run off and 4000 µA (a ramp stop); a move while the STOP circuit waits for its restart pulses the restart first |
 //! | 2 | button lamp `a` type, `b` floor, `c` value | recorded (the lab lift has no call lamps) |
-//! | 3 | floor indicator `a` | the lab's displays (floor stations 1..4, cabin display 5): the front end runs the PLC side of their handshakes (seed 003 tables 4.2–4.5) every 10 ms, showing the indicator's floor, the arrow of the motor's direction and "moving"; also recorded |
+//! | 3 | floor indicator `a` | the lab's displays (floor stations 1..4, cabin display 5): the front end runs the PLC side of their handshakes (tables 4.2–4.5 of the lift thesis) every 10 ms, showing the indicator's floor, the arrow of the motor's direction and "moving"; also recorded |
 //! | 4 | door open lamp `a` | recorded |
 //! | 5 | stop lamp `a` | recorded |
 //! | 6 | read button `a` type, `b` floor → `[6, pressed, 0, 0]` | the plant's button, held or not |

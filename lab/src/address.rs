@@ -1,4 +1,5 @@
-//! The lab lift's AS-i slaves and their addresses (seed 003 §2.2.3; docs/lab-bus.md §3.1).
+//! The lab lift's AS-i slaves and their addresses (§2.2.3 of the lift thesis; docs/lab-bus.md
+//! §3.1).
 
 /// Floor station of floor 1; the floor station of floor `f` is at address `f`.
 pub const FLOOR_1: u8 = 1;

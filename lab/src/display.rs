@@ -1,5 +1,5 @@
-//! The display word shown on the floor displays and in the cabin (seed 003 tables 4.2 and
-//! 4.4; docs/lab-bus.md).
+//! The display word shown on the floor displays and in the cabin (tables 4.2
+//! and 4.4 of the lift thesis; docs/lab-bus.md).
 //!
 //! Layout, bit 0 = D1:
 //!
@@ -35,8 +35,8 @@ const FAULT: u16 = 1 << 1;
 const PARITY: u16 = 1;
 const WIDTH_MASK: u16 = (1 << 10) - 1;
 
-/// What a display shows: floor number, arrows, moving and fault lamps (seed 003 table 4.2).
-/// The PLC program decides it, [`DisplayWord::encode`] gives the 10 bits D10..D1 the
+/// What a display shows: floor number, arrows, moving and fault lamps (table 4.2 of the lift
+/// thesis). The PLC program decides it, [`DisplayWord::encode`] gives the 10 bits D10..D1 the
 /// handshakes carry, and a display reads them back with [`DisplayWord::decode`].
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
 pub struct DisplayWord {

@@ -8,7 +8,8 @@ use crate::sensor::{End, VaneSensor};
 
 /// The fewest floors a lift has.
 pub const MIN_FLOORS: u8 = 2;
-/// The most floors: the display word carries floor numbers 1..24 (docs/lab-bus.md, seed 003 table 4.2).
+/// The most floors: the display word carries floor numbers 1..24 (docs/lab-bus.md, table 4.2 of the
+/// lift thesis).
 pub const MAX_FLOORS: u8 = lab::display::MAX_FLOOR;
 /// The longest length this model accepts, in mm (100 m): keeps every time and position
 /// computation far from overflow.
@@ -17,8 +18,8 @@ pub const MAX_LENGTH_MM: f64 = 100_000.0;
 /// (either way): the window in which the rig counts an arrival and the tests judge a stop.
 pub const LEVEL_WINDOW_MM: f64 = 10.0;
 
-/// The lift as built (docs/lift-plant.md geometry; seed 003 §6.3, §6.4). All lengths in mm, positions of
-/// the cabin measured upward from the level of floor 1.
+/// The lift as built (docs/lift-plant.md geometry; §6.3, §6.4 of the lift thesis). All lengths in
+/// mm, positions of the cabin measured upward from the level of floor 1.
 ///
 /// Defaults are docs/lift-plant.md's decisions for the lab lift: 4 floors 400 mm apart, vanes with a
 /// ±40 mm long and a ±10 mm short sensor track, overtravel trip 60 mm beyond the end floors,
@@ -68,7 +69,7 @@ impl Default for LiftConfig {
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum LiftConfigError {
     /// Fewer than 2 or more than 24 floors.
-    #[error("floors = {floors}: the lift needs 2 to 24 floors (the display word carries floor numbers 1..24, docs/lab-bus.md)")]
+    #[error("floors = {floors}: the lift needs 2 to 24 floors (the display word carries floor numbers 1..24; see the asi-lift guide, chapter \"The handshakes and displays\")")]
     FloorCount {
         /// The number given.
         floors: u8,
@@ -106,7 +107,7 @@ pub enum LiftConfigError {
         slip: f64,
     },
     /// The short track is not shorter than the long one.
-    #[error("short_track_half_mm = {short_mm:?} must be less than long_track_half_mm = {long_mm:?}: floor 1 is recognised by its long track rising first (docs/lift-plant.md)")]
+    #[error("short_track_half_mm = {short_mm:?} must be less than long_track_half_mm = {long_mm:?}: floor 1 is recognised by its long track rising first (the lift thesis, §6.4)")]
     TrackLengths {
         /// The short half length given.
         short_mm: f64,
@@ -114,7 +115,7 @@ pub enum LiftConfigError {
         long_mm: f64,
     },
     /// Two tracks of one sensor touch or overlap, so the sensor would not drop between floors.
-    #[error("vanes overlap: the {sensor} tracks of floors {lower_floor} and {upper_floor} touch or overlap (floor {lower_floor} ends at {lower_top_mm:?} mm, floor {upper_floor} starts at {upper_bottom_mm:?} mm); the sensor must drop between floors or the controller's floor counting (docs/controller.md) misses one: raise floor_pitch_mm or shorten the tracks")]
+    #[error("vanes overlap: the {sensor} tracks of floors {lower_floor} and {upper_floor} touch or overlap (floor {lower_floor} ends at {lower_top_mm:?} mm, floor {upper_floor} starts at {upper_bottom_mm:?} mm); the sensor must drop between floors or the controller's floor counting (the lift thesis, tables 6.4 and 6.5) misses one: raise floor_pitch_mm or shorten the tracks")]
     VanesOverlap {
         /// The sensor whose tracks collide.
         sensor: VaneSensor,
@@ -264,9 +265,9 @@ impl LiftConfig {
     /// The track `(from, to)` in mm, both ends inclusive, on which `sensor` is on at `floor`;
     /// `None` for a floor the lift does not have.
     ///
-    /// docs/lift-plant.md, seed 003 §6.4: at floors 2..N the right sensor (Snimac_2) has the long track
-    /// and the left (Snimac_1) the short one; the floor-1 vane is turned 90° to the left, so
-    /// there the left sensor has the long track.
+    /// docs/lift-plant.md, §6.4 of the lift thesis: at floors 2..N the right sensor (Snimac_2) has
+    /// the long track and the left (Snimac_1) the short one; the floor-1 vane is turned 90° to the
+    /// left, so there the left sensor has the long track.
     pub fn vane_track_mm(&self, sensor: VaneSensor, floor: u8) -> Option<(f64, f64)> {
         (1..=self.floors)
             .contains(&floor)

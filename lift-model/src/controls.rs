@@ -1,5 +1,5 @@
-//! What people operate: buttons, the STOP switch, the load (docs/lab-bus.md, §4; seed 003 tables
-//! 4.3, 4.6 and 6.2).
+//! What people operate: buttons, the STOP switch, the load (docs/lab-bus.md, §4; tables
+//! 4.3, 4.6 and 6.2 of the lift thesis).
 
 use core::fmt;
 
@@ -56,7 +56,7 @@ impl Button {
     }
 }
 
-/// The load sensor's reading (IG5886, docs/lab-bus.md slave 8; seed 003 `Zatizeni_Kabiny`).
+/// The load sensor's reading (IG5886, docs/lab-bus.md slave 8; the lift thesis' `Zatizeni_Kabiny`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
 pub enum LoadLevel {
     /// 0: empty.
@@ -66,7 +66,7 @@ pub enum LoadLevel {
     Loaded,
     /// 2: full.
     Full,
-    /// 3: overloaded; the lift must not start (seed 003 §6.3).
+    /// 3: overloaded; the lift must not start (§6.3 of the lift thesis).
     Overloaded,
 }
 

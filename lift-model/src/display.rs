@@ -1,6 +1,6 @@
 //! The floor displays and the cabin display as the plant shows them (docs/lab-bus.md §3.3;
-//! seed 003 tables 4.2 and 4.4): each shows the last complete word it was handed, or an error
-//! for a word that fails its checks. The word itself is the lab crate's [`DisplayWord`].
+//! tables 4.2 and 4.4 of the lift thesis): each shows the last complete word it was handed, or an
+//! error for a word that fails its checks. The word itself is the lab crate's [`DisplayWord`].
 
 use serde::{Deserialize, Serialize};
 

@@ -23,14 +23,14 @@ pub struct PlantEvent {
 /// them and can read them from the getters.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum PlantEventKind {
-    /// A vane sensor on the cabin changed (seed 003 §6.4; `Snimac_1`, `Snimac_2`).
+    /// A vane sensor on the cabin changed (§6.4 of the lift thesis; `Snimac_1`, `Snimac_2`).
     Vane {
         /// Which sensor.
         sensor: VaneSensor,
         /// Its new level: on over a vane track.
         on: bool,
     },
-    /// An overtravel safety sensor changed (GG505S, seed 003 §6.3).
+    /// An overtravel safety sensor changed (GG505S, §6.3 of the lift thesis).
     Overtravel {
         /// Which end.
         end: End,

@@ -1,4 +1,4 @@
-//! lift-model: the laboratory lift of seed 003 as a physical plant (docs/lift-plant.md).
+//! lift-model: the laboratory lift of the lift thesis as a physical plant (docs/lift-plant.md).
 //!
 //! The plant knows nothing of AS-i. It exposes the signals the rig connects to slave ports and
 //! to the safety logic:

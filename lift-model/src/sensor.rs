@@ -5,7 +5,7 @@ use core::fmt;
 
 use serde::{Deserialize, Serialize};
 
-/// One of the two vane (lamel) sensors on the cabin (seed 003 tables 6.1, 6.2).
+/// One of the two vane (lamel) sensors on the cabin (tables 6.1, 6.2 of the lift thesis).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
 pub enum VaneSensor {
     /// `Snimac_1`, the left sensor: long track at floor 1, short at floors 2..N.
@@ -15,8 +15,8 @@ pub enum VaneSensor {
 }
 
 impl VaneSensor {
-    /// The seed's variable name: `Snimac_1` (left) or `Snimac_2` (right).
-    pub fn seed_name(self) -> &'static str {
+    /// The lift thesis' variable name: `Snimac_1` (left) or `Snimac_2` (right).
+    pub fn thesis_name(self) -> &'static str {
         match self {
             VaneSensor::Left => "Snimac_1",
             VaneSensor::Right => "Snimac_2",
@@ -30,7 +30,7 @@ impl fmt::Display for VaneSensor {
             VaneSensor::Left => "left",
             VaneSensor::Right => "right",
         };
-        write!(f, "{} ({side})", self.seed_name())
+        write!(f, "{} ({side})", self.thesis_name())
     }
 }
 

@@ -1,5 +1,6 @@
-//! The shaft as the cabin's sensors see it: vane tracks, overtravel trip zones and mechanical
-//! ends, flattened into one sorted list of boundaries (docs/lift-plant.md; seed 003 §6.3, §6.4).
+//! The shaft as the cabin's sensors see it: vane tracks, overtravel trip zones and mechanical ends,
+//! flattened into one sorted list of boundaries (docs/lift-plant.md; §6.3, §6.4 of the lift
+//! thesis).
 //!
 //! Every zone is a closed interval of cabin position: a vane sensor is on for `from ≤ x ≤ to`,
 //! an overtravel sensor is tripped at its trip point and beyond, the cabin may touch a

@@ -1,18 +1,18 @@
-//! Seed 003 table 6.6 (and §6.4 for 11000): set-point → frequency → motor → sprocket →
+//! Table 6.6 of the lift thesis (and §6.4 for 11000): set-point → frequency → motor → sprocket →
 //! cabin velocity, one test per row, on the formulas and on the running plant.
 
 use crate::common::*;
 use asi_phy::SimTime;
 use lift_model::{converter_frequency_hz, DriveConfig, PlantEventKind, VaneSensor};
 
-/// `value` printed with as many decimals as the seed's `table` text has.
+/// `value` printed with as many decimals as the lift thesis' `table` text has.
 fn as_in_table(value: f64, table: &str) -> String {
     let decimals = table.split_once('.').map_or(0, |(_, d)| d.len());
     format!("{value:.decimals$}")
 }
 
-/// One row: the formulas give the seed's numbers, and the plant, run up from floor 1 at
-/// this set-point, reaches and holds the seed's velocity.
+/// One row: the formulas give the lift thesis' numbers, and the plant, run up from floor 1 at
+/// this set-point, reaches and holds the lift thesis' velocity.
 fn check_row(setpoint_ua: u16, f_hz: &str, n1: &str, n2: &str, v_mm_s: &str) {
     let drive = DriveConfig::default();
     let f = converter_frequency_hz(setpoint_ua);
@@ -83,7 +83,7 @@ fn table_6_6_row_10000() {
 }
 
 #[test]
-fn seed_6_4_row_11000() {
+fn section_6_4_row_11000() {
     check_row(11000, "15.400", "6.930", "0.2772", "68.797");
     // §6.4 equations (3) and (5) print four decimals: 6.9300 rev/s and 68.7971 mm/s.
     let drive = DriveConfig::default();

@@ -1,5 +1,6 @@
-//! Safety-relevant physics (docs/lift-plant.md, §6; seed 003 §6.3): K1 and the brake, EDM through the
-//! mirror contact, the hand crank, overtravel trips and crashes into the mechanical ends.
+//! Safety-relevant physics (docs/lift-plant.md, §6; §6.3 of the lift thesis): K1 and the brake, EDM
+//! through the mirror contact, the hand crank, overtravel trips and crashes into the mechanical
+//! ends.
 
 use crate::common::*;
 use asi_phy::{SimDuration, SimTime};
@@ -9,7 +10,7 @@ fn near(x: f64, expected: f64) -> bool {
     (x - expected).abs() < 1e-6
 }
 
-/// Steady cabin speed at `setpoint` (seed 003 table 6.6), mm/s.
+/// Steady cabin speed at `setpoint` (table 6.6 of the lift thesis), mm/s.
 fn speed(setpoint: u16) -> f64 {
     DriveConfig::default().setpoint_velocity_mm_s(setpoint)
 }
@@ -245,7 +246,7 @@ fn a_drive_into_the_bottom_end_is_a_recorded_crash_and_trips_the_converter() {
     let t = lift.now() + SimDuration::from_secs(1);
     ok(lift.set_converter(t, true, true, 6000));
     assert_eq!(lift.velocity_mm_s(), 0.0);
-    // ... until K1 drops. Then only the crank gets the cabin out (seed 003 §6.3).
+    // ... until K1 drops. Then only the crank gets the cabin out (§6.3 of the lift thesis).
     ok(lift.set_contactor(t, false));
     assert!(!lift.converter_fault());
     assert_eq!(

@@ -1,6 +1,6 @@
-//! The order of the vane sensors' edges (docs/lift-plant.md; seed 003 §6.4 and tables 6.3–6.5): the
-//! floor-1 vane is turned so the left sensor meets its long track first going down, at every
-//! other floor the right sensor does; going up the order mirrors; both on is the level zone.
+//! The order of the vane sensors' edges (docs/lift-plant.md; §6.4 and tables 6.3–6.5 of the lift
+//! thesis): the floor-1 vane is turned so the left sensor meets its long track first going down, at
+//! every other floor the right sensor does; going up the order mirrors; both on is the level zone.
 
 use crate::common::*;
 use asi_phy::SimDuration;
@@ -48,19 +48,19 @@ fn down_onto_floor_1_the_left_sensor_rises_first_and_the_right_within_2_s_at_600
     });
     assert!(near(lift.position_mm(), 10.0));
     let gap = right.at - left.at;
-    // 30 mm at 20.550 mm/s: 1.46 s, inside the seed's 2 s timer.
+    // 30 mm at 20.550 mm/s: 1.46 s, inside the lift thesis' 2 s timer.
     assert!(gap < SimDuration::from_secs(2), "{gap}");
     assert!((gap.as_secs_f64() - 30.0 / 20.550).abs() < 1e-3, "{gap}");
     assert!(lift.in_level_zone());
 }
 
 #[test]
-fn the_seed_initialisation_finds_floor_1_within_its_2_s_timer() {
-    // Seed table 6.3: run down at 11000; on the left sensor rising, 6000 and a 2 s timer;
-    // the right sensor rising while the timer runs means floor 1. Here the controller
-    // reacts 50 ms late (AS-i handshake and PLC scan), then 6000 ramps down from 68.8 mm/s.
+fn the_thesis_initialisation_finds_floor_1_within_its_2_s_timer() {
+    // Table 6.3 of the lift thesis: run down at 11000; on the left sensor rising, 6000 and a 2 s
+    // timer; the right sensor rising while the timer runs means floor 1. Here the controller reacts
+    // 50 ms late (AS-i handshake and PLC scan), then 6000 ramps down from 68.8 mm/s.
     let mut lift = driving(1000.0, false, 11_000);
-    // Passing floors 3 and 2 the right sensor (long track) rises first, so the seed's
+    // Passing floors 3 and 2 the right sensor (long track) rises first, so the lift thesis'
     // routine does not mistake them for floor 1.
     for floor_level in [800.0, 400.0] {
         let first = run_to(&mut lift, |k| {
@@ -190,8 +190,8 @@ fn the_level_zone_is_where_both_sensors_are_on() {
 
 #[test]
 fn stopping_on_both_sensors_at_6000_ends_inside_the_level_zone() {
-    // Seed table 6.4 "Dobrždění → Aktuální patro": braking at 6000, then 4000 when both
-    // sensors are on. Ramping down from 20.55 mm/s at 50 Hz/s covers under 1 mm.
+    // Table 6.4 of the lift thesis "Dobrždění → Aktuální patro": braking at 6000, then 4000 when
+    // both sensors are on. Ramping down from 20.55 mm/s at 50 Hz/s covers under 1 mm.
     let mut lift = driving(800.0, false, 6000);
     run_to(&mut lift, |k| {
         *k == PlantEventKind::Vane {

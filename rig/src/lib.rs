@@ -2,7 +2,7 @@
 //! PLC program and its safety logic together on one simulated clock ([`rig`]), driven by a
 //! scenario ([`scenario`]), judged by the invariant watch and summed up in a [`report`]; around
 //! it the waveform outputs of a run ([`waves`]), the timing analysis ([`timing`]) and the fault
-//! campaigns ([`campaign`]); beside it the teaching stand of seed 000 ([`stand`]). The
+//! campaigns ([`campaign`]); beside it the teaching stand of the SafeMOTION thesis ([`stand`]). The
 //! `asi-lift` command, the tests and other front-ends use it.
 
 pub mod campaign;

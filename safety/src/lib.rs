@@ -1,10 +1,10 @@
 //! safety: the TwinSAFE logic and PLCopen safety blocks that guard the asi-lift lift (docs/safety.md).
 //!
 //! - [`primitives`]: IEC `R_TRIG`, `F_TRIG`, `TON` and the TwinSAFE 0→1→0 pulse detector;
-//! - [`kl6904`]: the Beckhoff KL6904 logic terminal (seed 004);
-//! - [`plcopen`]: SF_EmergencyStop (seed 002), SF_Equivalent and SF_EDM;
+//! - [`kl6904`]: the Beckhoff KL6904 logic terminal (the KL6904 manual);
+//! - [`plcopen`]: SF_EmergencyStop (the SF_EmergencyStop help), SF_Equivalent and SF_EDM;
 //! - [`drive`]: a drive's integrated safety functions STO, SBC, SS1, SS2, SOS, SLS, SLP, SDI,
-//!   SLI, SLA (seeds 000 and 001, docs/drive-safety.md);
+//!   SLI, SLA (the SafeMOTION thesis and the drive manual, docs/drive-safety.md);
 //! - [`lift`]: the lift's safety project (docs/safety.md), the API the rig wires;
 //! - [`lift_drive`]: the lift's safe drive, a [`drive`] monitor on the lift's motor with the
 //!   safety logic's requests (docs/drive-safety.md §6), the option `[drive] safe = true`.

@@ -107,7 +107,7 @@ impl Ton {
     }
 }
 
-/// The TwinSAFE "0→1→0" pulse detector for Restart and ERR_ACK (seed 004 §3.1, §4.4).
+/// The TwinSAFE "0→1→0" pulse detector for Restart and ERR_ACK (§3.1, §4.4 of the KL6904 manual).
 ///
 /// The rising edge *arms* it and the falling edge *fires* it, so a button held down does
 /// nothing until it is let go (docs/safety-logic.md §6.1: the RESET state "waits for the negative

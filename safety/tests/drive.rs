@@ -1,5 +1,6 @@
-//! `safety::drive`: seed 000's test guides (appendix A) with its demo parameters, the decisions
-//! of docs/drive-safety.md, the no-encoder restriction and property tests of the monitoring.
+//! `safety::drive`: the SafeMOTION thesis' test guides (appendix A) with its demo parameters, the
+//! decisions of docs/drive-safety.md, the no-encoder restriction and property tests of the
+//! monitoring.
 
 use asi_phy::{SimDuration, SimTime};
 use proptest::prelude::*;
@@ -17,8 +18,8 @@ const T0_MS: u64 = 2_000;
 const SLS1: Function = Function::Sls(SlsLevel::L1);
 const SLS2: Function = Function::Sls(SlsLevel::L2);
 
-/// A drive on the seed's stand: an axis whose speed the test sets (the standard motion control)
-/// and whose position is integrated from it, scanned every 10 ms.
+/// A drive on the SafeMOTION thesis' stand: an axis whose speed the test sets (the standard motion
+/// control) and whose position is integrated from it, scanned every 10 ms.
 struct Stand {
     drive: SafeDrive,
     now_ms: u64,
@@ -130,7 +131,7 @@ const fn at(s: f64) -> u64 {
 }
 
 // ---------------------------------------------------------------------------------------------
-// Seed 000, appendix A: one test per guide, demo parameters.
+// The SafeMOTION thesis, appendix A: one test per guide, demo parameters.
 // ---------------------------------------------------------------------------------------------
 
 /// A.2: STO de-energises at once and stays off while requested; the status is TRUE.
@@ -377,7 +378,7 @@ fn guide_sls2_not_slowed_in_time_trips_at_15_s() {
     ));
 }
 
-/// Seed 000 §3.5: with several levels active the lowest limit holds.
+/// §3.5 of the SafeMOTION thesis: with several levels active the lowest limit holds.
 #[test]
 fn sls_lowest_active_limit_holds() {
     let mut s = Stand::demo();
@@ -416,7 +417,8 @@ fn guide_sli_nok_after_50_rev() {
     ));
 }
 
-/// Seed 000 §3.6: SLI requested while the axis turns faster than 2 rev/s de-energises.
+/// §3.6 of the SafeMOTION thesis: SLI requested while the axis turns faster than 2 rev/s
+/// de-energises.
 #[test]
 fn sli_requested_while_moving_trips() {
     let mut s = Stand::demo();
@@ -437,7 +439,8 @@ fn sli_requested_while_moving_trips() {
     ));
 }
 
-/// Seed 000 §3.6: after the request ends SLI stays active for the 10 s disable delay.
+/// §3.6 of the SafeMOTION thesis: after the request ends SLI stays active for the 10 s disable
+/// delay.
 #[test]
 fn sli_stays_active_for_its_disable_delay() {
     let mut s = Stand::demo();
@@ -522,7 +525,8 @@ fn sdi_counts_back_travel_from_the_furthest_point() {
     assert!((at(60.0)..=at(60.02)).contains(&t), "tripped at {t} ms");
 }
 
-/// Seed 000 §3.9: SLP trips when the position leaves [lower, upper] after its enable delay.
+/// §3.9 of the SafeMOTION thesis: SLP trips when the position leaves [lower, upper] after its
+/// enable delay.
 #[test]
 fn slp_trips_outside_its_position_limits() {
     let mut config = DriveSafetyConfig::demo();
@@ -559,7 +563,8 @@ fn sbc_applies_the_brake_after_its_delay() {
     assert!(s.status(Function::Sbc) && !s.out().torque_enabled);
 }
 
-/// SLA (reaction not in the seeds, **Decision**: trip): a jump faster than 100 rev/s² trips.
+/// SLA (reaction neither in the SafeMOTION thesis nor in the drive manual, **Decision**: trip): a
+/// jump faster than 100 rev/s² trips.
 #[test]
 fn sla_trips_on_too_fast_a_speed_change() {
     let mut s = Stand::demo();
@@ -580,9 +585,9 @@ fn sla_trips_on_too_fast_a_speed_change() {
     ));
 }
 
-/// SLT (seed 000 §3.10): after its enable delay the status is TRUE while the torque stays at
-/// most the limit either way; a torque above it trips (decision: like every other violation,
-/// the seed states no reaction), and so does a scan without a valid torque.
+/// SLT (§3.10 of the SafeMOTION thesis): after its enable delay the status is TRUE while the torque
+/// stays at most the limit either way; a torque above it trips (decision: like every other
+/// violation, the SafeMOTION thesis states no reaction), and so does a scan without a valid torque.
 #[test]
 fn slt_holds_its_status_within_the_limit_and_trips_above_it_either_way() {
     let mut config = DriveSafetyConfig::demo();
@@ -789,7 +794,7 @@ fn events_say_what_tripped_when_and_why() {
 }
 
 // ---------------------------------------------------------------------------------------------
-// No encoder (seed 000 §1.1.2) and parameters.
+// No encoder (§1.1.2 of the SafeMOTION thesis) and parameters.
 // ---------------------------------------------------------------------------------------------
 
 /// Without a safe encoder only STO, SBC and SS1 are available; requesting another function
@@ -835,7 +840,7 @@ fn no_encoder_ss1_is_time_monitored_only() {
     assert!(s.trips.is_empty() && s.status(Function::Ss1));
 }
 
-/// SLP needs an absolute multi-turn encoder (seed 001).
+/// SLP needs an absolute multi-turn encoder (the drive manual).
 #[test]
 fn slp_needs_a_multi_turn_encoder() {
     let config = DriveSafetyConfig {
@@ -850,7 +855,7 @@ fn slp_needs_a_multi_turn_encoder() {
 }
 
 #[test]
-fn demo_parameters_are_valid_and_as_in_the_seed() {
+fn demo_parameters_are_valid_and_as_in_the_safemotion_thesis() {
     let c = DriveSafetyConfig::demo();
     assert_eq!(c.validate(), Ok(()));
     assert_eq!(DriveSafetyConfig::demo_without_encoder().validate(), Ok(()));
@@ -1088,7 +1093,7 @@ proptest! {
 }
 
 mod two_channel {
-    //! Seed 001's two-channel activation (docs/drive-safety.md §3.5).
+    //! The drive manual's two-channel activation (docs/drive-safety.md §3.5).
 
     use asi_phy::SimTime;
     use proptest::prelude::*;

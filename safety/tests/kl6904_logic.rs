@@ -8,8 +8,8 @@ use safety::kl6904::logic::{ConnectionId, LogicEventKind, StandardInput};
 use safety::kl6904::modules::FbState;
 use safety::kl6904::{Project, TwinSafeLogic};
 
-/// Seed 004 §5.1 (one E-stop, contactor K1 with EDM) with the E-stop on a KL1904 behind a
-/// connection, plus a second group fed through DECOUPLE.
+/// §5.1 of the KL6904 manual (one E-stop, contactor K1 with EDM) with the E-stop on a KL1904 behind
+/// a connection, plus a second group fed through DECOUPLE.
 const MACHINE: &str = r#"
 [logic]
 name = "machine"

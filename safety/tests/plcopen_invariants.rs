@@ -8,7 +8,7 @@ use safety::plcopen::{
     SfEquivalentInputs,
 };
 
-/// The DiagCodes SF_EmergencyStop may show (seed 002 tables 24/25).
+/// The DiagCodes SF_EmergencyStop may show (tables 24/25 of the SF_EmergencyStop help).
 const ESTOP_CODES: [u16; 9] = [
     0x0000, 0x8001, 0x8802, 0x8402, 0x8804, 0x8404, 0x8000, 0xC001, 0xC011,
 ];

@@ -1,5 +1,5 @@
-//! `asi-lift stand`: seed 000's teaching stand (rig::stand): a stand scenario run and shown as a
-//! student at the stand sees it, or the list of the built-in ones (one per test guide).
+//! `asi-lift stand`: the SafeMOTION thesis' teaching stand (rig::stand): a stand scenario run and
+//! shown as a student at the stand sees it, or the list of the built-in ones (one per test guide).
 
 use super::output::Outputs;
 use super::{print_out, read_input};
@@ -50,8 +50,10 @@ pub fn run(args: StandArgs) -> Result<u8, String> {
             text.push_str(&format!("{:width$}  {}\n", b.name, b.summary()));
         }
         text.push_str(
-            "\nasi-lift stand NAME runs one (seed 000's test guides, appendix A); asi-lift stand \
-             show NAME prints it.\n",
+            "
+asi-lift stand NAME runs one (the SafeMOTION thesis' test guides, appendix A); \
+             asi-lift stand show NAME prints it.
+",
         );
         print_out(&text)?;
         return Ok(0);

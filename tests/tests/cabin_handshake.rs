@@ -1,7 +1,7 @@
-//! The cabin button handshake of seed 003 table 4.7 on the whole rig: K in the PLC's request,
-//! echoed by the panel (docs/lab-bus.md). The first word after power-on needs no resynchronisation,
-//! no torn word is taken while the panel is off the bus, and words resume as soon as it is
-//! back.
+//! The cabin button handshake of table 4.7 of the lift thesis on the whole rig: K in the PLC's
+//! request, echoed by the panel (docs/lab-bus.md). The first word after power-on needs no
+//! resynchronisation, no torn word is taken while the panel is off the bus, and words resume as
+//! soon as it is back.
 
 use asi_lift_tests::scenario;
 use asi_phy::{SimDuration, SimTime};

@@ -1,8 +1,8 @@
-//! The display word of seed 003 tables 4.2/4.4 from the PLC program to the plant's displays:
-//! the program decides a `lab::DisplayWord`, the PLC side of the floor station handshake
-//! (table 4.3) and of the cabin display handshake (table 4.5) carry its bits to the devices,
-//! and the plant's displays show what the program decided; a word that arrives with a flipped
-//! bit is refused by the display, not shown.
+//! The display word of tables 4.2/4.4 of the lift thesis from the PLC program to the plant's
+//! displays: the program decides a `lab::DisplayWord`, the PLC side of the floor station handshake
+//! (table 4.3) and of the cabin display handshake (table 4.5) carry its bits to the devices, and
+//! the plant's displays show what the program decided; a word that arrives with a flipped bit is
+//! refused by the display, not shown.
 
 use asi_master::plc_handshake::{CabinDisplayMaster, FloorStationMaster};
 use asi_phy::Nibble;

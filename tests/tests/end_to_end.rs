@@ -25,7 +25,7 @@ fn press(s: f64, button: Button) -> ScenarioEvent {
 
 #[test]
 fn initialises_from_several_heights_including_floor_1() {
-    // Level at floor 1 (which the seed's routine cannot handle), inside floor 1's vane above
+    // Level at floor 1 (which the lift thesis' routine cannot handle), inside floor 1's vane above
     // and below level, between floors, level at floors 2 and 4, inside floor 3's vane.
     for start in [0.0, 30.0, -30.0, 650.0, 400.0, 1200.0, 1000.0, 830.0] {
         let sc = Scenario {

@@ -99,10 +99,10 @@ fn press(s: f64, button: Button) -> ScenarioEvent {
     }
 }
 
-/// A hall call at floor 3 with the cabin idle at floor 1: floor station 3's handshake in the
-/// 40 ms after the press (the up-button code between its words, seed 003 table 4.3), then the
-/// converter I/O (address 7) from the press to the arrival: ready, run and direction bits
-/// set, the run bit dropped at floor 3.
+/// A hall call at floor 3 with the cabin idle at floor 1: floor station 3's handshake in the 40 ms
+/// after the press (the up-button code between its words, table 4.3 of the lift thesis), then the
+/// converter I/O (address 7) from the press to the arrival: ready, run and direction bits set, the
+/// run bit dropped at floor 3.
 #[test]
 fn a_floor_call_from_the_press_to_the_arrival() {
     let sc = Scenario {

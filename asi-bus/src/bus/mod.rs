@@ -97,7 +97,7 @@ pub struct MonitorId(pub usize);
 /// **Decision**: slave ICs work down to 16 V (docs/asi.md §1.1: ~16..33 V); below that
 /// they lose power and reset.
 pub const SLAVE_MIN_VOLTS: f64 = 16.0;
-/// The nominal AS-i supply (seed 003 §2.2.1: 29.5..31.6 V).
+/// The nominal AS-i supply (§2.2.1 of the lift thesis: 29.5..31.6 V).
 pub const NOMINAL_VOLTS: f64 = 30.0;
 
 #[derive(Debug)]

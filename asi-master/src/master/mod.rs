@@ -1,5 +1,5 @@
 //! The AS-i master: phases, lists, flags, the cycle and the process image (docs/master.md;
-//! docs/asi.md §5; seed 003 §2.2.3, table 4.1).
+//! docs/asi.md §5; §2.2.3, table 4.1 of the lift thesis).
 //!
 //! Sans-IO: the master never sees pulses or a clock. [`Master::poll_transmit`] gives the
 //! request to start now, [`Master::handle_outcome`] takes what came back (a valid response, a
@@ -20,7 +20,7 @@
 //! keeps LPF); one inclusion call to the next address that is not activated (skipped when none
 //! is left).
 //!
-//! **Decisions beyond the seed documents**:
+//! **Decisions beyond the source documents**:
 //! - Address 0 is an inclusion address only while some address 1..31 is free: with 31
 //!   standard slaves there is nothing left to include and the cycle is (31 + 1) · 154 µs.
 //! - A/B: an address with an A and a B slave in LAS is one slot, serving A in even and B in odd

@@ -1,5 +1,5 @@
 //! The AS-i receiver: pulses in, telegrams out, each with the seven receiver checks (docs/physical-layer.md
-//! "The seven receiver checks"; docs/asi.md §3.1; seed 003 §2.2.2).
+//! "The seven receiver checks"; docs/asi.md §3.1; §2.2.2 of the lift thesis).
 //!
 //! A telegram is the run of pulses between two pauses. The receiver anchors the half-bit grid at
 //! the first pulse of the run, places every later pulse on the nearest grid point, and decodes

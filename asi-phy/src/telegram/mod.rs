@@ -1,5 +1,5 @@
 //! AS-i telegrams: the 14-bit master request and the 7-bit slave response (docs/physical-layer.md, §2;
-//! docs/asi.md §2.1, §4; seed 003 §2.2.2).
+//! docs/asi.md §2.1, §4; §2.2.2 of the lift thesis).
 //!
 //! Both are validated representations over plain integers, in transmission order with the first
 //! bit sent in the most significant used position:

@@ -1,5 +1,6 @@
 //! The line voltage: APM pulses rendered as sampled sin² pulses, and the comparator that turns
-//! sampled voltage back into pulses (docs/physical-layer.md "Waveform"; docs/asi.md §1.1; seed 003 §2.2.1).
+//! sampled voltage back into pulses (docs/physical-layer.md "Waveform"; docs/asi.md §1.1; §2.2.1 of
+//! the lift thesis).
 //!
 //! The demodulator follows the receiver rule of the slave ICs: after a pause the comparators
 //! re-arm; the first pulse of a telegram (normally the negative start pulse) sets the threshold

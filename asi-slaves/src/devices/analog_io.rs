@@ -1,6 +1,6 @@
-//! S-7.3 analog devices: the IFM AC2618 current-loop output and a generic analog input
-//! (seed 003 §2.3, table 2.2). Both run the slave side of [`crate::analog_firmware`] in firmware and
-//! answer within the Data_Exchange that brings the master's step.
+//! S-7.3 analog devices: the IFM AC2618 current-loop output and a generic analog input (§2.3,
+//! table 2.2 of the lift thesis). Both run the slave side of [`crate::analog_firmware`] in firmware
+//! and answer within the Data_Exchange that brings the master's step.
 
 use super::any_impls;
 use crate::analog_firmware::{S73InputSlave, S73OutputSlave};
@@ -8,7 +8,7 @@ use crate::slave::Peripheral;
 use asi_phy::handshake_words::AnalogValue;
 use asi_phy::{Nibble, SimTime};
 
-/// The highest set-point the AC2618 drives, in µA (0..20 mA, seed 003 §3.1).
+/// The highest set-point the AC2618 drives, in µA (0..20 mA, §3.1 of the lift thesis).
 pub const AC2618_MAX_UA: u16 = 20_000;
 
 /// The IFM AC2618 two-channel current-loop output at address 10 (S-7.3.5). Channel 1 carries

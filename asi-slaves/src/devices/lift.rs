@@ -1,5 +1,5 @@
-//! The lift's AC2726 modules with the floor and cabin electronics behind them (seed 003 §4,
-//! tables 4.2–4.7).
+//! The lift's AC2726 modules with the floor and cabin electronics behind them (§4 of the lift
+//! thesis, tables 4.2–4.7).
 //!
 //! The electronics sit behind a plain I/O module: the module samples its input pins when it
 //! receives a Data_Exchange and then drives its outputs; the electronics react to the new

@@ -1,6 +1,6 @@
-//! The lab lift's slave devices (docs/lab-bus.md table; seed 003 table 3.1) and generic ones, each a
-//! [`Peripheral`](crate::slave::Peripheral) with its peripheral side as plain signals the rig
-//! connects to the lift plant.
+//! The lab lift's slave devices (docs/lab-bus.md table; table 3.1 of the lift thesis) and generic
+//! ones, each a [`Peripheral`](crate::slave::Peripheral) with its peripheral side as plain signals
+//! the rig connects to the lift plant.
 //!
 //! | address | device | profile | module |
 //! |---|---|---|---|
@@ -24,15 +24,15 @@ pub use safety_sensor::{SafetySensor, CODE_HOLD};
 
 use asi_phy::SlaveCodes;
 
-/// IFM AC2726, 4DI/4DO module: S-7.0.F (seed 003 table 3.1).
+/// IFM AC2726, 4DI/4DO module: S-7.0.F (table 3.1 of the lift thesis).
 pub const AC2726: SlaveCodes = SlaveCodes::new(0x7, 0x0, 0xF, 0xF);
-/// IFM AC2258, I/O module: S-7.0.E (seed 003 table 3.1).
+/// IFM AC2258, I/O module: S-7.0.E (table 3.1 of the lift thesis).
 pub const AC2258: SlaveCodes = SlaveCodes::new(0x7, 0x0, 0xF, 0xE);
-/// IFM IG5886, load sensor: S-1.1 (seed 003 table 3.1; a 2.0 profile, ID2 read as F).
+/// IFM IG5886, load sensor: S-1.1 (table 3.1 of the lift thesis; a 2.0 profile, ID2 read as F).
 pub const IG5886: SlaveCodes = SlaveCodes::new(0x1, 0x1, 0xF, 0xF);
-/// IFM AC2618, two-channel current-loop output: S-7.3.5 (seed 003 table 3.1).
+/// IFM AC2618, two-channel current-loop output: S-7.3.5 (table 3.1 of the lift thesis).
 pub const AC2618: SlaveCodes = SlaveCodes::new(0x7, 0x3, 0xF, 0x5);
-/// IFM GG505S, safety sensor: S-0.B.F (seed 003 §6.3; docs/lab-bus.md).
+/// IFM GG505S, safety sensor: S-0.B.F (§6.3 of the lift thesis; docs/lab-bus.md).
 pub const GG505S: SlaveCodes = SlaveCodes::new(0x0, 0xB, 0xF, 0xF);
 /// A generic two-channel S-7.3 analog input: S-7.3.D (ID2 = 1101: input, analog, 2 channels).
 pub const ANALOG_INPUT_2CH: SlaveCodes = SlaveCodes::new(0x7, 0x3, 0xF, 0xD);

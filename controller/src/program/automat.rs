@@ -1,4 +1,4 @@
-//! The automat (seed 003 tables 6.4/6.5): standing at a floor, departing, travelling,
+//! The automat (tables 6.4/6.5 of the lift thesis): standing at a floor, departing, travelling,
 //! braking, arriving and serving calls; STOP, overload and the holds between floors.
 
 use super::events::{HaltReason, LostReason, ProgramEventKind};
@@ -69,7 +69,7 @@ impl Program {
         want_restart
     }
 
-    /// The automat's step for this scan (seed tables 6.4/6.5).
+    /// The automat's step for this scan (tables 6.4/6.5 of the lift thesis).
     pub(super) fn step_service(
         &mut self,
         now: SimTime,
@@ -222,8 +222,8 @@ impl Program {
         self.phase = Phase::Service(step);
     }
 
-    /// At a floor: unload the next target while current floor = target (seed §6.6); a call for
-    /// the floor the cabin stands at is served at once.
+    /// At a floor: unload the next target while current floor = target (§6.6 of the lift thesis); a
+    /// call for the floor the cabin stands at is served at once.
     pub(super) fn choose_target(&mut self, now: SimTime) {
         for _ in 0..64 {
             if self.target != self.current {
@@ -258,8 +258,8 @@ impl Program {
         self.phase = Phase::Service(Step::Travel);
     }
 
-    /// STOP during travel: stop at the next floor in the direction of travel (seed §6.3, "Porucha
-    /// Stop"); already braking, stop where it brakes.
+    /// STOP during travel: stop at the next floor in the direction of travel (§6.3 of the lift
+    /// thesis, "Porucha Stop"); already braking, stop where it brakes.
     pub(super) fn stop_demanded(&mut self, now: SimTime, braking: bool) {
         self.stop_pending = true;
         let stop_at = match (braking, self.dir) {
@@ -275,9 +275,9 @@ impl Program {
         self.hold();
         self.drive_off_at = now;
         let floor = self.current;
-        // Level in a vane whose long track came first: the left one only at floor 1 (its vane
-        // is turned, seed 003 §6.4). A mismatch means the count is off: the calls of this stop
-        // are served (the cabin stands level at a floor), and the position is found again
+        // Level in a vane whose long track came first: the left one only at floor 1 (its vane is
+        // turned, §6.4 of the lift thesis). A mismatch means the count is off: the calls of this
+        // stop are served (the cabin stands level at a floor), and the position is found again
         // before the next journey. Checked only here, where both sensors are seen working.
         if self
             .vane_shape

@@ -4,25 +4,25 @@ use crate::dispatch::Algorithm;
 use asi_phy::SimDuration;
 use core::fmt;
 
-/// The program's settings. Defaults: the seed's set-points (µA of the current loop) and timer,
-/// a 10 ms scan (docs/controller.md).
+/// The program's settings. Defaults: the lift thesis' set-points (µA of the current loop) and
+/// timer, a 10 ms scan (docs/controller.md).
 #[derive(Clone, Debug, PartialEq)]
 pub struct ControllerConfig {
     /// Floors served, 2..=24.
     pub floors: u8,
-    /// FIFO (seed) or collective selective.
+    /// FIFO (the lift thesis') or collective selective.
     pub algorithm: Algorithm,
     /// The PLC scan period.
     pub scan: SimDuration,
-    /// Travel set-point (seed tables 6.4/6.5: 10000 µA, 59.4 mm/s).
+    /// Travel set-point (tables 6.4/6.5 of the lift thesis: 10000 µA, 59.4 mm/s).
     pub travel_ua: u16,
     /// Braking (creep) set-point (6000 µA, 20.6 mm/s).
     pub creep_ua: u16,
     /// Standstill set-point (4000 µA = 4 mA).
     pub standstill_ua: u16,
-    /// Initialisation set-point (seed table 6.3: 11000 µA, 68.8 mm/s).
+    /// Initialisation set-point (table 6.3 of the lift thesis: 11000 µA, 68.8 mm/s).
     pub init_ua: u16,
-    /// The initialisation timer (seed §6.4: 2 s).
+    /// The initialisation timer (§6.4 of the lift thesis: 2 s).
     pub init_timer: SimDuration,
     /// How often the restart pulse is repeated while the STOP circuit is not yet running again.
     pub restart_every: SimDuration,
@@ -30,7 +30,7 @@ pub struct ControllerConfig {
     pub stale_after: SimDuration,
     /// How long the cabin stands at a floor after arriving before it departs again.
     ///
-    /// **Decision**: 2 s. The seed's automat departs in the scan after it arrives, so an
+    /// **Decision**: 2 s. The lift thesis' automat departs in the scan after it arrives, so an
     /// intermediate stop would never come to rest; a lift stands for its passengers.
     pub dwell: SimDuration,
     /// Travel without reaching a vane for longer than this means a vane sensor lies: the

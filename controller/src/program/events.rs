@@ -90,7 +90,7 @@ pub enum ProgramEventKind {
     Served(ServedCall),
     /// STOP in the cabin: the target becomes the next floor in the direction of travel.
     StopDemanded {
-        /// The target given up (FIFO: the request is dropped, as in the seed).
+        /// The target given up (FIFO: the request is dropped, as in the lift thesis).
         dropped: Option<u8>,
         /// The floor the cabin will stop at.
         stop_at: u8,
@@ -167,8 +167,8 @@ pub struct Event {
 /// The vane sensors at the start of initialisation, which decide how it proceeds.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum InitStart {
-    /// No vane, or only the right sensor: the seed's routine (down at 11000 µA).
-    Seed,
+    /// No vane, or only the right sensor: the lift thesis' routine (down at 11000 µA).
+    ThesisRoutine,
     /// Only the left sensor: inside floor 1's long track, above or below level.
     Floor1Track,
     /// Both sensors: level at some floor; a slow probe tells floor 1 from the others.
@@ -189,7 +189,7 @@ impl fmt::Display for ProgramEventKind {
                 f,
                 "initialisation: {}",
                 match start {
-                    InitStart::Seed => "running down to find floor 1",
+                    InitStart::ThesisRoutine => "running down to find floor 1",
                     InitStart::Floor1Track => "inside floor 1's vane, creeping to level",
                     InitStart::Level => "level at a floor, probing which one",
                     InitStart::BelowFloor1 => "just below floor 1's vane, creeping up",

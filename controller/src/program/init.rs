@@ -1,5 +1,5 @@
-//! Initialisation (seed 003 table 6.3, extended for starts inside floor 1's vane, level at a
-//! floor or just below floor 1): finds floor 1 and hands over to the automat.
+//! Initialisation (table 6.3 of the lift thesis, extended for starts inside floor 1's vane, level
+//! at a floor or just below floor 1): finds floor 1 and hands over to the automat.
 
 use super::events::{HaltReason, InitStart, ProgramEventKind, NO_VANE_RETRY};
 use super::io::{Edges, Inputs};
@@ -15,13 +15,13 @@ impl Program {
             (true, false) => InitStart::Floor1Track,
             // Last seen inside floor 1's vane moving down, or below it moving up: below it.
             (false, false) if self.in_floor1_vane => InitStart::BelowFloor1,
-            _ => InitStart::Seed,
+            _ => InitStart::ThesisRoutine,
         };
         let step = match start {
             InitStart::Level => InitStep::Probe,
             InitStart::Floor1Track => InitStep::Floor1Down,
             InitStart::BelowFloor1 => InitStep::Floor1Up,
-            InitStart::Seed => InitStep::Run,
+            InitStart::ThesisRoutine => InitStep::Run,
         };
         self.initialised_at = None;
         self.init_held = None;
@@ -36,7 +36,8 @@ impl Program {
         self.drive_init(step);
     }
 
-    /// The outputs of an initialisation step (seed table 6.3: down, floor 1 and "down" shown).
+    /// The outputs of an initialisation step (table 6.3 of the lift thesis: down, floor 1 and
+    /// "down" shown).
     pub(super) fn drive_init(&mut self, step: InitStep) {
         let (ua, up) = match step {
             InitStep::Run => (self.cfg.init_ua, false),

@@ -1,10 +1,11 @@
-//! What the program reads at the start of a scan and writes at its end (seed 003 table 4.1,
-//! the cabin word of table 4.6, the displays of tables 4.2/4.4), and the vane sensor edges
+//! What the program reads at the start of a scan and writes at its end (table 4.1 of the lift
+//! thesis, the cabin word of table 4.6, the displays of tables 4.2/4.4), and the vane sensor edges
 //! derived from the inputs.
 
 use lab::DisplayWord;
 
-/// The cabin's 32-bit word (seed table 4.6), as the PLC assembles it from the two halves.
+/// The cabin's 32-bit word (table 4.6 of the lift thesis), as the PLC assembles it from the two
+/// halves.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct CabinWord {
     /// Floor buttons, bit `f − 1` for floor `f` (1..=24).
@@ -76,9 +77,9 @@ pub(super) struct Edges {
     pub(super) vane_rise: bool,
     /// "Left OR right" fell: the cabin leaves a vane.
     pub(super) vane_fall: bool,
-    /// At a vane rise: `Some(true)` if the left sensor came first (floor 1's turned vane, seed
-    /// 003 §6.4), `Some(false)` if the right one did (floors 2..), `None` if both came in one
-    /// word.
+    /// At a vane rise: `Some(true)` if the left sensor came first (floor 1's turned vane, §6.4 of
+    /// the lift thesis), `Some(false)` if the right one did (floors 2..), `None` if both came in
+    /// one word.
     pub(super) floor1_vane: Option<bool>,
     /// One sensor fell while the other stayed on: `Some(true)` for the left one.
     pub(super) left_fell_first: Option<bool>,

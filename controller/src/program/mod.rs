@@ -1,8 +1,8 @@
-//! The PLC program of seed 003 §6 as a scan-driven state machine: read inputs, safety checks,
-//! initialisation once, the automat, write outputs (seed figure 6.1).
+//! The PLC program of §6 of the lift thesis as a scan-driven state machine: read inputs, safety
+//! checks, initialisation once, the automat, write outputs (figure 6.1 of the lift thesis).
 //!
 //! This module is the program's logic over plain inputs and outputs; [`crate::plc`] connects it
-//! to the AS-i master's process image and runs the handshakes of seed tables 4.2–4.7.
+//! to the AS-i master's process image and runs the handshakes of tables 4.2–4.7 of the lift thesis.
 //!
 //! - this file: the [`Program`], its scan, reading the inputs, the restart pulses and the
 //!   displays;
@@ -10,8 +10,8 @@
 //! - `io`: the inputs and outputs of a scan, the vane sensor edges;
 //! - `events`: [`ProgramEventKind`] and the reasons it carries, with their words;
 //! - `state`: the phases and steps, and the [`State`] shown;
-//! - `init`: initialisation (seed table 6.3);
-//! - `automat`: the automat (seed tables 6.4/6.5);
+//! - `init`: initialisation (table 6.3 of the lift thesis);
+//! - `automat`: the automat (tables 6.4/6.5 of the lift thesis);
 //! - `position`: the floor count, its checks, and a lost position;
 //! - `bus_fault`: holding the cabin while the bus is not healthy, and what follows.
 
@@ -51,7 +51,7 @@ pub struct Program {
     /// A cabin request came in the STOP fault: restart pulses are due.
     restart_wanted: bool,
     /// This scan's STOP demand: EStopOut off or the cabin's STOP button pressed. No run
-    /// starts while it lasts (seed 003 §6.3), whatever routine would start one.
+    /// starts while it lasts (§6.3 of the lift thesis), whatever routine would start one.
     stop_demand: bool,
     cabin: CabinWord,
     last_cabin_at: Option<SimTime>,
@@ -244,7 +244,8 @@ impl Program {
             self.last_cabin_at = Some(now);
             for f in floors(pressed, self.cfg.floors) {
                 self.store(now, f, Source::Cabin, None);
-                // The cabin request that ends a STOP (seed §6.3) also restarts the STOP circuit.
+                // The cabin request that ends a STOP (§6.3 of the lift thesis) also restarts the
+                // STOP circuit.
                 let stopped = !inp.estop_ok
                     || self.stop_pending
                     || self.phase == Phase::Service(Step::StopFault);
@@ -284,8 +285,8 @@ impl Program {
         self.out.restart = self.restart_high;
     }
 
-    /// The display word content (seed 003 tables 4.2/4.4), by the rows of tables 6.3–6.5 that
-    /// say what is shown. The floor number and the arrow are latched: they change only at
+    /// The display word content (tables 4.2/4.4 of the lift thesis), by the rows of tables 6.3–6.5
+    /// that say what is shown. The floor number and the arrow are latched: they change only at
     /// these rows, not while floors are passed.
     ///
     /// - Table 6.3, state "Jede" (set in `start_init`): floor 1 and "down" from the start of

@@ -1,5 +1,5 @@
-//! The floor count ("Rozdil" counting on the vane sensors, seed 003 tables 6.4/6.5) and its
-//! checks: the vane's shape against the floor counted, stuck sensors, a cabin moved by hand;
+//! The floor count ("Rozdil" counting on the vane sensors, tables 6.4/6.5 of the lift thesis) and
+//! its checks: the vane's shape against the floor counted, stuck sensors, a cabin moved by hand;
 //! and what happens when the count is lost.
 
 use super::events::{LostReason, ProgramEventKind};
@@ -10,8 +10,8 @@ use crate::dispatch::{Algorithm, Dir};
 use asi_phy::SimTime;
 
 impl Program {
-    /// A rising vane edge during travel: the cabin reaches the next floor's vane (seed tables
-    /// 6.4/6.5, "Rozdil" counting); at the target it brakes to the creep speed.
+    /// A rising vane edge during travel: the cabin reaches the next floor's vane (tables
+    /// 6.4/6.5 of the lift thesis, "Rozdil" counting); at the target it brakes to the creep speed.
     pub(super) fn pass_floor(&mut self, now: SimTime, e: Edges) {
         let Some(dir) = self.dir else { return };
         let floor = match self.count_vane(dir, e) {
@@ -48,10 +48,10 @@ impl Program {
             .ok_or(LostReason::BeyondEndFloor)
     }
 
-    /// Whether the vane sensors show what no working pair can show in the vane of the floor
-    /// counted: at floor 1 the right (short) track lies inside the left (long) one, at the
-    /// other floors the left inside the right (seed 003 §6.4), so the short sensor is never on
-    /// alone.
+    /// Whether the vane sensors show what no working pair can show in the vane of the
+    /// floor counted: at floor 1 the right (short) track lies inside the left (long) one, at the
+    /// other floors the left inside the right (§6.4 of the lift thesis), so the short sensor is
+    /// never on alone.
     pub(super) fn vane_contradicts_floor(&self) -> bool {
         let (left, right) = (self.cabin.vane_left, self.cabin.vane_right);
         if self.current == 1 {

@@ -1,13 +1,13 @@
-//! The program's phases (waiting, initialisation, service, bus fault), the steps of
-//! initialisation (seed 003 table 6.3) and of the automat (tables 6.4/6.5), and the [`State`]
-//! they show as.
+//! The program's phases (waiting, initialisation, service, bus fault), the steps of initialisation
+//! (table 6.3 of the lift thesis) and of the automat (tables 6.4/6.5), and the [`State`] they show
+//! as.
 
 use super::events::HaltReason;
 use crate::dispatch::Dir;
 use asi_phy::SimTime;
 use core::fmt;
 
-/// Initialisation steps (seed table 6.3, extended for a start at floor 1).
+/// Initialisation steps (table 6.3 of the lift thesis, extended for a start at floor 1).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(super) enum InitStep {
     /// Jede: down at the initialisation speed.
@@ -23,7 +23,7 @@ pub(super) enum InitStep {
     Floor1Up,
 }
 
-/// Automat steps (seed tables 6.4/6.5).
+/// Automat steps (tables 6.4/6.5 of the lift thesis).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(super) enum Step {
     /// Aktuální patro: standing at a floor.
@@ -56,12 +56,12 @@ pub(super) enum Phase {
 }
 
 /// The program's state as the report shows it: the phase, and in service the automat's step
-/// (seed tables 6.3–6.5). [`State::name`] gives the words the report and the rig use.
+/// (tables 6.3–6.5 of the lift thesis). [`State::name`] gives the words the report and the rig use.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum State {
     /// No cabin word yet: nothing is known.
     WaitingForInputs,
-    /// Initialisation (seed table 6.3), held or not.
+    /// Initialisation (table 6.3 of the lift thesis), held or not.
     Initialising,
     /// The bus is not healthy: the cabin is held.
     BusFault,

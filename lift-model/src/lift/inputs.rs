@@ -51,7 +51,8 @@ impl Lift {
     }
 
     /// The converter's inputs: run, direction (`up`: 1 up, 0 down; slave 7 outputs D0, D1,
-    /// docs/lab-bus.md) and the current-loop set-point `Rychlost` in µA (slave 10, seed 003 table 6.6).
+    /// docs/lab-bus.md) and the current-loop set-point `Rychlost` in µA (slave 10, table 6.6 of the
+    /// lift thesis).
     ///
     /// With power and no fault the converter ramps its frequency at `drive.ramp_hz_per_s`
     /// toward [`crate::converter_frequency_hz`] of the set-point in the given direction, or
@@ -190,14 +191,14 @@ impl Lift {
     }
 
     /// The load in the cabin (docs/lab-bus.md slave 8). It does not change the drive's speed: the
-    /// seed's slip is a constant 0.1.
+    /// the lift thesis' slip is a constant 0.1.
     pub fn set_load(&mut self, now: SimTime, load: LoadLevel) -> Result<(), PlantError> {
         self.input_at(now)?;
         self.load = load;
         Ok(())
     }
 
-    /// A person turns the motor by hand (seed 003 §6.3) so the cabin moves `distance_mm`
+    /// A person turns the motor by hand (§6.3 of the lift thesis) so the cabin moves `distance_mm`
     /// (positive up) at `crank_speed_mm_s`, passing vanes and overtravel zones with their
     /// edges like any motion.
     ///
@@ -241,7 +242,7 @@ impl Lift {
     }
 
     /// A complete display word for a display, as the rig received it through the AS-i
-    /// handshake (seed 003 tables 4.3, 4.5); the display shows it from `now` on.
+    /// handshake (tables 4.3, 4.5 of the lift thesis); the display shows it from `now` on.
     pub fn set_display(&mut self, now: SimTime, id: DisplayId, raw: u16) -> Result<(), PlantError> {
         let index = self.display_index(id).ok_or(PlantError::NoSuchDisplay {
             floor: match id {

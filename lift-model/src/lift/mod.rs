@@ -57,7 +57,7 @@ pub enum PlantError {
         /// The distance given.
         distance_mm: f64,
     },
-    /// The crank needs the drive without power (seed 003 §6.3).
+    /// The crank needs the drive without power (§6.3 of the lift thesis).
     #[error("the hand crank is refused while contactor K1 is closed: the drive has power")]
     CrankWhilePowered,
     /// The crank needs the cabin at rest.
@@ -123,7 +123,7 @@ impl Iterator for Events<'_> {
 
 impl ExactSizeIterator for Events<'_> {}
 
-/// The laboratory lift of seed 003 as a plant: shaft, cabin, converter, motor, brake, K1,
+/// The laboratory lift of the lift thesis as a plant: shaft, cabin, converter, motor, brake, K1,
 /// sensors, buttons, door, load and displays (docs/lift-plant.md). Sans-IO: time is passed in.
 ///
 /// # Time and events

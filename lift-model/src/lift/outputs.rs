@@ -23,7 +23,7 @@ impl Lift {
         self.motion.a
     }
 
-    /// The level of a vane sensor: `true` over a vane track (seed 003 §6.4).
+    /// The level of a vane sensor: `true` over a vane track (§6.4 of the lift thesis).
     pub fn vane(&self, sensor: VaneSensor) -> bool {
         let level = match sensor {
             VaneSensor::Left => self.levels.left,
@@ -32,18 +32,18 @@ impl Lift {
         self.vane_faults[sensor as usize].reads(level)
     }
 
-    /// `Snimac_1`, the left vane sensor (seed 003 table 6.1).
+    /// `Snimac_1`, the left vane sensor (table 6.1 of the lift thesis).
     pub fn vane_left(&self) -> bool {
         self.vane(VaneSensor::Left)
     }
 
-    /// `Snimac_2`, the right vane sensor (seed 003 table 6.1).
+    /// `Snimac_2`, the right vane sensor (table 6.1 of the lift thesis).
     pub fn vane_right(&self) -> bool {
         self.vane(VaneSensor::Right)
     }
 
-    /// The cabin is in the level zone of a floor, where both vane tracks overlap (seed 003
-    /// tables 6.4, 6.5: "Dobrždění → Aktuální patro"); the physical position, whatever the
+    /// The cabin is in the level zone of a floor, where both vane tracks overlap (tables 6.4, 6.5
+    /// of the lift thesis: "Dobrždění → Aktuální patro"); the physical position, whatever the
     /// sensors report.
     pub fn in_level_zone(&self) -> bool {
         self.levels.left && self.levels.right

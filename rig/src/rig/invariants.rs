@@ -166,8 +166,8 @@ impl Window {
 }
 
 /// The watch of one STOP: from EStopOut going off until it is on again (docs/safety.md,
-/// `stop-overrun`; seed 003 §6.3: the cabin stops at the nearest floor in its direction of
-/// travel). Each rule allows a vane's half-length, so a cabin that levels at its floor, or a
+/// `stop-overrun`; §6.3 of the lift thesis: the cabin stops at the nearest floor in its direction
+/// of travel). Each rule allows a vane's half-length, so a cabin that levels at its floor, or a
 /// fault that a safety function stops within that, is not an overrun.
 #[derive(Clone, Debug, PartialEq)]
 struct StopEpisode {
@@ -921,7 +921,7 @@ mod tests {
         o
     }
 
-    /// Seed 003 §6.3: after STOP the cabin stops at the nearest floor in its direction of
+    /// §6.3 of the lift thesis: after STOP the cabin stops at the nearest floor in its direction of
     /// travel; the watch allows the next floor more than a vane's half-length ahead and that
     /// half-length beyond it.
     #[test]

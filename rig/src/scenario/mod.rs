@@ -149,11 +149,11 @@ pub enum Fault {
     EncoderRepaired,
 }
 
-/// The PLC scan periods the program works with. The cabin's 32-bit word takes 14 handshake
-/// steps of one scan each (seed 003 tables 4.6/4.7), so its inputs are up to about 15 scans
-/// old: at 20 ms a 300 ms press is always seen and initialisation sees floor 1's vane in time;
-/// at 25 ms some press phases are lost, at 30 ms initialisation can miss floor 1's level
-/// (measured; the book, "Scenario files").
+/// The PLC scan periods the program works with. The cabin's 32-bit word takes 14 handshake steps of
+/// one scan each (tables 4.6/4.7 of the lift thesis), so its inputs are up to about 15 scans old:
+/// at 20 ms a 300 ms press is always seen and initialisation sees floor 1's vane in time; at 25 ms
+/// some press phases are lost, at 30 ms initialisation can miss floor 1's level (measured; the
+/// book, "Scenario files").
 pub const PLC_SCAN_RANGE: std::ops::RangeInclusive<SimDuration> =
     SimDuration::from_millis(1)..=SimDuration::from_millis(20);
 

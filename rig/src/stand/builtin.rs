@@ -1,6 +1,6 @@
 //! The stand scenarios of the repository's `scenarios/stand/` directory, one per test guide of
-//! seed 000's appendix A, built into the library: `asi-lift stand` lists them, `asi-lift stand
-//! NAME` runs one.
+//! appendix A of the SafeMOTION thesis, built into the library: `asi-lift stand` lists them,
+//! `asi-lift stand NAME` runs one.
 
 use super::StandScenario;
 use crate::scenario::builtin::Builtin;

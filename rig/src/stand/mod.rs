@@ -1,27 +1,27 @@
-//! The teaching stand of seed 000 as a second built-in plant (docs/drive-safety.md §5): one
-//! servo axis, its standard motion control, the light curtain that requests the function
-//! selected on the HMI, the safe drive ([`SafeDrive`] with [`DriveSafetyConfig::demo`]) and the
-//! HMI page a student watches, on simulated time.
+//! The teaching stand of the SafeMOTION thesis as a second built-in plant (docs/drive-safety.md
+//! §5): one servo axis, its standard motion control, the light curtain that requests the function
+//! selected on the HMI, the safe drive ([`SafeDrive`] with [`DriveSafetyConfig::demo`]) and the HMI
+//! page a student watches, on simulated time.
 //!
 //! Sans-IO: [`Stand::step`] takes the scan's time and advances everything by one scan period;
 //! [`run`] plays a [`StandScenario`] and returns what happened as a [`StandReport`].
 //!
-//! **Decisions** where seed 000 is silent (docs/drive-safety.md §5):
+//! **Decisions** where the SafeMOTION thesis is silent (docs/drive-safety.md §5):
 //!
 //! - The safe drive and the programs are scanned every [`SCAN`] (10 ms); an event acts in the
 //!   first scan at or after its time; the light curtain, the safe drive and the HMI see it in
 //!   that same scan.
 //! - The motion control ramps the speed to the speed field at [`MOTION_RAMP`] (10 rev/s², the
-//!   "Pohon - Decelerace" field of figure A.3) both ways. It does not know the safety limits
-//!   (seed 000 §4), unless the scenario's `follows_limit` makes it brake to the safe drive's
-//!   `speed_command_limit`.
+//!   "Pohon - Decelerace" field of figure A.3) both ways. It does not know the safety limits (§4 of
+//!   the SafeMOTION thesis), unless the scenario's `follows_limit` makes it brake to the safe
+//!   drive's `speed_command_limit`.
 //! - Torque off: the axis coasts down at [`FRICTION_DECEL`] (2 rev/s²); with a holding brake
 //!   (`brake = true`, applied whenever the torque is off) at [`BRAKE_DECEL`] (50 rev/s²).
-//! - Torque off puts the motion control in error (seed 000 §4.1, "Deenergetizace pohonu"):
-//!   the drive shows "Vypnuto" and starts again only after the Reset and a new "Zap".
-//! - The light curtain (SF_ESPE, seed 000 §4.2.2, figure 5.4) has a restart interlock: its
-//!   output falls when the field is broken and rises only on the operator's Reset with the
-//!   field clear. The scenario begins after the guides' step 2 (the curtain acknowledged).
+//! - Torque off puts the motion control in error (§4.1 of the SafeMOTION thesis, "Deenergetizace
+//!   pohonu"): the drive shows "Vypnuto" and starts again only after the Reset and a new "Zap".
+//! - The light curtain (SF_ESPE, §4.2.2, figure 5.4 of the SafeMOTION thesis) has a restart
+//!   interlock: its output falls when the field is broken and rises only on the operator's Reset
+//!   with the field clear. The scenario begins after the guides' step 2 (the curtain acknowledged).
 //! - The Reset button is one scan TRUE: S_Control_Reset of the safe drive, the curtain's reset
 //!   and the motion control's error reset at once.
 
@@ -49,11 +49,11 @@ pub const MOTION_RAMP: f64 = 10.0;
 pub const FRICTION_DECEL: f64 = 2.0;
 /// How fast the holding brake stops the axis, rev/s².
 pub const BRAKE_DECEL: f64 = 50.0;
-/// The stopwatch's timer (seed 000 §4.2.4, figure 4.5: a TP with PT = T#15s).
+/// The stopwatch's timer (§4.2.4, figure 4.5 of the SafeMOTION thesis: a TP with PT = T#15s).
 pub const STOPWATCH_LIMIT: SimDuration = SimDuration::from_secs(15);
 
-/// The state of a function's page as the student sees it under its Zap/Vyp button (seed 000
-/// §4.2.3, figure 4.4, and the guides of appendix A).
+/// The state of a function's page as the student sees it under its Zap/Vyp button (§4.2.3,
+/// figure 4.4 of the SafeMOTION thesis, and the guides of its appendix A).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 pub enum HmiState {
     /// "Neaktivní", grey: the function is not selected.
@@ -102,10 +102,11 @@ impl fmt::Display for HmiState {
     }
 }
 
-/// The page's state of `function` (seed 000 figure 4.4, in its order): `ready` = SafetyRdy,
-/// `selected` = its `<f>_On`, `curtain_ok` = ESPE_OUT, `status` = S_Status_&lt;f&gt;,
-/// `not_err` = S_Status_NotErrFunc. STO's safe state shows "Aktivní" and SS1's "NOK", as the
-/// guides A.2 and A.4 say (for SS1 the safe state is the de-energised drive).
+/// The page's state of `function` (figure 4.4 of the SafeMOTION thesis, in its order):
+/// `ready` = SafetyRdy, `selected` = its `<f>_On`, `curtain_ok` = ESPE_OUT,
+/// `status` = S_Status_&lt;f&gt;, `not_err` = S_Status_NotErrFunc. STO's safe state shows "Aktivní"
+/// and SS1's "NOK", as the guides A.2 and A.4 say (for SS1 the safe state is the de-energised
+/// drive).
 pub fn hmi_state(
     function: Function,
     ready: bool,
@@ -133,8 +134,8 @@ pub fn hmi_state(
     }
 }
 
-/// `true` for the functions whose page has the stopwatch (seed 000 §4.2.4: `Function_Sel`
-/// 3..6, SS1, SS2, SLS1 and SLS2).
+/// `true` for the functions whose page has the stopwatch (§4.2.4 of the SafeMOTION thesis:
+/// `Function_Sel` 3..6, SS1, SS2, SLS1 and SLS2).
 pub fn has_stopwatch(f: Function) -> bool {
     matches!(
         f,
@@ -225,7 +226,7 @@ impl StandReport {
         let mut s = String::new();
         let _ = writeln!(
             s,
-            "stand: {} — {} selected, demo parameters (seed 000), scan {} ms",
+            "stand: {} — {} selected, demo parameters (the SafeMOTION thesis), scan {} ms",
             self.scenario, self.function, self.scan_ms
         );
         let _ = writeln!(
@@ -453,7 +454,8 @@ impl Stand {
             self.note(now, "safety", text);
         }
         if self.torque && !out.torque_enabled {
-            // MpAxisBasic goes into error when the drive is de-energised (seed 000 §4.1).
+            // MpAxisBasic goes into error when the drive is de-energised (§4.1 of the SafeMOTION
+            // thesis).
             self.motion_error = true;
             self.drive_on = false;
         }
@@ -502,9 +504,9 @@ impl Stand {
         self.move_axis(now);
     }
 
-    /// The stopwatch (seed 000 §4.2.4): runs from the request while UMSafetyOK holds (no
-    /// safe state, no error), stops at the safe state or the trip, at most 15 s; zero again
-    /// once the curtain is acknowledged.
+    /// The stopwatch (§4.2.4 of the SafeMOTION thesis): runs from the request while UMSafetyOK
+    /// holds (no safe state, no error), stops at the safe state or the trip, at most 15 s; zero
+    /// again once the curtain is acknowledged.
     fn stopwatch_scan(&mut self, now: SimTime, status: bool, not_err: bool) {
         if !has_stopwatch(self.function) {
             return;

@@ -15,13 +15,13 @@ use toml::Spanned;
 /// The longest stand scenario: an hour of simulated time.
 pub const MAX_DURATION: SimDuration = SimDuration::from_secs(3600);
 /// The highest speed the stand's HMI accepts, rev/s (3000 min⁻¹, a small servomotor's rated
-/// speed; seed 000 does not give the motor's data).
+/// speed; the SafeMOTION thesis does not give the motor's data).
 pub const MAX_SPEED: f64 = 50.0;
 /// How long a hand stays in the light curtain's field unless `hold` says otherwise.
 pub const DEFAULT_HOLD: SimDuration = SimDuration::from_millis(500);
 
-/// The functions that have a page and a Zap/Vyp button on the stand's HMI (seed 000 §4.2.1,
-/// `Function_Sel` 1..9), in that order.
+/// The functions that have a page and a Zap/Vyp button on the stand's HMI (§4.2.1 of the SafeMOTION
+/// thesis, `Function_Sel` 1..9), in that order.
 pub const SELECTABLE: [Function; 9] = [
     Function::Sto,
     Function::Sos,
@@ -51,11 +51,11 @@ pub struct StandScenario {
     pub duration: SimDuration,
     /// The drive page's speed field at the start, rev/s (signed: positive = Zap - P).
     pub speed: f64,
-    /// The standard motion control also brakes to the safe drive's `speed_command_limit`. Off
-    /// on seed 000's stand, whose motion program knows nothing of the safety limits (§4).
+    /// The standard motion control also brakes to the safe drive's `speed_command_limit`. Off on
+    /// the SafeMOTION thesis' stand, whose motion program knows nothing of the safety limits (§4).
     pub follows_limit: bool,
-    /// The motor has a holding brake, applied whenever the torque is off. Seed 000's stand
-    /// realises no SBC: without one the axis coasts.
+    /// The motor has a holding brake, applied whenever the torque is off. The SafeMOTION thesis'
+    /// stand realises no SBC: without one the axis coasts.
     pub brake: bool,
     /// The events, in time order.
     pub events: Vec<StandEvent>,

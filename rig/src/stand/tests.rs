@@ -1,6 +1,6 @@
-//! Seed 000's test guides (appendix A) on the stand with the demo parameters: the HMI states
-//! and their times as each guide describes them; the stand's decisions; the scenario reader's
-//! errors; determinism.
+//! The SafeMOTION thesis' test guides (appendix A) on the stand with the demo parameters: the HMI
+//! states and their times as each guide describes them; the stand's decisions; the scenario
+//! reader's errors; determinism.
 
 use super::builtin::{find, stand_scenario, STAND_BUILTINS};
 use super::*;

@@ -3,14 +3,14 @@
 //! model's expected repeats; and the lab's handshake periods and latency bounds that follow.
 //!
 //! **The cycle** (asi-master's slot rule, `master.rs`): one Data_Exchange per LAS slot, one
-//! management call (a mailbox job, else Read_Status of a LAS slave: answered), and one
-//! inclusion call to an address that is still free (a probe answered by silence), skipped when
-//! every address is used. An answered transaction is request + master pause + response + slave
-//! pause (84 + 18 + 42 + 10 = 154 µs), an unanswered one request + response timeout + slave pause
-//! (84 + 60 + 10 = 154 µs). So the clean cycle is (slots + 2) · 154 µs, the thesis' T = (n + 2) ·
-//! 154 µs (seed 003 §2.1) for n standard slaves while an address is free, (slots + 1) · 154 µs
-//! with all 31 used. An address holding an A and a B slave is one slot serving A and B in
-//! alternate cycles, so each of them is updated every second cycle.
+//! management call (a mailbox job, else Read_Status of a LAS slave: answered), and one inclusion
+//! call to an address that is still free (a probe answered by silence), skipped when every address
+//! is used. An answered transaction is request + master pause + response + slave pause (84 + 18 +
+//! 42 + 10 = 154 µs), an unanswered one request + response timeout + slave pause (84 + 60 +
+//! 10 = 154 µs). So the clean cycle is (slots + 2) · 154 µs, the thesis' T = (n + 2) · 154 µs (§2.1
+//! of the lift thesis) for n standard slaves while an address is free, (slots + 1) · 154 µs with
+//! all 31 used. An address holding an A and a B slave is one slot serving A and B in alternate
+//! cycles, so each of them is updated every second cycle.
 //!
 //! **With line noise** every answered transaction of the cycle adds the error model's expected
 //! extra time ([`super::error_model::LineNoise::first_try`]): the cycle's expectation is the
@@ -74,7 +74,7 @@ impl CycleModel {
         self.answered() + self.inclusion_call as u32
     }
 
-    /// The thesis' cycle T = (n + 2) · 154 µs (seed 003 §2.1), µs.
+    /// The thesis' cycle T = (n + 2) · 154 µs (§2.1 of the lift thesis), µs.
     pub(super) fn thesis_cycle_us(&self) -> f64 {
         (self.slaves + 2) as f64 * self.transaction_us
     }

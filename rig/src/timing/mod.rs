@@ -1,15 +1,15 @@
 //! `asi-lift timing`: the timing analysis of docs/timing.md for the lab bus, a bus of N standard
 //! slaves or 62 A/B slaves, analytic and simulated side by side.
 //!
-//! **Analytic.** One transaction is request + master pause + response + slave pause (154 µs
-//! with the default [`BusTiming`], docs/physical-layer.md). The seed's cycle is T = (n + 2) · 154 µs for n
-//! slaves (seed 003 §2.1). The model's own cycle (docs/master.md) is one transaction per LAS slot, one
-//! management call, and one inclusion call while an address is left to include:
-//! (slots + 2) · 154 µs, or (slots + 1) · 154 µs with every address used; an address holding an
-//! A and a B slave is one slot serving them in alternate cycles, so each of them sees twice the
-//! cycle. The report's model row is this formula (module `formula`, from asi-phy's [`BusTiming`]
-//! parts and the bus's slots), never a simulated count: it agrees with the simulation only
-//! because the simulated master keeps the slot rule. Where the LAS changes in the window (a
+//! **Analytic.** One transaction is request + master pause + response + slave pause (154 µs with
+//! the default [`BusTiming`], docs/physical-layer.md). The lift thesis' cycle is
+//! T = (n + 2) · 154 µs for n slaves (§2.1). The model's own cycle (docs/master.md) is one
+//! transaction per LAS slot, one management call, and one inclusion call while an address is left
+//! to include: (slots + 2) · 154 µs, or (slots + 1) · 154 µs with every address used; an address
+//! holding an A and a B slave is one slot serving them in alternate cycles, so each of them sees
+//! twice the cycle. The report's model row is this formula (module `formula`, from asi-phy's
+//! [`BusTiming`] parts and the bus's slots), never a simulated count: it agrees with the simulation
+//! only because the simulated master keeps the slot rule. Where the LAS changes in the window (a
 //! slave drops out) the formula does not apply and the report says so instead of giving a value.
 //!
 //! **Error model.** The line noise is asi-phy's seeded [`asi_phy::FaultRates::uniform`]`(p)`: each pulse
@@ -103,7 +103,7 @@ pub fn analyse(opts: &TimingOptions) -> Result<TimingReport, AnalysisError> {
         cycles,
         transactions,
         transaction_us: c.spacing.figure(1e-3).analytic(model.transaction_us),
-        seed_cycle_us: model.thesis_cycle_us(),
+        thesis_cycle_us: model.thesis_cycle_us(),
         cycle_us,
         cycle_histogram: histogram(&cycle_values, 1.0, 40),
         slave_update_us,

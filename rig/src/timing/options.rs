@@ -25,7 +25,7 @@ pub enum BusChoice {
 }
 
 impl BusChoice {
-    /// The number of slaves n of the seed's formula.
+    /// The number of slaves n of the lift thesis' formula.
     pub fn slaves(self) -> u32 {
         match self {
             BusChoice::Lab { extra } => 11 + extra as u32,

@@ -41,8 +41,8 @@ impl TimingReport {
         };
         row("transaction", &self.transaction_us, "µs", 1);
         row(
-            &format!("cycle, seed: T = (n + 2) · 154 µs, n = {}", self.slaves),
-            &Figure::default().analytic(self.seed_cycle_us),
+            &format!("cycle, thesis: T = (n + 2) · 154 µs, n = {}", self.slaves),
+            &Figure::default().analytic(self.thesis_cycle_us),
             "µs",
             1,
         );

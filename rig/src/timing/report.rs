@@ -99,7 +99,7 @@ pub struct LabTiming {
 pub struct TimingReport {
     /// The bus, in words.
     pub bus: String,
-    /// Slaves n (of the seed's formula).
+    /// Slaves n (of the lift thesis' formula).
     pub slaves: u32,
     /// LAS slots (addresses in use).
     pub slots: u32,
@@ -117,8 +117,8 @@ pub struct TimingReport {
     pub transactions: u64,
     /// Transaction time (start to start), µs.
     pub transaction_us: Figure,
-    /// The seed's cycle T = (n + 2) · 154 µs.
-    pub seed_cycle_us: f64,
+    /// The lift thesis' cycle T = (n + 2) · 154 µs.
+    pub thesis_cycle_us: f64,
     /// Cycle time: analytic = the model's formula (plus the expected repeats with errors).
     pub cycle_us: Figure,
     /// Cycle times, µs.

@@ -22,7 +22,7 @@ fn exact(f: &Figure, v: f64) {
     }
 }
 
-/// Without errors every cycle is the model's formula (docs/master.md), which is the seed's
+/// Without errors every cycle is the model's formula (docs/master.md), which is the lift thesis'
 /// (n + 2) · 154 µs wherever an inclusion address is left; 31 slaves leave none.
 #[test]
 fn clean_buses_run_the_model_formula_exactly() {
@@ -36,13 +36,13 @@ fn clean_buses_run_the_model_formula_exactly() {
         let r = analyse(&opts(bus, 0.0, 1, 0)).expect("analysis");
         exact(&r.transaction_us, 154.0);
         exact(&r.cycle_us, model);
-        assert_eq!(r.seed_cycle_us, seed);
+        assert_eq!(r.thesis_cycle_us, seed);
         assert!(r.cycles > 150, "{bus:?}: {}", r.cycles);
         assert_eq!(r.repeats.count, 0);
         assert_eq!(r.repeats.expected, 0.0);
         assert_eq!(r.cycle_histogram.counts.iter().sum::<u64>(), r.cycles);
         // Each slave is served every cycle, an A/B slave every second one: 64 · 154 µs,
-        // the seed's formula for 62 slaves (≤ 10 ms).
+        // the lift thesis' formula for 62 slaves (≤ 10 ms).
         let per_slave = if bus == BusChoice::AbPairs { 2.0 } else { 1.0 };
         exact(&r.slave_update_us, per_slave * model);
     }
@@ -54,7 +54,7 @@ fn clean_buses_run_the_model_formula_exactly() {
 fn the_lab_bus_without_errors() {
     let r = analyse(&opts(BusChoice::Lab { extra: 0 }, 0.0, 2, 3)).expect("analysis");
     exact(&r.cycle_us, 2002.0);
-    assert_eq!(r.seed_cycle_us, 2002.0);
+    assert_eq!(r.thesis_cycle_us, 2002.0);
     exact(&r.slave_update_us, 2002.0);
     let lab = r.lab.expect("lab figures");
     exact(&lab.analog_value_ms, 7.0 * 2.002);
@@ -204,7 +204,7 @@ fn the_outputs_show_every_figure() {
     let text = r.to_text();
     for want in [
         "transaction",
-        "seed: T = (n + 2)",
+        "thesis: T = (n + 2)",
         "per-slave",
         "error model",
     ] {

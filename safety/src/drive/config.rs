@@ -1,17 +1,18 @@
-//! The safe-drive parameters, named after seed 000's tables 3.2–3.10, and their validation.
+//! The safe-drive parameters, named after tables 3.2–3.10 of the SafeMOTION thesis, and their
+//! validation.
 
 use asi_phy::SimDuration;
 
 /// The axis's safe position source.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Encoder {
-    /// No safe encoder: only STO, SBC and SS1 (time-monitored only) are available (seed 000
-    /// §1.1.2).
+    /// No safe encoder: only STO, SBC and SS1 (time-monitored only) are available (§1.1.2 of the
+    /// SafeMOTION thesis).
     None,
     /// A safe single-turn encoder (position counted from power-up): everything except SLP.
     SafeSingleTurn,
-    /// A safe absolute multi-turn encoder (e.g. EnDat 2.2 as on seed 000's stand): every
-    /// function; SLP is fully functional only with this one (seed 001).
+    /// A safe absolute multi-turn encoder (e.g. EnDat 2.2 as on the SafeMOTION thesis' stand):
+    /// every function; SLP is fully functional only with this one (the drive manual).
     SafeMultiTurn,
 }
 
@@ -22,7 +23,7 @@ impl Encoder {
     }
 }
 
-/// The monitored stop of SS1 or SS2 (seed 000 tables 3.3, 3.4).
+/// The monitored stop of SS1 or SS2 (tables 3.3, 3.4 of the SafeMOTION thesis).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct StopRamp {
     /// "SSx - Ramp monitoring - Enable": also monitor the minimum deceleration (the envelope),
@@ -32,7 +33,7 @@ pub struct StopRamp {
     pub ramp_time: SimDuration,
 }
 
-/// One SLS level (seed 000 table 3.5).
+/// One SLS level (table 3.5 of the SafeMOTION thesis).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SlsLimit {
     /// "SLSx - Speed limit" in rev/s (magnitude, both directions).
@@ -41,7 +42,7 @@ pub struct SlsLimit {
     pub ramp_time: SimDuration,
 }
 
-/// SLP (seed 000 table 3.9).
+/// SLP (table 3.9 of the SafeMOTION thesis).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SlpLimits {
     /// "SLP - Lower position limit" in rev.
@@ -52,7 +53,7 @@ pub struct SlpLimits {
     pub enable_delay: SimDuration,
 }
 
-/// SLI (seed 000 table 3.6).
+/// SLI (table 3.6 of the SafeMOTION thesis).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SliLimit {
     /// "SLI - Position limit" in rev, either way from the position at the request.
@@ -61,7 +62,7 @@ pub struct SliLimit {
     pub disable_delay: SimDuration,
 }
 
-/// SLA (seed 000 table 3.8), all in rev/s².
+/// SLA (table 3.8 of the SafeMOTION thesis), all in rev/s².
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SlaLimits {
     /// "SLA - Acceleration limit in positive direction".
@@ -76,7 +77,7 @@ pub struct SlaLimits {
     pub enable_delay: SimDuration,
 }
 
-/// SLT (seed 000 table 3.10).
+/// SLT (table 3.10 of the SafeMOTION thesis).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SltLimit {
     /// "SLT - Torque limit" in mNm: the torque the drive must not exceed, either way.
@@ -85,8 +86,8 @@ pub struct SltLimit {
     pub enable_delay: SimDuration,
 }
 
-/// The parameters of one safe axis. Speeds in rev/s, positions in rev (seed 000's "units" are
-/// revolutions on its stand), times as [`SimDuration`].
+/// The parameters of one safe axis. Speeds in rev/s, positions in rev (the SafeMOTION thesis'
+/// "units" are revolutions on its stand), times as [`SimDuration`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct DriveSafetyConfig {
     /// The safe position source.
@@ -143,15 +144,15 @@ pub struct DriveConfigError {
 }
 
 impl DriveSafetyConfig {
-    /// The demo parameters of seed 000's teaching stand (§5, the axis parameter table, and the
-    /// HMI pages of appendix A): standstill 2 rev/s and 100 rev, early limit on with 5 s, ramp
-    /// enable delay 5 s, SS1/SS2 ramp time 10 s with ramp monitoring off, SLS1 8 rev/s and SLS2
-    /// 5 rev/s with 10 s each, SLI 50 rev with a 10 s disable delay, SDI and SBC delays 0, SLA
-    /// 100 rev/s² each way with delay 0, deceleration limit 1 rev/s² (unused while ramp
-    /// monitoring is off).
+    /// The demo parameters of the SafeMOTION thesis' teaching stand (§5, the axis parameter table,
+    /// and the HMI pages of appendix A): standstill 2 rev/s and 100 rev, early limit on with 5 s,
+    /// ramp enable delay 5 s, SS1/SS2 ramp time 10 s with ramp monitoring off, SLS1 8 rev/s and
+    /// SLS2 5 rev/s with 10 s each, SLI 50 rev with a 10 s disable delay, SDI and SBC delays 0, SLA
+    /// 100 rev/s² each way with delay 0, deceleration limit 1 rev/s² (unused while ramp monitoring
+    /// is off).
     ///
-    /// Not in the seed, filled in by asi-lift: SLS3 3 rev/s and SLS4 1 rev/s with 10 s each,
-    /// SLP from −1000 to +1000 rev with delay 0. The encoder is the stand's EnDat 2.2
+    /// Not in the SafeMOTION thesis, filled in by asi-lift: SLS3 3 rev/s and SLS4 1 rev/s with 10 s
+    /// each, SLP from −1000 to +1000 rev with delay 0. The encoder is the stand's EnDat 2.2
     /// (multi-turn).
     pub fn demo() -> Self {
         let s = SimDuration::from_secs;
@@ -208,8 +209,8 @@ impl DriveSafetyConfig {
                 decel_neg: 100.0,
                 enable_delay: SimDuration::ZERO,
             },
-            // Seed 000 gives no SLT value for its stand (its HMI has no SLT page): 1 N·m is
-            // asi-lift's, a little above what its ramps need of a small servo.
+            // The SafeMOTION thesis gives no SLT value for its stand (its HMI has no SLT page):
+            // 1 N·m is asi-lift's, a little above what its ramps need of a small servo.
             slt: SltLimit {
                 torque_limit: 1000.0,
                 enable_delay: SimDuration::ZERO,

@@ -1,35 +1,39 @@
-//! The safety functions, their active-low control bits and their status bits (seed 000 §5.1,
-//! the inputs and outputs of the SafeMOTION function block).
+//! The safety functions, their active-low control bits and their status bits (§5.1 of the
+//! SafeMOTION thesis, the inputs and outputs of the SafeMOTION function block).
 
 use std::fmt;
 
-/// A drive safety function (seed 000 §3; docs/drive-safety.md).
+/// A drive safety function (§3 of the SafeMOTION thesis; docs/drive-safety.md).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum Function {
-    /// Safe Torque Off: torque off at once, as long as requested (seed 000 §3.1).
+    /// Safe Torque Off: torque off at once, as long as requested (§3.1 of the SafeMOTION thesis).
     Sto,
-    /// Safe Brake Control: the holding brake applied (seed 000 §3, SBC enable delay).
+    /// Safe Brake Control: the holding brake applied (§3 of the SafeMOTION thesis, SBC enable
+    /// delay).
     Sbc,
-    /// Safe Stop 1: a monitored stop, then torque off (seed 000 §3.3).
+    /// Safe Stop 1: a monitored stop, then torque off (§3.3 of the SafeMOTION thesis).
     Ss1,
-    /// Safe Stop 2: a monitored stop, then standstill held with torque on (seed 000 §3.4).
+    /// Safe Stop 2: a monitored stop, then standstill held with torque on (§3.4 of the SafeMOTION
+    /// thesis).
     Ss2,
-    /// Safe Operating Stop: standstill held with torque on (seed 000 §3.2).
+    /// Safe Operating Stop: standstill held with torque on (§3.2 of the SafeMOTION thesis).
     Sos,
-    /// Safely Limited Speed, level 1..=4 (seed 000 §3.5).
+    /// Safely Limited Speed, level 1..=4 (§3.5 of the SafeMOTION thesis).
     Sls(SlsLevel),
-    /// Safely Limited Position: the position within [lower, upper] (seed 000 §3.9).
+    /// Safely Limited Position: the position within [lower, upper] (§3.9 of the SafeMOTION thesis).
     Slp,
-    /// Safe Direction, positive: no motion backwards beyond the position tolerance (seed 000 §3.7).
+    /// Safe Direction, positive: no motion backwards beyond the position tolerance (§3.7 of the
+    /// SafeMOTION thesis).
     SdiPos,
     /// Safe Direction, negative.
     SdiNeg,
-    /// Safely Limited Increment: at most a given travel from the request's position (seed 000 §3.6).
+    /// Safely Limited Increment: at most a given travel from the request's position (§3.6 of the
+    /// SafeMOTION thesis).
     Sli,
-    /// Safely Limited Acceleration: four limits, by direction (seed 000 §3.8).
+    /// Safely Limited Acceleration: four limits, by direction (§3.8 of the SafeMOTION thesis).
     Sla,
-    /// Safely Limited Torque: the drive's torque at most the limit, either way (seed 000
-    /// §3.10).
+    /// Safely Limited Torque: the drive's torque at most the limit, either way (§3.10 of the
+    /// SafeMOTION thesis).
     Slt,
 }
 
@@ -103,12 +107,12 @@ impl Function {
     }
 
     /// `true` for STO, SBC and SS1, the functions that work without a safe encoder
-    /// (seed 000 §1.1.2: "without a suitable encoder only STO, SBC and SS1").
+    /// (§1.1.2 of the SafeMOTION thesis: "without a suitable encoder only STO, SBC and SS1").
     pub const fn works_without_encoder(self) -> bool {
         matches!(self, Function::Sto | Function::Sbc | Function::Ss1)
     }
 
-    /// `true` for SLP, which needs an absolute multi-turn encoder (seed 001).
+    /// `true` for SLP, which needs an absolute multi-turn encoder (the drive manual).
     pub const fn needs_absolute_position(self) -> bool {
         matches!(self, Function::Slp)
     }
@@ -133,7 +137,7 @@ impl fmt::Display for Function {
     }
 }
 
-/// The control inputs of one scan (seed 000 §5.1).
+/// The control inputs of one scan (§5.1 of the SafeMOTION thesis).
 ///
 /// The function bits are **active-low** (closed-circuit principle): a function is requested
 /// while its bit is FALSE, so a broken wire or a lost telegram requests it. [`Default`] is
@@ -192,7 +196,7 @@ impl ControlBits {
     }
 }
 
-/// The status outputs of one scan (seed 000 §5.1).
+/// The status outputs of one scan (§5.1 of the SafeMOTION thesis).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct StatusBits {
     /// `S_Status_<function>`, indexed by [`Function::index`]: TRUE = the function is active and

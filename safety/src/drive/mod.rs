@@ -1,5 +1,5 @@
-//! A sans-IO model of a drive's integrated safety functions (seed 000, a B&R SafeMOTION teaching
-//! stand; seed 001; docs/drive-safety.md).
+//! A sans-IO model of a drive's integrated safety functions (the SafeMOTION thesis, a B&R
+//! SafeMOTION teaching stand; the drive manual; docs/drive-safety.md).
 //!
 //! [`SafeDrive::scan`] takes the scan's time, the control bits and the safe encoder's position
 //! (rev) and speed (rev/s), and returns whether the torque is enabled, the brake, every status
@@ -7,7 +7,7 @@
 //! standard motion control's job; [`DriveSafetyOutputs::speed_command_limit`] tells it what to
 //! aim for (**Decision**, see below).
 //!
-//! # The sequence of SS1, SS2 and SLS (seed 000 §3.3–3.5, figures 3.3–3.5)
+//! # The sequence of SS1, SS2 and SLS (§3.3–3.5, figures 3.3–3.5 of the SafeMOTION thesis)
 //!
 //! ```text
 //! request ─► enable delay ─► ramp window ──────────────► safe state
@@ -16,7 +16,8 @@
 //!                                                            SLS: the limit monitored
 //! ```
 //!
-//! **Decisions** where the seeds are silent (docs/drive-safety.md §3):
+//! **Decisions** where the SafeMOTION thesis and the drive manual are silent (docs/drive-safety.md
+//! §3):
 //!
 //! - **Early limit** — its timer runs only inside the ramp window, never during the enable
 //!   delay ("nothing is checked during the enable delay"). An axis already at standstill is
@@ -33,19 +34,19 @@
 //!   Functions still requested start afresh at that scan (new enable delay, new reference
 //!   position), so a persisting cause trips again.
 //! - **Torque** comes back by itself when no function holds it off and no error is latched: the
-//!   restart interlock is the safety program's (the light curtain's reset on seed 000's stand).
+//!   restart interlock is the safety program's (the light curtain's reset on the SafeMOTION thesis'
+//!   stand).
 //! - **Brake** is applied whenever the torque is off, and SBC (after its enable delay) applies it
 //!   and takes the torque off.
 //! - **SDI** counts the travel against the permitted direction from the furthest point reached in
 //!   the permitted direction since the monitoring began.
-//! - **SLA** (seed 000 §3.8, reaction not stated): the acceleration is the speed's change between
-//!   two scans; a violation trips like any other.
-//! - **SLT** (seed 000 §3.10, reaction not stated): the drive's own torque (mNm, from its
-//!   current) is an input of the scan; above the limit either way it trips like any other, and
-//!   a scan without a valid torque while SLT is monitored counts as above it. The lift and the
-//!   stand never request it (the lab converter reports no torque; the stand's HMI has no SLT
-//!   page).
-//! - **Two-channel activation** (seed 001): [`TwoChannelActivation`], see its module.
+//! - **SLA** (§3.8 of the SafeMOTION thesis, reaction not stated): the acceleration is the speed's
+//!   change between two scans; a violation trips like any other.
+//! - **SLT** (§3.10 of the SafeMOTION thesis, reaction not stated): the drive's own torque (mNm,
+//!   from its current) is an input of the scan; above the limit either way it trips like any other,
+//!   and a scan without a valid torque while SLT is monitored counts as above it. The lift and the
+//!   stand never request it (the lab converter reports no torque; the stand's HMI has no SLT page).
+//! - **Two-channel activation** (the drive manual): [`TwoChannelActivation`], see its module.
 
 mod config;
 mod event;
@@ -182,9 +183,9 @@ impl SafeDrive {
         self.error
     }
 
-    /// Whether `config`'s axis can provide `f` at all: without a safe encoder only STO, SBC and
-    /// SS1 (seed 000 §1.1.2), SLP only with a multi-turn encoder (seed 001). Requesting a
-    /// function that fails this check trips the drive with the same [`Violation`].
+    /// Whether `config`'s axis can provide `f` at all: without a safe encoder only STO, SBC and SS1
+    /// (§1.1.2 of the SafeMOTION thesis), SLP only with a multi-turn encoder (the drive manual).
+    /// Requesting a function that fails this check trips the drive with the same [`Violation`].
     pub fn check_available(config: &DriveSafetyConfig, f: Function) -> Result<(), Violation> {
         if !config.encoder.is_safe() && !f.works_without_encoder() {
             return Err(Violation::NeedsEncoder { function: f });
@@ -639,9 +640,9 @@ fn ramp(
     }
 }
 
-/// SLA's limit for the speed `v` and acceleration `a` (seed 000 §3.8): above the standstill
-/// tolerance the limits of the direction of travel, within it the stricter of the two pairs
-/// that act the same way.
+/// SLA's limit for the speed `v` and acceleration `a` (§3.8 of the SafeMOTION thesis): above the
+/// standstill tolerance the limits of the direction of travel, within it the stricter of the two
+/// pairs that act the same way.
 fn sla_limit(cfg: &DriveSafetyConfig, v: f64, a: f64) -> f64 {
     let s = &cfg.sla;
     let tol = cfg.standstill_speed_tolerance;

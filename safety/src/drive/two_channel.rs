@@ -1,20 +1,21 @@
-//! Seed 001's activation of a function by two digital inputs (docs/drive-safety.md §3.5).
+//! The drive manual's activation of a function by two digital inputs (docs/drive-safety.md §3.5).
 //!
-//! Seed 001 (the TGZ drive) activates one safety function per axis by two digital inputs,
+//! The drive manual's drive (a TGZ) activates one safety function per axis by two digital inputs,
 //! active-low: both must change within 10 ms of each other, else the function stays active
 //! until the drive restarts. [`TwoChannelActivation`] turns the two inputs into the function's
 //! control bit of [`super::ControlBits`].
 //!
-//! **Decisions** where the seed is silent: one input FALSE is enough to request the function
-//! (the safe side: the request does not wait for the second channel); the request ends only
-//! when both are TRUE again; the second edge may come up to 10 ms after the first (the scan
-//! that sees the inputs agree at 10 ms counts), a scan that still sees them differ 10 ms after
-//! the first scan that saw them differ latches the request; a latched request is left only by [`TwoChannelActivation::restart`]
-//! (the drive's restart), not by the inputs agreeing again nor by S_Control_Reset.
+//! **Decisions** where the drive manual is silent: one input FALSE is enough to request the
+//! function (the safe side: the request does not wait for the second channel); the request ends
+//! only when both are TRUE again; the second edge may come up to 10 ms after the first (the scan
+//! that sees the inputs agree at 10 ms counts), a scan that still sees them differ 10 ms after the
+//! first scan that saw them differ latches the request; a latched request is left only by
+//! [`TwoChannelActivation::restart`] (the drive's restart), not by the inputs agreeing again nor by
+//! S_Control_Reset.
 
 use asi_phy::{SimDuration, SimTime};
 
-/// Seed 001: both inputs must change within 10 ms.
+/// The drive manual's rule: both inputs must change within 10 ms.
 pub const TWO_CHANNEL_DISCREPANCY: SimDuration = SimDuration::from_millis(10);
 
 /// The two-channel activation of one function.

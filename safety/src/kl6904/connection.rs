@@ -1,5 +1,5 @@
-//! TwinSAFE connections: the safe telegram over an untrusted ("black") channel (seed 004 §3.2,
-//! §3.3; docs/safety-logic.md §1.3, §1.4, §6.3, §9.2 "Group / connection").
+//! TwinSAFE connections: the safe telegram over an untrusted ("black") channel (§3.2 and §3.3 of
+//! the KL6904 manual; docs/safety-logic.md §1.3, §1.4, §6.3, §9.2 "Group / connection").
 //!
 //! The logic is the TwinSAFE master of every connection to a safe I/O terminal. Each safety
 //! scan it sends one request to the partner and checks the partner's reply:
@@ -37,7 +37,7 @@ use std::collections::VecDeque;
 use asi_phy::{SimDuration, SimTime};
 use core::fmt;
 
-/// The connection diagnostic byte (seed 004 §3.3; bit 0 is the rightmost).
+/// The connection diagnostic byte (§3.3 of the KL6904 manual; bit 0 is the rightmost).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub struct ConnDiag(pub u8);
 
@@ -428,7 +428,7 @@ pub enum PartnerKind {
     /// KL2904: safe output terminal, 4 safe outputs.
     #[serde(rename = "KL2904")]
     Kl2904,
-    /// KL6904: another logic terminal, 8 channels each way (seed 004 §5.3).
+    /// KL6904: another logic terminal, 8 channels each way (§5.3 of the KL6904 manual).
     #[serde(rename = "KL6904")]
     Kl6904,
 }

@@ -1,4 +1,5 @@
-//! TwinSAFE groups (seed 004 §3.1, tables 3-1 and 3-2; docs/safety-logic.md §1.2, §6.1).
+//! TwinSAFE groups (§3.1, tables 3-1 and 3-2 of the KL6904 manual; docs/safety-logic.md §1.2,
+//! §6.1).
 
 use core::fmt;
 
@@ -37,12 +38,12 @@ impl fmt::Display for GroupState {
     }
 }
 
-/// Which error classes a group has latched: its outputs FB_ERR, COM_ERR, OUT_ERR (seed 004
-/// table 3-2).
+/// Which error classes a group has latched: its outputs FB_ERR, COM_ERR, OUT_ERR (table 3-2 of the
+/// KL6904 manual).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub struct GroupErrors {
-    /// At least one module of the group has an error; FALSE means no module has one (the
-    /// seed's Czech FALSE text, "all modules are faulty", is inverted: docs/seed-errors.md).
+    /// At least one module of the group has an error; FALSE means no module has one (the KL6904
+    /// manual's Czech FALSE text, "all modules are faulty", is inverted: docs/source-errors.md).
     pub fb_err: bool,
     /// At least one connection of the group reports an error.
     pub com_err: bool,
@@ -80,8 +81,8 @@ impl fmt::Display for GroupErrors {
 ///
 /// - any error (module, connection, local output) puts the group in ERROR: all its outputs are
 ///   0 (the logic forces them);
-/// - the safe state is released only when no error cause is present any more *and* ERR_ACK
-///   has gone 0→1→0 (seed 004 §3.1): the rising edge, seen while no cause is present, enters
+/// - the safe state is released only when no error cause is present any more *and* ERR_ACK has gone
+///   0→1→0 (§3.1 of the KL6904 manual): the rising edge, seen while no cause is present, enters
 ///   RESET; the falling edge acknowledges every error of the group at once (FB_ERR, COM_ERR and
 ///   OUT_ERR share the one ERR_ACK); if a cause returns in RESET, back to ERROR;
 /// - acknowledgement is never automatic; an ERR_ACK held TRUE does nothing;

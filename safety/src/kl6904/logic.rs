@@ -1,4 +1,4 @@
-//! The KL6904 runtime: one safety scan at a time on injected time (seed 004 §3;
+//! The KL6904 runtime: one safety scan at a time on injected time (§3 of the KL6904 manual;
 //! docs/safety-logic.md §8.1, §8.3).
 //!
 //! A scan:
@@ -12,12 +12,12 @@
 //!    0 in this scan's output image; a module of *another* group that already read one of them
 //!    in this scan sees the 0 from the next scan on);
 //! 5. writes every output: module safety outputs, local outputs and TwinSAFE-Out channels of a
-//!    group that is not in RUN are 0 (a group error drives all its outputs to the safe state,
-//!    seed 004 §3.1); modules' Error outputs and the group outputs FB_ERR/COM_ERR/OUT_ERR are
-//!    diagnostics and are not switched off.
+//!    group that is not in RUN are 0 (a group error drives all its outputs to the safe state, §3.1
+//!    of the KL6904 manual); modules' Error outputs and the group outputs FB_ERR/COM_ERR/OUT_ERR
+//!    are diagnostics and are not switched off.
 //!
-//! An internal logic fault (time running backwards, or one injected) stops the whole logic:
-//! every output 0 until the logic is created again (seed 004 §3: "an error in the TwinSAFE
+//! An internal logic fault (time running backwards, or one injected) stops the whole logic: every
+//! output 0 until the logic is created again (§3 of the KL6904 manual: "an error in the TwinSAFE
 //! logic shuts down the whole logic").
 
 use asi_phy::SimTime;
@@ -60,7 +60,7 @@ pub struct ModuleStatus {
     pub kind: ModuleKind,
     /// Its state (AND, OR, DECOUPLE: RUN or STOP with their group).
     pub state: FbState,
-    /// Its diagnostic bits (seed 004 §3.3).
+    /// Its diagnostic bits (§3.3 of the KL6904 manual).
     pub diag: u8,
 }
 

@@ -1,4 +1,5 @@
-//! The Beckhoff TwinSAFE KL6904 logic terminal (seed 004; docs/safety-logic.md §1, §6, §8.3).
+//! The Beckhoff TwinSAFE KL6904 logic terminal (the KL6904 manual; docs/safety-logic.md §1, §6,
+//! §8.3).
 //!
 //! - [`signal`]: contact types, signal kinds and references;
 //! - [`modules`]: the function modules AND, OR, OPMODE, ESTOP, MON, DECOUPLE;

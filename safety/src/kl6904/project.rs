@@ -1,5 +1,5 @@
 //! A TwinSAFE project as data: groups, connections, function modules and their wiring
-//! (seed 004 §3; docs/safety-logic.md §1), written as a TOML file or built in code.
+//! (§3 of the KL6904 manual; docs/safety-logic.md §1), written as a TOML file or built in code.
 //!
 //! A file looks like this (the lift's project is `safety/projects/lift.toml`):
 //!
@@ -61,7 +61,8 @@ pub struct Project {
     /// TwinSAFE connections to partner terminals.
     #[serde(default, rename = "connection", skip_serializing_if = "Vec::is_empty")]
     pub connections: Vec<ConnectionDesc>,
-    /// Function modules, in execution order (seed 004 §3: the order of the project tree).
+    /// Function modules, in execution order (§3 of the KL6904 manual: the order of the project
+    /// tree).
     #[serde(default, rename = "module", skip_serializing_if = "Vec::is_empty")]
     pub modules: Vec<ModuleDesc>,
     /// The KL6904's own safe outputs (Local-Out 1..4).
@@ -90,7 +91,7 @@ pub struct LogicDesc {
     pub address: u16,
 }
 
-/// A TwinSAFE group (seed 004 table 3-1).
+/// A TwinSAFE group (table 3-1 of the KL6904 manual).
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct GroupDesc {
@@ -104,7 +105,7 @@ pub struct GroupDesc {
     pub err_ack: Option<SignalRef>,
 }
 
-/// A TwinSAFE connection to a partner terminal (seed 004 §3.2).
+/// A TwinSAFE connection to a partner terminal (§3.2 of the KL6904 manual).
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ConnectionDesc {
@@ -138,7 +139,7 @@ pub struct ConnectionOutputDesc {
     pub source: SignalRef,
 }
 
-/// The function module types of the KL6904 (seed 004 §4).
+/// The function module types of the KL6904 (§4 of the KL6904 manual).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
 pub enum ModuleKind {
     /// AND (§4.1).
@@ -162,7 +163,7 @@ pub enum ModuleKind {
 }
 
 impl ModuleKind {
-    /// The name as in the seed, e.g. `ESTOP`.
+    /// The name as in the KL6904 manual, e.g. `ESTOP`.
     pub const fn name(self) -> &'static str {
         match self {
             ModuleKind::And => "AND",

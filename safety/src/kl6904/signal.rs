@@ -1,11 +1,12 @@
-//! Signals of a KL6904 project: contact types, signal kinds and references (seed 004 §4.1.2.3).
+//! Signals of a KL6904 project: contact types, signal kinds and references (§4.1.2.3 of the KL6904
+//! manual).
 
 use core::fmt;
 use core::str::FromStr;
 
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
-/// How a module input reads its signal (seed 004 §4.1.1, §4.4.1).
+/// How a module input reads its signal (§4.1.1, §4.4.1 of the KL6904 manual).
 ///
 /// - `Break` (NC, break contact): used as is; for ESTOP and MON inputs a 0 demands the safe
 ///   state;
@@ -35,7 +36,7 @@ impl Contact {
     }
 }
 
-/// The kinds of source a module input may be linked to (seed 004 table 4-3).
+/// The kinds of source a module input may be linked to (table 4-3 of the KL6904 manual).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum SignalKind {
     /// A safe input of a TwinSAFE terminal, delivered by a TwinSAFE connection.
@@ -47,7 +48,7 @@ pub enum SignalKind {
 }
 
 impl SignalKind {
-    /// The name used in the seed's tables.
+    /// The name used in the KL6904 manual's tables.
     pub const fn name(self) -> &'static str {
         match self {
             SignalKind::TwinSafeIn => "TwinSAFE-In",
@@ -63,7 +64,7 @@ impl fmt::Display for SignalKind {
     }
 }
 
-/// The diagnostic outputs of a TwinSAFE group (seed 004 table 3-2).
+/// The diagnostic outputs of a TwinSAFE group (table 3-2 of the KL6904 manual).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum GroupOutput {
     /// At least one module of the group has an error.
@@ -79,7 +80,7 @@ impl GroupOutput {
     pub const ALL: [GroupOutput; 3] =
         [GroupOutput::FbErr, GroupOutput::ComErr, GroupOutput::OutErr];
 
-    /// The name in the seed: `FB_ERR`, `COM_ERR`, `OUT_ERR`.
+    /// The name in the KL6904 manual: `FB_ERR`, `COM_ERR`, `OUT_ERR`.
     pub const fn name(self) -> &'static str {
         match self {
             GroupOutput::FbErr => "FB_ERR",

@@ -1,9 +1,11 @@
-//! SF_EmergencyStop, PLCopen v2.x (seed 002, tables 22–25; docs/safety-logic.md §2, §5.3).
+//! SF_EmergencyStop, PLCopen v2.x (the SF_EmergencyStop help, tables 22–25; docs/safety-logic.md
+//! §2, §5.3).
 
 use super::diag::DiagCode;
 use crate::primitives::RTrig;
 
-/// Inputs of [`SfEmergencyStop`] (seed 002 table 22). All default to FALSE, the initial values.
+/// Inputs of [`SfEmergencyStop`] (table 22 of the SF_EmergencyStop help). All default to FALSE, the
+/// initial values.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct SfEmergencyStopInputs {
     /// FALSE sets all outputs to their initial values (Idle, highest priority).
@@ -18,7 +20,8 @@ pub struct SfEmergencyStopInputs {
     pub reset: bool,
 }
 
-/// Outputs of [`SfEmergencyStop`] (seed 002 table 23), all assigned on every call.
+/// Outputs of [`SfEmergencyStop`] (table 23 of the SF_EmergencyStop help), all assigned on every
+/// call.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct SfEmergencyStopOutputs {
     /// The block is active and its outputs are valid.
@@ -31,12 +34,12 @@ pub struct SfEmergencyStopOutputs {
     pub reset_request: bool,
     /// A static Reset was detected.
     pub error: bool,
-    /// The state, seed 002 tables 24/25.
+    /// The state, tables 24/25 of the SF_EmergencyStop help.
     pub diag_code: DiagCode,
 }
 
-/// The states of SF_EmergencyStop, named as in the FBS_ESTOP enumeration (seed 002 tables
-/// 24/25; their DiagCode is [`EStopState::code`]).
+/// The states of SF_EmergencyStop, named as in the FBS_ESTOP enumeration (the SF_EmergencyStop help
+/// tables 24/25; their DiagCode is [`EStopState::code`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum EStopState {
     /// `0000` Idle: not active.
@@ -77,7 +80,7 @@ impl EStopState {
     }
 }
 
-/// PLCopen SF_EmergencyStop: monitors an emergency-stop button (seed 002).
+/// PLCopen SF_EmergencyStop: monitors an emergency-stop button (the SF_EmergencyStop help).
 ///
 /// Transitions (docs/safety-logic.md §5.3, v2.01 codes; one per call, first match wins):
 ///
@@ -93,10 +96,10 @@ impl EStopState {
 /// | 8000 | ¬In | 8804 |
 /// | C001, C011 | ¬Reset | 8802, 8804 |
 ///
-/// **Decision** (docs/safety-logic.md §2 AMBIG, §10 point 1): C001 and C011 share one text in
-/// the seed; C001 is the static Reset on the start path (from 8802), C011 after a demand (from
-/// 8804). The static Reset is flagged in the *wait-for-input* states, as the v2 texts say
-/// ("checks Reset = FALSE and waits for S_EStopIn = TRUE"), so a held button can never
+/// **Decision** (docs/safety-logic.md §2 AMBIG, §10 point 1): C001 and C011 share one text in the
+/// SF_EmergencyStop help; C001 is the static Reset on the start path (from 8802), C011 after a
+/// demand (from 8804). The static Reset is flagged in the *wait-for-input* states, as the v2 texts
+/// say ("checks Reset = FALSE and waits for S_EStopIn = TRUE"), so a held button can never
 /// acknowledge the moment the demand clears.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct SfEmergencyStop {

@@ -1,7 +1,7 @@
 //! PLCopen Safety function blocks (PLCopen TC5 Part 1, v2.x DiagCodes).
 //!
-//! - [`SfEmergencyStop`]: exactly as seed 002 (CODESYS help, tables 22–25) specifies, with the
-//!   transitions of docs/safety-logic.md §5.3;
+//! - [`SfEmergencyStop`]: exactly as the SF_EmergencyStop help (CODESYS help, tables 22–25)
+//!   specifies, with the transitions of docs/safety-logic.md §5.3;
 //! - [`SfEquivalent`]: the two-channel check the cabin STOP pair needs (docs/safety-logic.md §5.2,
 //!   v2.01 codes of the FBS_EQUI enumeration);
 //! - [`SfEdm`]: external device monitoring for the contactor (docs/safety-logic.md §5.2, FBS_EDM).

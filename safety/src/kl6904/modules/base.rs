@@ -84,7 +84,7 @@ impl fmt::Display for FbError {
     }
 }
 
-/// Diag bit of an EDM1 error (ESTOP and MON, seed 004 §3.3).
+/// Diag bit of an EDM1 error (ESTOP and MON, §3.3 of the KL6904 manual).
 pub(crate) const EDM1_BIT: u8 = 4;
 /// Diag bit of an EDM2 error.
 pub(crate) const EDM2_BIT: u8 = 5;
@@ -110,11 +110,11 @@ pub enum FbEvent {
     Stopped,
 }
 
-/// Discrepancy monitoring of two inputs that form a pair (seed 004 §4.4.1): they may differ
-/// only for the discrepancy time.
+/// Discrepancy monitoring of two inputs that form a pair (§4.4.1 of the KL6904 manual): they may
+/// differ only for the discrepancy time.
 ///
 /// **Decision**: an error is raised when the difference has lasted *longer than* the time
-/// (seed: "if the discrepancy time is exceeded"), checked in the same scan; PLCopen's
+/// (the KL6904 manual: "if the discrepancy time is exceeded"), checked in the same scan; PLCopen's
 /// SF_Equivalent instead uses TON.Q (≥) read one call later, and keeps that behaviour.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub(crate) struct PairMonitor {
@@ -215,7 +215,8 @@ impl Core {
     }
 
     /// A restart was accepted: check the activated EDM inputs (`edm_bad[k]` = EDM*k+1* activated
-    /// and not 1) and leave the safe state, or enter ERROR with diag bit 4/5 (seed 004 §4.4.1).
+    /// and not 1) and leave the safe state, or enter ERROR with diag bit 4/5 (§4.4.1 of the KL6904
+    /// manual).
     pub(crate) fn restart_checking_edm(&mut self, edm_bad: [bool; 2]) {
         for (k, bit) in [EDM1_BIT, EDM2_BIT].into_iter().enumerate() {
             if edm_bad[k] {

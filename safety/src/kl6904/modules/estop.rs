@@ -1,4 +1,4 @@
-//! The ESTOP function module (seed 004 §4.4; docs/safety-logic.md §1.6).
+//! The ESTOP function module (§4.4 of the KL6904 manual; docs/safety-logic.md §1.6).
 
 use asi_phy::{SimDuration, SimTime};
 
@@ -6,14 +6,14 @@ use super::base::{Core, FbError, FbEvent, FbState, PairMonitor};
 use crate::kl6904::signal::Contact;
 
 /// Parameters of an ESTOP module (the "Activated", contact, Delay-Time and discrepancy settings
-/// of seed 004 §4.4.3).
+/// of §4.4.3 of the KL6904 manual).
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct EstopConfig {
     /// EStopIn1..8: `None` = input not activated, else its contact type.
     pub inputs: [Option<Contact>; 8],
-    /// Discrepancy time of pairs 1/2, 3/4, 5/6, 7/8. A non-zero time makes the two inputs a
-    /// pair (seed 004 table 4-10: "if the discrepancy time is not 0"); zero leaves them single
-    /// channels.
+    /// Discrepancy time of pairs 1/2, 3/4, 5/6, 7/8. A non-zero time makes the two inputs a pair
+    /// (table 4-10 of the KL6904 manual: "if the discrepancy time is not 0"); zero leaves them
+    /// single channels.
     pub discrepancy: [SimDuration; 4],
     /// EDM1 (feedback of EStopOut) activated.
     pub edm1: bool,
@@ -36,7 +36,7 @@ pub struct EstopInputs {
     pub edm2: bool,
 }
 
-/// Outputs of an ESTOP module (seed 004 table 4-11).
+/// Outputs of an ESTOP module (table 4-11 of the KL6904 manual).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct EstopOutputs {
     /// First output: 0 at once on a demand.
@@ -50,15 +50,15 @@ pub struct EstopOutputs {
 /// The KL6904 emergency-stop module.
 ///
 /// - As soon as an active input demands the safe state, EStopOut goes to 0 at once and
-///   EStopDelOut after the Delay Time (seed 004 §4.4.1).
+///   EStopDelOut after the Delay Time (§4.4.1 of the KL6904 manual).
 /// - The safe state — at start (group activated) and after every demand — is left only by a
 ///   0→1→0 sequence on Restart, acting on its falling edge.
 /// - When a restart is accepted, every activated EDM input must read 1, else the module enters
-///   ERROR with diag bit 4/5 (a welded contactor, seed 004 §5.1).
+///   ERROR with diag bit 4/5 (a welded contactor, §5.1 of the KL6904 manual).
 /// - Inputs paired by a non-zero discrepancy time may differ only for that time, else ERROR
 ///   with diag bit 0–3. In ERROR all outputs are 0; only the group's ERR_ACK leaves it.
 ///
-/// **Decisions** where the seed is silent:
+/// **Decisions** where the KL6904 manual is silent:
 /// - a restart is accepted only in SAFE, i.e. once the delayed output too has gone to 0 and no
 ///   input demands the safe state; a pulse during the delay is ignored (the EDM check is then
 ///   meaningful: a contactor driven by EStopDelOut must have released);

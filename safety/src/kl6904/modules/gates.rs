@@ -1,4 +1,4 @@
-//! The stateless modules AND, OR (seed 004 §4.1, §4.2) and DECOUPLE (§4.6).
+//! The stateless modules AND, OR (§4.1, §4.2 of the KL6904 manual) and DECOUPLE (§4.6).
 
 use crate::kl6904::signal::Contact;
 

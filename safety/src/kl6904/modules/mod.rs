@@ -1,4 +1,5 @@
-//! The function modules of the KL6904 (seed 004 §4): AND, OR, OPMODE, ESTOP, MON, DECOUPLE.
+//! The function modules of the KL6904 (§4 of the KL6904 manual): AND, OR, OPMODE, ESTOP, MON,
+//! DECOUPLE.
 //!
 //! Each stateful module is a plain state machine called once per safety scan with the time,
 //! whether its group runs, and its input values; it returns every output on every call
@@ -15,8 +16,8 @@ macro_rules! core_accessors {
                 self.core.state
             }
 
-            /// Diagnostic bits (seed 004 §3.3): ESTOP 0–3 discrepancy of pair 1–4; MON 0–1
-            /// MonIn pairs, 2 Secure pair; ESTOP and MON 4 EDM1, 5 EDM2; OPMODE 0 discrepancy.
+            /// Diagnostic bits (§3.3 of the KL6904 manual): ESTOP 0–3 discrepancy of pair 1–4; MON
+            /// 0–1 MonIn pairs, 2 Secure pair; ESTOP and MON 4 EDM1, 5 EDM2; OPMODE 0 discrepancy.
             pub fn diag(&self) -> u8 {
                 self.core.diag
             }

@@ -1,14 +1,15 @@
-//! The MON function module (seed 004 §4.5; docs/safety-logic.md §1.6).
+//! The MON function module (§4.5 of the KL6904 manual; docs/safety-logic.md §1.6).
 
 use asi_phy::{SimDuration, SimTime};
 
 use super::base::{Core, FbError, FbEvent, FbState, PairMonitor};
 use crate::kl6904::signal::Contact;
 
-/// Parameters of a MON module (seed 004 §4.5.3).
+/// Parameters of a MON module (§4.5.3 of the KL6904 manual).
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct MonConfig {
-    /// MonIn1..4 (four inputs, docs/seed-errors.md): `None` = not activated, else the contact type.
+    /// MonIn1..4 (four inputs, docs/source-errors.md): `None` = not activated, else the contact
+    /// type.
     pub inputs: [Option<Contact>; 4],
     /// Discrepancy time of pairs MonIn1/2 and MonIn3/4; non-zero makes a pair.
     pub discrepancy: [SimDuration; 2],
@@ -46,7 +47,7 @@ pub struct MonInputs {
     pub edm2: bool,
 }
 
-/// Outputs of a MON module (seed 004 table 4-14).
+/// Outputs of a MON module (table 4-14 of the KL6904 manual).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct MonOutputs {
     /// First output: 0 at once on a demand.
@@ -57,8 +58,8 @@ pub struct MonOutputs {
     pub error: bool,
 }
 
-/// Diagnostic bit of a Secure-pair discrepancy (seed 004 §3.3; 0–1 are the MonIn pairs, 4–5
-/// EDM1/EDM2).
+/// Diagnostic bit of a Secure-pair discrepancy (§3.3 of the KL6904 manual; 0–1 are the MonIn pairs,
+/// 4–5 EDM1/EDM2).
 const SECURE_BIT: u8 = 2;
 
 /// The KL6904 monitoring module (safety door, or the lift's overtravel sensors).
@@ -68,10 +69,10 @@ const SECURE_BIT: u8 = 2;
 ///   ignored while Secure1 = Secure2 = 1, as make contacts while both are 0.
 /// - Manual restart: the safe state is left by a 0→1→0 Restart pulse; an activated EDM input
 ///   that is not 1 at that moment is an error (diag bit 4/5).
-/// - Automatic restart: the safe state is left as soon as nothing demands it; an EDM input that
-///   is not 1 then keeps the module in SAFE *without* an error (seed 004 §4.5.1: "an EDM error
-///   is only detected with manual restart"; docs/safety-logic.md §10 point 5 — kept as the seed
-///   says, and shown as a SAFE module whose EDM input is 0).
+/// - Automatic restart: the safe state is left as soon as nothing demands it; an EDM input that is
+///   not 1 then keeps the module in SAFE *without* an error (§4.5.1 of the KL6904 manual: "an EDM
+///   error is only detected with manual restart"; docs/safety-logic.md §10 point 5 — kept as the
+///   KL6904 manual says, and shown as a SAFE module whose EDM input is 0).
 /// - MonIn pairs and the Secure pair are discrepancy-monitored; manual function test as in
 ///   [`MonConfig::function_test`].
 ///

@@ -1,10 +1,11 @@
-//! The OPMODE function module (seed 004 §4.3; docs/seed-errors.md; docs/safety-logic.md §1.6).
+//! The OPMODE function module (§4.3 of the KL6904 manual; docs/source-errors.md;
+//! docs/safety-logic.md §1.6).
 
 use asi_phy::{SimDuration, SimTime};
 
 use super::base::{Core, FbError, FbEvent, FbState, PairMonitor};
 
-/// Parameters of an OPMODE module (seed 004 §4.3.3).
+/// Parameters of an OPMODE module (§4.3.3 of the KL6904 manual).
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct OpModeConfig {
     /// OpIn1..8 activated.
@@ -25,7 +26,7 @@ pub struct OpModeInputs {
     pub restart: bool,
 }
 
-/// Outputs of an OPMODE module (seed 004 table 4-8).
+/// Outputs of an OPMODE module (table 4-8 of the KL6904 manual).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct OpModeOutputs {
     /// OpOut1..8: at most one is 1.
@@ -37,7 +38,7 @@ pub struct OpModeOutputs {
 /// The KL6904 operating-mode selector.
 ///
 /// Only when exactly one active input is 1 is its output set; with no input or more than one
-/// input set all outputs are 0 (docs/seed-errors.md corrects the seed's "one or more").
+/// input set all outputs are 0 (docs/source-errors.md corrects the KL6904 manual's "one or more").
 ///
 /// **Decisions** (docs/safety-logic.md §10 point 6, not specified in detail):
 /// - the discrepancy time bounds how long the selection may be invalid (none or several inputs

@@ -8,16 +8,16 @@ use core::fmt;
 pub enum Rule {
     /// Names of groups, connections, modules, channels and outputs are unique and well formed.
     UniqueName,
-    /// Every connection, module and local output belongs to one existing group, and a
-    /// connection's I/O and a local output are used only by modules of their group (seed 004
-    /// §3, §3.1).
+    /// Every connection, module and local output belongs to one existing group, and a connection's
+    /// I/O and a local output are used only by modules of their group (§3, §3.1 of the KL6904
+    /// manual).
     OneGroup,
     /// Every output (local output, standard output, TwinSAFE-Out channel) is driven exactly once.
     DrivenOnce,
-    /// Only the signal kinds the seed's tables allow are linked to each input and output (e.g.
-    /// a standard signal only on AndIn1, seed 004 table 4-1).
+    /// Only the signal kinds the KL6904 manual's tables allow are linked to each input and output
+    /// (e.g. a standard signal only on AndIn1, table 4-1 of the KL6904 manual).
     SignalKind,
-    /// TwinSAFE addresses are unique and not 0 (seed 004 §3.2).
+    /// TwinSAFE addresses are unique and not 0 (§3.2 of the KL6904 manual).
     UniqueAddress,
     /// No input is linked to something that does not exist, and no required input is left open.
     Dangling,

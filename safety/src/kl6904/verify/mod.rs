@@ -1,6 +1,6 @@
 //! The project verifier: the checks the TwinSAFE Verifier and the System Manager make before a
-//! project is loaded into the KL6904 (seed 004 §2, §3, §4 signal tables), and the compiled form
-//! the logic runs.
+//! project is loaded into the KL6904 (the signal tables of §2, §3 and §4 of the KL6904 manual), and
+//! the compiled form the logic runs.
 //!
 //! Every problem found is reported (not only the first), each with the [`Rule`] it breaks and
 //! the [`Item`] it concerns.

@@ -156,7 +156,7 @@ pub(super) fn compile_module(v: &mut Verifier<'_>, index: usize, m: &ModuleDesc)
             require(
                 v,
                 count("AndIn", 8) >= 2,
-                "AND needs at least two inputs (docs/safety-logic.md)".into(),
+                "AND needs at least two inputs (the KL6904 manual, §4.1)".into(),
             );
             ModuleConfig::And
         }
@@ -189,7 +189,7 @@ pub(super) fn compile_module(v: &mut Verifier<'_>, index: usize, m: &ModuleDesc)
             require(
                 v,
                 linked("Restart"),
-                "Restart is not linked; ESTOP leaves the safe state only by a 0→1→0 Restart pulse (docs/safety-logic.md)".into(),
+                "Restart is not linked; ESTOP leaves the safe state only by a 0→1→0 Restart pulse (the KL6904 manual, §4.4)".into(),
             );
             let discrepancy = pairs(v, "EStopIn", 4);
             ModuleConfig::Estop(EstopConfig {

@@ -1,5 +1,5 @@
-//! How each module's inputs may be linked, its outputs and parameters (seed 004 §4 signal
-//! tables).
+//! How each module's inputs may be linked, its outputs and parameters (the signal tables
+//! of §4 of the KL6904 manual).
 
 use crate::kl6904::project::{ModuleDesc, ModuleKind};
 use crate::kl6904::signal::SignalKind;
@@ -41,8 +41,8 @@ fn single(name: &str, kinds: &'static [SignalKind], contact: bool) -> InputSpec 
     }
 }
 
-/// The inputs of a module kind, in a fixed order (seed 004 tables 4-1, 4-4, 4-7, 4-10, 4-13,
-/// 4-16).
+/// The inputs of a module kind, in a fixed order (tables 4-1, 4-4, 4-7, 4-10, 4-13
+/// and 4-16 of the KL6904 manual).
 pub(crate) fn input_specs(kind: ModuleKind) -> Vec<InputSpec> {
     match kind {
         ModuleKind::And => core::iter::once(single("AndIn1", ANY, true))
@@ -73,7 +73,7 @@ pub(crate) fn input_specs(kind: ModuleKind) -> Vec<InputSpec> {
 }
 
 /// The outputs of a module kind and whether each is a safety output (switched off with the
-/// group) or the Error output (seed 004 tables 4-2, 4-5, 4-8, 4-11, 4-14, 4-17).
+/// group) or the Error output (tables 4-2, 4-5, 4-8, 4-11, 4-14, 4-17 of the KL6904 manual).
 pub(crate) fn output_specs(kind: ModuleKind) -> Vec<(String, bool)> {
     let numbered = |p: &'static str, n: usize| (1..=n).map(move |k| (format!("{p}{k}"), true));
     let named = |names: &[&str]| -> Vec<(String, bool)> {

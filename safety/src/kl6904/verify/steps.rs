@@ -142,7 +142,7 @@ impl<'p> Verifier<'p> {
                     self.err(
                         Rule::Dangling,
                         Item::Group { index, name: g.name.clone() },
-                        "ERR_ACK is not connected; acknowledgement is never automatic, so it must be (docs/safety-logic.md)".into(),
+                        "ERR_ACK is not connected; acknowledgement is never automatic, so it must be (the KL6904 manual, §3.1)".into(),
                     );
                     None
                 }
@@ -293,7 +293,7 @@ impl<'p> Verifier<'p> {
                 self.err(
                     Rule::SignalKind,
                     item.clone(),
-                    format!("a Local-Out takes a module output, not the group output `{}` (docs/safety-logic.md)", o.source),
+                    format!("a Local-Out takes a module output, not the group output `{}` (the KL6904 manual, §2–§3)", o.source),
                 );
                 continue;
             }
@@ -348,7 +348,8 @@ impl<'p> Verifier<'p> {
         standard_outputs
     }
 
-    /// DECOUPLE: an input used needs its output linked, and the other way round (seed 004 §4.6).
+    /// DECOUPLE: an input used needs its output linked, and the other way round (§4.6 of the KL6904
+    /// manual).
     pub(super) fn check_decouple(&mut self) {
         let p = self.p;
         for (index, m) in p.modules.iter().enumerate() {
