@@ -16,6 +16,7 @@ pub mod command;
 pub mod live;
 pub mod map;
 pub mod net;
+pub mod speed;
 pub mod ttk;
 pub mod view;
 pub mod web;
@@ -29,9 +30,9 @@ use rig::{Report, Rig};
 use std::net::SocketAddr;
 use std::thread::JoinHandle;
 
-pub use live::Speed;
 pub use map::Owner;
 pub use net::Options;
+pub use speed::Speed;
 
 /// Why a live run cannot start.
 #[derive(Debug, thiserror::Error)]

@@ -185,15 +185,9 @@ pub fn run(args: ServeArgs) -> Result<u8, String> {
         ControllerArg::Builtin => Owner::Builtin,
         ControllerArg::External => Owner::External,
     };
-    if let (Owner::External, Speed::Factor(x)) = (owner, speed) {
-        if x > 1.0 {
-            // An outside controller runs on the wall clock: its reaction times shrink by the
-            // factor in simulated time, and one written for real time misses floors (the
-            // Python example at speed 2 leaves calls unserved, the cabin stopped between
-            // floors).
-            eprintln!(
-                "asi-lift: warning: --speed {x} runs the lift {x} times faster than the outside controller's clock: a controller written for real time may react too late (stop past a floor, miss a call); --speed 1 keeps real time, --speed max paces the simulation by its requests (lockstep)"
-            );
+    if owner == Owner::External {
+        if let Some(w) = speed.outside_controller_warning() {
+            eprintln!("asi-lift: warning: --{w}");
         }
     }
 
