@@ -492,6 +492,15 @@ fn a_foreign_host_name_is_refused_on_every_route_and_the_own_names_are_served() 
 async fn the_run_controls_work_over_the_socket() {
     let running = start(Speed::Factor(1.0));
     let addr = running.http_addr().expect("the live view's address");
+    let (_, page) = tokio::task::spawn_blocking(move || get(addr, "/"))
+        .await
+        .expect("the page");
+    for id in ["btn-pause", "speed-select", "btn-restart", "paused"] {
+        assert!(
+            page.contains(&format!("id=\"{id}\"")),
+            "no #{id} on the page"
+        );
+    }
     let mut ws = connect(addr).await;
     while next_of(&mut ws, "view").await["t_s"].as_f64() < Some(0.2) {}
     let r = command(&mut ws, 1, json!({"pause": true})).await;
