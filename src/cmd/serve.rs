@@ -29,7 +29,8 @@ pub struct ServeArgs {
     pub listen: String,
     /// Simulated seconds per wall second (e.g. 1, 0.5, 10), or `max`: as fast as the machine
     /// can with the built-in controller; with an outside controller, paced by its requests
-    /// (each advances the simulation by `--step`).
+    /// (each advances the simulation by `--step`). The live view's page can change it while
+    /// the run goes on.
     #[arg(long, value_name = "X|max", default_value = "1")]
     pub speed: String,
     /// Who runs the lift: the built-in PLC program (clients may watch), or the Modbus client
@@ -44,8 +45,8 @@ pub struct ServeArgs {
     #[arg(long, value_name = "ADDR", num_args = 0..=1, default_missing_value = "127.0.0.1:15657")]
     pub ttk4145: Option<String>,
     /// Also serve the live view, a page that shows the rig as it runs and lets a browser press
-    /// its buttons and inject faults (the asi-lift guide, chapter "Live view in the browser"),
-    /// on this address
+    /// its buttons, inject faults, pause the run, change its speed and restart it (the
+    /// asi-lift guide, chapter "Live view in the browser"), on this address
     /// [default: off; 127.0.0.1:8080 when given without an address]. Only loopback unless an
     /// address is given here.
     #[arg(long, value_name = "ADDR", num_args = 0..=1, default_missing_value = "127.0.0.1:8080")]
@@ -80,7 +81,8 @@ pub struct ServeArgs {
     #[arg(long, value_enum, default_value_t = Format::Text)]
     pub format: Format,
     /// Write every bus transaction, one line each, to this file: JSON lines for a `.jsonl`
-    /// or `.json` file, readable text otherwise.
+    /// or `.json` file, readable text otherwise. A restart from the live view's page starts
+    /// it again: it holds the last run, as the report does.
     #[arg(long, value_name = "FILE")]
     pub trace: Option<PathBuf>,
     /// The trace's form, overriding the file name's.
