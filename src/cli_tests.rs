@@ -539,6 +539,96 @@ fn serve_with_the_live_view_gives_the_same_run_as_without() {
     assert_the_batch_run(live);
 }
 
+/// A WebSocket text frame as a browser sends it (masked; `text` shorter than 126 bytes).
+fn ws_text_frame(text: &str) -> Vec<u8> {
+    let mask = [0x5a, 0x17, 0xc3, 0x2e];
+    let mut f = vec![0x81, 0x80 | u8::try_from(text.len()).expect("a short text")];
+    f.extend_from_slice(&mask);
+    f.extend(text.bytes().enumerate().map(|(i, b)| b ^ mask[i % 4]));
+    f
+}
+
+/// The live view's page restarts a run that writes a trace: the trace and the report are of
+/// the run since the restart, the batch run's; the log (on standard error) says so.
+#[test]
+fn a_restart_from_the_page_leaves_the_trace_and_the_report_of_the_last_run() {
+    use std::io::{Read, Write};
+    let d = temp();
+    let (trace, report) = (d.path().join("t.jsonl"), d.path().join("r.json"));
+    let mut child = asi_lift()
+        .args(["serve", "--listen", "127.0.0.1:0", "--http", "127.0.0.1:0"])
+        .args(["--until", "3s", "--format", "json", "--report"])
+        .arg(&report)
+        .arg("--trace")
+        .arg(&trace)
+        .stderr(Stdio::piped())
+        .stdout(Stdio::null())
+        .spawn()
+        .expect("asi-lift starts");
+    let mut err = BufReader::new(child.stderr.take().expect("its standard error"));
+    let mut seen = String::new();
+    let addr = loop {
+        let mut line = String::new();
+        assert!(err.read_line(&mut line).expect("a line") > 0, "{seen}");
+        seen.push_str(&line);
+        if let Some(rest) = line.trim().strip_prefix("asi-lift: live view on http://") {
+            break rest.trim_end_matches('/').to_owned();
+        }
+    };
+    let rest = std::thread::spawn(move || {
+        let mut text = String::new();
+        let _ = err.read_to_string(&mut text);
+        text
+    });
+    let mut ws = std::net::TcpStream::connect(&addr).expect("the live view");
+    let upgrade = format!(
+        "GET /ws HTTP/1.1\r\nHost: {addr}\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n\
+         Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\nSec-WebSocket-Version: 13\r\n\r\n"
+    );
+    ws.write_all(upgrade.as_bytes()).expect("the upgrade");
+    let mut head = [0u8; 12];
+    ws.read_exact(&mut head).expect("an answer");
+    assert_eq!(&head, b"HTTP/1.1 101");
+    // The snapshots are read and dropped, so that the server never waits to send one.
+    let mut drain = ws.try_clone().expect("the socket");
+    std::thread::spawn(move || std::io::copy(&mut drain, &mut std::io::sink()));
+    // 0.7 s of the first run at speed 1, then the restart, then the rest at max.
+    std::thread::sleep(std::time::Duration::from_millis(700));
+    for command in [r#"{"restart":true}"#, r#"{"speed":"max"}"#] {
+        let text = format!(r#"{{"id":1,"command":{command}}}"#);
+        ws.write_all(&ws_text_frame(&text)).expect("a command");
+    }
+    let status = child.wait().expect("asi-lift ends");
+    let err = rest.join().expect("its standard error");
+    assert!(status.success(), "{err}");
+    assert!(err.contains("restarted by the page"), "{err}");
+    assert!(err.contains("speed max (was 1), set by the page"), "{err}");
+    let batch_trace = d.path().join("batch.jsonl");
+    let run = asi_lift()
+        .args(["run", "--until", "3s", "--format", "json", "--trace"])
+        .arg(&batch_trace)
+        .output()
+        .expect("asi-lift runs");
+    assert!(run.status.success());
+    let (t, b) = (
+        std::fs::read(&trace).expect("the trace"),
+        std::fs::read(&batch_trace).expect("the batch run's trace"),
+    );
+    assert!(
+        t == b,
+        "the traces differ: {} and {} bytes",
+        t.len(),
+        b.len()
+    );
+    let text = std::fs::read_to_string(&report).expect("the report");
+    let mut live: serde_json::Value = serde_json::from_str(&text).expect("JSON");
+    assert_eq!(live["live"]["speed"], "max");
+    let mut batch: serde_json::Value = serde_json::from_slice(&run.stdout).expect("JSON");
+    live.as_object_mut().expect("an object").remove("live");
+    batch.as_object_mut().expect("an object").remove("live");
+    assert_eq!(live, batch);
+}
+
 #[test]
 fn serve_runs_free_to_its_end_and_writes_the_report_with_the_live_figures() {
     let (err, json) = serve_3s(&[]);

@@ -1,7 +1,9 @@
 //! asi-lift's live view in a real headless browser (chromium through chromedriver): the page
 //! loads and goes live; a click on cabin button 3 brings the cabin to floor 3 (read from the
 //! page); a bad command is answered in the page; a click on STOP changes the ESTOP state shown;
-//! a slave taken off line leaves LAS on the page; the page fits a phone's width.
+//! a slave taken off line leaves LAS on the page; pause stands the time shown still and resume
+//! lets it go on; a new speed is taken and a bad one answered; restart starts the time again;
+//! the page fits a phone's width.
 //!
 //! Needs chromedriver at `CHROMEDRIVER_URL` (default `http://127.0.0.1:9515`) and chromium at
 //! `CHROMIUM` (default `/usr/bin/chromium`); `bash scripts/ci-browser.sh` provides both. With
@@ -25,7 +27,7 @@ fn start(speed: f64) -> Running {
     let toml =
         "name = \"browser\"\nduration = \"30min\"\n[lift]\nstart_mm = 0.0\nload = \"loaded\"\n";
     let sc = Scenario::from_toml("browser.toml", toml).expect("a valid scenario");
-    let make = move || Rig::new(sc).map_err(|e| e.to_string());
+    let make = move || Rig::new(sc.clone()).map_err(|e| e.to_string());
     let cfg = LiveConfig {
         speed: Speed::Factor(speed),
         owner: Owner::Builtin,
@@ -88,6 +90,19 @@ async fn wait_text(c: &Client, id: &str, what: &str, ok: impl Fn(&str) -> bool) 
         assert!(t0.elapsed() < STEP, "{what}: #{id} shows {t:?}");
         tokio::time::sleep(Duration::from_millis(100)).await;
     }
+}
+
+/// Whether the element `id` is displayed.
+async fn is_shown(c: &Client, id: &str) -> bool {
+    match c.find(Locator::Id(id)).await {
+        Ok(e) => e.is_displayed().await.unwrap_or(false),
+        Err(_) => false,
+    }
+}
+
+/// Seconds as the page shows them (`12.34`).
+fn seconds(t: &str) -> f64 {
+    t.parse().unwrap_or_else(|_| panic!("not a time: {t:?}"))
 }
 
 async fn click(c: &Client, id: &str) {
@@ -171,6 +186,88 @@ async fn the_live_view_in_chromium() {
     })
     .await;
 
+    // Pause: the time shown stands still; resume: it goes on.
+    click(&c, "btn-pause").await;
+    wait_text(&c, "btn-pause", "the button offers the resume", |t| {
+        t.contains("resume")
+    })
+    .await;
+    assert!(is_shown(&c, "paused").await, "no `paused` in the header");
+    let t1 = text(&c, "sim-time").await;
+    for _ in 0..10 {
+        tokio::time::sleep(Duration::from_millis(100)).await;
+        assert_eq!(
+            text(&c, "sim-time").await,
+            t1,
+            "the time goes on while paused"
+        );
+    }
+    click(&c, "btn-pause").await;
+    wait_text(&c, "sim-time", "the time goes on after the resume", |t| {
+        t != t1
+    })
+    .await;
+    wait_text(&c, "btn-pause", "the button offers the pause", |t| {
+        t.contains("pause")
+    })
+    .await;
+    assert!(
+        !is_shown(&c, "paused").await,
+        "`paused` stays in the header"
+    );
+
+    // The speed: 10 from the list is taken and shown; a factor out of bounds is answered.
+    c.find(Locator::Id("speed-select"))
+        .await
+        .expect("the speed's list")
+        .select_by_value("10")
+        .await
+        .expect("speed 10 is chosen");
+    wait_text(&c, "message", "speed 10 is taken", |t| {
+        t == "speed 10: done"
+    })
+    .await;
+    let t0: f64 = seconds(&text(&c, "sim-time").await);
+    let w0 = Instant::now();
+    tokio::time::sleep(Duration::from_millis(1000)).await;
+    let rate = (seconds(&text(&c, "sim-time").await) - t0) / w0.elapsed().as_secs_f64();
+    assert!(
+        rate > 5.0,
+        "{rate} simulated seconds per second at speed 10"
+    );
+    c.execute("send({speed: 0}, 'speed 0');", vec![])
+        .await
+        .expect("the script runs");
+    wait_text(&c, "message", "the refused speed", |t| {
+        t.contains("speed: 0: expected a factor from 0.001 to 1000")
+    })
+    .await;
+    let shown: Value = c
+        .execute(
+            "return document.getElementById('speed-select').value;",
+            vec![],
+        )
+        .await
+        .expect("the script runs");
+    assert_eq!(shown, json!("10"));
+
+    // Restart: armed by the first click, done by the second; the time starts again.
+    let before = seconds(&text(&c, "sim-time").await);
+    click(&c, "btn-restart").await;
+    wait_text(&c, "btn-restart", "restart asks for a second click", |t| {
+        t.contains("click again")
+    })
+    .await;
+    click(&c, "btn-restart").await;
+    wait_text(&c, "sim-time", "the time starts again", |t| {
+        seconds(t) < before / 2.0
+    })
+    .await;
+    wait_text(&c, "message", "the restart is done", |t| {
+        t == "restart: done"
+    })
+    .await;
+
     // On a phone-sized screen nothing is wider than the screen.
     c.set_window_size(390, 844).await.expect("a phone's window");
     tokio::time::sleep(Duration::from_millis(300)).await;
@@ -196,5 +293,12 @@ async fn the_live_view_in_chromium() {
     let r = tokio::task::spawn_blocking(move || running.wait())
         .await
         .expect("the run ends");
-    assert!(r.arrivals.iter().any(|a| a.floor == 3), "{:?}", r.arrivals);
+    // The report is of the run since the restart.
+    assert!(
+        r.log
+            .iter()
+            .any(|l| l.who == "web" && l.text.starts_with("restarted by the page")),
+        "{:?}",
+        r.log
+    );
 }

@@ -4,9 +4,13 @@
 //! …) and checked by the scenario reader itself, so that the page can do what a scenario can
 //! and nothing else; and the one setting a scenario has outside its events that a teacher
 //! changes while the lift runs, `{"line_noise": 0.0001}` (the `bus.pulse_error_rate`).
+//! Beside them the run's controls, which change how the live run goes and not what the
+//! simulation does: `{"pause": true}` and `{"pause": false}`, `{"speed": 2}` or
+//! `{"speed": "max"}` (the bounds of `--speed`), `{"restart": true}` ([`RunControl`]).
 //!
 //! A command has no time: it happens at the moment the simulation has reached.
 
+use crate::speed::{Speed, MAX_SPEED, MIN_SPEED};
 use asi_phy::fault::FaultRates;
 use asi_phy::PulseErrorRate;
 use rig::scenario::Action;
@@ -22,6 +26,57 @@ pub enum Command {
     Act(Action),
     /// The line noise from now on: the probability that a pulse is corrupted.
     LineNoise(f64),
+    /// A change to how the live run goes, not to the rig.
+    Run(RunControl),
+}
+
+/// The page's controls of the live run: they change its pacing on the wall clock, or start
+/// it again, and never what the simulation does (the live loop does them, not [`apply`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum RunControl {
+    /// `{"pause": true}`: simulated time stands still; `{"pause": false}`: it goes on from
+    /// where it stood.
+    Pause(bool),
+    /// `{"speed": 2}`, `{"speed": "max"}`: the speed from now on, within the bounds of
+    /// `--speed` ([`Speed::factor`]).
+    Speed(Speed),
+    /// `{"restart": true}`: the scenario again from its beginning, with the same seed.
+    Restart,
+}
+
+/// The keys of the run's controls.
+const RUN_KEYS: [&str; 3] = ["pause", "speed", "restart"];
+
+/// The run control `key` with the value `v`; the error names the key and what it takes.
+fn run_control(key: &str, v: &serde_json::Value) -> Result<RunControl, String> {
+    match key {
+        "pause" => v.as_bool().map(RunControl::Pause).ok_or_else(|| {
+            format!("pause: {v}: expected true (simulated time stands still) or false (it goes on)")
+        }),
+        "restart" => match v.as_bool() {
+            Some(true) => Ok(RunControl::Restart),
+            Some(false) => Err("restart: `false` does nothing; send {\"restart\": true}".into()),
+            None => Err(format!(
+                "restart: {v}: expected true (the scenario again from its beginning)"
+            )),
+        },
+        _ => {
+            let expected = || {
+                format!(
+                    "speed: {v}: expected a factor from {MIN_SPEED} to {MAX_SPEED} (simulated seconds per wall second) or \"max\""
+                )
+            };
+            match v {
+                serde_json::Value::String(s) if s == "max" => Ok(RunControl::Speed(Speed::Max)),
+                serde_json::Value::Number(n) => n
+                    .as_f64()
+                    .and_then(|x| Speed::factor(x).ok())
+                    .map(RunControl::Speed)
+                    .ok_or_else(expected),
+                _ => Err(expected()),
+            }
+        }
+    }
 }
 
 /// The lift a command is checked for: what the scenario reader needs to know of it.
@@ -49,6 +104,12 @@ pub fn parse(value: &serde_json::Value, shape: LiftShape) -> Result<Command, Str
     let obj = value
         .as_object()
         .ok_or("a command is a JSON object with one action, such as {\"press\": \"cabin:3\"}")?;
+    if let Some((key, v)) = RUN_KEYS.iter().find_map(|k| obj.get(*k).map(|v| (*k, v))) {
+        if obj.len() > 1 {
+            return Err(format!("{key}: give it alone, without other keys"));
+        }
+        return run_control(key, v).map(Command::Run);
+    }
     if let Some(v) = obj.get("line_noise") {
         if obj.len() > 1 {
             return Err("line_noise: give it alone, without other keys".into());
@@ -98,7 +159,7 @@ pub fn parse(value: &serde_json::Value, shape: LiftShape) -> Result<Command, Str
         .events
         .into_iter()
         .next()
-        .ok_or("a command with no action: give one of press, load, door, crank_mm, reset, rescue, ack, attend, fault, line_noise")?;
+        .ok_or("a command with no action: give one of press, load, door, crank_mm, reset, rescue, ack, attend, fault, line_noise, pause, speed, restart")?;
     Ok(Command::Act(event.action))
 }
 
@@ -137,6 +198,10 @@ pub fn apply(rig: &mut Rig, cmd: &Command, seed: u64) -> Result<(), String> {
             rig.log_now("web", format!("line noise: pulse error rate {rate}"));
             Ok(())
         }
+        Command::Run(_) => Err(
+            "pause, speed and restart change the live run, not the rig: the live loop does them"
+                .into(),
+        ),
     }
 }
 
@@ -209,5 +274,79 @@ mod tests {
         assert!(err(json!({"at": "1s", "reset": true})).starts_with("at:"));
         assert!(err(json!({"line_noise": 2.0})).starts_with("line_noise:"));
         assert!(err(json!({"fault": {"kind": "slave-offline", "slave": 40}})).contains("1..31"));
+    }
+
+    #[test]
+    fn the_run_controls_are_parsed_with_the_bounds_of_the_command_line() {
+        let ok = |v| parse(&v, FOUR).expect("a command");
+        assert_eq!(
+            ok(json!({"pause": true})),
+            Command::Run(RunControl::Pause(true))
+        );
+        assert_eq!(
+            ok(json!({"pause": false})),
+            Command::Run(RunControl::Pause(false))
+        );
+        assert_eq!(
+            ok(json!({"restart": true})),
+            Command::Run(RunControl::Restart)
+        );
+        assert_eq!(
+            ok(json!({"speed": "max"})),
+            Command::Run(RunControl::Speed(Speed::Max))
+        );
+        for x in [MIN_SPEED, 0.1, 0.5, 1.0, 2.0, 5.0, 10.0, MAX_SPEED] {
+            assert_eq!(
+                ok(json!({ "speed": x })),
+                Command::Run(RunControl::Speed(Speed::Factor(x)))
+            );
+        }
+        assert_eq!(
+            ok(json!({"speed": 3})),
+            Command::Run(RunControl::Speed(Speed::Factor(3.0)))
+        );
+    }
+
+    #[test]
+    fn bad_run_controls_say_which_key_and_what_it_takes() {
+        let err = |v| parse(&v, FOUR).expect_err("an error");
+        for bad in [
+            json!(0),
+            json!(-1),
+            json!(0.0001),
+            json!(1000.5),
+            json!(1e300),
+            json!("fast"),
+            json!("2"),
+            json!("MAX"),
+            json!(null),
+            json!(true),
+            json!([1]),
+            json!({"x": 1}),
+        ] {
+            let e = err(json!({ "speed": bad.clone() }));
+            assert!(
+                e.starts_with(&format!(
+                    "speed: {bad}: expected a factor from 0.001 to 1000"
+                )),
+                "{bad}: {e}"
+            );
+        }
+        for bad in [json!(1), json!("yes"), json!(null), json!({})] {
+            assert!(err(json!({ "pause": bad })).starts_with("pause: "));
+        }
+        assert!(err(json!({"restart": false})).contains("does nothing"));
+        assert!(err(json!({"restart": 1})).starts_with("restart: 1: expected true"));
+        assert_eq!(
+            err(json!({"pause": true, "speed": 2})),
+            "pause: give it alone, without other keys"
+        );
+        assert_eq!(
+            err(json!({"speed": 2, "press": "cabin:1"})),
+            "speed: give it alone, without other keys"
+        );
+        assert!(err(json!({"resume": true})).contains("unknown field `resume`"));
+        let mut rig = Rig::new(Scenario::defaults()).expect("a rig");
+        assert!(apply(&mut rig, &Command::Run(RunControl::Restart), 0).is_err());
     }
 }

@@ -16,6 +16,7 @@ pub mod command;
 pub mod live;
 pub mod map;
 pub mod net;
+pub mod speed;
 pub mod ttk;
 pub mod view;
 pub mod web;
@@ -29,9 +30,9 @@ use rig::{Report, Rig};
 use std::net::SocketAddr;
 use std::thread::JoinHandle;
 
-pub use live::Speed;
 pub use map::Owner;
 pub use net::Options;
+pub use speed::Speed;
 
 /// Why a live run cannot start.
 #[derive(Debug, thiserror::Error)]
@@ -140,9 +141,9 @@ pub struct Listen {
     pub http: Option<SocketAddr>,
 }
 
-/// Starts a live run: builds the rig with `make_rig` on its own thread, listens on `listen`
-/// and serves Modbus TCP until the run ends; with `ttk`, serves the TTK4145 protocol there
-/// too.
+/// Starts a live run: builds the rig with `make_rig` on its own thread (and again for each
+/// restart from the live view's page), listens on `listen` and serves Modbus TCP until the
+/// run ends; with `ttk`, serves the TTK4145 protocol there too.
 pub fn start<F>(
     make_rig: F,
     cfg: LiveConfig,
@@ -150,7 +151,7 @@ pub fn start<F>(
     ttk: Option<SocketAddr>,
 ) -> Result<Running, GatewayError>
 where
-    F: FnOnce() -> Result<Rig, String> + Send + 'static,
+    F: FnMut() -> Result<Rig, String> + Send + 'static,
 {
     start_servers(
         make_rig,
@@ -170,20 +171,20 @@ pub fn start_servers<F>(
     listen: Listen,
 ) -> Result<Running, GatewayError>
 where
-    F: FnOnce() -> Result<Rig, String> + Send + 'static,
+    F: FnMut() -> Result<Rig, String> + Send + 'static,
 {
     start_with(make_rig, cfg, listen, Options::default())
 }
 
 /// As [`start_servers`], with the servers' [`Options`].
 pub fn start_with<F>(
-    make_rig: F,
+    mut make_rig: F,
     cfg: LiveConfig,
     listen: Listen,
     options: Options,
 ) -> Result<Running, GatewayError>
 where
-    F: FnOnce() -> Result<Rig, String> + Send + 'static,
+    F: FnMut() -> Result<Rig, String> + Send + 'static,
 {
     let Listen {
         modbus: listen,
@@ -216,7 +217,7 @@ where
         .spawn(move || match make_rig() {
             Ok(rig) => {
                 let _ = ready_tx.send(Ok(()));
-                live::run_with_view(rig, cfg, &rx, &status_tx, view)
+                live::run_with_view(rig, cfg, &rx, &status_tx, view, Some(&mut make_rig))
             }
             Err(e) => {
                 let _ = ready_tx.send(Err(e));

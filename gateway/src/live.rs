@@ -9,9 +9,17 @@
 //! each request is served, then the simulation advances by the step (1 ms by default), so a
 //! client's program and the simulation run in lockstep and the same requests give the same
 //! run.
+//!
+//! The live view's page may pause the run, change its speed or start it again
+//! ([`crate::command::RunControl`]). They change only the pacing: a pause stops stepping the
+//! rig (requests are still served, from the image of the moment reached), and a resume or a
+//! new speed measures the wall clock afresh from the moment reached, so the run goes on from
+//! where it stood and never catches up; the simulation is the same as without them. A
+//! restart makes a fresh rig from the run's configuration ([`Remake`]).
 
-use crate::command;
+use crate::command::{self, Command, RunControl};
 use crate::map::{Gateway, Owner};
+pub use crate::speed::{Speed, MAX_SPEED, MIN_SPEED};
 use crate::ttk::Ttk;
 use crate::view::{self, Telegrams};
 use asi_phy::{SimDuration, SimTime};
@@ -22,51 +30,6 @@ use std::collections::VecDeque;
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 use tokio_modbus::{ExceptionCode, Request, Response};
-
-/// How fast simulated time runs.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Speed {
-    /// Simulated seconds per wall second.
-    Factor(f64),
-    /// As fast as the machine can (builtin), or paced by the client's requests (external).
-    Max,
-}
-
-/// The slowest speed factor: a simulated millisecond per wall second.
-pub const MIN_SPEED: f64 = 0.001;
-/// The fastest speed factor.
-pub const MAX_SPEED: f64 = 1000.0;
-
-impl Speed {
-    /// The factor `x` if it is a number in [`MIN_SPEED`]..=[`MAX_SPEED`]; the error says what
-    /// is wrong. Outside it the pacing's wall times do not fit a `Duration`, or mean nothing.
-    pub fn factor(x: f64) -> Result<Speed, String> {
-        if x.is_finite() && (MIN_SPEED..=MAX_SPEED).contains(&x) {
-            Ok(Speed::Factor(x))
-        } else {
-            Err(format!(
-                "speed factor {x:?}: expected {MIN_SPEED} to {MAX_SPEED} simulated seconds per wall second"
-            ))
-        }
-    }
-
-    /// `self`, checked as [`Speed::factor`] checks a factor.
-    pub fn checked(self) -> Result<Speed, String> {
-        match self {
-            Speed::Factor(x) => Speed::factor(x),
-            Speed::Max => Ok(Speed::Max),
-        }
-    }
-}
-
-impl std::fmt::Display for Speed {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            Speed::Factor(x) => write!(f, "{x}"),
-            Speed::Max => f.write_str("max"),
-        }
-    }
-}
 
 /// How a live run goes.
 #[derive(Clone, Copy, Debug)]
@@ -97,14 +60,21 @@ pub struct TtkCall {
     pub reply: tokio::sync::oneshot::Sender<Option<[u8; 4]>>,
 }
 
-/// A command from the live view's page ([`crate::command`]), with where its answer goes:
-/// done, or why not.
+/// The answer to a command from the page: done (with a note for the page, such as a warning
+/// about the speed or that the run is paused), or why not.
+pub type WebAnswer = Result<Option<String>, String>;
+
+/// A command from the live view's page ([`crate::command`]), with where its answer goes.
 pub struct WebCall {
     /// The command, a JSON object not yet checked.
     pub command: serde_json::Value,
     /// Where the answer goes.
-    pub reply: tokio::sync::oneshot::Sender<Result<(), String>>,
+    pub reply: tokio::sync::oneshot::Sender<WebAnswer>,
 }
+
+/// Makes the run's rig again, as at its start (the same scenario, seed, controller and
+/// outputs), for a restart from the page.
+pub type Remake<'a> = &'a mut dyn FnMut() -> Result<Rig, String>;
 
 /// The cabin's height and speed over the last [`HISTORY`] of simulated time, for the page's
 /// plot: `[t_s, position_mm, velocity_mm_s]`, oldest first, one per snapshot.
@@ -158,6 +128,8 @@ pub struct Status {
     pub violations: usize,
     /// The gateway's watchdog has zeroed the outputs.
     pub watchdog_tripped: bool,
+    /// The page has paused the run: simulated time stands still.
+    pub paused: bool,
     /// The run has ended (this is the last status).
     pub ended: bool,
     /// The log lines since the last status that went out, the newest [`STATUS_LOG`] of them
@@ -188,7 +160,7 @@ const STATUS_EVERY: Duration = Duration::from_secs(1);
 /// The rig thread's loop: runs `rig` until its end or a [`ToRig::Stop`], serving requests
 /// from `rx` and sending a [`Status`] to `status` every wall second; returns the report.
 pub fn run(rig: Rig, cfg: LiveConfig, rx: &Receiver<ToRig>, status: &Sender<Status>) -> Report {
-    run_with_view(rig, cfg, rx, status, None)
+    run_with_view(rig, cfg, rx, status, None, None)
 }
 
 /// The live view's side of the rig thread: the snapshots it publishes.
@@ -224,115 +196,108 @@ impl Viewer {
             self.out.snapshots.send_replace(Some(json.into()));
         }
     }
+
+    /// Starts again on `rig`, a fresh one: its own observer, an empty plot, the commands
+    /// counted (for the line noise's seeds) from zero as in a fresh run.
+    fn restart(&mut self, rig: &mut Rig) {
+        self.telegrams = view::observe(rig);
+        self.commands = 0;
+        self.last = None;
+        if let Ok(mut h) = self.out.history.lock() {
+            h.clear();
+        }
+    }
 }
 
 /// As [`run`], and with `view` publishes a snapshot for the live view every [`VIEW_EVERY`] of
 /// wall time and serves the page's commands ([`ToRig::Web`]). The live view adds a transaction
-/// observer ([`Rig::on_transaction`]) for its list of the last telegrams.
+/// observer ([`Rig::on_transaction`]) for its list of the last telegrams. With `remake`, the
+/// page may start the run again ([`crate::command::RunControl::Restart`]); without it a
+/// restart is refused.
 pub fn run_with_view(
     rig: Rig,
     cfg: LiveConfig,
     rx: &Receiver<ToRig>,
     status: &Sender<Status>,
     view: Option<ViewOut>,
+    remake: Option<Remake<'_>>,
 ) -> Report {
-    let mut t = RigThread::new(rig, cfg, view);
-    let mut max_lag = Duration::ZERO;
-    let mut lag_warned = false;
-    let start = Instant::now();
-    let sim0 = t.rig.now();
-    let mut at = t.rig.now();
+    let mut t = RigThread::new(rig, cfg, view, remake);
     let mut last_status = Instant::now();
-    let mut log_sent = 0;
     let mut stopped = false;
-    'run: while !stopped && at < t.rig.end() {
-        match cfg.speed {
-            Speed::Factor(x) => {
-                let wall = start.elapsed();
-                let target = sim0 + sim_of(wall.mul_f64(x));
-                at = t.advance(at, target);
-                let lag = behind(start, sim0, at, x);
-                if lag > LAG_REPORTED {
-                    max_lag = max_lag.max(lag);
-                    if !lag_warned && lag > Duration::from_millis(100) {
-                        lag_warned = true;
-                        t.rig.log_now(
-                            "live",
-                            format!(
-                                "the machine cannot keep up at speed {x}: {:.0} ms behind the wall clock",
-                                lag.as_secs_f64() * 1e3
-                            ),
-                        );
-                    }
+    'run: while !stopped && t.at < t.rig.end() {
+        match t.cfg.speed {
+            _ if t.paused => {
+                // Simulated time stands still; requests are served at the moment reached.
+                match rx.recv_timeout(t.wait()) {
+                    Ok(m) => stopped |= t.handle(m),
+                    Err(RecvTimeoutError::Timeout) => {}
+                    Err(RecvTimeoutError::Disconnected) => break 'run,
                 }
+            }
+            Speed::Factor(x) => {
+                let target = t.sim0 + sim_of(t.start.elapsed().mul_f64(x));
+                t.advance(target);
+                t.watch_lag(x);
                 // Wait for a request until the next millisecond of simulated time is due.
                 let next = wall_secs(1e-3 / x).min(Duration::from_millis(1));
                 match rx.recv_timeout(next) {
-                    Ok(m) => stopped |= t.handle(m, at),
+                    Ok(m) => stopped |= t.handle(m),
                     Err(RecvTimeoutError::Timeout) => {}
                     Err(RecvTimeoutError::Disconnected) => break 'run,
                 }
             }
-            Speed::Max if cfg.owner == Owner::Builtin => {
-                at = t.advance(at, at + FREE_RUN_SLICE);
+            Speed::Max if t.cfg.owner == Owner::Builtin => {
+                t.advance(t.at + FREE_RUN_SLICE);
             }
-            Speed::Max => {
-                let wait = if t.viewer.is_some() {
-                    VIEW_EVERY
-                } else {
-                    STATUS_EVERY
-                };
-                match rx.recv_timeout(wait) {
-                    Ok(m) => {
-                        let call = matches!(m, ToRig::Call(_) | ToRig::Ttk(_));
-                        stopped |= t.handle(m, at);
-                        if call {
-                            at = t.advance(at, at + cfg.step);
-                        }
+            Speed::Max => match rx.recv_timeout(t.wait()) {
+                Ok(m) => {
+                    let call = matches!(m, ToRig::Call(_) | ToRig::Ttk(_));
+                    stopped |= t.handle(m);
+                    if call {
+                        t.advance(t.at + t.cfg.step);
                     }
-                    Err(RecvTimeoutError::Timeout) => {}
-                    Err(RecvTimeoutError::Disconnected) => break 'run,
                 }
-            }
+                Err(RecvTimeoutError::Timeout) => {}
+                Err(RecvTimeoutError::Disconnected) => break 'run,
+            },
         }
-        // At a speed factor or running free, everything else waiting is served at the same
-        // moment; in lockstep each request has its own step, and none is served at the end.
-        let lockstep = cfg.speed == Speed::Max && cfg.owner == Owner::External;
-        while !lockstep && at < t.rig.end() {
+        // At a speed factor, running free or paused, everything else waiting is served at
+        // the same moment; in lockstep each request has its own step, and none is served at
+        // the end.
+        while !t.lockstep() && t.at < t.rig.end() {
             match rx.try_recv() {
-                Ok(m) => stopped |= t.handle(m, at),
+                Ok(m) => stopped |= t.handle(m),
                 Err(TryRecvError::Empty) => break,
                 Err(TryRecvError::Disconnected) => break 'run,
             }
         }
         if last_status.elapsed() >= STATUS_EVERY {
             last_status = Instant::now();
-            let s = status_of(&t.rig, &t.gw, at, start, sim0, cfg.speed, false);
-            send_with_log(status, s, &t.rig, &mut log_sent);
+            t.send_status(status, false);
         }
-        if let Some(v) = t.viewer.as_mut().filter(|v| v.due()) {
-            let s = status_of(&t.rig, &t.gw, at, start, sim0, cfg.speed, false);
-            v.publish(&t.rig, run_of(&s, cfg));
+        if t.viewer.as_ref().is_some_and(Viewer::due) {
+            t.publish(false);
         }
     }
-    let RigThread {
-        mut rig,
-        gw,
-        ttk,
-        connections,
-        mut viewer,
-    } = t;
     if stopped {
-        rig.log_now(
+        t.rig.log_now(
             "live",
             "stopped by the operator (Ctrl-C or a termination signal)".into(),
         );
     }
-    let last = status_of(&rig, &gw, at, start, sim0, cfg.speed, true);
-    if let Some(v) = viewer.as_mut() {
-        v.publish(&rig, run_of(&last, cfg));
-    }
-    send_with_log(status, last, &rig, &mut log_sent);
+    t.publish(true);
+    t.send_status(status, true);
+    let RigThread {
+        mut rig,
+        gw,
+        ttk,
+        cfg,
+        connections,
+        at,
+        max_lag,
+        ..
+    } = t;
     // The moment at the end itself, as `asi-lift run` has it, then the report.
     rig.set_end(at);
     let mut report = rig.run(None);
@@ -352,17 +317,39 @@ pub fn run_with_view(
     report
 }
 
-/// What the rig thread owns: the rig and everything that serves its clients.
-struct RigThread {
+/// What the rig thread owns: the rig, everything that serves its clients, and the pacing.
+struct RigThread<'a> {
     rig: Rig,
     gw: Gateway,
     ttk: Ttk,
+    /// The run's configuration; its speed is the one now (the page may change it).
+    cfg: LiveConfig,
     connections: u64,
     viewer: Option<Viewer>,
+    remake: Option<Remake<'a>>,
+    /// The simulated time reached: the rig has run every moment up to it.
+    at: SimTime,
+    /// The page has paused the run.
+    paused: bool,
+    /// At a speed factor, simulated time follows the wall clock from `start`, where it was
+    /// `sim0`: measured afresh at a resume and at a change of speed, so that the run never
+    /// catches up on time it stood still.
+    start: Instant,
+    sim0: SimTime,
+    /// The most the simulation fell behind, and whether the log has said so.
+    max_lag: Duration,
+    lag_warned: bool,
+    /// How many of the rig's log lines went out with a status.
+    log_sent: usize,
 }
 
-impl RigThread {
-    fn new(mut rig: Rig, cfg: LiveConfig, view: Option<ViewOut>) -> RigThread {
+impl<'a> RigThread<'a> {
+    fn new(
+        mut rig: Rig,
+        cfg: LiveConfig,
+        view: Option<ViewOut>,
+        remake: Option<Remake<'a>>,
+    ) -> RigThread<'a> {
         for who in CLIENT_SOURCES {
             rig.bound_log(who, LOG_KEEP, LOG_KEEP);
         }
@@ -372,36 +359,135 @@ impl RigThread {
             last: None,
             commands: 0,
         });
+        let at = rig.now();
         RigThread {
             rig,
             gw: Gateway::new(cfg.owner, cfg.watchdog),
             ttk: Ttk::default(),
+            cfg,
             connections: 0,
             viewer,
+            remake,
+            at,
+            paused: false,
+            start: Instant::now(),
+            sim0: at,
+            max_lag: Duration::ZERO,
+            lag_warned: false,
+            log_sent: 0,
         }
     }
 
-    /// [`advance`] up to `target`, at most the run's end.
-    fn advance(&mut self, at: SimTime, target: SimTime) -> SimTime {
-        let target = target.min(self.rig.end());
-        advance(&mut self.rig, &mut self.gw, &mut self.ttk, at, target)
+    /// In lockstep: at `max` with an outside controller, and not paused.
+    fn lockstep(&self) -> bool {
+        !self.paused && self.cfg.speed == Speed::Max && self.cfg.owner == Owner::External
     }
 
-    /// Serves one message at `at`; `true` if it ends the run.
-    fn handle(&mut self, m: ToRig, at: SimTime) -> bool {
+    /// How long to wait for a message when the simulation does not advance by itself.
+    fn wait(&self) -> Duration {
+        if self.viewer.is_some() {
+            VIEW_EVERY
+        } else {
+            STATUS_EVERY
+        }
+    }
+
+    /// Measures the wall clock afresh from the moment reached: no lag from before.
+    fn anchor(&mut self) {
+        self.start = Instant::now();
+        self.sim0 = self.at;
+    }
+
+    /// [`advance`] up to `target`, at most the run's end.
+    fn advance(&mut self, target: SimTime) {
+        let target = target.min(self.rig.end());
+        self.at = advance(&mut self.rig, &mut self.gw, &mut self.ttk, self.at, target);
+    }
+
+    /// At speed `x`: keeps the largest lag, and says once in the log if the machine cannot
+    /// keep up.
+    fn watch_lag(&mut self, x: f64) {
+        let lag = behind(self.start, self.sim0, self.at, x);
+        if lag <= LAG_REPORTED {
+            return;
+        }
+        self.max_lag = self.max_lag.max(lag);
+        if !self.lag_warned && lag > Duration::from_millis(100) {
+            self.lag_warned = true;
+            self.rig.log_now(
+                "live",
+                format!(
+                    "the machine cannot keep up at speed {x}: {:.0} ms behind the wall clock",
+                    lag.as_secs_f64() * 1e3
+                ),
+            );
+        }
+    }
+
+    /// How far behind the wall clock the simulation is now, ms (0 at `max`, paused, ended).
+    fn lag_ms(&self, ended: bool) -> f64 {
+        match self.cfg.speed {
+            Speed::Factor(x) if !self.paused && !ended => {
+                behind(self.start, self.sim0, self.at, x).as_secs_f64() * 1e3
+            }
+            _ => 0.0,
+        }
+    }
+
+    fn status(&self, ended: bool) -> Status {
+        Status {
+            simulated_s: self.at.as_secs_f64(),
+            lag_ms: self.lag_ms(ended),
+            requests: self.gw.requests,
+            violations: self.rig.violations().len(),
+            watchdog_tripped: self.gw.watchdog_tripped(),
+            paused: self.paused,
+            ended,
+            log: Vec::new(),
+            log_left_out: 0,
+        }
+    }
+
+    /// Sends a status with the log lines since the last one that went out; counts them as
+    /// sent if it went out (a status that finds the channel full waits for the next, and its
+    /// lines with it).
+    fn send_status(&mut self, status: &Sender<Status>, ended: bool) {
+        let mut s = self.status(ended);
+        let log = self.rig.log_lines();
+        let new = log.get(self.log_sent..).unwrap_or_default();
+        let from = new.len().saturating_sub(STATUS_LOG);
+        s.log = new[from..].to_vec();
+        s.log_left_out = from;
+        if status.try_send(s).is_ok() {
+            self.log_sent = log.len();
+        }
+    }
+
+    /// Publishes a snapshot for the live view, if there is one.
+    fn publish(&mut self, ended: bool) {
+        let run = view::Run {
+            speed: self.cfg.speed.to_string(),
+            lag_ms: (self.lag_ms(ended) * 10.0).round() / 10.0,
+            controller: match self.cfg.owner {
+                Owner::Builtin => "builtin",
+                Owner::External => "external",
+            },
+            requests: self.gw.requests,
+            paused: self.paused,
+            ended,
+        };
+        if let Some(v) = self.viewer.as_mut() {
+            v.publish(&self.rig, run);
+        }
+    }
+
+    /// Serves one message at the moment reached; `true` if it ends the run.
+    fn handle(&mut self, m: ToRig) -> bool {
+        let at = self.at;
         let (rig, gw, ttk) = (&mut self.rig, &mut self.gw, &mut self.ttk);
         match m {
             ToRig::Web(c) => {
-                let answer = match self.viewer.as_mut() {
-                    Some(v) => {
-                        v.commands += 1;
-                        // Every change of the line noise draws from a seed of its own.
-                        let seed = 0x6c69_6e65 ^ v.commands;
-                        command::parse(&c.command, command::LiftShape::of(rig))
-                            .and_then(|cmd| command::apply(rig, &cmd, seed))
-                    }
-                    None => Err("this run has no live view".into()),
-                };
+                let answer = self.web(&c.command);
                 let _ = c.reply.send(answer);
                 false
             }
@@ -427,6 +513,102 @@ impl RigThread {
             ToRig::Stop => true,
         }
     }
+
+    /// Does a command from the page.
+    fn web(&mut self, command: &serde_json::Value) -> WebAnswer {
+        if self.viewer.is_none() {
+            return Err("this run has no live view".into());
+        }
+        let cmd = command::parse(command, command::LiftShape::of(&self.rig));
+        if let Ok(Command::Run(control)) = cmd {
+            return self.control(control);
+        }
+        let commands = self.viewer.as_mut().map_or(0, |v| {
+            v.commands += 1;
+            v.commands
+        });
+        // Every change of the line noise draws from a seed of its own.
+        let seed = 0x6c69_6e65 ^ commands;
+        cmd.and_then(|cmd| command::apply(&mut self.rig, &cmd, seed))?;
+        // While paused, the command happens at the moment the run stands at, the moment it
+        // goes on from: it takes effect when the run resumes.
+        Ok(self.paused.then(|| {
+            format!(
+                "paused at {:.3} s: it takes effect when the run resumes",
+                self.at.as_secs_f64()
+            )
+        }))
+    }
+
+    /// Does one of the run's controls from the page (logged as `web`, as its other commands).
+    fn control(&mut self, control: RunControl) -> WebAnswer {
+        match control {
+            RunControl::Pause(pause) => {
+                if pause != self.paused {
+                    self.paused = pause;
+                    self.anchor();
+                    let what = if pause { "paused" } else { "resumed" };
+                    self.rig.log_now("web", format!("run {what} by the page"));
+                }
+                Ok(None)
+            }
+            RunControl::Speed(speed) => {
+                let speed = speed.checked()?;
+                if speed != self.cfg.speed {
+                    let was = self.cfg.speed;
+                    self.cfg.speed = speed;
+                    self.anchor();
+                    self.lag_warned = false;
+                    self.rig
+                        .log_now("web", format!("speed {speed} (was {was}), set by the page"));
+                }
+                Ok(match (self.cfg.owner, speed) {
+                    (Owner::Builtin, _) => None,
+                    (Owner::External, Speed::Max) => Some(format!(
+                        "at max the simulation advances only with the outside controller's requests, {} ms each (lockstep)",
+                        self.cfg.step.as_nanos() as f64 / 1e6
+                    )),
+                    (Owner::External, Speed::Factor(_)) => speed.outside_controller_warning(),
+                })
+            }
+            RunControl::Restart => self.restart().map(|()| None),
+        }
+    }
+
+    /// Starts the run again from its beginning on a fresh rig from the run's configuration
+    /// (its scenario and seed; its trace, if any, starts again too). The gateway and the
+    /// TTK4145 front end start afresh as at the command's start (counters, watchdog time,
+    /// lamps); the clients' connections, the pause and the speed stay.
+    fn restart(&mut self) -> Result<(), String> {
+        let remake = self
+            .remake
+            .as_mut()
+            .ok_or("restart: this run cannot make its rig again")?;
+        let mut rig = remake().map_err(|e| format!("restart: {e}"))?;
+        for who in CLIENT_SOURCES {
+            rig.bound_log(who, LOG_KEEP, LOG_KEEP);
+        }
+        if let Some(v) = self.viewer.as_mut() {
+            v.restart(&mut rig);
+        }
+        rig.log_now(
+            "web",
+            format!(
+                "restarted by the page: the earlier run had reached {:.3} s; this report is of the run since the restart",
+                self.at.as_secs_f64()
+            ),
+        );
+        // The earlier rig goes here, with its outputs.
+        self.rig = rig;
+        self.gw = Gateway::new(self.cfg.owner, self.cfg.watchdog);
+        self.ttk = Ttk::default();
+        self.at = self.rig.now();
+        self.anchor();
+        self.max_lag = Duration::ZERO;
+        self.lag_warned = false;
+        self.log_sent = 0;
+        Ok(())
+    }
 }
 
 /// Runs the rig's moments up to `target`, then the watchdog and the TTK4145 front end's
@@ -445,58 +627,6 @@ pub(crate) fn advance(
     gw.watch(rig, target);
     ttk.scan(rig, target);
     target
-}
-
-/// The live view's line about the run.
-/// Sends `s` with the log lines after the first `sent`; counts them as sent if it went out
-/// (a status that finds the channel full waits for the next, and its lines with it).
-fn send_with_log(status: &Sender<Status>, mut s: Status, rig: &Rig, sent: &mut usize) {
-    let log = rig.log_lines();
-    let new = log.get(*sent..).unwrap_or_default();
-    let from = new.len().saturating_sub(STATUS_LOG);
-    s.log = new[from..].to_vec();
-    s.log_left_out = from;
-    if status.try_send(s).is_ok() {
-        *sent = log.len();
-    }
-}
-
-fn run_of(s: &Status, cfg: LiveConfig) -> view::Run {
-    view::Run {
-        speed: cfg.speed.to_string(),
-        lag_ms: (s.lag_ms * 10.0).round() / 10.0,
-        controller: match cfg.owner {
-            Owner::Builtin => "builtin",
-            Owner::External => "external",
-        },
-        requests: s.requests,
-        ended: s.ended,
-    }
-}
-
-fn status_of(
-    rig: &Rig,
-    gw: &Gateway,
-    at: SimTime,
-    start: Instant,
-    sim0: SimTime,
-    speed: Speed,
-    ended: bool,
-) -> Status {
-    let lag_ms = match speed {
-        Speed::Factor(x) => behind(start, sim0, at, x).as_secs_f64() * 1e3,
-        Speed::Max => 0.0,
-    };
-    Status {
-        simulated_s: at.as_secs_f64(),
-        lag_ms: if ended { 0.0 } else { lag_ms },
-        requests: gw.requests,
-        violations: rig.violations().len(),
-        watchdog_tripped: gw.watchdog_tripped(),
-        ended,
-        log: Vec::new(),
-        log_left_out: 0,
-    }
 }
 
 /// How far simulated time `at` is behind the wall clock at speed `x`, in wall time.
@@ -520,16 +650,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn speed_factors_outside_the_bounds_are_refused_and_the_pacing_never_panics() {
-        for x in [0.0, -1.0, 1e-30, 1e-4, 1000.5, f64::NAN, f64::INFINITY] {
-            let err = Speed::factor(x).expect_err("refused");
-            assert!(err.contains("speed factor"), "{err}");
-        }
-        assert_eq!(Speed::factor(MIN_SPEED), Ok(Speed::Factor(MIN_SPEED)));
-        assert_eq!(
-            Speed::Factor(1e-30).checked().map(|_| ()),
-            Speed::factor(1e-30).map(|_| ())
-        );
+    fn the_pacing_never_panics_at_any_factor() {
         assert_eq!(wall_secs(1e27), Duration::MAX);
         assert_eq!(wall_secs(f64::NAN), Duration::MAX);
         let start = Instant::now();

@@ -267,7 +267,7 @@ fn any_text_on_the_socket_gets_a_well_formed_reply() {
         };
         while let Ok(m) = rx.recv() {
             if let ToRig::Web(WebCall { command, reply }) = m {
-                let _ = reply.send(crate::command::parse(&command, shape).map(|_| ()));
+                let _ = reply.send(crate::command::parse(&command, shape).map(|_| None));
             }
         }
     });

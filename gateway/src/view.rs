@@ -50,6 +50,8 @@ pub struct Run {
     pub controller: &'static str,
     /// Requests served over Modbus TCP and TTK4145.
     pub requests: u64,
+    /// The page has paused the run: simulated time stands still.
+    pub paused: bool,
     /// The run has ended.
     pub ended: bool,
 }

@@ -6,12 +6,13 @@
 //! holds the others up), after the plot's history on connecting. What a browser sends is a
 //! command: `{"id": 1, "command": {"press": "cabin:3"}}`, at most
 //! [`MAX_COMMAND_BYTES`](crate::command::MAX_COMMAND_BYTES) of JSON text, handed to the rig
-//! thread and answered with `{"type": "reply", "id": 1, "ok": true}` or `"ok": false` and
-//! an `"error"` that names the key at fault. Nothing else is served: other paths are 404, and
+//! thread and answered with `{"type": "reply", "id": 1, "ok": true}` (and a `"note"` the page
+//! shows, if the rig thread has one) or `"ok": false` and an `"error"` that names the key at
+//! fault. Nothing else is served: other paths are 404, and
 //! every path is 403 to a `Host` that is not this server ([`Hosts`]).
 
 use crate::command::MAX_COMMAND_BYTES;
-use crate::live::{History, ToRig, WebCall};
+use crate::live::{History, ToRig, WebAnswer, WebCall};
 use axum::extract::ws::{Message, WebSocket, WebSocketUpgrade};
 use axum::extract::{Request, State};
 use axum::http::{header, HeaderMap, HeaderValue, StatusCode};
@@ -298,11 +299,13 @@ async fn serve_socket(mut socket: WebSocket, web: Web) {
     }
 }
 
-/// The answer to a command, as the page gets it.
-fn reply(id: Option<&Value>, result: Result<(), String>) -> String {
+/// The answer to a command, as the page gets it: with a `note` when the rig thread has one
+/// (a warning about the speed, a command that waits for the paused run to go on).
+fn reply(id: Option<&Value>, result: WebAnswer) -> String {
     let id = id.cloned().unwrap_or(Value::Null);
     match result {
-        Ok(()) => json!({"type": "reply", "id": id, "ok": true}),
+        Ok(None) => json!({"type": "reply", "id": id, "ok": true}),
+        Ok(Some(note)) => json!({"type": "reply", "id": id, "ok": true, "note": note}),
         Err(e) => json!({"type": "reply", "id": id, "ok": false, "error": e}),
     }
     .to_string()

@@ -36,7 +36,7 @@ fn start(toml: &str, ttk: bool) -> Running {
     };
     let loopback: SocketAddr = "127.0.0.1:0".parse().expect("an address");
     let make = move || {
-        Ok(Rig::new(sc)
+        Ok(Rig::new(sc.clone())
             .map_err(|e| e.to_string())?
             .with_external_controller())
     };
@@ -1101,7 +1101,9 @@ impl Bench {
             p.start_mm
         );
         let sc = Scenario::from_toml("random.toml", &toml).expect("a valid scenario");
-        let rig = Rig::new(sc).expect("a rig").with_external_controller();
+        let rig = Rig::new(sc.clone())
+            .expect("a rig")
+            .with_external_controller();
         let referee = Referee::new(&rig);
         Bench {
             rig,

@@ -1,6 +1,7 @@
 //! The gateway end to end: a live run served over Modbus TCP on a loopback port, driven by
 //! Rust clients (tokio-modbus) and by raw bytes; and the live view (`web`).
 
+mod controls;
 mod web;
 
 use asi_master::ProcessImage;
@@ -24,7 +25,7 @@ fn start(toml: &str, owner: Owner, speed: Speed) -> Running {
 fn start_with(toml: &str, owner: Owner, speed: Speed, ttk: bool) -> Running {
     let sc = Scenario::from_toml("test.toml", toml).expect("a valid scenario");
     let make = move || {
-        let rig = Rig::new(sc).map_err(|e| e.to_string())?;
+        let rig = Rig::new(sc.clone()).map_err(|e| e.to_string())?;
         Ok(match owner {
             Owner::External => rig.with_external_controller(),
             Owner::Builtin => rig,
@@ -52,7 +53,7 @@ fn a_speed_factor_out_of_bounds_is_refused_at_the_start_not_a_panic_later() {
     };
     let loopback: SocketAddr = "127.0.0.1:0".parse().expect("an address");
     match gateway::start(
-        move || Rig::new(sc).map_err(|e| e.to_string()),
+        move || Rig::new(sc.clone()).map_err(|e| e.to_string()),
         cfg,
         loopback,
         None,

@@ -57,17 +57,22 @@ function send(command, what) {
 function answered(msg) {
   const what = pending.get(msg.id) || "message";
   pending.delete(msg.id);
-  if (msg.ok) say(true, `${what}: done`);
+  if (msg.ok && msg.note) say("note", `${what}: ${msg.note}`);
+  else if (msg.ok) say(true, `${what}: done`);
   else say(false, `${what}: ${msg.error}`);
+  // A refused speed: the select shows the run's speed again.
+  if (!msg.ok && what.startsWith("speed")) showSpeed(shownSpeed, true);
 }
 
 let sayTimer = null;
+// `ok`: true (done), false (an error) or "note" (done, with something to read).
 function say(ok, text) {
   const m = $("message");
   m.textContent = text;
-  m.className = "message " + (ok ? "ok" : "error");
+  const kind = ok === "note" ? "note" : ok ? "ok" : "error";
+  m.className = "message " + kind;
   clearTimeout(sayTimer);
-  sayTimer = setTimeout(() => { m.className = "message"; }, ok ? 2500 : 10000);
+  sayTimer = setTimeout(() => { m.className = "message"; }, kind === "ok" ? 2500 : 10000);
 }
 
 // ----- controls --------------------------------------------------------------------------
@@ -76,7 +81,54 @@ function press(key) {
   send({ press: key }, `press ${key}`);
 }
 
+// The run's controls. The page sends the state it wants ({"pause": true}), not a toggle,
+// so that two clicks or two browsers never undo each other by surprise.
+let paused = false;
+let shownSpeed = null;
+let restartArmed = null;
+
+// Shows the run's speed `s` ("1", "0.5", "max") in the select, adding it if the command
+// line gave one the list lacks.
+function showSpeed(s, force) {
+  if (s === null || (s === shownSpeed && !force)) return;
+  shownSpeed = s;
+  const sel = $("speed-select");
+  if (![...sel.options].some((o) => o.value === s)) {
+    const o = document.createElement("option");
+    o.value = s;
+    o.textContent = `${s}×`;
+    sel.append(o);
+  }
+  sel.value = s;
+}
+
+function disarmRestart() {
+  clearTimeout(restartArmed);
+  restartArmed = null;
+  const b = $("btn-restart");
+  b.classList.remove("armed");
+  b.textContent = "⟲ restart";
+}
+
 function wireControls() {
+  $("btn-pause").onclick = () =>
+    send({ pause: !paused }, paused ? "resume" : "pause");
+  $("speed-select").onchange = (ev) => {
+    const v = ev.target.value;
+    send({ speed: v === "max" ? "max" : Number(v) }, `speed ${v}`);
+  };
+  // Restart discards the run so far: the first click arms it, a second within 4 s does it.
+  $("btn-restart").onclick = () => {
+    if (restartArmed === null) {
+      const b = $("btn-restart");
+      b.classList.add("armed");
+      b.textContent = "⟲ click again to restart";
+      restartArmed = setTimeout(disarmRestart, 4000);
+      return;
+    }
+    disarmRestart();
+    send({ restart: true }, "restart");
+  };
   document.body.addEventListener("click", (ev) => {
     const b = ev.target.closest("button");
     if (!b) return;
@@ -226,7 +278,12 @@ function render(v) {
   }
   drawShaft(v);
   text("sim-time", v.t_s.toFixed(2));
-  text("speed", v.run.speed);
+  paused = v.run.paused;
+  $("paused").hidden = !paused;
+  text("btn-pause", paused ? "▶ resume" : "‖ pause");
+  $("btn-pause").classList.toggle("armed", paused);
+  showSpeed(v.run.speed);
+  for (const id of ["btn-pause", "speed-select", "btn-restart"]) $(id).disabled = v.run.ended;
   text("lag", v.run.lag_ms.toFixed(1));
   text("controller-owner", v.run.controller);
   const viol = $("violations");
@@ -287,6 +344,8 @@ function render(v) {
   text("telegrams", v.bus.telegrams.join("\n"));
   text("log", v.log.join("\n"));
 
+  // A restart: simulated time starts again, and so does the plot.
+  if (history.length && v.t_s < history[history.length - 1][0]) history = [];
   history.push([v.t_s, l.position_mm, l.velocity_mm_s]);
   while (history.length && (history[0][0] < v.t_s - 30 || history.length > 2400)) history.shift();
   plot();

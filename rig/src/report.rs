@@ -54,13 +54,15 @@ pub struct Report {
 pub struct LiveReport {
     /// `builtin` or `external`.
     pub controller: String,
-    /// Simulated seconds per wall second asked for, or `max`.
+    /// Simulated seconds per wall second asked for, or `max`: at the end of the run (the
+    /// live view's page may change it; the log says when).
     pub speed: String,
     /// Modbus and TTK4145 requests served.
     pub requests: u64,
     /// Requests answered with an exception.
     pub exceptions: u64,
-    /// Client connections accepted.
+    /// Client connections accepted since the servers started (they outlive a restart from
+    /// the live view's page).
     pub connections: u64,
     /// Times the gateway's watchdog zeroed the output image.
     pub watchdog_trips: u64,

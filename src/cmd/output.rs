@@ -329,6 +329,21 @@ impl Outputs {
         }
     }
 
+    /// The file of `sink` itself, unbuffered, for a writer that starts it again (a live run's
+    /// trace when the run restarts); standard output has none.
+    pub fn file(&self, sink: &Sink) -> Result<File, String> {
+        let Sink::File(i) = sink else {
+            return Err("standard output is no file to start again".into());
+        };
+        let p = &self.pending[*i];
+        let file = match &p.target {
+            Target::Temp(t) => t.as_file(),
+            Target::Stream(f) => f,
+        };
+        file.try_clone()
+            .map_err(|e| format!("{} {}: {e}", p.flag, p.shown.display()))
+    }
+
     /// `true` once the reader of standard output has gone (`| head`): a command should stop
     /// and end quietly.
     pub fn stdout_gone(&self) -> bool {

@@ -10,11 +10,12 @@ use gateway::live::LiveConfig;
 use gateway::{Owner, Speed};
 use rig::Rig;
 use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
-use std::io::{IsTerminal, Write};
+use std::fs::File;
+use std::io::{BufWriter, IsTerminal, Seek, SeekFrom, Write};
 use std::net::SocketAddr;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::Arc;
+use std::sync::{Arc, Mutex, PoisonError};
 
 /// The arguments of `asi-lift serve`.
 #[derive(clap::Args)]
@@ -28,7 +29,8 @@ pub struct ServeArgs {
     pub listen: String,
     /// Simulated seconds per wall second (e.g. 1, 0.5, 10), or `max`: as fast as the machine
     /// can with the built-in controller; with an outside controller, paced by its requests
-    /// (each advances the simulation by `--step`).
+    /// (each advances the simulation by `--step`). The live view's page can change it while
+    /// the run goes on.
     #[arg(long, value_name = "X|max", default_value = "1")]
     pub speed: String,
     /// Who runs the lift: the built-in PLC program (clients may watch), or the Modbus client
@@ -43,8 +45,8 @@ pub struct ServeArgs {
     #[arg(long, value_name = "ADDR", num_args = 0..=1, default_missing_value = "127.0.0.1:15657")]
     pub ttk4145: Option<String>,
     /// Also serve the live view, a page that shows the rig as it runs and lets a browser press
-    /// its buttons and inject faults (the asi-lift guide, chapter "Live view in the browser"),
-    /// on this address
+    /// its buttons, inject faults, pause the run, change its speed and restart it (the
+    /// asi-lift guide, chapter "Live view in the browser"), on this address
     /// [default: off; 127.0.0.1:8080 when given without an address]. Only loopback unless an
     /// address is given here.
     #[arg(long, value_name = "ADDR", num_args = 0..=1, default_missing_value = "127.0.0.1:8080")]
@@ -79,7 +81,8 @@ pub struct ServeArgs {
     #[arg(long, value_enum, default_value_t = Format::Text)]
     pub format: Format,
     /// Write every bus transaction, one line each, to this file: JSON lines for a `.jsonl`
-    /// or `.json` file, readable text otherwise.
+    /// or `.json` file, readable text otherwise. A restart from the live view's page starts
+    /// it again: it holds the last run, as the report does.
     #[arg(long, value_name = "FILE")]
     pub trace: Option<PathBuf>,
     /// The trace's form, overriding the file name's.
@@ -185,15 +188,9 @@ pub fn run(args: ServeArgs) -> Result<u8, String> {
         ControllerArg::Builtin => Owner::Builtin,
         ControllerArg::External => Owner::External,
     };
-    if let (Owner::External, Speed::Factor(x)) = (owner, speed) {
-        if x > 1.0 {
-            // An outside controller runs on the wall clock: its reaction times shrink by the
-            // factor in simulated time, and one written for real time misses floors (the
-            // Python example at speed 2 leaves calls unserved, the cabin stopped between
-            // floors).
-            eprintln!(
-                "asi-lift: warning: --speed {x} runs the lift {x} times faster than the outside controller's clock: a controller written for real time may react too late (stop past a floor, miss a call); --speed 1 keeps real time, --speed max paces the simulation by its requests (lockstep)"
-            );
+    if owner == Owner::External {
+        if let Some(w) = speed.outside_controller_warning() {
+            eprintln!("asi-lift: warning: --{w}");
         }
     }
 
@@ -217,17 +214,22 @@ pub fn run(args: ServeArgs) -> Result<u8, String> {
         .map(|p| outs.add("--trace", p))
         .transpose()?;
     let trace_out = match (&trace, &trace_sink) {
-        (Some(path), Some(sink)) => Some((outs.writer(sink)?, trace_form(trace_format, path))),
+        (Some(path), Some(sink)) => Some((
+            RunTrace::new(outs.file(sink)?, path),
+            trace_form(trace_format, path),
+        )),
         _ => None,
     };
 
+    // Called again for each restart from the live view's page: the same scenario and seed,
+    // the same controller, and the trace started again.
     let make_rig = move || {
-        let mut rig = Rig::new(sc).map_err(|e| e.to_string())?;
+        let mut rig = Rig::new(sc.clone()).map_err(|e| e.to_string())?;
         if owner == Owner::External {
             rig = rig.with_external_controller();
         }
-        if let Some((out, form)) = trace_out {
-            rig.trace_to(out, form);
+        if let Some((trace, form)) = &trace_out {
+            rig.trace_to(trace.next_run()?, *form);
         }
         Ok(rig)
     };
@@ -296,7 +298,7 @@ pub fn run(args: ServeArgs) -> Result<u8, String> {
         }
         if terminal {
             eprint!(
-                "\r  simulated {:.1} s, {} requests, lag {:.1} ms, {} violations{}   ",
+                "\r  simulated {:.1} s, {} requests, lag {:.1} ms, {} violations{}{}   ",
                 s.simulated_s,
                 s.requests,
                 s.lag_ms,
@@ -305,7 +307,8 @@ pub fn run(args: ServeArgs) -> Result<u8, String> {
                     ", WATCHDOG: outputs zero"
                 } else {
                     ""
-                }
+                },
+                if s.paused { ", paused by the page" } else { "" }
             );
             let _ = std::io::stderr().flush();
         }
@@ -338,6 +341,76 @@ pub fn run(args: ServeArgs) -> Result<u8, String> {
     } else {
         EXIT_VIOLATIONS
     })
+}
+
+/// A live run's trace file, which holds one run from its power-on, as the report does: the
+/// last one, when the live view's page restarts the run. Each run writes through a writer of
+/// its own; the next run's truncates the file, and from then on the earlier run's writer
+/// (dropped, and flushed, only after the fresh rig has replaced it) writes nothing. A pipe or
+/// a device cannot be truncated: there the runs follow one another.
+struct RunTrace {
+    shared: Arc<Mutex<TraceShared>>,
+    shown: PathBuf,
+}
+
+struct TraceShared {
+    file: File,
+    /// The run whose writer writes; the others' bytes are dropped.
+    run: u64,
+}
+
+/// One run's writer of a [`RunTrace`].
+struct RunTraceWriter {
+    shared: Arc<Mutex<TraceShared>>,
+    run: u64,
+}
+
+impl RunTrace {
+    fn new(file: File, path: &Path) -> RunTrace {
+        RunTrace {
+            shared: Arc::new(Mutex::new(TraceShared { file, run: 0 })),
+            shown: path.to_path_buf(),
+        }
+    }
+
+    /// The writer of the next run, the file emptied for it (after the first).
+    fn next_run(&self) -> Result<Box<dyn Write>, String> {
+        let mut s = self.shared.lock().unwrap_or_else(PoisonError::into_inner);
+        if s.run > 0 && s.file.metadata().is_ok_and(|m| m.is_file()) {
+            s.file
+                .set_len(0)
+                .and_then(|()| s.file.seek(SeekFrom::Start(0)).map(|_| ()))
+                .map_err(|e| {
+                    format!(
+                        "--trace {}: cannot start it again: {e}",
+                        self.shown.display()
+                    )
+                })?;
+        }
+        s.run += 1;
+        Ok(Box::new(BufWriter::new(RunTraceWriter {
+            shared: Arc::clone(&self.shared),
+            run: s.run,
+        })))
+    }
+}
+
+impl Write for RunTraceWriter {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        let mut s = self.shared.lock().unwrap_or_else(PoisonError::into_inner);
+        if s.run != self.run {
+            return Ok(buf.len());
+        }
+        s.file.write(buf)
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        let mut s = self.shared.lock().unwrap_or_else(PoisonError::into_inner);
+        if s.run != self.run {
+            return Ok(());
+        }
+        s.file.flush()
+    }
 }
 
 /// `--speed`: a factor within the live mode's bounds, or `max`.

@@ -24,7 +24,7 @@ fn start(speed: Speed) -> Running {
 fn start_with(speed: Speed, options: gateway::Options) -> Running {
     let toml = "name = \"web\"\nduration = \"10min\"\n[lift]\nstart_mm = 0.0\n";
     let sc = Scenario::from_toml("web.toml", toml).expect("a valid scenario");
-    let make = move || Rig::new(sc).map_err(|e| e.to_string());
+    let make = move || Rig::new(sc.clone()).map_err(|e| e.to_string());
     let cfg = LiveConfig {
         speed,
         owner: Owner::Builtin,
@@ -486,4 +486,72 @@ fn a_foreign_host_name_is_refused_on_every_route_and_the_own_names_are_served() 
     drop(s);
     running.stop();
     running.wait();
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 1)]
+async fn the_run_controls_work_over_the_socket() {
+    let running = start(Speed::Factor(1.0));
+    let addr = running.http_addr().expect("the live view's address");
+    let (_, page) = tokio::task::spawn_blocking(move || get(addr, "/"))
+        .await
+        .expect("the page");
+    for id in ["btn-pause", "speed-select", "btn-restart", "paused"] {
+        assert!(
+            page.contains(&format!("id=\"{id}\"")),
+            "no #{id} on the page"
+        );
+    }
+    let mut ws = connect(addr).await;
+    while next_of(&mut ws, "view").await["t_s"].as_f64() < Some(0.2) {}
+    let r = command(&mut ws, 1, json!({"pause": true})).await;
+    assert_eq!(r, json!({"type": "reply", "id": 1, "ok": true}));
+    let mut v = next_of(&mut ws, "view").await;
+    while v["run"]["paused"] != true {
+        v = next_of(&mut ws, "view").await;
+    }
+    let paused_at = v["t_s"].clone();
+    let t0 = Instant::now();
+    while t0.elapsed() < Duration::from_millis(400) {
+        assert_eq!(next_of(&mut ws, "view").await["t_s"], paused_at);
+    }
+    // A press while paused is taken, with a note that it waits for the resume.
+    let r = command(&mut ws, 2, json!({"press": "cabin:2"})).await;
+    assert_eq!(r["ok"], true, "{r}");
+    let note = r["note"].as_str().expect("a note");
+    assert!(note.contains("when the run resumes"), "{note}");
+    let r = command(&mut ws, 3, json!({"speed": 0})).await;
+    assert_eq!(r["ok"], false, "{r}");
+    assert!(r["error"]
+        .as_str()
+        .expect("an error")
+        .starts_with("speed: 0: expected a factor"));
+    assert!(r.get("note").is_none(), "{r}");
+    let r = command(&mut ws, 4, json!({"restart": true})).await;
+    assert_eq!(r, json!({"type": "reply", "id": 4, "ok": true}));
+    while next_of(&mut ws, "view").await["t_s"] != 0.0 {}
+    let r = command(&mut ws, 5, json!({"speed": 10})).await;
+    assert_eq!(r, json!({"type": "reply", "id": 5, "ok": true}));
+    let r = command(&mut ws, 6, json!({"pause": false})).await;
+    assert_eq!(r["ok"], true, "{r}");
+    let t0 = Instant::now();
+    loop {
+        let v = next_of(&mut ws, "view").await;
+        assert_eq!(v["run"]["speed"], "10");
+        if v["t_s"].as_f64() > Some(1.0) {
+            assert_eq!(v["run"]["paused"], false);
+            break;
+        }
+        assert!(
+            t0.elapsed() < Duration::from_secs(5),
+            "the run stands still"
+        );
+    }
+    running.stop();
+    let r = tokio::task::spawn_blocking(move || running.wait())
+        .await
+        .expect("the run ends");
+    assert!(r
+        .log
+        .iter()
+        .any(|l| l.who == "web" && l.text.starts_with("restarted by the page")));
 }
