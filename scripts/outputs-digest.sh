@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # Prints one line per output of the asi-lift command, `sha256  name`, for a fixed set of runs:
 # every scenario of scenarios/ (report as text and JSON, trace as text and JSON lines), the VCD
-# and CSV of the demo's first 10 s, their decoding, the plots of the demo and of the safe
-# drive, every stand guide (text and JSON), a live run at full speed (`serve`), `encode`,
+# and CSV of the demo's first 10 s, their decoding, the plots of the demo (SVG and PNG) and of
+# the safe drive, every stand guide (text and JSON), a live run at full speed (`serve`), `encode`,
 # `timing` of three buses (text, JSON, SVG) and a short campaign. Comparing the lists of two builds shows whether a change
 # altered any output:
 #
@@ -36,8 +36,9 @@ for f in demo.vcd demo.csv demo10.txt demo-late.vcd; do digest "$f" "$f"; done
 "$bin" decode "demo-late.vcd" --signal rig.bus.line_voltage > "decode-late.txt" 2>&1 || true
 for f in decode-csv.txt decode-vcd.jsonl decode-late.txt; do digest "$f" "$f"; done
 "$bin" run --until 20s --plot "demo.svg" --report /dev/null >/dev/null 2>&1 || true
+"$bin" run --until 20s --plot "demo.png" --report /dev/null >/dev/null 2>&1 || true
 "$bin" run scenarios/safe-drive-runaway.toml --until 35s --plot "safe-drive.svg" --report /dev/null >/dev/null 2>&1 || true
-for f in demo.svg safe-drive.svg; do digest "$f" "$f"; done
+for f in demo.svg demo.png safe-drive.svg; do digest "$f" "$f"; done
 for sc in scenarios/stand/*.toml; do
   name="stand-$(basename "$sc" .toml)"
   "$bin" stand "$sc" > "$name.txt" 2>&1 || true

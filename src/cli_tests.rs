@@ -1091,6 +1091,62 @@ mod command {
         let _ = std::fs::remove_dir_all(&dir);
     }
 
+    /// `--plot x.png` draws the same picture as PNG: a real PNG (it decodes) of the plot's
+    /// size, its text drawn (the title's rows are not blank), and the same bytes for the same
+    /// run, whatever fonts the machine has.
+    #[test]
+    fn a_png_plot_decodes_to_the_plots_size_and_is_the_same_for_the_same_run() {
+        let dir = temp("plot-png");
+        let path = |n: &str| dir.join(n).to_string_lossy().to_string();
+        let (a, b) = (path("a.png"), path("b.PNG"));
+        for png in [&a, &b] {
+            let args = ["--until", "2s", "--plot", png, "--report", "/dev/null"];
+            assert_eq!(run_cli(&args), Ok(0));
+        }
+        let bytes = std::fs::read(&a).expect("the PNG");
+        assert!(
+            bytes.starts_with(b"\x89PNG\r\n\x1a\n"),
+            "{:?}",
+            &bytes[..bytes.len().min(16)]
+        );
+        assert!(
+            bytes == std::fs::read(&b).expect("the PNG"),
+            "two runs of one scenario, two PNGs"
+        );
+        let mut reader = png::Decoder::new(std::io::Cursor::new(&bytes))
+            .read_info()
+            .expect("the PNG's header");
+        let mut rgb = vec![0; reader.output_buffer_size().expect("a size")];
+        let frame = reader.next_frame(&mut rgb).expect("the PNG's pixels");
+        assert_eq!((frame.width, frame.height), asi_lift::cmd::plot::SIZE);
+        assert_eq!(
+            (frame.color_type, frame.bit_depth),
+            (png::ColorType::Rgb, png::BitDepth::Eight)
+        );
+        // The title, in black, is all that the top 30 rows hold.
+        let title = &rgb[..frame.line_size * 30];
+        assert!(title.iter().any(|&v| v < 64), "no title in the PNG");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    /// The SVG is the same, byte for byte, as before the plot could be a PNG: plotters lays
+    /// it out by its own estimate of the text's size, not by the PNG's font (src/cmd/plot.rs).
+    /// A deliberate change of the drawing changes the length and the digest here.
+    #[test]
+    fn the_svg_plot_is_laid_out_as_before_the_png() {
+        let dir = temp("plot-svg-layout");
+        let svg = dir.join("one.svg").to_string_lossy().to_string();
+        let args = ["--until", "1s", "--plot", &svg, "--report", "/dev/null"];
+        assert_eq!(run_cli(&args), Ok(0));
+        let bytes = std::fs::read(&svg).expect("the SVG");
+        // FNV-1a, 64 bits.
+        let digest = bytes.iter().fold(0xcbf2_9ce4_8422_2325_u64, |h, &b| {
+            (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
+        });
+        assert_eq!((bytes.len(), digest), (79_792, 0x2e8d_7805_770c_09ce));
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
     #[test]
     fn the_timing_svg_is_not_overwritten_without_force() {
         let path = std::env::temp_dir().join(format!("asi-lift-timing-{}.svg", std::process::id()));
@@ -1239,7 +1295,7 @@ mod output {
 
 /// The plot's sampling ([`asi_lift::cmd::plot`]).
 mod plot {
-    use asi_lift::cmd::plot::{button_floor, sample_step, MIN_STEP};
+    use asi_lift::cmd::plot::{button_floor, format_of, sample_step, Format, MIN_STEP};
     use asi_phy::SimDuration;
 
     #[test]
@@ -1257,6 +1313,29 @@ mod plot {
         assert_eq!(button_floor("cabin:3"), Some(3));
         assert_eq!(button_floor("hall-down:4"), Some(4));
         assert_eq!(button_floor("cabin"), None);
+    }
+
+    /// The plot's format is its file's extension, in any case; no extension is SVG (`-`,
+    /// `/dev/null`); another one, or a bare dot, is refused naming both formats.
+    #[test]
+    fn the_plots_format_is_its_files_extension() {
+        let of = |p: &str| format_of(std::path::Path::new(p));
+        for svg in ["run.svg", "RUN.SVG", "-", "/dev/null", "plots/run"] {
+            assert_eq!(of(svg), Ok(Format::Svg), "{svg}");
+        }
+        for png in ["run.png", "run.Png", "docs/demo-plot.png"] {
+            assert_eq!(of(png), Ok(Format::Png), "{png}");
+        }
+        for other in ["run.jpg", "run.", "run.png.gz", "run.svgz"] {
+            let e = of(other).expect_err(other);
+            assert!(
+                e.contains("--plot")
+                    && e.contains(other)
+                    && e.contains(".svg")
+                    && e.contains(".png"),
+                "{e}"
+            );
+        }
     }
 }
 
@@ -1693,21 +1772,26 @@ fn two_outputs_may_share_a_device_but_not_a_fifo() {
     assert!(reader.join().expect("the reader").is_empty());
 }
 
-/// `--plot run.png` is refused before the run, naming --plot and the format drawn, rather than
-/// writing SVG under a PNG name; `.svg` and a name without an extension are drawn.
+/// `--plot run.jpg` is refused before the run, naming --plot, the file and the formats drawn,
+/// rather than writing SVG or PNG under a name that promises another format; so is a name
+/// ending in a bare dot. `.svg` (in any case) and a name without an extension are drawn as SVG.
 #[test]
-fn a_plot_with_another_extension_than_svg_is_refused() {
+fn a_plot_with_another_extension_than_svg_or_png_is_refused() {
     let d = temp();
-    let png = d.path().join("run.png");
-    let err = fails(
-        asi_lift()
-            .args(["run", "--until", "1s", "--plot"])
-            .arg(&png),
-    );
-    assert!(
-        err.contains("--plot") && err.contains("run.png") && err.contains(".svg"),
-        "{err}"
-    );
+    for name in ["run.jpg", "run."] {
+        let err = fails(
+            asi_lift()
+                .args(["run", "--until", "1s", "--plot"])
+                .arg(d.path().join(name)),
+        );
+        assert!(
+            err.contains("--plot")
+                && err.contains(name)
+                && err.contains(".svg")
+                && err.contains(".png"),
+            "{err}"
+        );
+    }
     assert!(files_in(d.path()).is_empty(), "{:?}", files_in(d.path()));
     let svg = d.path().join("run.SVG");
     let out = asi_lift()

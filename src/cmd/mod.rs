@@ -23,8 +23,13 @@ pub const EXIT_VIOLATIONS: u8 = 3;
 
 /// Writes `text` to standard output; a reader that has gone (`| head`) is no error.
 pub fn print_out(text: &str) -> Result<(), String> {
+    write_out(text.as_bytes())
+}
+
+/// Writes `data` to standard output; a reader that has gone (`| head`) is no error.
+pub fn write_out(data: &[u8]) -> Result<(), String> {
     let mut out = std::io::stdout().lock();
-    match out.write_all(text.as_bytes()).and_then(|()| out.flush()) {
+    match out.write_all(data).and_then(|()| out.flush()) {
         Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => {
             Err(format!("standard output: {e}"))
         }

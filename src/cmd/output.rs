@@ -350,14 +350,16 @@ impl Outputs {
         self.stdout_gone.load(Ordering::Relaxed)
     }
 
-    /// Writes all of `text` to `sink` (standard output: a reader that has gone is no error).
-    pub fn write_all(&self, sink: &Sink, text: &str) -> Result<(), String> {
+    /// Writes all of `data` (text, or a picture's bytes) to `sink` (standard output: a reader
+    /// that has gone is no error).
+    pub fn write_all(&self, sink: &Sink, data: impl AsRef<[u8]>) -> Result<(), String> {
+        let data = data.as_ref();
         match sink {
-            Sink::Stdout => super::print_out(text),
+            Sink::Stdout => super::write_out(data),
             Sink::File(i) => {
                 let p = &self.pending[*i];
                 let mut w = self.writer(sink)?;
-                w.write_all(text.as_bytes())
+                w.write_all(data)
                     .and_then(|()| w.flush())
                     .map_err(|e| format!("{} {}: {e}", p.flag, p.shown.display()))
             }

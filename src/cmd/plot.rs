@@ -1,4 +1,4 @@
-//! `asi-lift run --plot FILE.svg`: a picture of the run drawn with `plotters`.
+//! `asi-lift run --plot FILE.svg|FILE.png`: a picture of the run drawn with `plotters`.
 //!
 //! Three panels on one time axis:
 //! 1. the cabin position with the floor levels, the vanes' long sensor tracks, the overtravel
@@ -13,17 +13,25 @@
 //! fixed simulated step ([`sample_step`]) and reading the plant and the bus between moments;
 //! the stepping only pauses the simulation, so the run (and its report) is the same as
 //! without `--plot`. The drawing depends on nothing but the samples and the report, so the
-//! same scenario gives a byte-identical SVG.
+//! same scenario gives a byte-identical SVG, or PNG: the PNG's text is set in a font built
+//! into the command (`FONT`), not in one found on the machine.
+//!
+//! One drawing (`draw_on`) serves both formats, on plotters' SVG backend or on its bitmap
+//! backend, whose pixels the `png` crate encodes.
 
 use asi_phy::{SimDuration, SimTime};
 use lift_model::LiftConfig;
 use plotters::coord::Shift;
 use plotters::prelude::*;
+// By path only: its traits in scope would make the colours' `stroke_width` ambiguous.
+use plotters_backend as backend;
 use rig::{Report, Rig};
 use safety::drive::Function;
 
-/// The width and height of the picture, pixels.
-const SIZE: (u32, u32) = (1400, 1000);
+/// The width and height of the picture, pixels, in the SVG and the PNG alike. plotters has no
+/// scale factor: a sharper PNG at twice the size would need every size in the drawing (fonts,
+/// margins, strokes, the legend's) doubled, and at 1400 × 1000 the text is readable as it is.
+pub const SIZE: (u32, u32) = (1400, 1000);
 /// The window of the bus error rate.
 const BUS_WINDOW_S: f64 = 1.0;
 /// The finest sampling step; longer runs get a coarser one (see [`sample_step`]).
@@ -184,32 +192,240 @@ pub fn button_floor(button: &str) -> Option<u8> {
     button.rsplit_once(':')?.1.parse().ok()
 }
 
-/// Refuses a `--plot` file whose extension names another image format than SVG (`run.png`):
-/// the plot is drawn as SVG only (plotters' bitmap backend would pull in the image and PNG
-/// encoders), and an SVG under a `.png` name is a file no viewer opens. A name without an
-/// extension (`/dev/null`, `-`) gets SVG.
-pub fn check_extension(path: &std::path::Path) -> Result<(), String> {
+/// The formats the plot is drawn in.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Format {
+    /// SVG, text that a browser or an editor shows at any size.
+    Svg,
+    /// PNG, pixels: for a README, a chat or a report that takes no SVG.
+    Png,
+}
+
+/// The format of a `--plot` file, by its extension (in any case): `.svg` or `.png`. A name
+/// without an extension (`/dev/null`, `-`) gets SVG. Another extension (`run.jpg`) is
+/// refused, rather than writing SVG or PNG under a name that promises something else.
+pub fn format_of(path: &std::path::Path) -> Result<Format, String> {
     match path.extension().and_then(|e| e.to_str()) {
-        None => Ok(()),
-        Some(e) if e.eq_ignore_ascii_case("svg") => Ok(()),
+        None => Ok(Format::Svg),
+        Some(e) if e.eq_ignore_ascii_case("svg") => Ok(Format::Svg),
+        Some(e) if e.eq_ignore_ascii_case("png") => Ok(Format::Png),
         Some(_) => Err(format!(
-            "--plot {}: the plot is drawn as SVG only; name the file .svg (e.g. run.svg), \
-             then convert it if need be (rsvg-convert -o run.png run.svg)",
+            "--plot {}: the plot is drawn as SVG or PNG; name the file .svg or .png \
+             (e.g. run.svg, run.png)",
             path.display()
         )),
     }
 }
 
-/// Draws the run as SVG.
-pub fn draw(samples: &Samples, rep: &Report) -> Result<String, String> {
-    let mut svg = String::new();
-    {
-        let root = SVGBackend::with_string(&mut svg, SIZE).into_drawing_area();
-        draw_on(&root, samples, rep).map_err(|e| format!("drawing the plot: {e}"))?;
-        root.present()
-            .map_err(|e| format!("drawing the plot: {e}"))?;
+/// Draws the run in `format`: the file's bytes.
+pub fn draw(samples: &Samples, rep: &Report, format: Format) -> Result<Vec<u8>, String> {
+    let drawing = |e: &dyn std::fmt::Display| format!("drawing the plot: {e}");
+    match format {
+        Format::Svg => {
+            let mut svg = String::new();
+            {
+                let root = SVGBackend::with_string(&mut svg, SIZE).into_drawing_area();
+                draw_on(&root, samples, rep).map_err(|e| drawing(&e))?;
+                root.present().map_err(|e| drawing(&e))?;
+            }
+            Ok(svg.into_bytes())
+        }
+        Format::Png => {
+            let font = ab_glyph::FontRef::try_from_slice(FONT)
+                .map_err(|e| format!("the plot's built-in font: {e}"))?;
+            let (w, h) = SIZE;
+            let mut rgb = vec![0; w as usize * h as usize * 3];
+            {
+                let bitmap = BitMapBackend::with_buffer(&mut rgb, SIZE);
+                let root = Pixels { bitmap, font }.into_drawing_area();
+                draw_on(&root, samples, rep).map_err(|e| drawing(&e))?;
+                root.present().map_err(|e| drawing(&e))?;
+            }
+            encode_png(&rgb, SIZE).map_err(|e| format!("encoding the plot as PNG: {e}"))
+        }
     }
-    Ok(svg)
+}
+
+/// The font of the PNG's text: DejaVu Sans, cut down to the characters a plot draws
+/// (src/cmd/fonts/README.md). Built into the command, so that the PNG is the same on every
+/// machine, whatever fonts it has.
+const FONT: &[u8] = include_bytes!("fonts/DejaVuSans-subset.ttf");
+
+/// `rgb` (3 bytes a pixel, row by row) as a PNG file.
+fn encode_png(rgb: &[u8], (w, h): (u32, u32)) -> Result<Vec<u8>, png::EncodingError> {
+    let mut out = Vec::new();
+    let mut encoder = png::Encoder::new(&mut out, w, h);
+    encoder.set_color(png::ColorType::Rgb);
+    encoder.set_depth(png::BitDepth::Eight);
+    let mut writer = encoder.write_header()?;
+    writer.write_image_data(rgb)?;
+    writer.finish()?;
+    Ok(out)
+}
+
+/// plotters' bitmap backend, with the text set in [`FONT`] as the SVG's viewer sets it.
+///
+/// plotters' own text on a bitmap (its `ab_glyph` feature) places each glyph without its
+/// left side bearing, which spaces the letters unevenly ("fl oor"), and once enabled it
+/// measures the text by the font on every backend, which moves the SVG's titles and labels
+/// by a pixel. Here plotters lays out both pictures alike, by its estimate of the text's
+/// size without a font, and only the PNG's text is drawn by the font: in every family and
+/// style the drawing names (all `sans-serif`, normal), at the SVG's size (`font-size` =
+/// plotters' size / 1.24), anchored as the SVG anchors it.
+struct Pixels<'a> {
+    bitmap: BitMapBackend<'a>,
+    font: ab_glyph::FontRef<'static>,
+}
+
+impl DrawingBackend for Pixels<'_> {
+    type ErrorType = <BitMapBackend<'static> as DrawingBackend>::ErrorType;
+
+    fn get_size(&self) -> (u32, u32) {
+        self.bitmap.get_size()
+    }
+
+    fn ensure_prepared(&mut self) -> Result<(), backend::DrawingErrorKind<Self::ErrorType>> {
+        self.bitmap.ensure_prepared()
+    }
+
+    fn present(&mut self) -> Result<(), backend::DrawingErrorKind<Self::ErrorType>> {
+        self.bitmap.present()
+    }
+
+    fn draw_pixel(
+        &mut self,
+        point: backend::BackendCoord,
+        color: backend::BackendColor,
+    ) -> Result<(), backend::DrawingErrorKind<Self::ErrorType>> {
+        self.bitmap.draw_pixel(point, color)
+    }
+
+    fn draw_line<S: backend::BackendStyle>(
+        &mut self,
+        from: backend::BackendCoord,
+        to: backend::BackendCoord,
+        style: &S,
+    ) -> Result<(), backend::DrawingErrorKind<Self::ErrorType>> {
+        self.bitmap.draw_line(from, to, style)
+    }
+
+    fn draw_rect<S: backend::BackendStyle>(
+        &mut self,
+        upper_left: backend::BackendCoord,
+        bottom_right: backend::BackendCoord,
+        style: &S,
+        fill: bool,
+    ) -> Result<(), backend::DrawingErrorKind<Self::ErrorType>> {
+        self.bitmap.draw_rect(upper_left, bottom_right, style, fill)
+    }
+
+    fn draw_path<S: backend::BackendStyle, I: IntoIterator<Item = backend::BackendCoord>>(
+        &mut self,
+        path: I,
+        style: &S,
+    ) -> Result<(), backend::DrawingErrorKind<Self::ErrorType>> {
+        self.bitmap.draw_path(path, style)
+    }
+
+    fn draw_circle<S: backend::BackendStyle>(
+        &mut self,
+        center: backend::BackendCoord,
+        radius: u32,
+        style: &S,
+        fill: bool,
+    ) -> Result<(), backend::DrawingErrorKind<Self::ErrorType>> {
+        self.bitmap.draw_circle(center, radius, style, fill)
+    }
+
+    fn fill_polygon<S: backend::BackendStyle, I: IntoIterator<Item = backend::BackendCoord>>(
+        &mut self,
+        vert: I,
+        style: &S,
+    ) -> Result<(), backend::DrawingErrorKind<Self::ErrorType>> {
+        self.bitmap.fill_polygon(vert, style)
+    }
+
+    fn blit_bitmap(
+        &mut self,
+        pos: backend::BackendCoord,
+        size: (u32, u32),
+        src: &[u8],
+    ) -> Result<(), backend::DrawingErrorKind<Self::ErrorType>> {
+        self.bitmap.blit_bitmap(pos, size, src)
+    }
+
+    fn draw_text<S: backend::BackendTextStyle>(
+        &mut self,
+        text: &str,
+        style: &S,
+        pos: backend::BackendCoord,
+    ) -> Result<(), backend::DrawingErrorKind<Self::ErrorType>> {
+        use ab_glyph::{Font, ScaleFont};
+        use backend::text_anchor::{HPos, VPos};
+        let color = style.color();
+        if color.alpha == 0.0 {
+            return Ok(());
+        }
+        let font = &self.font;
+        let units_per_em = font.units_per_em().unwrap_or(2048.0);
+        let em = (style.size() / 1.24) as f32;
+        let scaled = font.as_scaled(em * font.height_unscaled() / units_per_em);
+        // The pen along the baseline, kerned; the glyphs relative to the text's start.
+        let mut glyphs = Vec::with_capacity(text.len());
+        let mut pen = 0.0_f32;
+        let mut previous = None;
+        for c in text.chars() {
+            let id = scaled.glyph_id(c);
+            if let Some(p) = previous {
+                pen += scaled.kern(p, id);
+            }
+            glyphs.push((id, pen));
+            pen += scaled.h_advance(id);
+            previous = Some(id);
+        }
+        let dx = match style.anchor().h_pos {
+            HPos::Left => 0.0,
+            HPos::Center => -pen / 2.0,
+            HPos::Right => -pen,
+        };
+        // The baseline below the anchor, as the SVG's `dy`: 0.76 em under a top anchor,
+        // half an ex (the height of the x) under a centre, half an ex over a bottom.
+        let ex = font.outline(font.glyph_id('x')).map_or(0.5 * em, |o| {
+            o.bounds.min.y.max(o.bounds.max.y) / units_per_em * em
+        });
+        let baseline = match style.anchor().v_pos {
+            VPos::Top => 0.76 * em,
+            VPos::Center => 0.5 * ex,
+            VPos::Bottom => -0.5 * ex,
+        };
+        // Rotated about the anchor, as the SVG's `rotate(…, x, y)`.
+        let turn = style.transform();
+        for (id, x) in glyphs {
+            let glyph =
+                id.with_scale_and_position(scaled.scale(), ab_glyph::point(dx + x, baseline));
+            let Some(outline) = scaled.outline_glyph(glyph) else {
+                continue;
+            };
+            let bounds = outline.px_bounds();
+            // Whole pixels: px_bounds' corner is rounded outwards.
+            let (left, top) = (bounds.min.x as i32, bounds.min.y as i32);
+            let mut result = Ok(());
+            outline.draw(|gx, gy, coverage| {
+                let coverage = f64::from(coverage.clamp(0.0, 1.0));
+                if coverage == 0.0 || result.is_err() {
+                    return;
+                }
+                let (tx, ty) = turn.transform(left + gx as i32, top + gy as i32);
+                let pixel = backend::BackendColor {
+                    alpha: color.alpha * coverage,
+                    rgb: color.rgb,
+                };
+                result = self.bitmap.draw_pixel((pos.0 + tx, pos.1 + ty), pixel);
+            });
+            result?;
+        }
+        Ok(())
+    }
 }
 
 type DrawResult = Result<(), Box<dyn std::error::Error>>;
@@ -225,7 +441,8 @@ const WAIT: RGBColor = RGBColor(220, 170, 220);
 const SERVED: RGBColor = RGBColor(0, 150, 150);
 const BUS: RGBColor = RGBColor(100, 60, 20);
 
-type Area<'a> = DrawingArea<SVGBackend<'a>, Shift>;
+/// A part of the picture, on either backend.
+type Area<DB> = DrawingArea<DB, Shift>;
 
 /// How a legend entry shows its series.
 enum Swatch {
@@ -246,7 +463,10 @@ enum Swatch {
 }
 
 /// Draws a legend in its own column next to a panel, so that it never hides the data.
-fn legend(area: &Area<'_>, entries: &[(Swatch, String)]) -> DrawResult {
+fn legend<DB: DrawingBackend>(area: &Area<DB>, entries: &[(Swatch, String)]) -> DrawResult
+where
+    DB::ErrorType: 'static,
+{
     // The panels' captions take the first ~35 px.
     let mut y = 52;
     for (swatch, text) in entries {
@@ -296,7 +516,11 @@ fn legend(area: &Area<'_>, entries: &[(Swatch, String)]) -> DrawResult {
 /// The width of the legend column, pixels.
 const LEGEND_W: u32 = 300;
 
-fn draw_on(root: &Area<'_>, s: &Samples, rep: &Report) -> DrawResult {
+/// The whole picture, on either backend: the title, the panels and their legends.
+fn draw_on<DB: DrawingBackend>(root: &Area<DB>, s: &Samples, rep: &Report) -> DrawResult
+where
+    DB::ErrorType: 'static,
+{
     root.fill(&WHITE)?;
     let title = format!(
         "asi-lift run: scenario \"{}\", seed {}, {:.1} s simulated",
@@ -335,7 +559,7 @@ fn tick(v: &f64) -> String {
 
 /// A panel's chart with the common time axis: the same label areas in every panel, so that
 /// their time axes line up.
-fn panel<'a, 'b>(area: &'a Area<'b>, caption: &str) -> ChartBuilder<'a, 'b, SVGBackend<'b>> {
+fn panel<'a, DB: DrawingBackend>(area: &'a Area<DB>, caption: &str) -> ChartBuilder<'a, 'a, DB> {
     let mut b = ChartBuilder::on(area);
     b.margin(10)
         .caption(caption, ("sans-serif", 18))
@@ -346,13 +570,16 @@ fn panel<'a, 'b>(area: &'a Area<'b>, caption: &str) -> ChartBuilder<'a, 'b, SVGB
 }
 
 /// Panel 1: cabin position, floors, vanes, overtravel, calls.
-fn position_panel(
-    area: &Area<'_>,
-    key: &Area<'_>,
+fn position_panel<DB: DrawingBackend>(
+    area: &Area<DB>,
+    key: &Area<DB>,
     s: &Samples,
     rep: &Report,
     t_end: f64,
-) -> DrawResult {
+) -> DrawResult
+where
+    DB::ErrorType: 'static,
+{
     let cfg = &s.config;
     let top_level = f64::from(cfg.floors - 1) * cfg.floor_pitch_mm;
     let trip_bottom = -cfg.trip_beyond_floor_mm;
@@ -468,13 +695,16 @@ fn position_panel(
 }
 
 /// Panel 2: velocity, K1, safety trips.
-fn velocity_panel(
-    area: &Area<'_>,
-    key: &Area<'_>,
+fn velocity_panel<DB: DrawingBackend>(
+    area: &Area<DB>,
+    key: &Area<DB>,
     s: &Samples,
     rep: &Report,
     t_end: f64,
-) -> DrawResult {
+) -> DrawResult
+where
+    DB::ErrorType: 'static,
+{
     let vmax = s
         .samples
         .iter()
@@ -563,13 +793,16 @@ fn spans(s: &Samples, on: impl Fn(&Sample) -> bool) -> Vec<(f64, f64)> {
 }
 
 /// Panel 3 (with the safe drive): each function the run requested, one row each.
-fn drive_panel(
-    area: &Area<'_>,
-    key: &Area<'_>,
+fn drive_panel<DB: DrawingBackend>(
+    area: &Area<DB>,
+    key: &Area<DB>,
     s: &Samples,
     rep: &Report,
     t_end: f64,
-) -> DrawResult {
+) -> DrawResult
+where
+    DB::ErrorType: 'static,
+{
     let ever = s
         .samples
         .iter()
@@ -645,7 +878,16 @@ fn drive_panel(
 }
 
 /// Panel 4: repeats per transaction.
-fn bus_panel(area: &Area<'_>, key: &Area<'_>, s: &Samples, rep: &Report, t_end: f64) -> DrawResult {
+fn bus_panel<DB: DrawingBackend>(
+    area: &Area<DB>,
+    key: &Area<DB>,
+    s: &Samples,
+    rep: &Report,
+    t_end: f64,
+) -> DrawResult
+where
+    DB::ErrorType: 'static,
+{
     let rate = s.bus_rate();
     let max = rate.iter().fold(0.0_f64, |m, r| m.max(r.2));
     let ymax = if max > 0.0 { max * 1.2 } else { 1.0 };

@@ -60,11 +60,12 @@ pub struct RunArgs {
     /// per simulated second); the other signals always cover the whole run.
     #[arg(long, value_name = "START..END")]
     pub pulse_window: Option<String>,
-    /// Draw the run as SVG: cabin position and velocity over time with the floors, vanes and
+    /// Draw the run: cabin position and velocity over time with the floors, vanes and
     /// overtravel trip points, the calls pressed and served, K1, the safety trips and the
-    /// bus's repeats per transaction. SVG only: another extension (`.png`) is refused; a
-    /// name without one (`/dev/null`, `-`) gets SVG.
-    #[arg(long, value_name = "FILE.svg")]
+    /// bus's repeats per transaction. SVG for a `.svg` file, PNG (1400 × 1000 pixels) for a
+    /// `.png` one; another extension is refused, and a name without one (`/dev/null`, `-`)
+    /// gets SVG.
+    #[arg(long, value_name = "FILE.svg|FILE.png")]
     pub plot: Option<PathBuf>,
     /// Overwrite the report, trace, VCD, CSV and plot files if they exist.
     #[arg(long)]
@@ -176,9 +177,7 @@ pub fn run(args: RunArgs) -> Result<u8, String> {
         .transpose()?;
     let vcd_sink = vcd.as_deref().map(|p| outs.add("--vcd", p)).transpose()?;
     let csv_sink = csv.as_deref().map(|p| outs.add("--csv", p)).transpose()?;
-    if let Some(p) = &plot {
-        plot::check_extension(p)?;
-    }
+    let plot_format = plot.as_deref().map(plot::format_of).transpose()?;
     let plot_sink = plot.as_deref().map(|p| outs.add("--plot", p)).transpose()?;
     let end = SimTime::ZERO + until.map_or(sc.duration, |u| u.min(sc.duration));
     if vcd.is_some() {
@@ -233,15 +232,15 @@ pub fn run(args: RunArgs) -> Result<u8, String> {
     if let Some(sink) = &report_sink {
         outs.write_all(sink, &report_body(&rep, format)?)?;
     }
-    if let (Some(sink), Some(mut samples)) = (&plot_sink, samples) {
+    if let (Some(sink), Some(format), Some(mut samples)) = (&plot_sink, plot_format, samples) {
         samples.finish(&rep);
-        let svg = plot::draw(&samples, &rep).map_err(|e| {
+        let picture = plot::draw(&samples, &rep, format).map_err(|e| {
             format!(
                 "--plot {}: {e}",
                 plot.as_deref().unwrap_or(Path::new("")).display()
             )
         })?;
-        outs.write_all(sink, &svg)?;
+        outs.write_all(sink, &picture)?;
     }
     // A trace or waveform file that could not be written whole is not put in place (a file
     // of that name keeps what it had); the report and the plot are.

@@ -91,7 +91,7 @@ pub fn run(args: TimingArgs) -> Result<u8, String> {
         print_out(&rep.to_text())?;
     }
     if let Some((path, sink)) = &svg_out {
-        outs.write_all(sink, &rep.to_svg())?;
+        outs.write_all(sink, rep.to_svg())?;
         outs.commit()?;
         if !json {
             print_out(&format!("SVG written to {}\n", path.display()))?;
