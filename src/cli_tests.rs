@@ -1455,6 +1455,45 @@ fn stand_lists_reports_json_and_names_errors() {
     assert!(err.contains("there are sto, sos, ss1"), "{err}");
 }
 
+/// `asi-lift stand NAME --plot` draws the stand's run as SVG or PNG, the same bytes every
+/// time, next to the report it prints; another extension is refused before the run.
+#[test]
+fn stand_plots_as_svg_or_png() {
+    let d = temp();
+    for (name, magic) in [
+        ("ss1.svg", &b"<svg"[..]),
+        ("ss1.png", &b"\x89PNG\r\n\x1a\n"[..]),
+    ] {
+        let file = d.path().join(name);
+        let out = asi_lift()
+            .args(["stand", "ss1", "--plot"])
+            .arg(&file)
+            .output()
+            .expect("runs");
+        assert!(out.status.success(), "{out:?}");
+        assert!(String::from_utf8_lossy(&out.stdout).contains("stopwatch: 15000 ms"));
+        let first = std::fs::read(&file).expect("the plot");
+        assert!(first.starts_with(magic), "{name}");
+        std::fs::remove_file(&file).expect("remove");
+        let again = asi_lift()
+            .args(["stand", "ss1", "--plot"])
+            .arg(&file)
+            .output()
+            .expect("runs");
+        assert!(again.status.success(), "{again:?}");
+        assert_eq!(std::fs::read(&file).expect("the plot"), first, "{name}");
+    }
+    let svg = std::fs::read_to_string(d.path().join("ss1.svg")).expect("the SVG");
+    assert!(
+        svg.contains("SS1 page") && svg.contains("stopwatch: 15000 ms"),
+        "{svg}"
+    );
+    let jpg = d.path().join("ss1.jpg");
+    let err = fails(asi_lift().args(["stand", "ss1", "--plot"]).arg(&jpg));
+    assert!(err.contains("--plot") && err.contains(".png"), "{err}");
+    assert!(!jpg.exists());
+}
+
 /// `asi-lift stand show NAME` prints the built-in scenario as a file that runs as the
 /// built-in one does, to copy and edit.
 #[test]

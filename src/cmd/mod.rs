@@ -13,6 +13,7 @@ pub mod run;
 pub mod scenarios;
 pub mod serve;
 pub mod stand;
+mod stand_plot;
 pub mod timing;
 
 use std::io::{BufRead, Read, Write};

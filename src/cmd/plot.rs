@@ -219,13 +219,41 @@ pub fn format_of(path: &std::path::Path) -> Result<Format, String> {
 
 /// Draws the run in `format`: the file's bytes.
 pub fn draw(samples: &Samples, rep: &Report, format: Format) -> Result<Vec<u8>, String> {
+    render(&RunPicture { samples, rep }, format)
+}
+
+/// A picture that draws itself on either backend: the run's, the stand's.
+pub(super) trait Picture {
+    /// Draws the whole picture on `root`.
+    fn draw_on<DB: DrawingBackend>(&self, root: &Area<DB>) -> DrawResult
+    where
+        DB::ErrorType: 'static;
+}
+
+/// The run's picture.
+struct RunPicture<'a> {
+    samples: &'a Samples,
+    rep: &'a Report,
+}
+
+impl Picture for RunPicture<'_> {
+    fn draw_on<DB: DrawingBackend>(&self, root: &Area<DB>) -> DrawResult
+    where
+        DB::ErrorType: 'static,
+    {
+        draw_on(root, self.samples, self.rep)
+    }
+}
+
+/// Draws `picture` in `format`, [`SIZE`]: the file's bytes.
+pub(super) fn render(picture: &impl Picture, format: Format) -> Result<Vec<u8>, String> {
     let drawing = |e: &dyn std::fmt::Display| format!("drawing the plot: {e}");
     match format {
         Format::Svg => {
             let mut svg = String::new();
             {
                 let root = SVGBackend::with_string(&mut svg, SIZE).into_drawing_area();
-                draw_on(&root, samples, rep).map_err(|e| drawing(&e))?;
+                picture.draw_on(&root).map_err(|e| drawing(&e))?;
                 root.present().map_err(|e| drawing(&e))?;
             }
             Ok(svg.into_bytes())
@@ -238,7 +266,7 @@ pub fn draw(samples: &Samples, rep: &Report, format: Format) -> Result<Vec<u8>, 
             {
                 let bitmap = BitMapBackend::with_buffer(&mut rgb, SIZE);
                 let root = Pixels { bitmap, font }.into_drawing_area();
-                draw_on(&root, samples, rep).map_err(|e| drawing(&e))?;
+                picture.draw_on(&root).map_err(|e| drawing(&e))?;
                 root.present().map_err(|e| drawing(&e))?;
             }
             encode_png(&rgb, SIZE).map_err(|e| format!("encoding the plot as PNG: {e}"))
@@ -428,7 +456,7 @@ impl DrawingBackend for Pixels<'_> {
     }
 }
 
-type DrawResult = Result<(), Box<dyn std::error::Error>>;
+pub(super) type DrawResult = Result<(), Box<dyn std::error::Error>>;
 
 const FLOOR: RGBColor = RGBColor(90, 90, 90);
 const VANE: RGBColor = RGBColor(120, 170, 230);
@@ -442,10 +470,10 @@ const SERVED: RGBColor = RGBColor(0, 150, 150);
 const BUS: RGBColor = RGBColor(100, 60, 20);
 
 /// A part of the picture, on either backend.
-type Area<DB> = DrawingArea<DB, Shift>;
+pub(super) type Area<DB> = DrawingArea<DB, Shift>;
 
 /// How a legend entry shows its series.
-enum Swatch {
+pub(super) enum Swatch {
     /// A line of this width.
     Line(RGBColor, u32),
     /// A dashed line.
@@ -463,7 +491,10 @@ enum Swatch {
 }
 
 /// Draws a legend in its own column next to a panel, so that it never hides the data.
-fn legend<DB: DrawingBackend>(area: &Area<DB>, entries: &[(Swatch, String)]) -> DrawResult
+pub(super) fn legend<DB: DrawingBackend>(
+    area: &Area<DB>,
+    entries: &[(Swatch, String)],
+) -> DrawResult
 where
     DB::ErrorType: 'static,
 {
@@ -514,7 +545,7 @@ where
 }
 
 /// The width of the legend column, pixels.
-const LEGEND_W: u32 = 300;
+pub(super) const LEGEND_W: u32 = 300;
 
 /// The whole picture, on either backend: the title, the panels and their legends.
 fn draw_on<DB: DrawingBackend>(root: &Area<DB>, s: &Samples, rep: &Report) -> DrawResult
@@ -552,14 +583,17 @@ where
 }
 
 /// A tick label: 10 rather than 10.0, 0.25 as it is.
-fn tick(v: &f64) -> String {
+pub(super) fn tick(v: &f64) -> String {
     let r = (v * 1000.0).round() / 1000.0;
     format!("{}", if r == 0.0 { 0.0 } else { r })
 }
 
 /// A panel's chart with the common time axis: the same label areas in every panel, so that
 /// their time axes line up.
-fn panel<'a, DB: DrawingBackend>(area: &'a Area<DB>, caption: &str) -> ChartBuilder<'a, 'a, DB> {
+pub(super) fn panel<'a, DB: DrawingBackend>(
+    area: &'a Area<DB>,
+    caption: &str,
+) -> ChartBuilder<'a, 'a, DB> {
     let mut b = ChartBuilder::on(area);
     b.margin(10)
         .caption(caption, ("sans-serif", 18))

@@ -2,10 +2,10 @@
 //! shown as a student at the stand sees it, or the list of the built-in ones (one per test guide).
 
 use super::output::Outputs;
-use super::{print_out, read_input};
+use super::{plot, print_out, read_input, stand_plot};
 use rig::scenario::builtin::Builtin;
 use rig::stand::builtin::{find, stand_scenario, STAND_BUILTINS};
-use rig::stand::{run as run_stand, StandScenario};
+use rig::stand::{run_sampled, StandScenario};
 use std::path::{Path, PathBuf};
 
 /// What `asi-lift stand` does besides running a scenario.
@@ -31,7 +31,11 @@ pub struct StandArgs {
     /// Where the stand's log and page states go: a file, or `-` for standard output.
     #[arg(long, value_name = "FILE|-", default_value = "-")]
     pub report: PathBuf,
-    /// Overwrite the report file if it exists.
+    /// Draw the run: the axis's speed and position, the safe speed limit, the torque, the
+    /// light curtain and the page's states over time, as SVG (`.svg`) or PNG (`.png`).
+    #[arg(long, value_name = "FILE.svg|FILE.png")]
+    pub plot: Option<PathBuf>,
+    /// Overwrite the report and plot files if they exist.
     #[arg(long)]
     pub force: bool,
 }
@@ -65,8 +69,14 @@ asi-lift stand NAME runs one (the SafeMOTION thesis' test guides, appendix A); \
         outs.input("the scenario", &scenario)?;
     }
     let sink = outs.add("--report", &args.report)?;
+    let plot_format = args.plot.as_deref().map(plot::format_of).transpose()?;
+    let plot_sink = args
+        .plot
+        .as_deref()
+        .map(|p| outs.add("--plot", p))
+        .transpose()?;
     let sc = load(&scenario)?;
-    let report = run_stand(&sc);
+    let (report, samples) = run_sampled(&sc);
     let body = match args.format {
         super::run::Format::Text => report.to_text(),
         super::run::Format::Json => {
@@ -77,6 +87,11 @@ asi-lift stand NAME runs one (the SafeMOTION thesis' test guides, appendix A); \
         }
     };
     outs.write_all(&sink, &body)?;
+    if let (Some(plot_sink), Some(format), Some(path)) = (&plot_sink, plot_format, &args.plot) {
+        let picture = stand_plot::draw(&report, &samples, format)
+            .map_err(|e| format!("--plot {}: {e}", path.display()))?;
+        outs.write_all(plot_sink, &picture)?;
+    }
     outs.commit()?;
     Ok(0)
 }

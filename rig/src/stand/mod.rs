@@ -578,6 +578,19 @@ impl Stand {
         }
     }
 
+    /// What the stand shows at `now`, after a scan.
+    pub fn sample(&self, now: SimTime) -> StandSample {
+        StandSample {
+            t_s: now.as_secs_f64(),
+            speed: self.speed,
+            position: self.position,
+            torque: self.torque,
+            field_broken: self.field_broken_until.is_some_and(|t| now < t),
+            hmi: self.hmi,
+            speed_limit: self.speed_limit,
+        }
+    }
+
     /// The report so far, ending at `end`.
     pub fn report(&self, name: &str, end: SimTime) -> StandReport {
         StandReport {
@@ -608,6 +621,19 @@ fn round(v: f64) -> f64 {
 
 /// Plays `sc` on a fresh stand: every scan from 0 to the scenario's end.
 pub fn run(sc: &StandScenario) -> StandReport {
+    play(sc, |_, _| {})
+}
+
+/// [`run`], and what the stand showed after each scan, for a plot.
+pub fn run_sampled(sc: &StandScenario) -> (StandReport, Vec<StandSample>) {
+    let mut samples = Vec::new();
+    let report = play(sc, |stand, at| samples.push(stand.sample(at)));
+    (report, samples)
+}
+
+/// Plays `sc`, handing the stand to `after_scan` after every scan with the time the axis has
+/// reached.
+fn play(sc: &StandScenario, mut after_scan: impl FnMut(&Stand, SimTime)) -> StandReport {
     let mut stand = Stand::new(sc);
     let end = SimTime::ZERO + sc.duration;
     let mut events = sc.events.iter().peekable();
@@ -618,6 +644,26 @@ pub fn run(sc: &StandScenario) -> StandReport {
         }
         stand.step(now);
         now += SCAN;
+        after_scan(&stand, now);
     }
     stand.report(&sc.name, end)
+}
+
+/// What the stand shows at a moment: the axis, the torque, the curtain, the page.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StandSample {
+    /// Simulated time, s.
+    pub t_s: f64,
+    /// The axis's speed, rev/s.
+    pub speed: f64,
+    /// The axis's position, rev.
+    pub position: f64,
+    /// The drive gives torque.
+    pub torque: bool,
+    /// A hand is in the light curtain's field.
+    pub field_broken: bool,
+    /// The page's state of the selected function (`None` before the first scan).
+    pub hmi: Option<HmiState>,
+    /// The speed limit the safe drive commands, rev/s, while one holds.
+    pub speed_limit: Option<f64>,
 }
