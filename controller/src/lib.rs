@@ -12,11 +12,14 @@
 //! - [`fifo`]: FIFO_Kabina and FIFO_Patra;
 //! - [`plc`]: the I/O routines over the master's process image and the handshakes.
 
+pub mod contract;
 pub mod dispatch;
 pub mod fifo;
 pub mod plc;
 pub mod program;
 
+pub use asi_master::ProcessImage;
+pub use contract::{Controller, Outside, PendingCalls, Status};
 pub use dispatch::{Algorithm, Dir, HallDir, ServedCall, Source};
 pub use program::{
     CabinWord, ControllerConfig, ControllerConfigError, Event, HaltReason, InitStart, Inputs,

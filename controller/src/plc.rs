@@ -147,35 +147,16 @@ pub struct ToSafety {
 #[derive(Clone, Debug)]
 pub struct Plc {
     program: Program,
-    floors: Vec<FloorStationMaster>,
-    cabin_display: CabinDisplayMaster,
-    panel: CabinPanelMaster,
-    /// The bus was healthy (no configuration error, no AS-i power fail) at the last scan.
-    bus_healthy: bool,
-    /// The display word's bits last handed to the display handshakes.
-    shown: Option<u16>,
-    las: LasReader,
+    io: PlcIo,
 }
 
 impl Plc {
     /// A PLC with the program set to RUN.
     pub fn new(cfg: ControllerConfig) -> Result<Plc, ControllerConfigError> {
-        if cfg.floors > address::FLOOR_STATIONS {
-            return Err(ControllerConfigError {
-                field: "floors",
-                value: cfg.floors.to_string(),
-                rule: "the lab bus has floor stations for 4 floors (addresses 1..4)",
-            });
-        }
-        let floors = (0..cfg.floors).map(|_| FloorStationMaster::new()).collect();
+        let io = PlcIo::new(cfg.floors)?;
         Ok(Plc {
             program: Program::new(cfg)?,
-            floors,
-            cabin_display: CabinDisplayMaster::new(),
-            panel: CabinPanelMaster::new().with_stall_limit(PANEL_STALL_LIMIT),
-            bus_healthy: false,
-            shown: None,
-            las: LasReader::new(),
+            io,
         })
     }
 
@@ -192,12 +173,66 @@ impl Plc {
     /// The master side of the cabin panel handshake (its word log tells when 32-bit words
     /// arrive, for timing studies).
     pub fn cabin_panel(&self) -> &CabinPanelMaster {
-        &self.panel
+        self.io.cabin_panel()
     }
 
     /// One PLC scan: read the input image, run the handshakes and the program, write the
     /// output image. Returns the signals for the safety logic.
     pub fn scan(&mut self, now: SimTime, image: &mut ProcessImage, safety: FromSafety) -> ToSafety {
+        let inputs = self.io.read(image, safety);
+        let out = self.program.scan(now, &inputs);
+        self.io.write(&out, image)
+    }
+}
+
+/// The PLC's I/O routines for the lab bus, for any program: the master side of the
+/// handshakes of tables 4.2–4.7 of the lift thesis, the LAS through the command mailbox, the
+/// load sensor, the converter and the S-7.3 speed set-point (§6.2 of the lift thesis,
+/// "Komunikuj" and "OvladaniMotoru"). A scan reads the image into [`Inputs`] with
+/// [`PlcIo::read`], runs its program, and writes the program's [`Outputs`] with
+/// [`PlcIo::write`].
+#[derive(Clone, Debug)]
+pub struct PlcIo {
+    floors: Vec<FloorStationMaster>,
+    cabin_display: CabinDisplayMaster,
+    panel: CabinPanelMaster,
+    /// The bus was healthy (no configuration error, no AS-i power fail) at the last scan.
+    bus_healthy: bool,
+    /// The display word's bits last handed to the display handshakes.
+    shown: Option<u16>,
+    las: LasReader,
+}
+
+impl PlcIo {
+    /// The I/O of a lift with `floors` floors (at most the lab bus's 4 floor stations).
+    pub fn new(floors: u8) -> Result<PlcIo, ControllerConfigError> {
+        if floors > address::FLOOR_STATIONS {
+            return Err(ControllerConfigError {
+                field: "floors",
+                value: floors.to_string(),
+                rule: "the lab bus has floor stations for 4 floors (addresses 1..4)",
+            });
+        }
+        Ok(PlcIo {
+            floors: (0..floors).map(|_| FloorStationMaster::new()).collect(),
+            cabin_display: CabinDisplayMaster::new(),
+            panel: CabinPanelMaster::new().with_stall_limit(PANEL_STALL_LIMIT),
+            bus_healthy: false,
+            shown: None,
+            las: LasReader::new(),
+        })
+    }
+
+    /// The master side of the cabin panel handshake.
+    pub fn cabin_panel(&self) -> &CabinPanelMaster {
+        &self.panel
+    }
+
+    /// The first half of a scan: the handshakes' next steps (they write their nibbles into
+    /// the output image), and what the program reads: the cabin word completed since the
+    /// last scan, the hall calls, the load, the converter, the bus and the safety logic's
+    /// EStopOut (`safety`).
+    pub fn read(&mut self, image: &mut ProcessImage, safety: FromSafety) -> Inputs {
         let input = &image.input;
         let output = &mut image.output;
         let flags = input.word(0);
@@ -249,22 +284,25 @@ impl Plc {
             lost: load_lost,
         } = LoadReading::of(input);
 
-        let out = self.program.scan(
-            now,
-            &Inputs {
-                cabin,
-                hall_up,
-                hall_down,
-                load,
-                load_lost,
-                estop_ok: safety.estop_out,
-                converter_ready: converter.bit(0),
-                converter_fault: converter.bit(1),
-                bus_ok,
-                power_ok: flags & F1_APF == 0,
-            },
-        );
-        self.write_outputs(&out, output);
+        Inputs {
+            cabin,
+            hall_up,
+            hall_down,
+            load,
+            load_lost,
+            estop_ok: safety.estop_out,
+            converter_ready: converter.bit(0),
+            converter_fault: converter.bit(1),
+            bus_ok,
+            power_ok: flags & F1_APF == 0,
+        }
+    }
+
+    /// The second half of a scan: the program's outputs `out` into the output image (the
+    /// converter's nibble, the speed set-point, the display word for the display
+    /// handshakes); returns the signals for the safety logic.
+    pub fn write(&mut self, out: &Outputs, image: &mut ProcessImage) -> ToSafety {
+        self.write_outputs(out, &mut image.output);
         ToSafety {
             restart: out.restart,
             overloaded: out.overloaded,

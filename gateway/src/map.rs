@@ -35,6 +35,7 @@ use asi_master::{EcFlags, SlaveList};
 use asi_phy::{SimDuration, SimTime, SlaveAddr};
 use bitvec::prelude::*;
 use controller::plc::ToSafety;
+use controller::Outside;
 use lab::address::LOAD_SENSOR;
 use lift_model::{Button, LoadLevel};
 use rig::scenario::{Action, Fault, DEFAULT_HOLD};
@@ -499,7 +500,7 @@ impl Gateway {
     /// The controller's signals to the safety logic, set by a front end.
     pub fn set_signals(&mut self, rig: &mut Rig, signals: ToSafety) {
         self.signals = signals;
-        rig.set_plc_signals(signals);
+        set_outside_signals(rig, signals);
     }
 
     /// The client wrote the outputs at `now`: the watchdog starts again.
@@ -512,7 +513,7 @@ impl Gateway {
                 "outputs written again: the watchdog is clear".into(),
             );
         }
-        rig.set_plc_signals(self.signals);
+        set_outside_signals(rig, self.signals);
     }
 
     /// Zeroes the output image and gives the safety logic [`WATCHDOG_SIGNALS`] if the outside
@@ -534,7 +535,7 @@ impl Gateway {
             image.set_word(w, 0);
         }
         self.signals = WATCHDOG_SIGNALS;
-        rig.set_plc_signals(self.signals);
+        set_outside_signals(rig, self.signals);
         rig.log_now(
             "gateway",
             format!(
@@ -659,6 +660,13 @@ pub fn button(v: u16) -> Option<Button> {
         4 if f == 0 => Some(Button::Stop),
         5 if f == 0 => Some(Button::Bell),
         _ => None,
+    }
+}
+
+/// Hands `signals` to the rig's outside controller; nothing while the built-in program runs.
+fn set_outside_signals(rig: &mut Rig, signals: ToSafety) {
+    if let Some(outside) = rig.controller_mut::<Outside>() {
+        outside.set_signals(signals);
     }
 }
 

@@ -429,21 +429,19 @@ pub fn build(rig: &Rig, run: Run, telegrams: Option<&Telegrams>) -> View {
         logic_fault: diag.is_some_and(|d| d.logic_fault),
     };
 
-    let external = rig.external_controller();
-    let p = rig.plc().program();
-    let builtin = !external;
+    let p = rig.plc().map(|plc| plc.program());
     let controller = ControllerView {
-        external,
-        algorithm: builtin.then_some(match p.config().algorithm {
+        external: p.is_none(),
+        algorithm: p.map(|p| match p.config().algorithm {
             Algorithm::Fifo => "FIFO",
             Algorithm::Collective => "collective",
         }),
-        initialised: builtin.then(|| p.is_initialised()),
-        state: builtin.then(|| p.state().name()),
-        floor: builtin.then(|| p.current_floor()),
-        target: builtin.then(|| p.target()),
-        fifo_cabin: (!external).then(|| p.fifo_cabin()),
-        fifo_hall: (!external).then(|| p.fifo_hall()),
+        initialised: p.map(|p| p.is_initialised()),
+        state: p.map(|p| p.state().name()),
+        floor: p.map(|p| p.current_floor()),
+        target: p.map(|p| p.target()),
+        fifo_cabin: p.map(|p| p.fifo_cabin()),
+        fifo_hall: p.map(|p| p.fifo_hall()),
     };
 
     let violations = rig.violations();

@@ -4,6 +4,7 @@
 
 mod cabin_handshake;
 mod campaign;
+mod controllers;
 mod display_word;
 mod end_to_end;
 mod fast_path;

@@ -13,7 +13,7 @@ fn at(s: f64) -> SimTime {
 
 /// Words the PLC took and dropped, and words it abandoned after a stall.
 fn counts(rig: &Rig) -> (u32, u32, u32) {
-    let p = rig.plc().cabin_panel();
+    let p = rig.plc().expect("the built-in program").cabin_panel();
     (p.words().good(), p.words().bad(), p.restarts())
 }
 
@@ -55,5 +55,11 @@ fn the_panel_word_survives_power_on_and_a_slave_drop_out() {
     // (The stall count starts again when the PLC starts the new word.)
     assert_eq!((bad, restarts), (0, 0), "no stall after the return");
     let signals = *rig.lab().cabin_panel().expect("panel").signals();
-    assert_eq!(rig.plc().cabin_panel().state(), Some(signals));
+    assert_eq!(
+        rig.plc()
+            .expect("the built-in program")
+            .cabin_panel()
+            .state(),
+        Some(signals)
+    );
 }

@@ -37,6 +37,7 @@ use asi_phy::fault::{FaultRates, PulseErrorRate};
 use asi_phy::{SimDuration, SimTime};
 use asi_trace::trace::TraceFormat;
 use controller::plc::{FromSafety, Plc, ToSafety};
+use controller::{Controller, Outside};
 use controller::{ControllerConfig, ProgramEventKind as Ctl};
 use invariants::{Finding, InvariantWatch, Observed, Quiet};
 use lab::address::{SAFETY_BOTTOM, SAFETY_TOP};
@@ -104,7 +105,9 @@ pub struct Rig {
     sc: Scenario,
     lab: LabLift,
     lift: Lift,
-    plc: Plc,
+    /// The lift's PLC: the built-in program ([`Plc`]) unless [`Rig::with_controller`] put
+    /// another in its place.
+    controller: Box<dyn Controller>,
     safety: LiftSafety,
     estop_delay: SimDuration,
     now: SimTime,
@@ -160,9 +163,6 @@ pub struct Rig {
     las_watch: LasWatch,
     /// Since when the controller holds the cabin for a bus fault.
     bus_fault_since: Option<SimTime>,
-    /// An outside controller is the PLC ([`Rig::with_external_controller`]): the built-in
-    /// program is off, and these are the standard signals it last gave the safety logic.
-    external: Option<ToSafety>,
     /// The safe drive (`[drive] safe = true`).
     drive: Option<drive::SafeDriveGuard>,
     /// The sources whose log lines are bounded ([`Rig::bound_log`]).
@@ -208,7 +208,7 @@ impl Rig {
             end: SimTime::ZERO + sc.duration,
             lab,
             lift,
-            plc,
+            controller: Box::new(plc),
             safety,
             estop_delay,
             now: SimTime::ZERO,
@@ -240,7 +240,6 @@ impl Rig {
             safety_out: None,
             las_watch: LasWatch::default(),
             bus_fault_since: None,
-            external: None,
             drive: None,
             log_bounds: log_bound::LogBounds::default(),
             sc,
@@ -348,7 +347,8 @@ impl Rig {
     /// The rig's state for the VCD.
     fn sample(&self) -> RigSample {
         let l = &self.lift;
-        let p = self.plc.program();
+        let status = self.controller.status();
+        let calls = self.controller.pending_calls().unwrap_or_default();
         let diag = self.safety_out.as_ref();
         RigSample {
             position_mm: l.position_mm(),
@@ -362,15 +362,12 @@ impl Rig {
             converter_run: self.applied.run,
             converter_up: self.applied.up,
             setpoint_ua: self.applied.setpoint_ua,
-            controller_state: if self.external.is_some() {
-                "external"
-            } else {
-                p.state().name()
-            },
-            floor: p.current_floor(),
-            target_floor: p.target(),
-            fifo_cabin: p.fifo_cabin().len() as u8,
-            fifo_hall: p.fifo_hall().len() as u8,
+            // A controller that tells no state is the outside one of `serve`.
+            controller_state: status.state.map_or("external", |s| s.name()),
+            floor: status.floor.unwrap_or(0),
+            target_floor: status.target.unwrap_or(0),
+            fifo_cabin: calls.cabin.len() as u8,
+            fifo_hall: calls.hall.len() as u8,
             estop_out: self.from_safety.estop_out,
             group_state: diag.map_or("STOP", |d| d.group.state.name()),
             fb_err: diag.is_some_and(|d| d.group.errors.fb_err),
@@ -557,7 +554,7 @@ impl Rig {
         }
         if t >= self.next_plc {
             self.plc_scan(t);
-            self.next_plc = t + self.sc.plc_scan;
+            self.next_plc = t + self.controller.scan_period();
             self.flush_trace();
         }
         self.own_moments_changed();
@@ -713,15 +710,15 @@ impl Rig {
                 out_of_las_s: round3(out.as_secs_f64()),
             })
             .collect();
-        let p = self.plc.program();
-        let builtin = self.external.is_none();
+        let status = self.controller.status();
+        let calls = self.controller.pending_calls();
         let stats = self.lab.bus.stats();
         self.report.simulated_s = self.now.as_secs_f64();
         self.report.final_state = FinalState {
-            floor: builtin.then(|| p.current_floor()),
+            floor: status.floor,
             position_mm: round3(self.lift.position_mm()),
             cabin_at: CabinAt::of(self.lift.config(), self.lift.position_mm()),
-            state: builtin.then(|| p.state()),
+            state: status.state,
             moving: self.lift.velocity_mm_s() != 0.0,
             contactor_closed: self.lift.k1_closed(),
             k1_open_cause: self
@@ -734,8 +731,8 @@ impl Rig {
                     let d = self.drive.as_ref().filter(|_| !self.lift.k1_closed())?;
                     d.torque_off_cause()
                 }),
-            fifo_cabin: builtin.then(|| p.fifo_cabin()),
-            fifo_hall: builtin.then(|| p.fifo_hall()),
+            fifo_cabin: calls.as_ref().map(|c| c.cabin.clone()),
+            fifo_hall: calls.map(|c| c.hall),
         };
         self.report.bus = words::bus_report(stats, dropouts);
         self.report.passengers = self.passengers.report();
@@ -777,32 +774,49 @@ impl Rig {
         self.own_moments_changed();
     }
 
-    /// Turns the built-in PLC program off: an outside controller (`asi-lift serve
-    /// --controller external`) writes the output image between moments through
-    /// [`Rig::lab_mut`] and gives the safety logic its standard signals through
-    /// [`Rig::set_plc_signals`]. Bus, slaves, plant, safety logic and invariant watch run as
-    /// before; a stop level at a floor counts as serving every call waiting there.
-    pub fn with_external_controller(mut self) -> Rig {
-        self.external = Some(ToSafety::default());
-        self.log(
-            "rig",
-            "controller: external (the built-in PLC program is off)".into(),
-        );
+    /// Puts `controller` in the built-in program's place: the rig scans it every
+    /// [`Controller::scan_period`] from the moment reached. Bus, slaves, plant, safety logic
+    /// and invariant watch run as before.
+    pub fn with_controller(mut self, controller: impl Controller) -> Rig {
+        self.controller = Box::new(controller);
+        self.next_plc = self.next_plc.max(self.now);
+        self.own_moments_changed();
         self
     }
 
-    /// The standard signals an outside controller gives the safety logic (the STOP
-    /// circuit's restart, the overload); taken at the next PLC scan moment. Ignored while
-    /// the built-in program runs.
-    pub fn set_plc_signals(&mut self, signals: ToSafety) {
-        if self.external.is_some() {
-            self.external = Some(signals);
-        }
+    /// Turns the built-in PLC program off for an outside controller (`asi-lift serve
+    /// --controller external`, [`Outside`]): it writes the output image between moments
+    /// through [`Rig::lab_mut`] and gives the safety logic its standard signals through
+    /// [`Outside::set_signals`] ([`Rig::controller_mut`]). A stop level at a floor counts as
+    /// serving every call waiting there.
+    pub fn with_external_controller(self) -> Rig {
+        let scan = self.sc.plc_scan;
+        let mut rig = self.with_controller(Outside::new(scan));
+        rig.log(
+            "rig",
+            "controller: external (the built-in PLC program is off)".into(),
+        );
+        rig
     }
 
-    /// Whether an outside controller is the PLC.
-    pub fn external_controller(&self) -> bool {
-        self.external.is_some()
+    /// The controller, if it is a `C`.
+    pub fn controller<C: Controller>(&self) -> Option<&C> {
+        self.controller.as_any().downcast_ref()
+    }
+
+    /// The controller, mutable, if it is a `C` (an [`Outside`] controller's signals, say).
+    pub fn controller_mut<C: Controller>(&mut self) -> Option<&mut C> {
+        self.controller.as_any_mut().downcast_mut()
+    }
+
+    /// What the controller tells about itself now.
+    pub fn controller_status(&self) -> controller::Status {
+        self.controller.status()
+    }
+
+    /// The calls the controller holds, if it tells them.
+    pub fn controller_calls(&self) -> Option<controller::PendingCalls> {
+        self.controller.pending_calls()
     }
 
     /// Does `action` now, as a scenario event would; `who` names the actor in the log.
@@ -879,9 +893,9 @@ impl Rig {
         &mut self.lab
     }
 
-    /// The PLC.
-    pub fn plc(&self) -> &Plc {
-        &self.plc
+    /// The built-in PLC program, unless another controller took its place.
+    pub fn plc(&self) -> Option<&Plc> {
+        self.controller()
     }
 
     /// The safe drive's control and status bits now (`[drive] safe = true`), as the VCD's

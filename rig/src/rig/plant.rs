@@ -90,7 +90,7 @@ impl Rig {
                 position_mm - level
             ),
         );
-        if self.external.is_some() {
+        if !self.controller.names_served_calls() {
             // No program tells which call a stop serves: a stop at a floor answers every
             // call waiting there.
             let served = self.passengers.arrived(floor, at);

@@ -340,8 +340,7 @@ impl Rig {
         };
         let signals = drive::Signals {
             estop_out,
-            initialising: self.external.is_none()
-                && self.plc.program().state() == controller::State::Initialising,
+            initialising: self.controller.status().initialising(),
             run: self.applied.run,
             up: self.applied.up,
             setpoint_ua: self.applied.setpoint_ua,
@@ -358,13 +357,10 @@ impl Rig {
     }
 
     pub(super) fn plc_scan(&mut self, t: SimTime) {
-        if let Some(signals) = self.external {
-            // The outside controller writes the output image itself, between moments.
-            self.to_safety = signals;
-            return;
-        }
-        self.to_safety = self.plc.scan(t, self.lab.bus.image_mut(), self.from_safety);
-        let held = self.plc.program().state() == controller::State::BusFault;
+        self.to_safety = self
+            .controller
+            .scan(t, self.lab.bus.image_mut(), self.from_safety);
+        let held = self.controller.status().bus_fault();
         match (self.bus_fault_since, held) {
             (None, true) => {
                 self.bus_fault_since = Some(t);
@@ -376,8 +372,7 @@ impl Rig {
             }
             _ => {}
         }
-        let events: Vec<_> = self.plc.program_mut().drain_events().collect();
-        for e in events {
+        for e in self.controller.drain_events() {
             match e.kind {
                 Ctl::Initialised if self.report.initialised_at_s.is_none() => {
                     self.report.initialised_at_s = Some(e.at.as_secs_f64());

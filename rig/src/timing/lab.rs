@@ -3,7 +3,7 @@
 
 use super::bus::READY_WITHIN;
 use super::collector::{lock, take, BusWindow, Collector};
-use super::latency::{ready_at, sample_latencies, wait_resetting};
+use super::latency::{builtin, ready_at, sample_latencies, wait_resetting};
 use super::options::{AnalysisError, TimingOptions};
 use super::report::LabTiming;
 use super::stats::{ms, Summary, Ticker};
@@ -138,7 +138,7 @@ impl WordTimers {
             let w = d.engine().words();
             self.display.poll(w.good() as u64 + w.bad() as u64, now);
         }
-        let w = rig.plc().cabin_panel().words();
+        let w = builtin(rig).cabin_panel().words();
         self.panel.poll(w.good() as u64 + w.bad() as u64, now);
         if let Some(a) = lab.analog_output() {
             self.analog.poll(a.values_received() as u64, now);

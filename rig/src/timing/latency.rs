@@ -19,7 +19,7 @@ use std::sync::Mutex;
 /// The lift stands at `floor`, ready to depart: program at the floor without a fault, drive
 /// powered and not moving, no STOP demand.
 pub(super) fn ready_at(rig: &Rig, floor: u8) -> bool {
-    let p = rig.plc().program();
+    let p = builtin(rig).program();
     let d = p.outputs().display;
     p.is_initialised()
         && !d.moving
@@ -72,7 +72,7 @@ pub(super) fn wait_resetting(
             return Some(rig.now());
         }
         powered |= rig.lift().k1_closed();
-        let tripped = (rig.plc().program().is_initialised() || powered)
+        let tripped = (builtin(rig).program().is_initialised() || powered)
             && rig.estop_out()
             && !rig.lift().k1_closed();
         if tripped && reset_at.is_none_or(|t| rig.now() >= t + SimDuration::from_secs(1)) {
@@ -91,6 +91,12 @@ pub(super) fn wait_resetting(
 const PRESS_STREAM: u64 = 0x7469_6D69_6E67;
 
 /// The seeded source of press moments.
+/// The built-in program the timing studies measure (their rigs never get another).
+pub(super) fn builtin(rig: &Rig) -> &controller::plc::Plc {
+    rig.plc()
+        .expect("the timing studies run the built-in program")
+}
+
 fn press_rng(seed: u64) -> ChaCha8Rng {
     ChaCha8Rng::seed_from_u64(seed ^ PRESS_STREAM)
 }
@@ -109,7 +115,7 @@ const HOLD: SimDuration = SimDuration::from_millis(300);
 
 /// The program has arrived at `floor` (it stands there, possibly in the STOP fault).
 fn arrived(rig: &Rig, floor: u8) -> bool {
-    let p = rig.plc().program();
+    let p = builtin(rig).program();
     p.current_floor() == floor && matches!(p.state(), State::AtFloor | State::StopFault)
 }
 
@@ -127,10 +133,10 @@ pub(super) fn sample_latencies(
     opts: &TimingOptions,
 ) -> Latencies {
     let mut s = Sampler {
-        dwell: rig.plc().program().config().dwell,
+        dwell: builtin(rig).program().config().dwell,
         stop_delay: safety::LiftSafetyConfig::default().estop_delay,
         // When the program last arrived at a floor: it departs no earlier than a dwell later.
-        arrival: rig.plc().program().initialised_at(),
+        arrival: builtin(rig).program().initialised_at(),
         rig,
         shared,
         rng: press_rng(opts.seed),
@@ -207,7 +213,7 @@ impl Sampler<'_> {
         // Registered: the program holds the call (as its target or in FIFO_Patra).
         let mut resets = 0;
         let registered = wait_resetting(self.rig, STEP_LIMIT, &mut resets, |r| {
-            let p = r.plc().program();
+            let p = builtin(r).program();
             r.now() >= press && (p.target() == there || p.fifo_hall().contains(&there))
         });
         let shared = self.shared;

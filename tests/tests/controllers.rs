@@ -1,0 +1,79 @@
+//! Controllers in the built-in program's place (`Rig::with_controller`): the contract of
+//! `controller::Controller` as the rig keeps it.
+
+use asi_phy::SimDuration;
+use controller::plc::Plc;
+use controller::{ControllerConfig, Outside};
+use rig::scenario::builtin::Builtin;
+use rig::{Rig, Scenario};
+use std::sync::{Arc, Mutex};
+
+fn scenario(name: &str, seconds: u64) -> Scenario {
+    let mut sc = Builtin::find(name)
+        .expect("built in")
+        .scenario()
+        .expect("reads");
+    sc.duration = SimDuration::from_secs(seconds);
+    sc
+}
+
+/// The run's report and its bus trace as text.
+fn run(rig: Rig) -> (rig::Report, Vec<u8>) {
+    let trace = Arc::new(Mutex::new(Vec::new()));
+    struct Sink(Arc<Mutex<Vec<u8>>>);
+    impl std::io::Write for Sink {
+        fn write(&mut self, b: &[u8]) -> std::io::Result<usize> {
+            self.0.lock().expect("the trace").extend_from_slice(b);
+            Ok(b.len())
+        }
+        fn flush(&mut self) -> std::io::Result<()> {
+            Ok(())
+        }
+    }
+    let mut rig = rig;
+    rig.trace_to(
+        Box::new(Sink(trace.clone())),
+        asi_trace::trace::TraceFormat::Text,
+    );
+    let report = rig.run(None);
+    let text = trace.lock().expect("the trace").clone();
+    (report, text)
+}
+
+/// The built-in program handed over as a controller runs exactly as the rig's own: the same
+/// report and the same bus trace, on a scenario with calls and line noise.
+#[test]
+fn the_built_in_program_as_a_controller_is_the_rigs_own() {
+    let name = "noise";
+    let sc = scenario(name, 90);
+    let cfg = ControllerConfig {
+        floors: sc.floors,
+        algorithm: sc.algorithm,
+        scan: sc.plc_scan,
+        ..ControllerConfig::default()
+    };
+    let own = run(Rig::new(sc.clone()).expect("a rig"));
+    let handed = run(Rig::new(sc)
+        .expect("a rig")
+        .with_controller(Plc::new(cfg).expect("a PLC")));
+    assert!(own.0.arrivals.len() > 1, "{name}: {:?}", own.0.arrivals);
+    assert_eq!(own.0, handed.0, "{name}");
+    assert!(own.1 == handed.1, "{name}: the traces differ");
+}
+
+/// An outside controller that writes nothing leaves the cabin where it was powered on, and
+/// the report tells no state of it; the rig finds it again as the controller it was given.
+#[test]
+fn an_outside_controller_that_does_nothing_moves_nothing() {
+    let mut rig = Rig::new(scenario("demo", 20))
+        .expect("a rig")
+        .with_external_controller();
+    assert!(rig.controller_mut::<Outside>().is_some());
+    assert!(rig.plc().is_none());
+    let report = rig.run(None);
+    assert!(report.arrivals.is_empty(), "{:?}", report.arrivals);
+    assert_eq!(report.final_state.state, None);
+    assert_eq!(report.final_state.fifo_cabin, None);
+    assert!((report.final_state.position_mm - 650.0).abs() < 1e-9);
+    assert!(report.violations.is_empty(), "{:?}", report.violations);
+}
