@@ -14,6 +14,7 @@ use fantoccini::{Client, ClientBuilder, Locator};
 use gateway::live::LiveConfig;
 use gateway::{Listen, Owner, Running, Speed};
 use hyper_util::client::legacy::connect::HttpConnector;
+use rig::Actor;
 use rig::{Rig, Scenario};
 use serde_json::{json, Value};
 use std::net::SocketAddr;
@@ -297,7 +298,7 @@ async fn the_live_view_in_chromium() {
     assert!(
         r.log
             .iter()
-            .any(|l| l.who == "web" && l.text.starts_with("restarted by the page")),
+            .any(|l| l.who == Actor::Web && l.text.starts_with("restarted by the page")),
         "{:?}",
         r.log
     );

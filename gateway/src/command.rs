@@ -13,6 +13,7 @@
 use crate::speed::{Speed, MAX_SPEED, MIN_SPEED};
 use asi_phy::fault::FaultRates;
 use asi_phy::PulseErrorRate;
+use rig::report::Actor;
 use rig::scenario::Action;
 use rig::{Rig, Scenario};
 
@@ -186,7 +187,7 @@ pub fn apply(rig: &mut Rig, cmd: &Command, seed: u64) -> Result<(), String> {
                     );
                 }
             }
-            rig.act_now("web", action);
+            rig.act_now(Actor::Web, action);
             Ok(())
         }
         Command::LineNoise(rate) => {
@@ -195,7 +196,7 @@ pub fn apply(rig: &mut Rig, cmd: &Command, seed: u64) -> Result<(), String> {
                 _ => FaultRates::NONE,
             };
             rig.lab_mut().bus.set_line_faults(seed, rates);
-            rig.log_now("web", format!("line noise: pulse error rate {rate}"));
+            rig.log_now(Actor::Web, format!("line noise: pulse error rate {rate}"));
             Ok(())
         }
         Command::Run(_) => Err(

@@ -26,6 +26,7 @@ mod props;
 
 use crossbeam_channel::{Receiver, Sender};
 use live::{LiveConfig, Status, ToRig, ViewOut};
+use rig::report::Actor;
 use rig::{Report, Rig};
 use std::net::SocketAddr;
 use std::thread::JoinHandle;
@@ -238,7 +239,7 @@ where
     let max = options.max_connections;
     let to_rig = tx.clone();
     runtime.spawn(net::accept_loop(
-        "modbus",
+        Actor::ModbusServer,
         listener,
         max,
         net::BACKOFF,
@@ -248,7 +249,7 @@ where
     if let Some((listener, _)) = ttk {
         let to_rig = tx.clone();
         runtime.spawn(net::accept_loop(
-            "ttk4145",
+            Actor::Ttk4145,
             listener,
             max,
             net::BACKOFF,
@@ -265,7 +266,7 @@ where
         });
         let timeout = options.header_timeout;
         runtime.spawn(net::accept_loop(
-            "http",
+            Actor::HttpServer,
             listener,
             max,
             net::BACKOFF,

@@ -24,7 +24,7 @@ use crate::ttk::Ttk;
 use crate::view::{self, Telegrams};
 use asi_phy::{SimDuration, SimTime};
 use crossbeam_channel::{Receiver, RecvTimeoutError, Sender, TryRecvError};
-use rig::report::{LiveReport, LogLine};
+use rig::report::{Actor, LiveReport, LogLine};
 use rig::{Report, Rig};
 use std::collections::VecDeque;
 use std::sync::{Arc, Mutex};
@@ -110,7 +110,7 @@ pub enum ToRig {
     /// A client connected.
     Connected,
     /// A line for the run's log from the servers (`who`, the text).
-    Log(&'static str, String),
+    Log(Actor, String),
     /// End the run now (Ctrl-C).
     Stop,
 }
@@ -148,7 +148,14 @@ pub const STATUS_LOG: usize = 200;
 pub const LOG_KEEP: usize = 500;
 /// The sources the clients drive: the TTK4145 front end, Modbus commands, the page's
 /// commands, the gateway's watchdog and the servers' own lines.
-const CLIENT_SOURCES: [&str; 6] = ["ttk4145", "client", "web", "gateway", "modbus", "http"];
+const CLIENT_SOURCES: [Actor; 6] = [
+    Actor::Ttk4145,
+    Actor::Client,
+    Actor::Web,
+    Actor::Gateway,
+    Actor::ModbusServer,
+    Actor::HttpServer,
+];
 
 /// Lag below this is the granularity of the pacing, not falling behind.
 const LAG_REPORTED: Duration = Duration::from_millis(2);
@@ -282,7 +289,7 @@ pub fn run_with_view(
     }
     if stopped {
         t.rig.log_now(
-            "live",
+            Actor::Live,
             "stopped by the operator (Ctrl-C or a termination signal)".into(),
         );
     }
@@ -415,7 +422,7 @@ impl<'a> RigThread<'a> {
         if !self.lag_warned && lag > Duration::from_millis(100) {
             self.lag_warned = true;
             self.rig.log_now(
-                "live",
+                Actor::Live,
                 format!(
                     "the machine cannot keep up at speed {x}: {:.0} ms behind the wall clock",
                     lag.as_secs_f64() * 1e3
@@ -548,7 +555,8 @@ impl<'a> RigThread<'a> {
                     self.paused = pause;
                     self.anchor();
                     let what = if pause { "paused" } else { "resumed" };
-                    self.rig.log_now("web", format!("run {what} by the page"));
+                    self.rig
+                        .log_now(Actor::Web, format!("run {what} by the page"));
                 }
                 Ok(None)
             }
@@ -559,8 +567,10 @@ impl<'a> RigThread<'a> {
                     self.cfg.speed = speed;
                     self.anchor();
                     self.lag_warned = false;
-                    self.rig
-                        .log_now("web", format!("speed {speed} (was {was}), set by the page"));
+                    self.rig.log_now(
+                        Actor::Web,
+                        format!("speed {speed} (was {was}), set by the page"),
+                    );
                 }
                 Ok(match (self.cfg.owner, speed) {
                     (Owner::Builtin, _) => None,
@@ -592,7 +602,7 @@ impl<'a> RigThread<'a> {
             v.restart(&mut rig);
         }
         rig.log_now(
-            "web",
+            Actor::Web,
             format!(
                 "restarted by the page: the earlier run had reached {:.3} s; this report is of the run since the restart",
                 self.at.as_secs_f64()

@@ -38,6 +38,7 @@ use controller::plc::ToSafety;
 use controller::Outside;
 use lab::address::LOAD_SENSOR;
 use lift_model::{Button, LoadLevel};
+use rig::report::Actor;
 use rig::scenario::{Action, Fault, DEFAULT_HOLD};
 use rig::Rig;
 use tokio_modbus::{ExceptionCode, Request, Response};
@@ -453,7 +454,7 @@ impl Gateway {
             } else {
                 let action =
                     command(i - COMMAND_REGISTERS, v).ok_or(ExceptionCode::IllegalDataValue)?;
-                rig.act_now("client", &action);
+                rig.act_now(Actor::Client, &action);
             }
         }
         if outputs {
@@ -509,7 +510,7 @@ impl Gateway {
         if self.tripped {
             self.tripped = false;
             rig.log_now(
-                "gateway",
+                Actor::Gateway,
                 "outputs written again: the watchdog is clear".into(),
             );
         }
@@ -537,7 +538,7 @@ impl Gateway {
         self.signals = WATCHDOG_SIGNALS;
         set_outside_signals(rig, self.signals);
         rig.log_now(
-            "gateway",
+            Actor::Gateway,
             format!(
                 "watchdog: no output write for {} ms: the output image is zero",
                 self.watchdog.as_nanos() / 1_000_000
@@ -698,7 +699,7 @@ mod tests {
     fn a_tripped_watchdog_gives_the_safety_logic_its_safe_values() {
         let mut rig = external_rig();
         let mut gw = Gateway::new(Owner::External, SimDuration::from_millis(1000));
-        rig.act_now("test", &Action::Load(LoadLevel::Overloaded));
+        rig.act_now(Actor::Rig, &Action::Load(LoadLevel::Overloaded));
         let signals = |gw: &mut Gateway, rig: &mut Rig, at, v| {
             let w = Request::WriteSingleRegister(PLC_SIGNALS_REGISTER, v);
             assert!(gw.serve(rig, at, &w).is_ok());

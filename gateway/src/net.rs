@@ -11,6 +11,7 @@
 
 use crate::live::{Call, ToRig, TtkCall};
 use crossbeam_channel::Sender;
+use rig::report::Actor;
 use std::future::Future;
 use std::io;
 use std::net::SocketAddr;
@@ -94,7 +95,7 @@ pub(crate) const BACKOFF: Backoff = Backoff {
 /// streak and when accepts work again) through `log`, and tried again after a wait that
 /// doubles as `wait` says.
 pub(crate) async fn accept_loop<A, H, F>(
-    who: &'static str,
+    who: Actor,
     mut listener: A,
     max: usize,
     wait: Backoff,
@@ -346,7 +347,7 @@ mod tests {
             last: Duration::from_millis(16),
         };
         let task = tokio::spawn(accept_loop(
-            "test",
+            Actor::Gateway,
             Scripted(script),
             8,
             wait,
@@ -379,7 +380,7 @@ mod tests {
             .collect();
         assert_eq!(notes.len(), 4, "{notes:?}");
         assert!(
-            notes[0].starts_with("test: cannot accept a connection"),
+            notes[0].starts_with("gateway: cannot accept a connection"),
             "{notes:?}"
         );
         assert!(notes[1].contains("after 12 failed tries"), "{notes:?}");
@@ -392,7 +393,7 @@ mod tests {
         let (done_tx, done) = tokio::sync::oneshot::channel();
         let done_tx = std::sync::Mutex::new(Some(done_tx));
         let task = tokio::spawn(accept_loop(
-            "test",
+            Actor::Gateway,
             script,
             usize::MAX,
             BACKOFF,
@@ -420,7 +421,7 @@ mod tests {
         let (tx, _rx) = crossbeam_channel::unbounded();
         // Each connection echoes one byte and ends.
         let task = tokio::spawn(accept_loop(
-            "test",
+            Actor::Gateway,
             listener,
             2,
             BACKOFF,

@@ -31,6 +31,7 @@ use lab::address::{CABIN_DISPLAY, CONVERTER, FLOOR_1, FLOOR_STATIONS, SPEED_SETP
 use lab::display::DisplayWord;
 use lab::setpoint::STANDSTILL_UA;
 use lift_model::Button;
+use rig::report::Actor;
 use rig::Rig;
 use std::collections::BTreeMap;
 
@@ -197,14 +198,14 @@ impl Ttk {
                 -1 => "motor down",
                 _ => "motor stop",
             };
-            rig.log_now("ttk4145", text.into());
+            rig.log_now(Actor::Ttk4145, text.into());
         }
     }
 
     /// A lamp the lab lift lacks: logged when it changes.
     fn lamp(&mut self, rig: &mut Rig, name: String, value: u8) {
         if self.lamps.get(&name) != Some(&value) {
-            rig.log_now("ttk4145", format!("{name}: {value}"));
+            rig.log_now(Actor::Ttk4145, format!("{name}: {value}"));
             self.lamps.insert(name, value);
         }
     }
@@ -282,7 +283,7 @@ mod tests {
         };
         let t = run_to(&mut rig, &mut gw, &mut ttk, SimTime::from_millis(500));
         rig.act_now(
-            "test",
+            Actor::Rig,
             &rig::scenario::Action::Fault(rig::scenario::Fault::SlaveOffline {
                 slave: lab::address::LOAD_SENSOR,
             }),

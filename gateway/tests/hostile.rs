@@ -14,6 +14,7 @@ use gateway::live::LiveConfig;
 use gateway::map::{Gateway, Owner};
 use gateway::{Running, Speed};
 use rig::report::ViolationKind;
+use rig::Actor;
 use rig::{Report, Rig, Scenario};
 use std::collections::BTreeSet;
 use std::io::{Read, Write};
@@ -734,7 +735,7 @@ fn a_controller_that_goes_quiet_mid_travel_is_stopped_by_the_watchdog() {
     assert!(r
         .log
         .iter()
-        .any(|l| l.who == "gateway" && l.text.contains("watchdog")));
+        .any(|l| l.who == Actor::Gateway && l.text.contains("watchdog")));
 }
 
 #[test]

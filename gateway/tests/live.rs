@@ -11,6 +11,7 @@ use controller::ControllerConfig;
 use gateway::live::LiveConfig;
 use gateway::{Owner, Running, Speed};
 use rig::report::{CallSource, ViolationKind};
+use rig::Actor;
 use rig::{Report, Rig, Scenario};
 use std::io::{Read, Write};
 use std::net::{SocketAddr, TcpStream};
@@ -273,7 +274,7 @@ async fn the_watchdog_zeroes_the_outputs_of_a_controller_that_went_quiet() {
     assert!(r
         .log
         .iter()
-        .any(|l| l.who == "gateway" && l.text.contains("watchdog")));
+        .any(|l| l.who == Actor::Gateway && l.text.contains("watchdog")));
 }
 
 /// One Modbus TCP request as bytes (MBAP header, unit 1).
@@ -567,7 +568,7 @@ fn a_ttk4145_controller_drives_the_lab_lift_and_its_lamps_are_recorded() {
     assert!(r
         .log
         .iter()
-        .any(|l| l.who == "ttk4145" && l.text == "motor up"));
+        .any(|l| l.who == Actor::Ttk4145 && l.text == "motor up"));
 }
 
 #[test]
@@ -642,7 +643,7 @@ fn clients_that_repeat_themselves_for_ever_leave_a_bounded_log() {
     running.stop();
     let r = running.wait();
     let keep = gateway::live::LOG_KEEP;
-    for (who, sent) in [("ttk4145", 20_000), ("client", 3000)] {
+    for (who, sent) in [(Actor::Ttk4145, 20_000), (Actor::Client, 3000)] {
         let lines: Vec<&str> = r
             .log
             .iter()

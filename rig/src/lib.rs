@@ -15,5 +15,5 @@ pub mod timing;
 pub mod waves;
 
 pub use crate::rig::{Rig, RigError};
-pub use report::Report;
+pub use report::{Actor, Report};
 pub use scenario::Scenario;

@@ -501,13 +501,84 @@ pub enum HallDirection {
     Down,
 }
 
+/// Who did or saw what a line of the run's log tells.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+#[non_exhaustive]
+pub enum Actor {
+    /// The rig itself: power-on, its operator's actions, its notes on the run.
+    Rig,
+    /// An event of the scenario file.
+    Scenario,
+    /// The lift plant: the cabin at rest, sensors, K1.
+    Plant,
+    /// The AS-i bus: slaves leaving and rejoining LAS.
+    Bus,
+    /// The Safety-at-Work monitor.
+    Monitor,
+    /// The safety logic (the KL6904 project).
+    Safety,
+    /// The safe drive.
+    Drive,
+    /// The lift's controller.
+    Controller,
+    /// The lift attendant of a scenario's `attend`.
+    Attendant,
+    /// The invariant watch's judge (a violation).
+    Judge,
+    /// The gateway of `serve` (its watchdog).
+    Gateway,
+    /// The gateway's Modbus TCP server (its listener).
+    ModbusServer,
+    /// The live view's HTTP server (its listener).
+    HttpServer,
+    /// A Modbus TCP client of the gateway.
+    Client,
+    /// A TTK4145 client.
+    Ttk4145,
+    /// The live view's page.
+    Web,
+    /// The live run (pacing, the end of the run).
+    Live,
+}
+
+impl Actor {
+    /// The name the readable log shows.
+    pub fn name(self) -> &'static str {
+        match self {
+            Actor::Rig | Actor::Judge => "rig",
+            Actor::Scenario => "scenario",
+            Actor::Plant => "plant",
+            Actor::Bus => "bus",
+            Actor::Monitor => "monitor",
+            Actor::Safety => "safety",
+            Actor::Drive => "drive",
+            Actor::Controller => "controller",
+            Actor::Attendant => "attendant",
+            Actor::Gateway => "gateway",
+            Actor::ModbusServer => "modbus",
+            Actor::HttpServer => "http",
+            Actor::Client => "client",
+            Actor::Ttk4145 => "ttk4145",
+            Actor::Web => "web",
+            Actor::Live => "live",
+        }
+    }
+}
+
+impl std::fmt::Display for Actor {
+    /// The name, padded as the formatter asks (`{:<10}`).
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.pad(self.name())
+    }
+}
+
 /// One line of the run's log.
 #[derive(Clone, Debug, PartialEq)]
 pub struct LogLine {
     /// Seconds.
     pub at_s: f64,
-    /// Who: `scenario`, `controller`, `plant`, `safety`, `monitor`, `bus`, `rig`.
-    pub who: &'static str,
+    /// Who.
+    pub who: Actor,
     /// What.
     pub text: String,
 }

@@ -1,7 +1,7 @@
 //! Helpers of the end-to-end tests: run a scenario file of `scenarios/` or a built scenario on
 //! the whole rig and read its report.
 
-use rig::report::Report;
+use rig::report::{Actor, Report};
 use rig::rig::Rig;
 use rig::scenario::Scenario;
 use std::path::PathBuf;
@@ -57,12 +57,12 @@ pub fn served(r: &Report) -> Vec<(u8, String)> {
 }
 
 /// `true` if a log line of `who` contains `text`.
-pub fn logged(r: &Report, who: &str, text: &str) -> bool {
+pub fn logged(r: &Report, who: Actor, text: &str) -> bool {
     r.log.iter().any(|l| l.who == who && l.text.contains(text))
 }
 
 /// The first time a log line of `who` contains `text`.
-pub fn logged_at(r: &Report, who: &str, text: &str) -> Option<f64> {
+pub fn logged_at(r: &Report, who: Actor, text: &str) -> Option<f64> {
     r.log
         .iter()
         .find(|l| l.who == who && l.text.contains(text))
@@ -70,7 +70,7 @@ pub fn logged_at(r: &Report, who: &str, text: &str) -> Option<f64> {
 }
 
 /// The first time after `after_s` a log line of `who` contains `text`.
-pub fn logged_after(r: &Report, who: &str, text: &str, after_s: f64) -> Option<f64> {
+pub fn logged_after(r: &Report, who: Actor, text: &str, after_s: f64) -> Option<f64> {
     r.log
         .iter()
         .find(|l| l.at_s > after_s && l.who == who && l.text.contains(text))

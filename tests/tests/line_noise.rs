@@ -7,6 +7,7 @@ use asi_phy::{SimDuration, SimTime};
 use lift_model::Button;
 use rig::report::Report;
 use rig::scenario::{Action, Fault, ScenarioEvent};
+use rig::Actor;
 
 fn at(s: f64) -> SimTime {
     SimTime::ZERO + SimDuration::from_secs_f64(s).expect("time")
@@ -39,7 +40,7 @@ fn every_silence_follows_a_dropout(r: &Report) {
         let dropped = r
             .log
             .iter()
-            .filter(|l| l.who == "bus" && l.text == text && l.at_s <= m.at_s)
+            .filter(|l| l.who == Actor::Bus && l.text == text && l.at_s <= m.at_s)
             .map(|l| l.at_s)
             .next_back();
         assert!(
@@ -135,7 +136,7 @@ fn a_floor_station_dropping_out_does_not_halt_the_cabin() {
     assert_eq!(r.availability.bus_fault_holds, 0, "{:?}", r.availability);
     assert!(!logged(
         &r,
-        "controller",
+        Actor::Controller,
         "cabin slave or bus lost: cabin stopped"
     ));
     let d = r

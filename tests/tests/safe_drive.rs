@@ -11,6 +11,7 @@ use rig::campaign::summary::summarize;
 use rig::campaign::{execute, judge, line, Execution, LineContext};
 use rig::report::{Report, ViolationKind};
 use rig::scenario::{Action, Fault, Scenario};
+use rig::Actor;
 
 /// The STOP circuit's fixed delay before K1 drops (docs/safety.md §6.2).
 const STOP_DELAY_S: f64 = 9.1;
@@ -48,11 +49,11 @@ fn stop_is_ss1_the_torque_goes_off_once_the_car_stands_well_before_9_1_s() {
     let off = stop.torque_off_at_s.expect("off");
     let after_rest = off - rest.at_s;
     assert!((0.489..=0.5).contains(&after_rest), "{after_rest}");
-    assert!(logged(&r, "drive", "torque off (STO): K1 opens"));
+    assert!(logged(&r, Actor::Drive, "torque off (STO): K1 opens"));
     // The cabin request at 40 s restarts the STOP circuit: SS1 ends, service goes on; the
     // door opened at floor 3 is SOS, which holds without a trip.
     assert_eq!(stops(&r), vec![1, 2, 3, 1]);
-    assert!(logged(&r, "drive", "SOS reached its safe state"));
+    assert!(logged(&r, Actor::Drive, "SOS reached its safe state"));
     assert!(r.final_state.contactor_closed);
 }
 
@@ -62,7 +63,7 @@ fn without_the_safe_drive_the_same_stop_waits_9_1_s_for_k1() {
     sc.safe_drive = false;
     let r = run(sc);
     assert!(r.safety.drive.is_none());
-    assert!(logged(&r, "safety", "STOP delay of 9.1 s elapsed"));
+    assert!(logged(&r, Actor::Safety, "STOP delay of 9.1 s elapsed"));
     // K1 opens only at 30.1 s: the first K1 opening after the STOP.
     let k1 = r
         .safety
@@ -105,7 +106,11 @@ fn a_runaway_at_a_floor_with_the_door_open_ends_in_sos_then_sto_within_the_toler
         .trips
         .iter()
         .any(|t| t.cause.starts_with("safe drive: SOS")));
-    assert!(logged(&r, "drive", "error acknowledged by S_Control_Reset"));
+    assert!(logged(
+        &r,
+        Actor::Drive,
+        "error acknowledged by S_Control_Reset"
+    ));
     assert!(r.final_state.contactor_closed, "{}", r.to_text());
     assert!(r.to_text().contains("SOS tripped"));
 }
@@ -136,7 +141,11 @@ fn a_failed_encoder_stops_the_car_between_floors_until_repaired_and_reset() {
     let r = run(scenario("safe-drive-encoder"));
     assert!(r.violations.is_empty(), "{}", r.to_text());
     assert_eq!(drive(&r).trips.len(), 1, "{:?}", drive(&r).trips);
-    assert!(logged(&r, "drive", "error acknowledged by S_Control_Reset"));
+    assert!(logged(
+        &r,
+        Actor::Drive,
+        "error acknowledged by S_Control_Reset"
+    ));
     let floors: Vec<u8> = r.arrivals.iter().map(|a| a.floor).collect();
     assert_eq!(floors, [1, 4, 2], "{}", r.to_text());
     assert!(r.final_state.contactor_closed);
@@ -433,6 +442,6 @@ fn slp_stops_a_runaway_on_the_journey_up_and_the_overtravel_sensor_backs_it() {
         d.trips[0].position_mm
     );
     assert!((r.final_state.position_mm - 1273.5).abs() < 0.1);
-    assert!(logged(&r, "plant", "overtravel sensor (Top) tripped"));
-    assert!(!logged(&r, "plant", "crash"));
+    assert!(logged(&r, Actor::Plant, "overtravel sensor (Top) tripped"));
+    assert!(!logged(&r, Actor::Plant, "crash"));
 }

@@ -6,12 +6,13 @@
 use asi_lift_tests::*;
 use rig::report::Report;
 use rig::scenario::Action;
+use rig::Actor;
 
 /// The times the safety logic closed K1.
 fn k1_closed_at(r: &Report) -> Vec<f64> {
     r.log
         .iter()
-        .filter(|l| l.who == "safety" && l.text.contains("K1 closed"))
+        .filter(|l| l.who == Actor::Safety && l.text.contains("K1 closed"))
         .map(|l| l.at_s)
         .collect()
 }
@@ -56,7 +57,11 @@ door = "closed"
 "#,
     );
     assert_no_violations(&r);
-    assert!(logged(&r, "controller", "initialisation held: door open"));
+    assert!(logged(
+        &r,
+        Actor::Controller,
+        "initialisation held: door open"
+    ));
     assert!(
         r.initialised_at_s.is_some_and(|t| t > 20.0),
         "{:?}",
@@ -119,9 +124,9 @@ crank_mm = 10.0
 "#,
     );
     assert_no_violations(&r);
-    assert!(logged(&r, "scenario", "hand crank +10.0 mm"));
+    assert!(logged(&r, Actor::Scenario, "hand crank +10.0 mm"));
     assert!(
-        !logged(&r, "scenario", "refused by the plant"),
+        !logged(&r, Actor::Scenario, "refused by the plant"),
         "{}",
         r.to_text()
     );
@@ -315,7 +320,7 @@ press = "cabin:3"
         );
         assert_no_violations(&r);
         assert!(
-            !logged(&r, "scenario", "refused by the plant"),
+            !logged(&r, Actor::Scenario, "refused by the plant"),
             "start {start}: {}",
             r.to_text()
         );
@@ -409,7 +414,13 @@ fault = { kind = "slave-online", slave = 7 }
     );
     assert_no_violations(&r);
     assert_eq!(r.final_state.position_mm, 800.0);
-    assert!(logged_after(&r, "controller", "initialisation held: door open", 63.0).is_some());
+    assert!(logged_after(
+        &r,
+        Actor::Controller,
+        "initialisation held: door open",
+        63.0
+    )
+    .is_some());
 }
 
 #[test]
@@ -460,9 +471,11 @@ press = "cabin:4"
 "#,
     );
     assert_no_violations(&r);
-    let refused = logged_at(&r, "scenario", "K1 is closed: no rescue by hand").expect("refused");
-    let tripped = logged_at(&r, "safety", "K1 opened: overtravel bottom sensor").expect("trip");
-    let cranked = logged_at(&r, "scenario", "hand crank +").expect("second rescue");
+    let refused =
+        logged_at(&r, Actor::Scenario, "K1 is closed: no rescue by hand").expect("refused");
+    let tripped =
+        logged_at(&r, Actor::Safety, "K1 opened: overtravel bottom sensor").expect("trip");
+    let cranked = logged_at(&r, Actor::Scenario, "hand crank +").expect("second rescue");
     assert!(refused < tripped && tripped < cranked, "{}", r.to_text());
     assert!(r.initialised_at_s.is_some_and(|t| t > 32.0));
     assert_arrivals_agree(&r);
@@ -481,23 +494,23 @@ fn a_monitor_trip_from_line_noise_halts_safely_until_the_operator_resets() {
         include_str!("data/noise-trip-after-recovery.toml"),
     );
     assert_no_violations(&r);
-    let dropped = logged_at(&r, "monitor", "safety sensor 12 not released").expect("drop");
-    let opened = logged_after(&r, "safety", "K1 opened", dropped).expect("K1 opens");
+    let dropped = logged_at(&r, Actor::Monitor, "safety sensor 12 not released").expect("drop");
+    let opened = logged_after(&r, Actor::Safety, "K1 opened", dropped).expect("K1 opens");
     assert!(opened - dropped < 0.01, "{}", r.to_text());
     assert!(
-        logged_after(&r, "controller", "halted between floors", opened).is_some(),
+        logged_after(&r, Actor::Controller, "halted between floors", opened).is_some(),
         "{}",
         r.to_text()
     );
     let reset = logged_after(
         &r,
-        "safety",
+        Actor::Safety,
         "overtravel monitor reset by the operator",
         opened,
     )
     .expect("the operator's reset");
     assert!(reset >= 151.0);
-    assert!(logged_after(&r, "safety", "K1 closed", reset - 0.001).is_some());
+    assert!(logged_after(&r, Actor::Safety, "K1 closed", reset - 0.001).is_some());
     let last = r.served.last().expect("a call served");
     assert!(last.served_at_s > reset, "{last:?}");
     assert_eq!(r.final_state.state, Some(controller::State::AtFloor));
@@ -526,21 +539,26 @@ fn an_attendant_answers_a_monitor_trip_from_line_noise_after_the_repairs() {
     sc.events.sort_by_key(|e| e.at);
     let r = run(sc);
     assert_no_violations(&r);
-    let dropped = logged_at(&r, "monitor", "safety sensor 12 not released").expect("drop");
-    let opened = logged_after(&r, "safety", "K1 opened", dropped).expect("K1 opens");
-    let round = logged_after(&r, "attendant", "rescue, acknowledge and reset", opened)
-        .expect("the attendant's round");
+    let dropped = logged_at(&r, Actor::Monitor, "safety sensor 12 not released").expect("drop");
+    let opened = logged_after(&r, Actor::Safety, "K1 opened", dropped).expect("K1 opens");
+    let round = logged_after(
+        &r,
+        Actor::Attendant,
+        "rescue, acknowledge and reset",
+        opened,
+    )
+    .expect("the attendant's round");
     assert!((round - opened - 2.0).abs() < 0.02, "{}", r.to_text());
     let reset = logged_after(
         &r,
-        "safety",
+        Actor::Safety,
         "overtravel monitor reset by the operator",
         round,
     )
     .expect("the attendant's reset");
     // The reset is pressed 7 s after the round begins and taken on its release, 100 ms on.
     assert!((reset - round - 7.1).abs() < 0.02, "{}", r.to_text());
-    assert!(logged_after(&r, "safety", "K1 closed", reset - 0.001).is_some());
+    assert!(logged_after(&r, Actor::Safety, "K1 closed", reset - 0.001).is_some());
     // The first round answered the group error of the safe-link drop at 84 s.
     assert_eq!(r.safety.attendant_rounds, 2);
     assert_eq!(r.final_state.state, Some(controller::State::AtFloor));
@@ -585,8 +603,9 @@ door = "closed"
 "#,
     );
     assert_no_violations(&r);
-    let halted = logged_at(&r, "controller", "halted between floors: door open").expect("halt");
-    let continued = logged_after(&r, "controller", "continues travel", halted).expect("on");
+    let halted =
+        logged_at(&r, Actor::Controller, "halted between floors: door open").expect("halt");
+    let continued = logged_after(&r, Actor::Controller, "continues travel", halted).expect("on");
     assert!(continued >= halted + 11.0, "{}", r.to_text());
     assert_eq!(served(&r), [(2, "hall".into())]);
 }
@@ -622,7 +641,7 @@ fault = { kind = "slave-online", slave = 10 }
     assert_no_violations(&r);
     assert!(logged(
         &r,
-        "controller",
+        Actor::Controller,
         "initialisation held: STOP circuit open"
     ));
     assert!(!r.final_state.moving, "{}", r.to_text());
@@ -667,7 +686,7 @@ fault = { kind = "vane-stuck-off", sensor = "left" }
     );
     assert_no_violations(&r);
     assert!(
-        logged(&r, "controller", "level"),
+        logged(&r, Actor::Controller, "level"),
         "the missed level is reported: {}",
         r.to_text()
     );
@@ -706,5 +725,5 @@ reset = true
 "#,
     );
     assert_no_violations(&r);
-    assert!(logged(&r, "safety", "K1 closed"));
+    assert!(logged(&r, Actor::Safety, "K1 closed"));
 }

@@ -6,6 +6,7 @@ use asi_phy::{SimDuration, SimTime};
 use asi_trace::trace::TraceFormat;
 use gateway::live::{self, LiveConfig, Status, ToRig, ViewOut, WebAnswer, WebCall};
 use gateway::{Owner, Speed};
+use rig::Actor;
 use rig::{Report, Rig, Scenario};
 use serde_json::{json, Value};
 use std::sync::{Arc, Mutex};
@@ -170,7 +171,8 @@ impl Live {
 /// object, the page's log lines and the live loop's own (a machine that cannot keep up).
 fn without_the_live_run(mut r: Report) -> Report {
     r.live = None;
-    r.log.retain(|l| l.who != "web" && l.who != "live");
+    r.log
+        .retain(|l| l.who != Actor::Web && l.who != Actor::Live);
     r
 }
 
@@ -242,7 +244,7 @@ fn a_paused_run_stands_still_and_goes_on_from_where_it_stood_without_catching_up
     let web: Vec<&str> = report
         .log
         .iter()
-        .filter(|l| l.who == "web")
+        .filter(|l| l.who == Actor::Web)
         .map(|l| l.text.as_str())
         .collect();
     assert_eq!(web.len(), 3, "{web:?}");
@@ -272,7 +274,7 @@ fn a_run_paused_and_resumed_is_the_same_run_as_one_that_was_not() {
         paused
             .log
             .iter()
-            .any(|l| l.who == "web" && l.text == "run paused by the page"),
+            .any(|l| l.who == Actor::Web && l.text == "run paused by the page"),
         "the pause came after the run's end: {:?}",
         paused.log
     );
@@ -320,7 +322,7 @@ fn a_restart_runs_the_scenario_again_from_0_with_the_same_seed() {
         restarted
             .log
             .iter()
-            .any(|l| l.who == "web" && l.text.starts_with("restarted by the page")),
+            .any(|l| l.who == Actor::Web && l.text.starts_with("restarted by the page")),
         "{lines:?}"
     );
     assert!(
@@ -369,7 +371,7 @@ fn a_new_speed_takes_effect_at_once_and_a_bad_one_is_refused() {
         report
             .log
             .iter()
-            .any(|l| l.who == "web" && l.text == "speed 10 (was 1), set by the page"),
+            .any(|l| l.who == Actor::Web && l.text == "speed 10 (was 1), set by the page"),
         "{:?}",
         report.log
     );

@@ -5,11 +5,11 @@ use super::*;
 
 impl Rig {
     pub(super) fn apply(&mut self, t: SimTime, ev: &ScenarioEvent) {
-        self.act(t, "scenario", &ev.action);
+        self.act(t, Actor::Scenario, &ev.action);
     }
 
     /// `who` (the scenario or the attendant) does `action` at `t`.
-    pub(super) fn act(&mut self, t: SimTime, who: &'static str, action: &Action) {
+    pub(super) fn act(&mut self, t: SimTime, who: Actor, action: &Action) {
         self.log(who, describe(action));
         let result = match action {
             Action::Press { button, hold } => {
@@ -47,11 +47,7 @@ impl Rig {
     }
 
     /// The operator's overtravel rescue ([`operator::rescue`]).
-    pub(super) fn rescue(
-        &mut self,
-        t: SimTime,
-        who: &'static str,
-    ) -> Result<(), lift_model::PlantError> {
+    pub(super) fn rescue(&mut self, t: SimTime, who: Actor) -> Result<(), lift_model::PlantError> {
         let rescue = match operator::rescue(&self.lift, self.sc.floors) {
             Rescue::NotNeeded => self
                 .drive
@@ -81,7 +77,7 @@ impl Rig {
             Fault::SlaveOffline { slave } | Fault::SlaveOnline { slave } => {
                 let Some(id) = self.lab.slave_id(slave) else {
                     self.log(
-                        "scenario",
+                        Actor::Scenario,
                         format!("no slave at address {slave} on the lab bus"),
                     );
                     return;
@@ -102,7 +98,7 @@ impl Rig {
             }
             Fault::Vane { sensor, fault } => {
                 if let Err(e) = self.lift.set_vane_fault(t, sensor, fault) {
-                    self.log("plant", format!("error: {e}"));
+                    self.log(Actor::Plant, format!("error: {e}"));
                 }
                 self.plant_dirty = true;
             }
@@ -112,7 +108,7 @@ impl Rig {
                     _ => None,
                 };
                 if let Err(e) = self.lift.set_converter_runaway(t, runaway) {
-                    self.log("plant", format!("error: {e}"));
+                    self.log(Actor::Plant, format!("error: {e}"));
                 }
                 self.plant_dirty = true;
             }
@@ -121,7 +117,7 @@ impl Rig {
                 match self.drive.as_mut() {
                     Some(d) => d.set_encoder_failed(matches!(f, Fault::EncoderFailed)),
                     None => self.log(
-                        "scenario",
+                        Actor::Scenario,
                         "no safe drive, so no encoder: the fault changes nothing".into(),
                     ),
                 }
@@ -149,7 +145,7 @@ impl Rig {
                     self.operator_reset = on;
                     if on {
                         self.log(
-                            "rig",
+                            Actor::Rig,
                             "operator presses the safety reset after power-on".into(),
                         );
                         self.timers
@@ -157,11 +153,11 @@ impl Rig {
                     }
                 }
                 Timer::ErrAck(on) => self.err_ack = on,
-                Timer::Attendant(Round::Ack) => self.act(t, "attendant", &Action::Ack),
-                Timer::Attendant(Round::Reset) => self.act(t, "attendant", &Action::Reset),
+                Timer::Attendant(Round::Ack) => self.act(t, Actor::Attendant, &Action::Ack),
+                Timer::Attendant(Round::Reset) => self.act(t, Actor::Attendant, &Action::Reset),
                 Timer::PowerBack => {
                     self.lab.bus.set_supply_voltage(NOMINAL_VOLTS);
-                    self.log("rig", "AS-i power back".into());
+                    self.log(Actor::Rig, "AS-i power back".into());
                     self.plant_dirty = true;
                 }
             }

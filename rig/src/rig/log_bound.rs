@@ -3,13 +3,13 @@
 //! how many between them were left out, so that a client that sends the same command
 //! millions of times costs the run a bounded amount of memory.
 
-use crate::report::LogLine;
+use crate::report::{Actor, LogLine};
 use std::collections::VecDeque;
 
 /// One bounded source.
 #[derive(Clone, Debug)]
 struct Bound {
-    who: &'static str,
+    who: Actor,
     first: usize,
     last: usize,
     /// Lines of the source so far.
@@ -29,7 +29,7 @@ pub(super) struct LogBounds {
 
 impl LogBounds {
     /// Keeps the first `first` and the last `last` lines of `who`.
-    pub(super) fn set(&mut self, who: &'static str, first: usize, last: usize) {
+    pub(super) fn set(&mut self, who: Actor, first: usize, last: usize) {
         self.bounds.retain(|b| b.who != who);
         self.bounds.push(Bound {
             who,
@@ -97,7 +97,7 @@ impl LogBounds {
 mod tests {
     use super::*;
 
-    fn line(i: u32, who: &'static str) -> LogLine {
+    fn line(i: u32, who: Actor) -> LogLine {
         LogLine {
             at_s: f64::from(i),
             who,
@@ -108,11 +108,11 @@ mod tests {
     #[test]
     fn a_bounded_source_keeps_its_first_and_last_lines_and_says_how_many_it_left_out() {
         let mut b = LogBounds::default();
-        b.set("client", 3, 2);
+        b.set(Actor::Client, 3, 2);
         let mut log = Vec::new();
         for i in 0..10 {
-            log.extend(b.take(line(i, "client")));
-            log.extend(b.take(line(i, "rig")));
+            log.extend(b.take(line(i, Actor::Client)));
+            log.extend(b.take(line(i, Actor::Rig)));
         }
         assert_eq!(log.len(), 3 + 10);
         assert_eq!(b.tails(5).count(), 2);

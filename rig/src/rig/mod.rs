@@ -26,7 +26,7 @@ mod words;
 pub use outputs::TransactionObserver;
 
 use crate::report::{
-    round3, Arrival, CabinAt, FinalState, LogLine, MonitorTrip, OvertravelReached, Report,
+    round3, Actor, Arrival, CabinAt, FinalState, LogLine, MonitorTrip, OvertravelReached, Report,
     SlaveDropouts, Trip, TripKind, Violation, ViolationKind,
 };
 use crate::scenario::{Action, Fault, Scenario, ScenarioEvent};
@@ -247,7 +247,7 @@ impl Rig {
         rig.lift.set_load(SimTime::ZERO, rig.sc.load)?;
         rig.lift.set_door(SimTime::ZERO, rig.sc.door_closed)?;
         rig.log(
-            "rig",
+            Actor::Rig,
             format!(
                 "power on: cabin at {:.1} mm, load {}, door {}, {} control, line error rate {}",
                 rig.sc.start_mm,
@@ -264,7 +264,7 @@ impl Rig {
         if rig.sc.safe_drive {
             rig.drive = Some(drive::SafeDriveGuard::new(&rig.lift)?);
             rig.log(
-                "rig",
+                Actor::Rig,
                 "safe drive: encoder on the motor, drive safety monitor (SS1, SOS, SLS, SDI, SLP; STO through K1)".into(),
             );
         }
@@ -400,7 +400,7 @@ impl Rig {
             if self.next_plc != scans {
                 scans = self.next_plc;
                 if progress(t, self.end).is_break() {
-                    self.log("rig", "the run was stopped early by its caller".into());
+                    self.log(Actor::Rig, "the run was stopped early by its caller".into());
                     break;
                 }
             }
@@ -635,7 +635,7 @@ impl Rig {
     }
 
     fn violation(&mut self, t: SimTime, kind: ViolationKind, detail: String) {
-        self.log_at(t, "rig", format!("VIOLATION {kind}: {detail}"));
+        self.log_at(t, Actor::Judge, format!("VIOLATION {kind}: {detail}"));
         self.report.violations.push(Violation {
             at_s: t.as_secs_f64(),
             kind,
@@ -654,7 +654,7 @@ impl Rig {
         let position_mm = self.lift.position_mm();
         self.log_at(
             t,
-            "rig",
+            Actor::Rig,
             format!(
                 "the cabin reached the {end} overtravel sensor under power at {position_mm:.1} mm"
             ),
@@ -669,11 +669,11 @@ impl Rig {
             });
     }
 
-    fn log(&mut self, who: &'static str, text: String) {
+    fn log(&mut self, who: Actor, text: String) {
         self.log_at(self.now, who, text);
     }
 
-    fn log_at(&mut self, at: SimTime, who: &'static str, text: String) {
+    fn log_at(&mut self, at: SimTime, who: Actor, text: String) {
         let line = LogLine {
             at_s: at.as_secs_f64(),
             who,
@@ -691,7 +691,7 @@ impl Rig {
         self.outputs.finish(self.now);
         if let Some(e) = self.trace_error().map(str::to_owned) {
             let text = format!("the bus trace could not be written: {e}");
-            self.log("rig", text);
+            self.log(Actor::Rig, text);
             self.report.output_error = Some(e);
         }
         let now = self.now;
@@ -793,7 +793,7 @@ impl Rig {
         let scan = self.sc.plc_scan;
         let mut rig = self.with_controller(Outside::new(scan));
         rig.log(
-            "rig",
+            Actor::Rig,
             "controller: external (the built-in PLC program is off)".into(),
         );
         rig
@@ -820,13 +820,13 @@ impl Rig {
     }
 
     /// Does `action` now, as a scenario event would; `who` names the actor in the log.
-    pub fn act_now(&mut self, who: &'static str, action: &Action) {
+    pub fn act_now(&mut self, who: Actor, action: &Action) {
         self.act(self.now, who, action);
         self.own_moments_changed();
     }
 
     /// Adds a line to the run's log at the moment reached.
-    pub fn log_now(&mut self, who: &'static str, text: String) {
+    pub fn log_now(&mut self, who: Actor, text: String) {
         self.log(who, text);
     }
 
@@ -867,7 +867,7 @@ impl Rig {
     /// Keeps only the first `first` and the last `last` log lines of `who` (a live run's
     /// clients, which may send a command any number of times); the report says how many
     /// lines between them were left out, at the time of the first.
-    pub fn bound_log(&mut self, who: &'static str, first: usize, last: usize) {
+    pub fn bound_log(&mut self, who: Actor, first: usize, last: usize) {
         self.log_bounds.set(who, first, last);
     }
 
@@ -957,7 +957,7 @@ mod tests {
         let mut report = rig.finish();
         report.log.push(LogLine {
             at_s: 0.0,
-            who: "test",
+            who: Actor::Rig,
             text: format!("{progress_at:?}"),
         });
         report
@@ -975,7 +975,7 @@ mod tests {
                 });
         report.log.push(LogLine {
             at_s: 0.0,
-            who: "test",
+            who: Actor::Rig,
             text: format!("{progress_at:?}"),
         });
         report

@@ -26,7 +26,7 @@ impl Rig {
     #[cold]
     #[inline(never)]
     pub(super) fn plant_error(&mut self, e: lift_model::PlantError) {
-        self.log("plant", format!("error: {e}"));
+        self.log(Actor::Plant, format!("error: {e}"));
     }
 
     /// The plant's edges up to `t`, which it has reached.
@@ -44,7 +44,7 @@ impl Rig {
                 Plant::Crash { end, impact_mm_s } => {
                     let text =
                         format!("crash into the mechanical end ({end:?}) at {impact_mm_s:.1} mm/s");
-                    self.log_at(e.at, "plant", text.clone());
+                    self.log_at(e.at, Actor::Plant, text.clone());
                     self.violation(e.at, ViolationKind::MechanicalEnd, text);
                 }
                 Plant::Overtravel { end, tripped } => {
@@ -56,10 +56,10 @@ impl Rig {
                     } else {
                         format!("overtravel sensor ({end:?}) free again")
                     };
-                    self.log_at(e.at, "plant", text);
+                    self.log_at(e.at, Actor::Plant, text);
                 }
                 Plant::ConverterFault { fault } => {
-                    self.log_at(e.at, "plant", format!("converter fault: {fault:?}"));
+                    self.log_at(e.at, Actor::Plant, format!("converter fault: {fault:?}"));
                 }
                 _ => {}
             }
@@ -84,7 +84,7 @@ impl Rig {
         });
         self.log_at(
             at,
-            "plant",
+            Actor::Plant,
             format!(
                 "cabin at rest level at floor {floor} ({:+.1} mm)",
                 position_mm - level
@@ -137,7 +137,7 @@ impl Rig {
         }
         let result = wiring::apply_to_plant(&mut self.lift, t, &self.applied, &new, self.sc.floors);
         if let Err(e) = result {
-            self.log("plant", format!("error: {e}"));
+            self.log(Actor::Plant, format!("error: {e}"));
         }
         // What the plant shows the slaves can change with what it is given.
         self.plant_dirty = true;

@@ -92,10 +92,10 @@ impl Rig {
     fn log_las(&mut self, t: SimTime, left: u32, back: u32) {
         for i in 1..32u8 {
             if left & (1 << i) != 0 {
-                self.log_at(t, "bus", format!("slave {i} dropped out of LAS"));
+                self.log_at(t, Actor::Bus, format!("slave {i} dropped out of LAS"));
             }
             if back & (1 << i) != 0 {
-                self.log_at(t, "bus", format!("slave {i} back in LAS"));
+                self.log_at(t, Actor::Bus, format!("slave {i} back in LAS"));
             }
         }
     }
@@ -108,7 +108,7 @@ impl Rig {
             let address = d.address.get();
             self.log_at(
                 d.at,
-                "monitor",
+                Actor::Monitor,
                 format!("safety sensor {address} not released: {text}"),
             );
             self.report.safety.monitor.push(MonitorTrip {
@@ -158,7 +158,7 @@ impl Rig {
             }
             self.report.log.push(LogLine {
                 at_s: e.at_s(),
-                who: "safety",
+                who: Actor::Safety,
                 text: e.cause.clone(),
             });
         }
@@ -181,14 +181,14 @@ impl Rig {
                 .map(|c| c.to_string())
                 .or_else(|| self.drive.as_ref().and_then(|d| d.torque_off_cause()));
             self.log(
-                "attendant",
+                Actor::Attendant,
                 format!(
                     "K1 open for {ATTENDANT_NOTICE} ({}): rescue, acknowledge and reset",
                     cause.unwrap_or_default()
                 ),
             );
             self.report.safety.attendant_rounds += 1;
-            self.act(t, "attendant", &Action::Rescue);
+            self.act(t, Actor::Attendant, &Action::Rescue);
             let ack = t + ATTENDANT_ACK_AFTER;
             self.timers.push((ack, Timer::Attendant(Round::Ack)));
             let reset = ack + ATTENDANT_RESET_AFTER;
@@ -198,7 +198,7 @@ impl Rig {
         if k1 != self.k1 {
             self.k1 = k1;
             if let Err(e) = self.lift.set_contactor(t, k1) {
-                self.log("plant", format!("error: {e}"));
+                self.log(Actor::Plant, format!("error: {e}"));
             }
             self.plant_dirty = true;
         }
@@ -351,7 +351,7 @@ impl Rig {
         };
         let (torque, lines) = guard.scan(t, &signals, &mut self.report.safety.trips);
         for (at, text) in lines {
-            self.log_at(at, "drive", text);
+            self.log_at(at, Actor::Drive, text);
         }
         k1 && torque
     }
@@ -386,7 +386,7 @@ impl Rig {
                 }
                 _ => {}
             }
-            self.log_at(e.at, "controller", e.kind.to_string());
+            self.log_at(e.at, Actor::Controller, e.kind.to_string());
         }
     }
 }
