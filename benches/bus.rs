@@ -1,4 +1,4 @@
-//! Throughput of a 31-slave bus in normal operation at pulse level (issue 3: ≥ 5 M
+//! Throughput of a 31-slave bus in normal operation at pulse level (target: ≥ 5 M
 //! transactions per second on one core).
 //!
 //! Run: `cargo bench -p asi-lift-benches --bench bus -- --warm-up-time 1 --measurement-time 5`.

@@ -225,11 +225,10 @@ fn clamp_probability(p: f64) -> f64 {
 /// fault touches (a geometric number, one logarithm of a uniform draw), lets that many pass
 /// without a draw, and for the touched pulse draws which faults hit it, each under the
 /// condition that at least one does. That is the same model, pulse for pulse (the probability
-/// of every combination of faults on every pulse, and the independence of the pulses), but a
-/// different random stream from the draw per pulse and kind used before: a noisy run's faults
-/// fall elsewhere than they did up to asi-lift 2026-11-24. At 10⁻³ the line draws about once
-/// in a thousand pulses instead of four times a pulse, so a noisy line costs little more than
-/// a quiet one (issue 16; docs/timing.md, *Error model*). Jitter (when set) is still a draw per pulse.
+/// of every combination of faults on every pulse, and the independence of the pulses), drawn
+/// far less often: at 10⁻³ the line draws about once in a thousand pulses instead of four
+/// times a pulse, so a noisy line costs little more than a quiet one (docs/timing.md, *Error
+/// model*). Jitter (when set) is still a draw per pulse.
 #[derive(Clone, Debug)]
 pub struct FaultInjector {
     rng: ChaCha8Rng,

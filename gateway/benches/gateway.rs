@@ -1,4 +1,4 @@
-//! The gateway under load, on loopback, with the lab rig (issue 15): not a timed test, a
+//! The gateway under load, on loopback, with the lab rig: not a timed test, a
 //! program that prints its figures.
 //!
 //! 1. **Throughput while keeping real time.** The built-in controller runs a quiet scenario at

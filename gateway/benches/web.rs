@@ -1,4 +1,4 @@
-//! The live view's stream under load (issue 18): not a timed test, a program that prints its
+//! The live view's stream under load: not a timed test, a program that prints its
 //! figures.
 //!
 //! The built-in controller runs a quiet scenario at speed 1 three times, each for the same

@@ -632,7 +632,7 @@ mod tests {
             23_000_000
         );
         assert_eq!(estimate_csv_bytes(s(0), SimTime::from_millis(600)), 0);
-        // 12 minutes of everything but the voltage: about 3 GB, as issue 14 found.
+        // 12 minutes of everything but the voltage: about 3 GB.
         let twelve = estimate_vcd_bytes(s(720_000), s(720_000), s(0));
         assert!((2_500_000_000..3_500_000_000).contains(&twelve), "{twelve}");
     }

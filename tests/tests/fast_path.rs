@@ -197,6 +197,6 @@ fn random_runs_with_faults_give_the_same_outputs_on_both_paths() {
 #[ignore = "240 runs of minutes: .ci/run runs it on the release build"]
 fn every_fast_path_agrees_on_200_random_runs() {
     random_runs("default", 200, None);
-    // And the lift with the safe drive (issue 17).
+    // And the lift with the safe drive.
     random_runs("safe-drive", 40, None);
 }

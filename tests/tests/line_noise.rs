@@ -1,4 +1,4 @@
-//! Line noise (issue 12, item 7): the Safety-at-Work monitor judges only valid telegrams, the
+//! Line noise: the Safety-at-Work monitor judges only valid telegrams, the
 //! lift keeps serving while the bus delivers what it needs, and when it cannot the report says
 //! why.
 

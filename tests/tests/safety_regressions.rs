@@ -1,4 +1,4 @@
-//! Regressions of unsafe or unrecoverable runs that the fault campaign found (issue 12, part 2).
+//! Regressions of unsafe or unrecoverable runs that the fault campaign found.
 //! Each test is the reproducer as a scenario file body, run on the whole rig, and asserts what
 //! a safety engineer expects of it: no invariant broken, the fault ends in a safe reported
 //! state, and service resumes once the fault is repaired.
