@@ -582,6 +582,20 @@ where
     Ok(())
 }
 
+/// The labels of a two-state line drawn at 0 (`off`) and 1 (`on`) on a secondary axis; no
+/// label at the other ticks.
+pub(super) fn two_state(off: &'static str, on: &'static str) -> impl Fn(&f64) -> String {
+    move |v| {
+        if v.abs() < 1e-9 {
+            off.to_string()
+        } else if (v - 1.0).abs() < 1e-9 {
+            on.to_string()
+        } else {
+            String::new()
+        }
+    }
+}
+
 /// A tick label: 10 rather than 10.0, 0.25 as it is.
 pub(super) fn tick(v: &f64) -> String {
     let r = (v * 1000.0).round() / 1000.0;
@@ -759,15 +773,7 @@ where
         .configure_secondary_axes()
         .y_desc("contactor K1")
         .y_labels(3)
-        .y_label_formatter(&|v: &f64| {
-            if v.abs() < 1e-9 {
-                "open".to_string()
-            } else if (v - 1.0).abs() < 1e-9 {
-                "closed".to_string()
-            } else {
-                String::new()
-            }
-        })
+        .y_label_formatter(&two_state("open", "closed"))
         .label_style(("sans-serif", 13))
         .draw()?;
     let k1 = |b: bool| if b { 1.0 } else { 0.0 };

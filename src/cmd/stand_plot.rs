@@ -10,7 +10,9 @@
 //! Drawn from the samples [`rig::stand::run_sampled`] takes after every scan (10 ms), so
 //! the same scenario gives the same bytes.
 
-use super::plot::{legend, panel, render, tick, Area, DrawResult, Format, Picture, Swatch};
+use super::plot::{
+    legend, panel, render, tick, two_state, Area, DrawResult, Format, Picture, Swatch,
+};
 use plotters::prelude::*;
 use rig::stand::{HmiState, StandReport, StandSample};
 
@@ -208,15 +210,7 @@ impl StandPicture<'_> {
             .configure_secondary_axes()
             .y_desc("torque")
             .y_labels(3)
-            .y_label_formatter(&|v: &f64| {
-                if v.abs() < 1e-9 {
-                    "off".to_string()
-                } else if (v - 1.0).abs() < 1e-9 {
-                    "on".to_string()
-                } else {
-                    String::new()
-                }
-            })
+            .y_label_formatter(&two_state("off", "on"))
             .label_style(("sans-serif", 13))
             .draw()?;
         let mut steps = Vec::with_capacity(self.samples.len() * 2);
