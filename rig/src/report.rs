@@ -6,6 +6,7 @@ use std::fmt::Write as _;
 
 /// Everything a run produced.
 #[derive(Clone, Debug, PartialEq, Serialize)]
+#[non_exhaustive]
 pub struct Report {
     /// The scenario's name.
     pub scenario: String,
@@ -76,6 +77,7 @@ pub struct LiveReport {
 
 /// The cabin came to rest level at a floor.
 #[derive(Clone, Debug, PartialEq, Serialize)]
+#[non_exhaustive]
 pub struct Arrival {
     /// The floor.
     pub floor: u8,
@@ -87,6 +89,7 @@ pub struct Arrival {
 
 /// A call served.
 #[derive(Clone, Debug, PartialEq, Serialize)]
+#[non_exhaustive]
 pub struct Served {
     /// The floor.
     pub floor: u8,
@@ -103,6 +106,7 @@ pub struct Served {
 
 /// One passenger's press and its answer.
 #[derive(Clone, Debug, PartialEq, Serialize)]
+#[non_exhaustive]
 pub struct Passenger {
     /// The button, as in the scenario: `cabin:3`, `hall-up:2`.
     pub button: String,
@@ -115,6 +119,7 @@ pub struct Passenger {
 
 /// Mean waiting times over the passengers who were served (`None` without any).
 #[derive(Clone, Copy, Debug, PartialEq, PartialOrd)]
+#[non_exhaustive]
 pub struct Waits {
     /// Hall calls: press to the cabin's arrival (the lift engineer's waiting time).
     pub hall_mean_s: Option<f64>,
@@ -128,6 +133,7 @@ pub struct Waits {
 
 /// The state at the end of the run.
 #[derive(Clone, Debug, PartialEq, Serialize)]
+#[non_exhaustive]
 pub struct FinalState {
     /// The controller's current floor (Aktualni_Patro); absent under an outside controller.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -158,6 +164,7 @@ pub struct FinalState {
 
 /// Bus figures.
 #[derive(Clone, Debug, PartialEq, Serialize)]
+#[non_exhaustive]
 pub struct BusReport {
     /// Transactions, repeats included.
     pub transactions: u64,
@@ -174,6 +181,7 @@ pub struct BusReport {
 
 /// A slave's absences from LAS in normal operation.
 #[derive(Clone, Debug, PartialEq, Serialize)]
+#[non_exhaustive]
 pub struct SlaveDropouts {
     /// The slave's address.
     pub address: u8,
@@ -185,6 +193,7 @@ pub struct SlaveDropouts {
 
 /// Why the lift could not serve.
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
+#[non_exhaustive]
 pub struct Availability {
     /// Times the controller held the cabin for a bus fault (an essential slave out of LAS, a
     /// stale cabin word, AS-i power fail).
@@ -202,6 +211,7 @@ impl Availability {
 
 /// Errors per receiver check, and missing responses.
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
+#[non_exhaustive]
 pub struct ErrorCounts {
     /// Start bit.
     pub start_bit: u64,
@@ -223,6 +233,7 @@ pub struct ErrorCounts {
 
 /// Minimum, mean and maximum.
 #[derive(Clone, Debug, PartialEq, Serialize)]
+#[non_exhaustive]
 pub struct CycleTimes {
     /// Shortest.
     pub min: f64,
@@ -234,6 +245,7 @@ pub struct CycleTimes {
 
 /// The safety logic's trips.
 #[derive(Clone, Debug, PartialEq, Serialize)]
+#[non_exhaustive]
 pub struct SafetyReport {
     /// Every trip and error, in order.
     pub trips: Vec<Trip>,
@@ -272,6 +284,7 @@ impl SafetyReport {
 
 /// The cabin reached an overtravel sensor under power.
 #[derive(Clone, Debug, PartialEq, Serialize)]
+#[non_exhaustive]
 pub struct OvertravelReached {
     /// When, seconds.
     pub at_s: f64,
@@ -283,6 +296,7 @@ pub struct OvertravelReached {
 
 /// What the safe drive did (docs/drive-safety.md §6).
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
+#[non_exhaustive]
 pub struct DriveReport {
     /// Every trip: which function, and why (each also a `safety.trips` record).
     pub trips: Vec<DriveTrip>,
@@ -292,6 +306,7 @@ pub struct DriveReport {
 
 /// A safe-drive function tripped: STO and the brake.
 #[derive(Clone, Debug, PartialEq, Serialize)]
+#[non_exhaustive]
 pub struct DriveTrip {
     /// When, seconds.
     pub at_s: f64,
@@ -305,6 +320,7 @@ pub struct DriveTrip {
 
 /// One SS1 stop.
 #[derive(Clone, Debug, PartialEq, Serialize)]
+#[non_exhaustive]
 pub struct Ss1Stop {
     /// When SS1 was requested (the STOP circuit's demand), seconds.
     pub requested_at_s: f64,
@@ -323,6 +339,7 @@ fn is_zero(n: &u32) -> bool {
 
 /// The Safety-at-Work monitor dropped a sensor's release.
 #[derive(Clone, Debug, PartialEq, Serialize)]
+#[non_exhaustive]
 pub struct MonitorTrip {
     /// When, seconds.
     pub at_s: f64,
@@ -335,6 +352,7 @@ pub struct MonitorTrip {
 
 /// One safety trip, error, or output the safety logic switched off.
 #[derive(Clone, Debug, PartialEq, Serialize)]
+#[non_exhaustive]
 pub struct Trip {
     /// When, seconds.
     pub at_s: f64,
@@ -400,6 +418,7 @@ impl std::fmt::Display for CabinAt {
 
 /// A safety invariant broken.
 #[derive(Clone, Debug, PartialEq, Serialize)]
+#[non_exhaustive]
 pub struct Violation {
     /// When it was found, seconds.
     pub at_s: f64,
@@ -574,6 +593,7 @@ impl std::fmt::Display for Actor {
 
 /// One line of the run's log.
 #[derive(Clone, Debug, PartialEq)]
+#[non_exhaustive]
 pub struct LogLine {
     /// Seconds.
     pub at_s: f64,
