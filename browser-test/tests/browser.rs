@@ -28,7 +28,7 @@ fn start(speed: f64) -> Running {
     let toml =
         "name = \"browser\"\nduration = \"30min\"\n[lift]\nstart_mm = 0.0\nload = \"loaded\"\n";
     let sc = Scenario::from_toml("browser.toml", toml).expect("a valid scenario");
-    let make = move || Rig::new(sc.clone()).map_err(|e| e.to_string());
+    let make = move || Rig::new(sc.clone()).map_err(gateway::MakeRigError::from);
     let cfg = LiveConfig {
         speed: Speed::Factor(speed),
         owner: Owner::Builtin,

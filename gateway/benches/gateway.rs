@@ -53,7 +53,7 @@ const CONVERTER: u8 = 7;
 fn start(seconds: u64, owner: Owner, speed: Speed, exchanges: Option<Exchanges>) -> Running {
     let sc = quiet(seconds);
     let make = move || {
-        let mut rig = Rig::new(sc.clone()).map_err(|e| e.to_string())?;
+        let mut rig = Rig::new(sc.clone()).map_err(gateway::MakeRigError::from)?;
         if let Some(seen) = exchanges.clone() {
             rig.on_transaction(Box::new(move |r| {
                 if let Call::DataExchange { address, data } = r.request.call() {

@@ -29,7 +29,7 @@ const CLIENTS: usize = 8;
 fn start(http: bool) -> Running {
     let toml = "name = \"quiet\"\nduration = \"1h\"\n[lift]\nstart_mm = 0.0\n";
     let sc = Scenario::from_toml("quiet.toml", toml).expect("a valid scenario");
-    let make = move || Rig::new(sc.clone()).map_err(|e| e.to_string());
+    let make = move || Rig::new(sc.clone()).map_err(gateway::MakeRigError::from);
     let cfg = LiveConfig {
         speed: Speed::Factor(1.0),
         owner: Owner::Builtin,

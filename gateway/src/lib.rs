@@ -31,6 +31,7 @@ use rig::{Report, Rig};
 use std::net::SocketAddr;
 use std::thread::JoinHandle;
 
+pub use live::MakeRigError;
 pub use map::Owner;
 pub use net::Options;
 pub use speed::Speed;
@@ -50,11 +51,14 @@ pub enum GatewayError {
     #[error("cannot start the network runtime: {0}")]
     Runtime(std::io::Error),
     /// The speed factor is out of bounds ([`Speed::factor`]).
+    #[error(transparent)]
+    Speed(#[from] speed::SpeedError),
+    /// The rig cannot be made (its configuration, or what the caller's maker needs).
     #[error("{0}")]
-    Speed(String),
-    /// The rig cannot be built.
-    #[error("{0}")]
-    Rig(String),
+    Rig(MakeRigError),
+    /// The rig's thread ended before the run began.
+    #[error("the rig thread ended at its start")]
+    RigThread,
 }
 
 /// A live run with its Modbus server, started by [`start`].
@@ -152,7 +156,7 @@ pub fn start<F>(
     ttk: Option<SocketAddr>,
 ) -> Result<Running, GatewayError>
 where
-    F: FnMut() -> Result<Rig, String> + Send + 'static,
+    F: FnMut() -> Result<Rig, MakeRigError> + Send + 'static,
 {
     start_servers(
         make_rig,
@@ -172,7 +176,7 @@ pub fn start_servers<F>(
     listen: Listen,
 ) -> Result<Running, GatewayError>
 where
-    F: FnMut() -> Result<Rig, String> + Send + 'static,
+    F: FnMut() -> Result<Rig, MakeRigError> + Send + 'static,
 {
     start_with(make_rig, cfg, listen, Options::default())
 }
@@ -185,7 +189,7 @@ pub fn start_with<F>(
     options: Options,
 ) -> Result<Running, GatewayError>
 where
-    F: FnMut() -> Result<Rig, String> + Send + 'static,
+    F: FnMut() -> Result<Rig, MakeRigError> + Send + 'static,
 {
     let Listen {
         modbus: listen,
@@ -229,11 +233,7 @@ where
     match ready.recv() {
         Ok(Ok(())) => {}
         Ok(Err(e)) => return Err(GatewayError::Rig(e)),
-        Err(_) => {
-            return Err(GatewayError::Rig(
-                "the rig thread ended at its start".into(),
-            ))
-        }
+        Err(_) => return Err(GatewayError::RigThread),
     }
 
     let max = options.max_connections;

@@ -74,7 +74,11 @@ pub struct WebCall {
 
 /// Makes the run's rig again, as at its start (the same scenario, seed, controller and
 /// outputs), for a restart from the page.
-pub type Remake<'a> = &'a mut dyn FnMut() -> Result<Rig, String>;
+pub type Remake<'a> = &'a mut dyn FnMut() -> Result<Rig, MakeRigError>;
+
+/// Why a live run's rig could not be made: the rig's own [`rig::RigError`], or what the
+/// caller's maker needs besides (a trace file to open, say).
+pub type MakeRigError = Box<dyn std::error::Error + Send + Sync>;
 
 /// The cabin's height and speed over the last [`HISTORY`] of simulated time, for the page's
 /// plot: `[t_s, position_mm, velocity_mm_s]`, oldest first, one per snapshot.
@@ -561,7 +565,7 @@ impl<'a> RigThread<'a> {
                 Ok(None)
             }
             RunControl::Speed(speed) => {
-                let speed = speed.checked()?;
+                let speed = speed.checked().map_err(|e| e.to_string())?;
                 if speed != self.cfg.speed {
                     let was = self.cfg.speed;
                     self.cfg.speed = speed;

@@ -15,21 +15,26 @@ pub const MIN_SPEED: f64 = 0.001;
 /// The fastest speed factor.
 pub const MAX_SPEED: f64 = 1000.0;
 
+/// A speed factor out of bounds ([`Speed::factor`]).
+#[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]
+#[error(
+    "speed factor {0:?}: expected {MIN_SPEED} to {MAX_SPEED} simulated seconds per wall second"
+)]
+pub struct SpeedError(pub f64);
+
 impl Speed {
-    /// The factor `x` if it is a number in [`MIN_SPEED`]..=[`MAX_SPEED`]; the error says what
-    /// is wrong. Outside it the pacing's wall times do not fit a `Duration`, or mean nothing.
-    pub fn factor(x: f64) -> Result<Speed, String> {
+    /// The factor `x` if it is a number in [`MIN_SPEED`]..=[`MAX_SPEED`]. Outside it the
+    /// pacing's wall times do not fit a `Duration`, or mean nothing.
+    pub fn factor(x: f64) -> Result<Speed, SpeedError> {
         if x.is_finite() && (MIN_SPEED..=MAX_SPEED).contains(&x) {
             Ok(Speed::Factor(x))
         } else {
-            Err(format!(
-                "speed factor {x:?}: expected {MIN_SPEED} to {MAX_SPEED} simulated seconds per wall second"
-            ))
+            Err(SpeedError(x))
         }
     }
 
     /// `self`, checked as [`Speed::factor`] checks a factor.
-    pub fn checked(self) -> Result<Speed, String> {
+    pub fn checked(self) -> Result<Speed, SpeedError> {
         match self {
             Speed::Factor(x) => Speed::factor(x),
             Speed::Max => Ok(Speed::Max),
@@ -68,7 +73,8 @@ mod tests {
     fn speed_factors_outside_the_bounds_are_refused() {
         for x in [0.0, -1.0, 1e-30, 1e-4, 1000.5, f64::NAN, f64::INFINITY] {
             let err = Speed::factor(x).expect_err("refused");
-            assert!(err.contains("speed factor"), "{err}");
+            assert_eq!(err.0.to_bits(), x.to_bits());
+            assert!(err.to_string().starts_with("speed factor"), "{err}");
         }
         assert_eq!(Speed::factor(MIN_SPEED), Ok(Speed::Factor(MIN_SPEED)));
         assert_eq!(Speed::factor(MAX_SPEED), Ok(Speed::Factor(MAX_SPEED)));

@@ -36,11 +36,7 @@ fn start(toml: &str, ttk: bool) -> Running {
         step: SimDuration::from_millis(1),
     };
     let loopback: SocketAddr = "127.0.0.1:0".parse().expect("an address");
-    let make = move || {
-        Ok(Rig::new(sc.clone())
-            .map_err(|e| e.to_string())?
-            .with_external_controller())
-    };
+    let make = move || Ok(Rig::new(sc.clone())?.with_external_controller());
     gateway::start(make, cfg, loopback, ttk.then_some(loopback)).expect("the gateway starts")
 }
 

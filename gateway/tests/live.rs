@@ -26,7 +26,7 @@ fn start(toml: &str, owner: Owner, speed: Speed) -> Running {
 fn start_with(toml: &str, owner: Owner, speed: Speed, ttk: bool) -> Running {
     let sc = Scenario::from_toml("test.toml", toml).expect("a valid scenario");
     let make = move || {
-        let rig = Rig::new(sc.clone()).map_err(|e| e.to_string())?;
+        let rig = Rig::new(sc.clone()).map_err(gateway::MakeRigError::from)?;
         Ok(match owner {
             Owner::External => rig.with_external_controller(),
             Owner::Builtin => rig,
@@ -54,7 +54,7 @@ fn a_speed_factor_out_of_bounds_is_refused_at_the_start_not_a_panic_later() {
     };
     let loopback: SocketAddr = "127.0.0.1:0".parse().expect("an address");
     match gateway::start(
-        move || Rig::new(sc.clone()).map_err(|e| e.to_string()),
+        move || Rig::new(sc.clone()).map_err(gateway::MakeRigError::from),
         cfg,
         loopback,
         None,

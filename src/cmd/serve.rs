@@ -224,7 +224,7 @@ pub fn run(args: ServeArgs) -> Result<u8, String> {
     // Called again for each restart from the live view's page: the same scenario and seed,
     // the same controller, and the trace started again.
     let make_rig = move || {
-        let mut rig = Rig::new(sc.clone()).map_err(|e| e.to_string())?;
+        let mut rig = Rig::new(sc.clone())?;
         if owner == Owner::External {
             rig = rig.with_external_controller();
         }

@@ -78,7 +78,7 @@ impl Live {
         let thread = std::thread::spawn(move || {
             // Each run of the rig writes a trace of its own.
             let mut make = move || {
-                let mut rig = Rig::new(sc.clone()).map_err(|e| e.to_string())?;
+                let mut rig = Rig::new(sc.clone()).map_err(gateway::MakeRigError::from)?;
                 if cfg.owner == Owner::External {
                     rig = rig.with_external_controller();
                 }

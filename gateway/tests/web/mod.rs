@@ -25,7 +25,7 @@ fn start(speed: Speed) -> Running {
 fn start_with(speed: Speed, options: gateway::Options) -> Running {
     let toml = "name = \"web\"\nduration = \"10min\"\n[lift]\nstart_mm = 0.0\n";
     let sc = Scenario::from_toml("web.toml", toml).expect("a valid scenario");
-    let make = move || Rig::new(sc.clone()).map_err(|e| e.to_string());
+    let make = move || Rig::new(sc.clone()).map_err(gateway::MakeRigError::from);
     let cfg = LiveConfig {
         speed,
         owner: Owner::Builtin,
