@@ -124,7 +124,7 @@ fn sixty_two_ab_slaves_see_twice_the_cycle() {
     );
     // The outputs reached the right slave of the pair (slaves 8 and 9 are 5A and 5B).
     let out = |i: usize| {
-        bus.device::<IoModule>(asi_bus::SlaveId(i))
+        bus.device::<IoModule>(bus.slave_ids().nth(i).expect("a slave"))
             .expect("io")
             .outputs()
             .get()

@@ -60,8 +60,8 @@ fn state(lab: &mut LabLift) -> String {
         bus.stats(),
         bus.image(),
     );
-    for i in 0..bus.slave_count() {
-        s += &format!("{:?}\n", bus.slave(asi_bus::SlaveId(i)));
+    for id in bus.slave_ids() {
+        s += &format!("{:?}\n", bus.slave(id));
     }
     s += &format!("{:?}", lab.monitor());
     s

@@ -84,6 +84,11 @@ impl Bus {
         self.slaves.len()
     }
 
+    /// The places of the bus's slaves, in the order they were added.
+    pub fn slave_ids(&self) -> impl Iterator<Item = SlaveId> {
+        (0..self.slaves.len()).map(SlaveId)
+    }
+
     /// A slave.
     pub fn slave(&self, id: SlaveId) -> Option<&Slave> {
         self.slaves.get(id.0).map(|s| &s.slave)

@@ -88,11 +88,11 @@ impl Told {
 
 /// A slave's place on the bus.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
-pub struct SlaveId(pub usize);
+pub struct SlaveId(pub(crate) usize);
 
 /// A monitor's place on the bus.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
-pub struct MonitorId(pub usize);
+pub struct MonitorId(pub(crate) usize);
 
 /// **Decision**: slave ICs work down to 16 V (docs/asi.md §1.1: ~16..33 V); below that
 /// they lose power and reset.
