@@ -1,43 +1,24 @@
 //! Controllers in the built-in program's place (`Rig::with_controller`): the contract of
 //! `controller::Controller` as the rig keeps it.
 
+use asi_lift_tests::{scenario, Shared};
 use asi_phy::SimDuration;
 use controller::plc::Plc;
 use controller::{ControllerConfig, Outside};
-use rig::scenario::builtin::Builtin;
 use rig::{Rig, Scenario};
-use std::sync::{Arc, Mutex};
 
-fn scenario(name: &str, seconds: u64) -> Scenario {
-    let mut sc = Builtin::find(name)
-        .expect("built in")
-        .scenario()
-        .expect("reads");
+/// The scenario `name` shortened to `seconds`.
+fn shortened(name: &str, seconds: u64) -> Scenario {
+    let mut sc = scenario(name);
     sc.duration = SimDuration::from_secs(seconds);
     sc
 }
 
 /// The run's report and its bus trace as text.
-fn run(rig: Rig) -> (rig::Report, Vec<u8>) {
-    let trace = Arc::new(Mutex::new(Vec::new()));
-    struct Sink(Arc<Mutex<Vec<u8>>>);
-    impl std::io::Write for Sink {
-        fn write(&mut self, b: &[u8]) -> std::io::Result<usize> {
-            self.0.lock().expect("the trace").extend_from_slice(b);
-            Ok(b.len())
-        }
-        fn flush(&mut self) -> std::io::Result<()> {
-            Ok(())
-        }
-    }
-    let mut rig = rig;
-    rig.trace_to(
-        Box::new(Sink(trace.clone())),
-        asi_trace::trace::TraceFormat::Text,
-    );
-    let report = rig.run(None);
-    let text = trace.lock().expect("the trace").clone();
-    (report, text)
+fn run(mut rig: Rig) -> (rig::Report, Vec<u8>) {
+    let trace = Shared::default();
+    rig.trace_to(Box::new(trace.clone()), asi_trace::trace::TraceFormat::Text);
+    (rig.run(None), trace.bytes())
 }
 
 /// The built-in program handed over as a controller runs exactly as the rig's own: the same
@@ -45,7 +26,7 @@ fn run(rig: Rig) -> (rig::Report, Vec<u8>) {
 #[test]
 fn the_built_in_program_as_a_controller_is_the_rigs_own() {
     let name = "noise";
-    let sc = scenario(name, 90);
+    let sc = shortened(name, 90);
     let cfg = ControllerConfig {
         floors: sc.floors,
         algorithm: sc.algorithm,
@@ -65,7 +46,7 @@ fn the_built_in_program_as_a_controller_is_the_rigs_own() {
 /// the report tells no state of it; the rig finds it again as the controller it was given.
 #[test]
 fn an_outside_controller_that_does_nothing_moves_nothing() {
-    let mut rig = Rig::new(scenario("demo", 20))
+    let mut rig = Rig::new(shortened("demo", 20))
         .expect("a rig")
         .with_external_controller();
     assert!(rig.controller_mut::<Outside>().is_some());
