@@ -1118,7 +1118,7 @@ mod command {
             .expect("the PNG's header");
         let mut rgb = vec![0; reader.output_buffer_size().expect("a size")];
         let frame = reader.next_frame(&mut rgb).expect("the PNG's pixels");
-        assert_eq!((frame.width, frame.height), asi_lift::cmd::plot::SIZE);
+        assert_eq!((frame.width, frame.height), asi_lift::cmd::picture::SIZE);
         assert_eq!(
             (frame.color_type, frame.bit_depth),
             (png::ColorType::Rgb, png::BitDepth::Eight)
@@ -1295,7 +1295,8 @@ mod output {
 
 /// The plot's sampling ([`asi_lift::cmd::plot`]).
 mod plot {
-    use asi_lift::cmd::plot::{button_floor, format_of, sample_step, Format, MIN_STEP};
+    use asi_lift::cmd::picture::{format_of, Format};
+    use asi_lift::cmd::plot::{button_floor, sample_step, MIN_STEP};
     use asi_phy::SimDuration;
 
     #[test]

@@ -8,6 +8,7 @@ pub mod decode;
 pub mod encode;
 pub mod man;
 pub mod output;
+pub mod picture;
 pub mod plot;
 pub mod run;
 pub mod scenarios;

@@ -2,7 +2,7 @@
 
 use super::output::Outputs;
 use super::scenarios::find;
-use super::{plot, print_out, read_input, EXIT_VIOLATIONS};
+use super::{picture, plot, print_out, read_input, EXIT_VIOLATIONS};
 use asi_phy::{SimDuration, SimTime};
 use asi_trace::trace::TraceFormat;
 use clap::ValueEnum;
@@ -177,7 +177,7 @@ pub fn run(args: RunArgs) -> Result<u8, String> {
         .transpose()?;
     let vcd_sink = vcd.as_deref().map(|p| outs.add("--vcd", p)).transpose()?;
     let csv_sink = csv.as_deref().map(|p| outs.add("--csv", p)).transpose()?;
-    let plot_format = plot.as_deref().map(plot::format_of).transpose()?;
+    let plot_format = plot.as_deref().map(picture::format_of).transpose()?;
     let plot_sink = plot.as_deref().map(|p| outs.add("--plot", p)).transpose()?;
     let end = SimTime::ZERO + until.map_or(sc.duration, |u| u.min(sc.duration));
     if vcd.is_some() {

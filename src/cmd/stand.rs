@@ -2,7 +2,7 @@
 //! shown as a student at the stand sees it, or the list of the built-in ones (one per test guide).
 
 use super::output::Outputs;
-use super::{plot, print_out, read_input, stand_plot};
+use super::{picture, print_out, read_input, stand_plot};
 use rig::scenario::builtin::Builtin;
 use rig::stand::builtin::{find, stand_scenario, STAND_BUILTINS};
 use rig::stand::{run_sampled, StandScenario};
@@ -69,7 +69,7 @@ asi-lift stand NAME runs one (the SafeMOTION thesis' test guides, appendix A); \
         outs.input("the scenario", &scenario)?;
     }
     let sink = outs.add("--report", &args.report)?;
-    let plot_format = args.plot.as_deref().map(plot::format_of).transpose()?;
+    let plot_format = args.plot.as_deref().map(picture::format_of).transpose()?;
     let plot_sink = args
         .plot
         .as_deref()

@@ -10,7 +10,7 @@
 //! Drawn from the samples [`rig::stand::run_sampled`] takes after every scan (10 ms), so
 //! the same scenario gives the same bytes.
 
-use super::plot::{
+use super::picture::{
     legend, panel, render, tick, two_state, Area, DrawResult, Format, Picture, Swatch,
 };
 use plotters::prelude::*;
@@ -61,7 +61,7 @@ impl Picture for StandPicture<'_> {
         let root = root.titled(&title, ("sans-serif", 22))?;
         let (w, h) = root.dim_in_pixel();
         let (w, h) = (i32::try_from(w)?, i32::try_from(h)?);
-        let legend_x = w - i32::try_from(super::plot::LEGEND_W)?;
+        let legend_x = w - i32::try_from(super::picture::LEGEND_W)?;
         let areas = root.split_by_breakpoints([legend_x], [h * 55 / 100]);
         let t_end = (self.rep.duration_ms as f64 / 1000.0).max(1e-3);
         self.speed_panel(&areas[0], &areas[1], t_end)?;
