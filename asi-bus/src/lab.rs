@@ -23,12 +23,10 @@ use asi_slaves::devices::{
 };
 use asi_slaves::monitor::{CodeTable, MonitorConfig, SafetyMonitor};
 use asi_slaves::slave::{Peripheral, Slave};
-use core::sync::atomic::{AtomicU64, Ordering};
 use lab::address::{
     CABIN_DISPLAY, CABIN_PANEL, CONVERTER, FREE, LOAD_SENSOR, SAFETY_BOTTOM, SAFETY_TOP,
     SPEED_SETPOINT,
 };
-use std::sync::Arc;
 
 /// Serial numbers that seed the two safety sensors' code tables.
 pub const SAFETY_SERIALS: [u64; 2] = [0x0505_0011, 0x0505_0012];
@@ -65,9 +63,6 @@ pub struct LabLift {
     pub ids: [Option<SlaveId>; 32],
     /// The Safety-at-Work monitor of addresses 11 and 12.
     pub monitor: MonitorId,
-    /// How often what the plant-driving devices drive may have changed
-    /// ([`LabLift::drive_changes`]).
-    drive_changes: Arc<AtomicU64>,
 }
 
 /// A device that drives the plant, and what it drives as one number to compare (see
@@ -106,9 +101,9 @@ impl Drives for AnalogOutput {
 }
 
 /// A lab device whose outputs drive the plant (a floor or cabin display, the converter's run
-/// and direction, the speed set-point), with a count of the changes of what it drives, shared
-/// with its [`LabLift`]: the rig reads the devices' outputs only when the count has moved
-/// ([`LabLift::drive_changes`]), instead of at every moment.
+/// and direction, the speed set-point), with a count of the changes of what it drives
+/// ([`Peripheral::drive_changes`]): the rig reads the devices' outputs only when the bus's sum
+/// of the counts has moved ([`LabLift::drive_changes`]), instead of at every moment.
 ///
 /// What it drives can change only through the device's [`Peripheral`] methods, all of which
 /// go through this wrapper: after `exchange`, `write_parameter` and `reset` it compares what
@@ -116,29 +111,33 @@ impl Drives for AnalogOutput {
 /// typed access, which may change anything) counts one at once and forgets what the device
 /// drove, so that the next call counts one too. Typed access sees the device itself
 /// (`as_any` and `as_any_mut` hand out the wrapped device), and `Debug` shows it as it is.
+/// The count is the device's own, so a copy of the bus counts on by itself.
+#[derive(Clone)]
 struct Driving<T> {
     device: T,
     /// What the device drove after the last call, `None` after typed mutable access.
     last: Option<u32>,
-    changes: Arc<AtomicU64>,
+    changes: u64,
 }
 
 impl<T: Drives> Driving<T> {
-    fn boxed(device: T, changes: &Arc<AtomicU64>) -> Box<dyn Peripheral> {
+    fn boxed(device: T) -> Box<dyn Peripheral> {
         Box::new(Driving {
             last: Some(device.drive()),
             device,
-            changes: Arc::clone(changes),
+            changes: 0,
         })
     }
 
-    /// Counts a change if what the device drives is not what it drove.
-    fn note(&mut self) {
+    /// Counts a change if what the device drives is not what it drove; `true` if it did.
+    fn note(&mut self) -> bool {
         let now = self.device.drive();
-        if self.last != Some(now) {
+        let moved = self.last != Some(now);
+        if moved {
             self.last = Some(now);
-            self.changes.fetch_add(1, Ordering::Relaxed);
+            self.changes += 1;
         }
+        moved
     }
 }
 
@@ -150,9 +149,11 @@ impl<T: Peripheral> core::fmt::Debug for Driving<T> {
 
 impl<T: Drives> Peripheral for Driving<T> {
     fn exchange(&mut self, now: asi_phy::SimTime, outputs: Nibble) -> Nibble {
+        self.exchange_noted(now, outputs).0
+    }
+    fn exchange_noted(&mut self, now: asi_phy::SimTime, outputs: Nibble) -> (Nibble, bool) {
         let inputs = self.device.exchange(now, outputs);
-        self.note();
-        inputs
+        (inputs, self.note())
     }
     fn write_parameter(&mut self, now: asi_phy::SimTime, parameter: Nibble) -> Nibble {
         let echo = self.device.write_parameter(now, parameter);
@@ -166,12 +167,15 @@ impl<T: Drives> Peripheral for Driving<T> {
     fn periphery_fault(&self) -> bool {
         self.device.periphery_fault()
     }
+    fn drive_changes(&self) -> Option<u64> {
+        Some(self.changes)
+    }
     fn as_any(&self) -> &dyn core::any::Any {
         self.device.as_any()
     }
     fn as_any_mut(&mut self) -> &mut dyn core::any::Any {
         self.last = None;
-        self.changes.fetch_add(1, Ordering::Relaxed);
+        self.changes += 1;
         self.device.as_any_mut()
     }
 }
@@ -212,26 +216,27 @@ impl LabLift {
 
     /// A fresh device for lab address `n`.
     pub fn device_for(n: u8) -> Option<Box<dyn Peripheral>> {
-        LabLift::device(n, None)
+        LabLift::device(n, false)
     }
 
     /// A fresh device for lab address `n`; one whose outputs drive the plant (the floor
     /// stations, the cabin display, the converter I/O, the current-loop output) counts the
-    /// changes of what it drives in `changes` if given ([`LabLift::drive_changes`]).
-    fn device(n: u8, changes: Option<&Arc<AtomicU64>>) -> Option<Box<dyn Peripheral>> {
-        fn driving<T: Drives>(device: T, changes: Option<&Arc<AtomicU64>>) -> Box<dyn Peripheral> {
-            match changes {
-                Some(c) => Driving::boxed(device, c),
-                None => Box::new(device),
+    /// changes of what it drives if `counted` ([`LabLift::drive_changes`]).
+    fn device(n: u8, counted: bool) -> Option<Box<dyn Peripheral>> {
+        fn driving<T: Drives>(device: T, counted: bool) -> Box<dyn Peripheral> {
+            if counted {
+                Driving::boxed(device)
+            } else {
+                Box::new(device)
             }
         }
         Some(match n {
-            1..=4 => driving(FloorStation::new(), changes),
-            CABIN_DISPLAY => driving(CabinDisplay::new(), changes),
+            1..=4 => driving(FloorStation::new(), counted),
+            CABIN_DISPLAY => driving(CabinDisplay::new(), counted),
             CABIN_PANEL => Box::new(CabinPanel::new()),
-            CONVERTER => driving(Converter::new(), changes),
+            CONVERTER => driving(Converter::new(), counted),
             LOAD_SENSOR => Box::new(LoadSensor::new()),
-            SPEED_SETPOINT => driving(AnalogOutput::new(), changes),
+            SPEED_SETPOINT => driving(AnalogOutput::new(), counted),
             SAFETY_BOTTOM => Box::new(SafetySensor::new(CodeTable::from_serial(SAFETY_SERIALS[0]))),
             SAFETY_TOP => Box::new(SafetySensor::new(CodeTable::from_serial(SAFETY_SERIALS[1]))),
             _ => return None,
@@ -251,13 +256,11 @@ impl LabLift {
         let extra = extra_addresses(extra)?;
         let mut bus = Bus::new(cfg, LabLift::projected_with(extra.len() as u8)?, Vec::new())?;
         let mut ids = [None; 32];
-        let drive_changes = Arc::new(AtomicU64::new(0));
         for &(n, name, codes) in &LAB_SLAVES {
-            let device =
-                LabLift::device(n, Some(&drive_changes)).ok_or_else(|| ConfigError::Slave {
-                    name: name.into(),
-                    why: "no device".into(),
-                })?;
+            let device = LabLift::device(n, true).ok_or_else(|| ConfigError::Slave {
+                name: name.into(),
+                why: "no device".into(),
+            })?;
             let id = bus.add_slave(Slave::new(name, addr(n)?, codes, device))?;
             ids[n as usize] = Some(id);
         }
@@ -270,18 +273,12 @@ impl LabLift {
             ))?;
             ids[n as usize] = Some(id);
         }
-        bus.count_drive_changes(Arc::clone(&drive_changes));
         let monitor = bus.add_monitor(SafetyMonitor::new(
             &timing,
             MonitorConfig::default(),
             &[addr(SAFETY_BOTTOM)?, addr(SAFETY_TOP)?],
         ));
-        Ok(LabLift {
-            bus,
-            ids,
-            monitor,
-            drive_changes,
-        })
+        Ok(LabLift { bus, ids, monitor })
     }
 
     /// A count that moves whenever what the plant-driving devices drive may have changed:
@@ -291,10 +288,10 @@ impl LabLift {
     /// `display`, [`LabLift::converter`]'s `outputs` and [`LabLift::analog_output`]'s
     /// `current_ua` say what they said, so the rig reads them only when it has moved.
     ///
-    /// It covers the lab's own devices while they stay on the bus: a device put in their
-    /// place through [`Bus::slave_mut`] is not counted.
+    /// It is the bus's sum of the devices' counts ([`Bus::drive_count`]): a device put in
+    /// their place through [`Bus::slave_mut`] is covered only if it counts too.
     pub fn drive_changes(&self) -> u64 {
-        self.drive_changes.load(Ordering::Relaxed)
+        self.bus.drive_count().unwrap_or(0)
     }
 
     fn id(&self, n: u8) -> Option<SlaveId> {

@@ -60,6 +60,7 @@ impl FloorStationSlave {
     /// A latched press is queued as the extra code unless one is pending already. The latches
     /// are looked at first: without a press (almost every step) there is nothing to queue,
     /// and the requester is not asked whether an extra is pending.
+    #[inline]
     pub fn step(&mut self, outputs: Nibble) -> Nibble {
         let code = match (self.up_latched, self.down_latched) {
             (true, true) => Some(CODE_BOTH),
@@ -130,6 +131,7 @@ impl CabinDisplaySlave {
     }
 
     /// One step with the master's output nibble; returns the input nibble to present.
+    #[inline]
     pub fn step(&mut self, outputs: Nibble) -> Nibble {
         let (out, ev) = self.requester.step(outputs);
         if let Some(RequesterEvent::Word(bits)) = ev {
@@ -204,6 +206,7 @@ impl CabinPanelSlave {
     }
 
     /// One step with the master's output nibble; returns the input nibble to present.
+    #[inline]
     pub fn step(&mut self, outputs: Nibble) -> Nibble {
         let signals = self.signals;
         let half = self.next_half;

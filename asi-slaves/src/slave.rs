@@ -33,6 +33,21 @@ pub trait Peripheral: Any + fmt::Debug + Send {
     fn periphery_fault(&self) -> bool {
         false
     }
+    /// A count that moves whenever what the device drives outside the bus (a display, a
+    /// relay, a current) may have changed, for an application that reads what the devices
+    /// drive only when something did; `None` (the default): the device does not count, and
+    /// what it drives is read at every output it takes.
+    fn drive_changes(&self) -> Option<u64> {
+        None
+    }
+    /// [`Peripheral::exchange`], and whether what the device drives outside the bus may have
+    /// changed in it (its [`Peripheral::drive_changes`] moved). A device that counts may
+    /// override it to say so without asking its count twice.
+    fn exchange_noted(&mut self, now: SimTime, outputs: Nibble) -> (Nibble, bool) {
+        let before = self.drive_changes();
+        let inputs = self.exchange(now, outputs);
+        (inputs, self.drive_changes() != before)
+    }
     /// For typed access from the application.
     fn as_any(&self) -> &dyn Any;
     /// For typed access from the application.
@@ -64,6 +79,10 @@ pub struct Slave {
     /// hold under the mask) for an A/B slave, at address 0 or before a Write_Parameter. Kept
     /// by [`Slave::refresh`] after every change of those.
     data_exchange_at: u16,
+    /// The device counts its drive changes ([`Peripheral::drive_changes`]).
+    drive_counted: bool,
+    /// What the device drives may have changed since [`Slave::take_drive_moved`] last looked.
+    drive_moved: bool,
     device: Box<dyn Peripheral>,
 }
 
@@ -99,6 +118,8 @@ impl Slave {
             eeprom_busy_until: SimTime::ZERO,
             eeprom_write_time: SimDuration::from_millis(15),
             data_exchange_at: Slave::NO_DATA_EXCHANGE,
+            drive_counted: device.drive_changes().is_some(),
+            drive_moved: false,
             device,
         }
     }
@@ -172,6 +193,12 @@ impl Slave {
     /// The device, mutable.
     pub fn device_mut(&mut self) -> &mut dyn Peripheral {
         self.device.as_mut()
+    }
+
+    /// Whether the device counts its drive changes ([`Peripheral::drive_changes`]).
+    #[inline]
+    pub fn drive_counted(&self) -> bool {
+        self.drive_counted
     }
 
     /// Sets status bit S3 (non-volatile memory error), a fault hook.
@@ -249,9 +276,19 @@ impl Slave {
     /// save and restore the registers the others need.
     pub fn handle(&mut self, now: SimTime, req: Request) -> Option<Response> {
         if let Some(outputs) = self.standard_data_exchange(req) {
-            return Some(Response::new(self.device.exchange(now, outputs)));
+            let (inputs, moved) = self.device.exchange_noted(now, outputs);
+            self.drive_moved |= moved;
+            return Some(Response::new(inputs));
         }
         self.handle_other(now, req)
+    }
+
+    /// Whether what the device drives outside the bus may have changed (its count moved,
+    /// [`Peripheral::drive_changes`]) in the calls [`Slave::handle`] took since the last
+    /// look; forgets it.
+    #[inline(always)]
+    pub fn take_drive_moved(&mut self) -> bool {
+        core::mem::take(&mut self.drive_moved)
     }
 
     /// [`Slave::handle`] of a request that is not a standard Data_Exchange to this slave.
@@ -261,8 +298,10 @@ impl Slave {
             // The master's status poll: it changes nothing, so nothing to refresh.
             return Some(Response::new(self.status(now)));
         }
+        let before = self.device.drive_changes();
         let answer = self.handle_call(now, req);
         self.refresh();
+        self.drive_moved |= self.device.drive_changes() != before;
         answer
     }
 
@@ -504,6 +543,92 @@ mod tests {
             }
         }
         assert!(checked > 0);
+    }
+
+    /// A device that lights a lamp from output bit 0 (a parameter write or a reset puts it
+    /// out) and counts the lamp's changes.
+    #[derive(Debug, Default)]
+    struct Lamp {
+        on: bool,
+        changes: u64,
+    }
+
+    impl Lamp {
+        fn set(&mut self, on: bool) {
+            if on != self.on {
+                self.on = on;
+                self.changes += 1;
+            }
+        }
+    }
+
+    impl Peripheral for Lamp {
+        fn exchange(&mut self, _now: SimTime, outputs: Nibble) -> Nibble {
+            self.set(outputs.bit(0));
+            Nibble::ZERO
+        }
+        fn write_parameter(&mut self, _now: SimTime, parameter: Nibble) -> Nibble {
+            self.set(false);
+            parameter
+        }
+        fn reset(&mut self) {
+            self.set(false);
+        }
+        fn drive_changes(&self) -> Option<u64> {
+            Some(self.changes)
+        }
+        fn as_any(&self) -> &dyn Any {
+            self
+        }
+        fn as_any_mut(&mut self) -> &mut dyn Any {
+            self
+        }
+    }
+
+    /// Every request, to a slave whose lamp is lit and to one whose lamp is out: the slave
+    /// notes a possible drive change exactly when the call moved the device's count; a device
+    /// that does not count never moves one.
+    #[test]
+    fn a_call_that_moves_the_drive_count_is_noted() {
+        let now = SimTime::from_millis(3);
+        let address = Address::new(7).expect("7");
+        let codes = SlaveCodes::new(7, 0xF, 0xF, 0xF);
+        let (mut moved, mut kept) = (0, 0);
+        for lit in [false, true] {
+            for body in 0..1u16 << 11 {
+                let mut s = Slave::new("lamp", address, codes, Box::<Lamp>::default());
+                s.data_exchange_enabled = true;
+                s.refresh();
+                let lamp = |s: &Slave| {
+                    s.device()
+                        .as_any()
+                        .downcast_ref::<Lamp>()
+                        .expect("a lamp")
+                        .changes
+                };
+                s.device_mut()
+                    .as_any_mut()
+                    .downcast_mut::<Lamp>()
+                    .expect("a lamp")
+                    .set(lit);
+                let before = lamp(&s);
+                let _ = s.handle(now, request(body));
+                let noted = s.take_drive_moved();
+                assert_eq!(noted, lamp(&s) != before, "lit {lit}, {:?}", request(body));
+                assert!(!s.take_drive_moved(), "noted once");
+                if noted {
+                    moved += 1;
+                } else {
+                    kept += 1;
+                }
+            }
+            let mut r = test_slave(7, codes, true);
+            for body in 0..1u16 << 11 {
+                let _ = r.handle(now, request(body));
+                assert!(!r.take_drive_moved(), "{:?}", request(body));
+            }
+        }
+        assert!(moved > 0 && kept > 0, "{moved} moved, {kept} kept");
     }
 
     proptest::proptest! {

@@ -96,6 +96,7 @@ impl Bus {
 
     /// A slave, mutable (for fault hooks such as [`Slave::set_nv_error`]).
     pub fn slave_mut(&mut self, id: SlaveId) -> Option<&mut Slave> {
+        self.drives_may_move();
         self.slaves.get_mut(id.0).map(|s| &mut s.slave)
     }
 

@@ -6,6 +6,8 @@ impl Bus {
     /// Takes slave `id` off the bus (unplugged: it hears nothing, answers nothing, loses power).
     pub fn detach(&mut self, id: SlaveId) {
         self.release_held();
+        // The reset may change what the device drives.
+        self.drives_may_move();
         if let Some(s) = self.slaves.get_mut(id.0) {
             if s.attached {
                 s.attached = false;
@@ -19,6 +21,7 @@ impl Bus {
     /// Puts slave `id` back on the bus: it powers up (reset) with a fresh receiver.
     pub fn attach(&mut self, id: SlaveId) {
         self.release_held();
+        self.drives_may_move();
         let powered = self.slaves_powered;
         if let Some(s) = self.slaves.get_mut(id.0) {
             if !s.attached {
@@ -50,6 +53,7 @@ impl Bus {
         };
         self.volts = volts;
         self.last_out = [NO_OUTPUT; 32];
+        self.drives_may_move();
         let now = self.now;
         let slaves_ok = volts >= SLAVE_MIN_VOLTS;
         if !slaves_ok && self.slaves_powered {

@@ -54,8 +54,6 @@ use asi_phy::{
 };
 use asi_slaves::monitor::SafetyMonitor;
 use asi_slaves::slave::{Peripheral, Slave};
-use std::sync::atomic::{AtomicU64, Ordering};
-use std::sync::Arc;
 
 mod access;
 mod grid;
@@ -249,9 +247,13 @@ pub struct Bus {
     last_out: [u8; 32],
     /// A watched address took a new output nibble in the current event.
     output_taken: bool,
-    /// The application's count of the changes of what the watched slaves' devices drive
-    /// ([`Bus::count_drive_changes`]), and its value when the bus last looked.
-    drive_count: Option<Arc<AtomicU64>>,
+    /// The drive count ([`Bus::drive_count`]): the calls into the slaves in which what a
+    /// counting device drives may have changed, and the application's mutable accesses and
+    /// fault hooks, which may change anything.
+    drive_total: u64,
+    /// A slave's device counts its drive changes ([`Slave::drive_counted`]).
+    drive_counted: bool,
+    /// The drive count when the bus last looked ([`Bus::pass_quiet_outputs_until`]).
     drive_seen: u64,
     /// Up to this time a new output nibble that moved no drive passes without ending
     /// [`Bus::advance_before`] ([`Bus::pass_quiet_outputs_until`]).
@@ -310,7 +312,8 @@ impl Bus {
             watch: 0,
             last_out: [NO_OUTPUT; 32],
             output_taken: false,
-            drive_count: None,
+            drive_total: 0,
+            drive_counted: false,
             drive_seen: 0,
             quiet_outputs_until: None,
             ring: None,
@@ -336,6 +339,8 @@ impl Bus {
             slave,
             attached: true,
         });
+        self.drive_counted |= self.slaves[id].slave.drive_counted();
+
         self.join(id);
         self.reindex();
         Ok(SlaveId(id))
@@ -785,6 +790,7 @@ impl Bus {
         // A Data_Exchange (told from its bits) never changes an address.
         let told = Told::of(req);
         let exchange = matches!(told, Told::Exchange(..));
+        let mut moved = false;
         while who != 0 {
             let i = who.trailing_zeros() as usize;
             who &= who - 1;
@@ -796,11 +802,13 @@ impl Bus {
             }
             let before = (!exchange).then(|| slot.slave.addr());
             let r = slot.slave.handle(now, req);
+            moved |= slot.slave.take_drive_moved();
             readdressed |= before.is_some_and(|b| slot.slave.addr() != b);
             if let Some(r) = r {
                 answer(r);
             }
         }
+        self.drive_total += u64::from(moved);
         self.note_output(req, told);
         let reset = matches!(
             told,

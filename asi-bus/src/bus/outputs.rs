@@ -1,6 +1,6 @@
 //! What the application watches of the slaves' outputs: the addresses whose new output
 //! nibbles end [`Bus::advance_before`] early ([`Bus::watch_outputs`]), and the new nibbles
-//! that change nothing a slave drives, which may pass ([`Bus::count_drive_changes`],
+//! that change nothing a slave drives, which may pass ([`Bus::drive_count`],
 //! [`Bus::pass_quiet_outputs_until`]).
 
 use super::*;
@@ -30,24 +30,24 @@ impl Bus {
         self.watch = addresses;
     }
 
-    /// Gives the bus the application's count of the changes of what the watched slaves'
-    /// devices drive (it moves whenever what one drives changes, in the device's exchange):
-    /// what lets a new output nibble that changed nothing pass
-    /// ([`Bus::pass_quiet_outputs_until`]).
-    pub fn count_drive_changes(&mut self, count: Arc<AtomicU64>) {
-        self.drive_seen = count.load(Ordering::Relaxed);
-        self.drive_count = Some(count);
+    /// A count that moves whenever what a counting slave device drives
+    /// ([`Peripheral::drive_changes`](asi_slaves::slave::Peripheral::drive_changes)) may have
+    /// changed: at each call into the slaves in which one's count moved, and at each of the
+    /// application's accesses that may change anything ([`Bus::slave_mut`], the fault hooks
+    /// that reset slaves). `None` when no device counts.
+    #[inline]
+    pub fn drive_count(&self) -> Option<u64> {
+        self.drive_counted.then_some(self.drive_total)
     }
 
-    /// The drive count given to the bus ([`Bus::count_drive_changes`]) as it is now, `None`
-    /// without one.
-    pub fn drive_count(&self) -> Option<u64> {
-        self.drive_count.as_ref().map(|c| c.load(Ordering::Relaxed))
+    /// What the application is about to do may change what a slave drives.
+    pub(super) fn drives_may_move(&mut self) {
+        self.drive_total += 1;
     }
 
     /// Up to `until` (inclusive; `None`: never), a watched slave's new output nibble (or a
     /// call that writes to it, after which its next nibble counts as new) does not end
-    /// [`Bus::advance_before`] where the drive count ([`Bus::count_drive_changes`]) has not
+    /// [`Bus::advance_before`] where the drive count ([`Bus::drive_count`]) has not
     /// moved since the bus last looked at it: it changed nothing the slave drives. For an
     /// application to whom such a moment would do nothing (the rig while the plant has
     /// nothing for the slaves and its invariant watch nothing to check); any other new nibble
@@ -61,10 +61,9 @@ impl Bus {
     /// the drive count has not moved since the bus last looked (which it now has).
     #[inline(never)]
     fn output_passes_quietly(&mut self) -> bool {
-        let Some(count) = &self.drive_count else {
+        let Some(c) = self.drive_count() else {
             return false;
         };
-        let c = count.load(Ordering::Relaxed);
         let moved = c != self.drive_seen;
         self.drive_seen = c;
         !moved && self.quiet_outputs_until.is_some_and(|u| self.now <= u)
