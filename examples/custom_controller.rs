@@ -40,6 +40,7 @@ enum Phase {
 }
 
 /// The shuttle: a controller of its own on the library's I/O.
+#[derive(Clone)]
 struct Shuttle {
     io: PlcIo,
     phase: Phase,

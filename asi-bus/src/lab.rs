@@ -55,7 +55,7 @@ fn extra_addresses(n: u8) -> Result<&'static [u8], ConfigError> {
 }
 
 /// The lab lift's bus with typed access to its devices.
-#[derive(Debug)]
+#[derive(Clone, Debug)]
 pub struct LabLift {
     /// The bus.
     pub bus: Bus,
@@ -67,7 +67,7 @@ pub struct LabLift {
 
 /// A device that drives the plant, and what it drives as one number to compare (see
 /// [`Driving`]).
-trait Drives: Peripheral {
+trait Drives: Peripheral + Clone {
     fn drive(&self) -> u32;
 }
 

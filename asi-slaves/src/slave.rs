@@ -20,7 +20,7 @@ use core::fmt;
 /// received the request; it gets the output bits and returns the input bits for the response.
 /// A plain I/O module samples its input pins and then drives its outputs; an intelligent slave
 /// (S-7.3 analog) may react to the outputs within the same telegram.
-pub trait Peripheral: Any + fmt::Debug + Send {
+pub trait Peripheral: Any + fmt::Debug + Send + PeripheralClone {
     /// Data_Exchange: output bits D3..D0 in (D2..D0 for an A/B slave), input bits out.
     fn exchange(&mut self, now: SimTime, outputs: Nibble) -> Nibble;
     /// Write_Parameter: the parameter bits; returns the parameter echo (default: the bits).
@@ -54,6 +54,25 @@ pub trait Peripheral: Any + fmt::Debug + Send {
     fn as_any_mut(&mut self) -> &mut dyn Any;
 }
 
+/// A copy of a [`Peripheral`] behind a box, so that a bus can be copied with its slaves' devices
+/// (a snapshot of a run): any device that is `Clone` has it.
+pub trait PeripheralClone {
+    /// A copy of the device, boxed.
+    fn clone_box(&self) -> Box<dyn Peripheral>;
+}
+
+impl<T: Peripheral + Clone> PeripheralClone for T {
+    fn clone_box(&self) -> Box<dyn Peripheral> {
+        Box::new(self.clone())
+    }
+}
+
+impl Clone for Box<dyn Peripheral> {
+    fn clone(&self) -> Self {
+        (**self).clone_box()
+    }
+}
+
 /// Status bit S0: address or ID code volatile (EEPROM write in progress).
 pub const S0_VOLATILE: u8 = 0b0001;
 /// Status bit S1: periphery fault.
@@ -62,6 +81,7 @@ pub const S1_PERIPHERY_FAULT: u8 = 0b0010;
 pub const S3_NV_ERROR: u8 = 0b1000;
 
 /// One AS-i slave: the IC state and its device.
+#[derive(Clone)]
 pub struct Slave {
     name: String,
     address: Address,
@@ -388,7 +408,7 @@ mod tests {
     use super::*;
 
     /// A device that answers with its outputs turned round and notes every call.
-    #[derive(Debug, Default)]
+    #[derive(Clone, Debug, Default)]
     struct Recorder {
         calls: Vec<(SimTime, Nibble)>,
         parameters: Vec<Nibble>,
@@ -547,7 +567,7 @@ mod tests {
 
     /// A device that lights a lamp from output bit 0 (a parameter write or a reset puts it
     /// out) and counts the lamp's changes.
-    #[derive(Debug, Default)]
+    #[derive(Clone, Debug, Default)]
     struct Lamp {
         on: bool,
         changes: u64,

@@ -19,7 +19,10 @@ use asi_phy::{SimDuration, SimTime};
 use std::any::Any;
 
 /// A lift controller on the lab bus: one PLC scan at a time.
-pub trait Controller: Send + 'static {
+///
+/// A controller is `Clone` ([`ControllerClone`]), so that a rig can be copied with it (a
+/// snapshot of a run goes on exactly as the original).
+pub trait Controller: Send + 'static + ControllerClone {
     /// The time between two scans.
     fn scan_period(&self) -> SimDuration;
 
@@ -88,6 +91,24 @@ pub struct PendingCalls {
     pub cabin: Vec<u8>,
     /// Hall calls, in the controller's order.
     pub hall: Vec<u8>,
+}
+
+/// A copy of a [`Controller`] behind a box: any controller that is `Clone` has it.
+pub trait ControllerClone {
+    /// A copy of the controller, boxed.
+    fn clone_box(&self) -> Box<dyn Controller>;
+}
+
+impl<T: Controller + Clone> ControllerClone for T {
+    fn clone_box(&self) -> Box<dyn Controller> {
+        Box::new(self.clone())
+    }
+}
+
+impl Clone for Box<dyn Controller> {
+    fn clone(&self) -> Self {
+        (**self).clone_box()
+    }
 }
 
 impl Controller for Plc {

@@ -19,7 +19,7 @@ pub mod plc;
 pub mod program;
 
 pub use asi_master::ProcessImage;
-pub use contract::{Controller, Outside, PendingCalls, Status};
+pub use contract::{Controller, ControllerClone, Outside, PendingCalls, Status};
 pub use dispatch::{Algorithm, Dir, HallDir, ServedCall, Source};
 pub use program::{
     CabinWord, ControllerConfig, ControllerConfigError, Event, HaltReason, InitStart, Inputs,

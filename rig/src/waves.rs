@@ -141,6 +141,7 @@ pub struct DriveSample {
 }
 
 /// The VCD's variables of the safe drive: per function its control and status bit.
+#[derive(Clone)]
 struct DriveIds {
     control: Vec<VarId>,
     status: Vec<VarId>,
@@ -203,6 +204,7 @@ fn declare_drive(w: &mut VcdWriter<Box<dyn Write>>) -> DriveIds {
     }
 }
 
+#[derive(Clone)]
 struct Ids {
     manchester: VarId,
     line_voltage: VarId,
@@ -320,6 +322,39 @@ impl Waves {
             last_real: None,
             error: None,
         }
+    }
+
+    /// Waveforms that go on from where these stand into the writers of `out` (for a copy of a
+    /// rig; the windows stay these ones'): the same variables, the changes not yet written,
+    /// the line voltage not yet drawn. The VCD begins with its header and every variable's
+    /// value at the last time written ([`VcdWriter::continue_into`]), the CSV with its header;
+    /// every record after that is one these waveforms write.
+    pub fn continue_into(&self, out: WaveOutputs) -> Waves {
+        let vcd = match (&self.vcd, out.vcd) {
+            (Some((w, ids)), Some(o)) => Some((w.continue_into(o), ids.clone())),
+            _ => None,
+        };
+        Waves {
+            vcd,
+            drive: self.drive.clone(),
+            csv: self.csv.as_ref().and(out.csv),
+            window: self.window,
+            pulse_window: self.pulse_window,
+            window_pulses: self.window_pulses.clone(),
+            rendered_to: self.rendered_to,
+            csv_header: false,
+            wave: self.wave,
+            response_after: self.response_after,
+            last_real: self.last_real,
+            error: None,
+        }
+    }
+
+    /// Waveforms begun at `now` of a run under way (a copy of a rig given outputs of its own):
+    /// the line voltage is drawn from `now` on, as nothing before it was seen.
+    pub fn starting_at(mut self, now: SimTime) -> Waves {
+        self.rendered_to = self.rendered_to.max(now);
+        self
     }
 
     /// Adds the scope `rig.drive_safety` (the safe drive's bits) to the VCD; before the first

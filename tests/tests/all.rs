@@ -4,6 +4,7 @@
 
 mod cabin_handshake;
 mod campaign;
+mod clones;
 mod controllers;
 mod display_word;
 mod end_to_end;

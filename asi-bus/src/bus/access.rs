@@ -13,6 +13,11 @@ impl Bus {
         self.line_changed();
     }
 
+    /// Whether the line's pulses are recorded ([`Bus::record_line`]).
+    pub fn records_line(&self) -> bool {
+        self.medium.inner().is_recording()
+    }
+
     /// The pulses put on the line since the last call, in the order they went on it (a
     /// pulse that a fault shifted may be slightly out of time order).
     pub fn take_line_pulses(&mut self) -> Vec<asi_phy::Pulse> {
@@ -76,7 +81,7 @@ impl Bus {
 
     /// Calls `cb` with every trace record (`None` removes it).
     pub fn set_trace_callback(&mut self, cb: Option<TraceCallback>) {
-        self.callback = cb;
+        self.callback = Callback(cb);
     }
 
     /// Number of slaves added.

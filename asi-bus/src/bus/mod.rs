@@ -98,7 +98,7 @@ pub const SLAVE_MIN_VOLTS: f64 = 16.0;
 /// The nominal AS-i supply (§2.2.1 of the lift thesis: 29.5..31.6 V).
 pub const NOMINAL_VOLTS: f64 = 30.0;
 
-#[derive(Debug)]
+#[derive(Clone, Debug)]
 struct SlaveSlot {
     slave: Slave,
     attached: bool,
@@ -193,7 +193,22 @@ impl Current {
 /// Callback sink for trace records.
 pub type TraceCallback = Box<dyn FnMut(&TransactionRecord) + Send>;
 
+/// The bus's trace callback, a writer of the one bus it was given to: a copy of the bus
+/// (a snapshot) has none.
+#[derive(Default)]
+struct Callback(Option<TraceCallback>);
+
+impl Clone for Callback {
+    fn clone(&self) -> Callback {
+        Callback(None)
+    }
+}
+
 /// An AS-i segment: master, slaves, line, passive monitors.
+///
+/// A copy ([`Clone`]) goes on exactly as the original from the moment it was taken (the same
+/// transactions, the same line noise); it has no trace callback ([`Bus::set_trace_callback`]).
+#[derive(Clone)]
 pub struct Bus {
     timing: BusTiming,
     /// `timing.transaction()`, worked out once: the timing of a bus never changes, and the
@@ -259,7 +274,7 @@ pub struct Bus {
     /// [`Bus::advance_before`] ([`Bus::pass_quiet_outputs_until`]).
     quiet_outputs_until: Option<SimTime>,
     ring: Option<TraceRing>,
-    callback: Option<TraceCallback>,
+    callback: Callback,
     /// The frames of a response, kept between transactions so that none allocates.
     response_frames: Vec<Frame>,
 }
@@ -317,7 +332,7 @@ impl Bus {
             drive_seen: 0,
             quiet_outputs_until: None,
             ring: None,
-            callback: None,
+            callback: Callback(None),
             response_frames: Vec::new(),
         };
         for s in slaves {
@@ -635,7 +650,7 @@ impl Bus {
         // could see the event see it.
         let traced = tracing::Level::TRACE <= tracing::level_filters::STATIC_MAX_LEVEL
             && tracing::Level::TRACE <= tracing::level_filters::LevelFilter::current();
-        if traced || self.ring.is_some() || self.callback.is_some() {
+        if traced || self.ring.is_some() || self.callback.0.is_some() {
             self.publish(TransactionRecord {
                 start: cur.start,
                 kind: cur.tx.kind,
@@ -663,7 +678,7 @@ impl Bus {
         if let Some(r) = &mut self.ring {
             r.push(rec);
         }
-        if let Some(cb) = &mut self.callback {
+        if let Some(cb) = &mut self.callback.0 {
             cb(&rec);
         }
     }

@@ -8,7 +8,7 @@ use crate::{FaultInjector, FaultRates, Frame, Pulse, PulseFault, SimTime, Transm
 /// A line whose pulses pass a seeded [`FaultInjector`] and a one-shot list of exact
 /// [`PulseFault`]s on their way (a wrapper, like smoltcp's fault injector). Without faults a
 /// clean telegram goes on to the inner line as it is (and may take the wire's fast path).
-#[derive(Debug)]
+#[derive(Clone, Debug)]
 pub struct Faulty<L> {
     inner: L,
     injector: Option<FaultInjector>,

@@ -6,7 +6,7 @@ use crate::{Frame, Pulse, SimTime, Transmission};
 /// A line whose pulses are recorded while recording is on (a wrapper, like smoltcp's packet
 /// capture): inside [`Faulty`](super::Faulty) it records the pulses after faults, with
 /// colliding answers superimposed.
-#[derive(Debug)]
+#[derive(Clone, Debug)]
 pub struct Tap<L> {
     inner: L,
     recorded: Option<Vec<Pulse>>,

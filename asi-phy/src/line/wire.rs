@@ -4,7 +4,7 @@ use super::base::Line;
 use crate::{BusTiming, Expect, Frame, LineDecoder, Pulse, SimDuration, SimTime, Transmission};
 
 /// The bare line with its decoder: no faults, nothing recorded.
-#[derive(Debug)]
+#[derive(Clone, Debug)]
 pub struct Wire {
     decoder: LineDecoder,
     pause: SimDuration,

@@ -42,7 +42,7 @@ impl From<bool> for Sample {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub struct VarId(usize);
 
-#[derive(Debug)]
+#[derive(Clone, Debug)]
 struct Var {
     scope: Vec<&'static str>,
     name: &'static str,
@@ -115,6 +115,22 @@ impl<W: Write> VcdWriter<W> {
         self.pending.push((t_ns.max(self.flushed_to), var, value));
     }
 
+    /// A writer that goes on from where this one stands into `out` (a copy of a run given
+    /// outputs of its own): the same variables, the changes not yet written, and the values
+    /// written so far, which its output states after the header (a `$dumpvars` at the last
+    /// time written), so that it is a whole VCD of what follows. Every record it writes after
+    /// them is one this writer would write.
+    pub fn continue_into<V: Write>(&self, out: V) -> VcdWriter<V> {
+        VcdWriter {
+            out,
+            vars: self.vars.clone(),
+            pending: self.pending.clone(),
+            header_done: false,
+            time: self.time,
+            flushed_to: self.flushed_to,
+        }
+    }
+
     /// Writes every recorded change up to and including `t_ns`, in time order.
     pub fn flush_until(&mut self, t_ns: u64) -> io::Result<()> {
         self.header()?;
@@ -185,11 +201,23 @@ impl<W: Write> VcdWriter<W> {
             writeln!(o, "$upscope $end")?;
         }
         writeln!(o, "$enddefinitions $end")?;
+        // A writer that goes on from another ([`VcdWriter::continue_into`]): the values
+        // written so far.
+        if let Some(t) = self.time {
+            writeln!(self.out, "#{t}")?;
+            writeln!(self.out, "$dumpvars")?;
+            for i in 0..self.vars.len() {
+                if let Some(value) = self.vars[i].last.clone() {
+                    self.write_value(VarId(i), &value)?;
+                }
+            }
+            writeln!(self.out, "$end")?;
+        }
         Ok(())
     }
 
     fn write_change(&mut self, t: u64, var: VarId, value: Sample) -> io::Result<()> {
-        let v = &mut self.vars[var.0];
+        let v = &self.vars[var.0];
         if !v.every_record && v.last.as_ref() == Some(&value) {
             return Ok(());
         }
@@ -197,31 +225,37 @@ impl<W: Write> VcdWriter<W> {
             writeln!(self.out, "#{t}")?;
             self.time = Some(t);
         }
+        self.write_value(var, &value)?;
+        self.vars[var.0].last = Some(value);
+        Ok(())
+    }
+
+    /// Writes the record of `var` taking `value`.
+    fn write_value(&mut self, var: VarId, value: &Sample) -> io::Result<()> {
+        let v = &self.vars[var.0];
         let o = &mut self.out;
-        match (&value, v.kind) {
-            (Sample::Bits(b), VarKind::Wire(1)) => writeln!(o, "{}{}", b & 1, v.code)?,
-            (Sample::Unknown, VarKind::Wire(1)) => writeln!(o, "x{}", v.code)?,
+        match (value, v.kind) {
+            (Sample::Bits(b), VarKind::Wire(1)) => writeln!(o, "{}{}", b & 1, v.code),
+            (Sample::Unknown, VarKind::Wire(1)) => writeln!(o, "x{}", v.code),
             (Sample::Bits(b), VarKind::Wire(w)) => {
                 let digits: String = (0..w)
                     .rev()
                     .map(|i| if b >> i & 1 == 1 { '1' } else { '0' })
                     .collect();
-                writeln!(o, "b{digits} {}", v.code)?
+                writeln!(o, "b{digits} {}", v.code)
             }
-            (Sample::Unknown, VarKind::Wire(_)) => writeln!(o, "bx {}", v.code)?,
-            (Sample::Real(x), _) => writeln!(o, "r{x} {}", v.code)?,
+            (Sample::Unknown, VarKind::Wire(_)) => writeln!(o, "bx {}", v.code),
+            (Sample::Real(x), _) => writeln!(o, "r{x} {}", v.code),
             (Sample::Text(s), _) => {
                 let s: String = s
                     .chars()
                     .map(|c| if c.is_whitespace() { '_' } else { c })
                     .collect();
-                writeln!(o, "s{s} {}", v.code)?
+                writeln!(o, "s{s} {}", v.code)
             }
-            (Sample::Unknown, _) => writeln!(o, "s? {}", v.code)?,
-            (Sample::Bits(b), _) => writeln!(o, "r{b} {}", v.code)?,
+            (Sample::Unknown, _) => writeln!(o, "s? {}", v.code),
+            (Sample::Bits(b), _) => writeln!(o, "r{b} {}", v.code),
         }
-        v.last = Some(value);
-        Ok(())
     }
 }
 
@@ -304,5 +338,103 @@ bx #
 #50
 ";
         assert_eq!(text, want);
+    }
+
+    /// A writer continued at any point writes its header, the values written so far at the
+    /// last time written, and then exactly what the original writes from there.
+    #[test]
+    fn a_continued_writer_states_the_values_and_goes_on_as_the_original() {
+        let run = |split: Option<usize>| -> (String, Option<(usize, String)>) {
+            let mut w = VcdWriter::new(Vec::new());
+            let k1 = w.var(&["rig"], "k1", VarKind::Wire(1));
+            let pos = w.var(&["rig"], "pos", VarKind::Real);
+            let line = w.var_every_record(&["rig"], "line", VarKind::Wire(1));
+            let st = w.var(&["rig"], "state", VarKind::Text);
+            let mut copy = None;
+            for i in 0..12u64 {
+                if split == Some(i as usize) {
+                    let written = w.out.len();
+                    copy = Some((written, w.continue_into(Vec::new())));
+                }
+                let t = i * 10;
+                w.change(t, line, (i % 3 == 0).into());
+                w.change(t + 5, pos, Sample::Real((i / 4) as f64));
+                w.change(t + 2, k1, (i >= 6).into());
+                if i == 7 {
+                    w.change(t, st, Sample::Text("run up".into()));
+                }
+                if let Some((_, c)) = copy.as_mut() {
+                    c.change(t, line, (i % 3 == 0).into());
+                    c.change(t + 5, pos, Sample::Real((i / 4) as f64));
+                    c.change(t + 2, k1, (i >= 6).into());
+                    if i == 7 {
+                        c.change(t, st, Sample::Text("run up".into()));
+                    }
+                }
+                if i % 2 == 1 {
+                    w.flush_until(t).expect("write");
+                    if let Some((_, c)) = copy.as_mut() {
+                        c.flush_until(t).expect("write");
+                    }
+                }
+            }
+            let copied = copy.map(|(n, c)| {
+                (
+                    n,
+                    String::from_utf8(c.finish(130).expect("write")).expect("utf-8"),
+                )
+            });
+            (
+                String::from_utf8(w.finish(130).expect("write")).expect("utf-8"),
+                copied,
+            )
+        };
+        let (whole, _) = run(None);
+        for split in [1, 4, 8, 11] {
+            let (original, copy) = run(Some(split));
+            assert_eq!(original, whole);
+            let (written, copy) = copy.expect("a copy");
+            if written == 0 {
+                // Nothing written yet: the copy is the whole file.
+                assert_eq!(copy, whole, "split at {split}");
+                continue;
+            }
+            let (header, _) = whole
+                .split_once("$enddefinitions $end\n")
+                .expect("a header");
+            let rest = copy
+                .strip_prefix(header)
+                .and_then(|r| r.strip_prefix("$enddefinitions $end\n"))
+                .expect("the same header");
+            let (dump, body) = rest.split_once("$end\n").expect("a $dumpvars block");
+            assert_eq!(body, &whole[written..], "split at {split}");
+            let last_time = whole[..written]
+                .lines()
+                .rev()
+                .find(|l| l.starts_with('#'))
+                .expect("a time written");
+            let mut lines = dump.lines();
+            assert_eq!(lines.next(), Some(last_time), "split at {split}");
+            assert_eq!(lines.next(), Some("$dumpvars"), "split at {split}");
+            // Each value stated is the variable's last record before the split.
+            for record in lines {
+                let code = record.rsplit_once(' ').map_or(&record[1..], |(_, c)| c);
+                let last = whole[..written]
+                    .lines()
+                    .rev()
+                    .filter(|l| !l.starts_with('#') && !l.starts_with('$'))
+                    .find(|l| l.rsplit_once(' ').map_or(&l[1..], |(_, c)| c) == code);
+                assert_eq!(last, Some(record), "split at {split}");
+            }
+        }
+        // The worked case: split after the first flush, which wrote up to time 10 (line 1 at 0,
+        // k1 0 at 2, pos 0 at 5, line 0 at 10): the values in the order declared.
+        let (_, copy) = run(Some(2));
+        let (_, copy) = copy.expect("a copy");
+        let dump = copy.split_once("$enddefinitions $end\n").expect("header").1;
+        assert!(
+            dump.starts_with("#10\n$dumpvars\n0!\nr0 \"\n0#\n$end\n"),
+            "{dump}"
+        );
     }
 }

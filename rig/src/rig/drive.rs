@@ -14,6 +14,7 @@ use safety::drive::{DriveConfigError, DriveEventKind, Function, Violation};
 use safety::lift_drive::{LiftDriveConfig, LiftDriveInputs, LiftDriveSafety};
 
 /// The safe drive and what it has done.
+#[derive(Clone)]
 pub(super) struct SafeDriveGuard {
     safety: LiftDriveSafety,
     /// At or below this set-point the converter creeps (SLS2).

@@ -101,6 +101,12 @@ enum Round {
 }
 
 /// The whole rig.
+///
+/// A copy ([`Clone`], a snapshot) goes on exactly as the original from the moment it was
+/// taken: the same report, the same transactions. It has none of the original's outputs
+/// (the trace, the waveforms, the observers are writers of the rig they were given to); give
+/// it its own ([`Rig::trace_to`], [`Rig::waves_to`], [`Rig::on_transaction`]).
+#[derive(Clone)]
 pub struct Rig {
     sc: Scenario,
     lab: LabLift,
@@ -287,15 +293,24 @@ impl Rig {
         self.every_moment = on;
     }
 
-    /// Writes the VCD and the line-voltage CSV of the run (see [`crate::waves`]).
+    /// Writes the VCD and the line-voltage CSV of the run (see [`crate::waves`]). A copy of a
+    /// rig ([`Clone`]) given them before it steps on goes on with the original's
+    /// waveforms (and their windows) into these writers; otherwise they begin at the moment
+    /// reached.
     pub fn waves_to(&mut self, out: WaveOutputs) {
         self.enable_trace_ring();
         self.lab.bus.record_line(true);
-        let waves = Waves::new(out, self.lab.bus.timing());
-        self.outputs.waves = Some(match self.drive {
-            Some(_) => waves.with_drive_safety(),
-            None => waves,
-        });
+        let waves = match self.outputs.copied_waves.take() {
+            Some(copied) => copied.continue_into(out),
+            None => {
+                let waves = Waves::new(out, self.lab.bus.timing()).starting_at(self.now);
+                match self.drive {
+                    Some(_) => waves.with_drive_safety(),
+                    None => waves,
+                }
+            }
+        };
+        self.outputs.waves = Some(waves);
     }
 
     /// Hands every bus transaction to `f` (at every PLC scan and at the end, in order),
@@ -306,8 +321,12 @@ impl Rig {
     }
 
     fn enable_trace_ring(&mut self) {
-        // A PLC scan spans about 65 transactions of the lab bus; the ring holds far more.
-        self.lab.bus.enable_trace(1 << 16);
+        // A copy of a rig keeps the records its original had not yet handed on: its new
+        // outputs get them.
+        if self.lab.bus.trace_ring_mut().is_none() {
+            // A PLC scan spans about 65 transactions of the lab bus; the ring holds far more.
+            self.lab.bus.enable_trace(1 << 16);
+        }
     }
 
     /// The first error writing the trace or the waveforms, if any.
@@ -318,7 +337,16 @@ impl Rig {
     /// Hands the transactions and line pulses since the last call to the trace and the
     /// waveform outputs.
     fn flush_trace(&mut self) {
+        // A copy of a rig that had outputs keeps recording for the outputs it is given
+        // before its first step ([`Rig::enable_trace_ring`], [`Rig::waves_to`]); given none,
+        // nothing wants the records.
+        if self.outputs.waves.is_none() && self.lab.bus.records_line() {
+            self.lab.bus.record_line(false);
+        }
         if !self.outputs.wanted() {
+            if self.lab.bus.trace_ring_mut().is_some() {
+                self.lab.bus.enable_trace(0);
+            }
             return;
         }
         let records = self.lab.bus.drain_trace();
@@ -458,6 +486,7 @@ impl Rig {
     /// stops where a slave takes a new output for the plant, which gets it at that moment.
     #[inline]
     fn advance(&mut self, limit: SimTime) -> Option<SimTime> {
+        self.outputs.stepped();
         let t = self.next_moment();
         if t > limit {
             return None;
@@ -475,6 +504,7 @@ impl Rig {
     /// after a new output: it is before the end, and no PLC scan has run). About half the
     /// moments of a run are new outputs of the set-point slave's analog transfer.
     fn advance_to_step(&mut self, limit: SimTime) -> Option<SimTime> {
+        self.outputs.stepped();
         loop {
             let t = self.next_moment();
             if t > limit {

@@ -1,7 +1,7 @@
 //! Where a run's transactions go besides the report: the transaction trace (text or JSON
 //! lines), the waveform outputs (VCD, line-voltage CSV) and an observer.
 
-use crate::waves::{RigSample, Waves};
+use crate::waves::{RigSample, WaveOutputs, Waves, DEFAULT_WINDOW};
 use asi_master::record::TransactionRecord;
 use asi_phy::{Pulse, SimTime};
 use asi_trace::trace::{write_record, TraceFormat};
@@ -20,9 +20,40 @@ pub(super) struct Outputs {
     pub waves: Option<Waves>,
     /// Who else wants every transaction, in the order they were added.
     pub observers: Vec<TransactionObserver>,
+    /// A copy's: the original's waveforms as they stood, without writers, for the waveform
+    /// outputs the copy is given before it steps on to go on from
+    /// ([`Waves::continue_into`]).
+    pub copied_waves: Option<Waves>,
+}
+
+/// A copy of a rig has no outputs: they are writers of the rig they were given to. It keeps
+/// the state of the waveforms, for outputs of its own to go on from.
+impl Clone for Outputs {
+    fn clone(&self) -> Outputs {
+        let waves = self.waves.as_ref().or(self.copied_waves.as_ref());
+        Outputs {
+            copied_waves: waves.map(|w| {
+                w.continue_into(WaveOutputs {
+                    vcd: Some(Box::new(std::io::sink())),
+                    csv: Some(Box::new(std::io::sink())),
+                    window: DEFAULT_WINDOW,
+                    pulse_window: None,
+                })
+            }),
+            ..Outputs::default()
+        }
+    }
 }
 
 impl Outputs {
+    /// The rig steps on: a copy's waveforms not taken up by then can no longer be.
+    #[inline]
+    pub(super) fn stepped(&mut self) {
+        if self.copied_waves.is_some() {
+            self.copied_waves = None;
+        }
+    }
+
     /// Whether anything wants the transactions.
     pub(super) fn wanted(&self) -> bool {
         self.trace.is_some() || self.waves.is_some() || !self.observers.is_empty()
