@@ -298,7 +298,7 @@ async fn the_live_view_in_chromium() {
     assert!(
         r.log
             .iter()
-            .any(|l| l.who == Actor::Web && l.text.starts_with("restarted by the page")),
+            .any(|l| l.who == Actor::Web && l.text().starts_with("restarted by the page")),
         "{:?}",
         r.log
     );

@@ -462,7 +462,7 @@ pub fn build(rig: &Rig, run: Run, telegrams: Option<&Telegrams>) -> View {
             .map(|v| format!("{:.3} s {}: {}", v.at_s, v.kind, v.detail)),
         log: log
             .iter()
-            .map(|l| format!("{:9.3} s  {}: {}", l.at_s, l.who, l.text))
+            .map(|l| format!("{:9.3} s  {}: {}", l.at_s, l.who, l.event))
             .collect(),
     }
 }

@@ -274,7 +274,7 @@ async fn the_watchdog_zeroes_the_outputs_of_a_controller_that_went_quiet() {
     assert!(r
         .log
         .iter()
-        .any(|l| l.who == Actor::Gateway && l.text.contains("watchdog")));
+        .any(|l| l.who == Actor::Gateway && l.text().contains("watchdog")));
 }
 
 /// One Modbus TCP request as bytes (MBAP header, unit 1).
@@ -568,7 +568,7 @@ fn a_ttk4145_controller_drives_the_lab_lift_and_its_lamps_are_recorded() {
     assert!(r
         .log
         .iter()
-        .any(|l| l.who == Actor::Ttk4145 && l.text == "motor up"));
+        .any(|l| l.who == Actor::Ttk4145 && l.text() == "motor up"));
 }
 
 #[test]
@@ -644,11 +644,11 @@ fn clients_that_repeat_themselves_for_ever_leave_a_bounded_log() {
     let r = running.wait();
     let keep = gateway::live::LOG_KEEP;
     for (who, sent) in [(Actor::Ttk4145, 20_000), (Actor::Client, 3000)] {
-        let lines: Vec<&str> = r
+        let lines: Vec<String> = r
             .log
             .iter()
             .filter(|l| l.who == who)
-            .map(|l| l.text.as_str())
+            .map(rig::report::LogLine::text)
             .collect();
         assert_eq!(lines.len(), 2 * keep + 1, "{who}");
         let marker = format!("… {} lines left out", sent - 2 * keep);

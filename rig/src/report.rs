@@ -358,8 +358,41 @@ pub struct Trip {
     pub at_s: f64,
     /// What it is.
     pub kind: TripKind,
-    /// Why, in words.
-    pub cause: String,
+    /// Why (in the JSON report, in words).
+    pub cause: TripCause,
+}
+
+/// Why a [`Trip`] happened: what the safety logic or the safe drive reported. `Display` (and
+/// the JSON report) gives it in words.
+#[derive(Clone, Debug, PartialEq)]
+#[non_exhaustive]
+pub enum TripCause {
+    /// The lift's safety logic: a safety function, the group, a connection, K1.
+    Logic(safety::LiftSafetyCause),
+    /// The safe drive: a function tripped.
+    Drive(safety::drive::Violation),
+}
+
+impl TripCause {
+    /// `true` if K1 opened ([`safety::LiftSafetyCause::K1Opened`]).
+    pub fn is_k1_opened(&self) -> bool {
+        matches!(self, TripCause::Logic(safety::LiftSafetyCause::K1Opened(_)))
+    }
+}
+
+impl std::fmt::Display for TripCause {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            TripCause::Logic(c) => c.fmt(f),
+            TripCause::Drive(v) => write!(f, "safe drive: {v}"),
+        }
+    }
+}
+
+impl Serialize for TripCause {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.collect_str(self)
+    }
 }
 
 /// What a [`Trip`] record is.
@@ -599,14 +632,55 @@ pub struct LogLine {
     pub at_s: f64,
     /// Who.
     pub who: Actor,
-    /// What.
-    pub text: String,
+    /// What ([`LogEvent`]; [`LogLine::text`] in words).
+    pub event: LogEvent,
+}
+
+impl LogLine {
+    /// A line of `who` at `at_s` saying `event`.
+    pub fn new(at_s: f64, who: Actor, event: LogEvent) -> LogLine {
+        LogLine { at_s, who, event }
+    }
+
+    /// What the line says, in words.
+    pub fn text(&self) -> String {
+        self.event.to_string()
+    }
 }
 
 impl std::fmt::Display for LogLine {
     /// The line as the readable log prints it: time, who, what.
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "{:>10.3} s  {:<10}  {}", self.at_s, self.who, self.text)
+        write!(f, "{:>10.3} s  {:<10}  {}", self.at_s, self.who, self.event)
+    }
+}
+
+/// What a [`LogLine`] says: the safety logic's and the controller's events as they are, the
+/// rest in words. `Display` gives the log's words.
+#[derive(Clone, Debug, PartialEq)]
+#[non_exhaustive]
+pub enum LogEvent {
+    /// The lift's safety logic reported this ([`Actor::Safety`]).
+    Safety(safety::LiftSafetyCause),
+    /// The built-in program reported this ([`Actor::Controller`]).
+    Controller(controller::ProgramEventKind),
+    /// Anything else, in words.
+    Text(String),
+}
+
+impl std::fmt::Display for LogEvent {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            LogEvent::Safety(c) => c.fmt(f),
+            LogEvent::Controller(e) => e.fmt(f),
+            LogEvent::Text(t) => f.write_str(t),
+        }
+    }
+}
+
+impl From<String> for LogEvent {
+    fn from(text: String) -> LogEvent {
+        LogEvent::Text(text)
     }
 }
 
@@ -811,7 +885,7 @@ impl Report {
             .safety
             .trips
             .iter()
-            .filter(|t| t.kind == TripKind::PowerOff && t.cause.starts_with("K1 opened"))
+            .filter(|t| t.kind == TripKind::PowerOff && t.cause.is_k1_opened())
             .count();
         // With the safe drive its torque-off opens K1 too: the count is the safety logic's,
         // and says so; the drive's own are listed below.

@@ -20,6 +20,6 @@ pub mod plcopen;
 pub mod primitives;
 
 pub use lift::{
-    LiftSafety, LiftSafetyConfig, LiftSafetyEvent, LiftSafetyInputs, LiftSafetyOutputs, SafeLink,
-    SAFETY_SCAN_PERIOD,
+    LiftSafety, LiftSafetyCause, LiftSafetyConfig, LiftSafetyEvent, LiftSafetyInputs,
+    LiftSafetyOutputs, SafeLink, SAFETY_SCAN_PERIOD,
 };

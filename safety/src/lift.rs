@@ -330,6 +330,102 @@ pub enum LiftEventKind {
     Info,
 }
 
+/// What the lift's safety logic reports, in the lift's terms: the SF_EmergencyStop module of
+/// the STOP circuit, the SF_SafetyMonitor of the overtravel sensors, K1, or another event of
+/// the logic in its own terms. `Display` gives the safety log's words, e.g. `tripped: STOP
+/// demanded (channel 1 open); estop_out off, K1 off in 9.1 s`.
+#[derive(Clone, Debug, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum LiftSafetyCause {
+    /// The STOP circuit demanded the safe state: these channels open (bit 0: channel 1, bit
+    /// 1: channel 2); estop_out off at once, K1 after `delay`.
+    StopDemanded {
+        /// The open channels.
+        channels: u8,
+        /// The STOP delay.
+        delay: SimDuration,
+    },
+    /// The STOP delay elapsed: EStopDelOut off.
+    StopDelayElapsed {
+        /// The STOP delay.
+        delay: SimDuration,
+    },
+    /// The controller restarted the STOP circuit.
+    StopRestarted,
+    /// FB_ERR: the STOP channels disagreed for longer than `limit`.
+    StopDiscrepancy {
+        /// The discrepancy time allowed.
+        limit: SimDuration,
+    },
+    /// FB_ERR: K1's auxiliary contact was open at the STOP restart (K1 welded?).
+    StopContactOpen,
+    /// The overtravel monitor tripped: these sensors not released; K1 off.
+    OvertravelTripped {
+        /// The bottom sensor.
+        bottom: bool,
+        /// The top sensor.
+        top: bool,
+    },
+    /// The operator reset the overtravel monitor.
+    OvertravelReset,
+    /// FB_ERR: K1's auxiliary contact was open at the overtravel reset (K1 welded?).
+    OvertravelContactOpen,
+    /// K1 closed: drive power on.
+    K1Closed,
+    /// K1 opened, for this cause.
+    K1Opened(K1Cause),
+    /// Another event of the logic, in its own terms (a connection's error, the group's
+    /// state, a local output, a logic fault, the modules' other events).
+    Logic(LogicEventKind),
+}
+
+impl fmt::Display for LiftSafetyCause {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        use LiftSafetyCause::*;
+        match self {
+            StopDemanded { channels, delay } => {
+                let open: Vec<String> = (0..2)
+                    .filter(|b| channels & 1 << b != 0)
+                    .map(|b| (b + 1).to_string())
+                    .collect();
+                write!(
+                    f,
+                    "tripped: STOP demanded (channel {} open); estop_out off, K1 off in {delay}",
+                    open.join(" and ")
+                )
+            }
+            StopDelayElapsed { delay } => {
+                write!(f, "STOP delay of {delay} elapsed: EStopDelOut off")
+            }
+            StopRestarted => f.write_str("STOP circuit restarted by the controller"),
+            StopDiscrepancy { limit } => {
+                write!(f, "FB_ERR: STOP channels disagree for longer than {limit}")
+            }
+            StopContactOpen => {
+                f.write_str("FB_ERR: K1 auxiliary contact open at the STOP restart (K1 welded?)")
+            }
+            OvertravelTripped { bottom, top } => {
+                let which = match (bottom, top) {
+                    (true, true) => "bottom and top sensors",
+                    (true, false) => "bottom sensor",
+                    _ => "top sensor",
+                };
+                write!(
+                    f,
+                    "tripped: overtravel {which} (safety monitor not released); K1 off"
+                )
+            }
+            OvertravelReset => f.write_str("overtravel monitor reset by the operator"),
+            OvertravelContactOpen => f.write_str(
+                "FB_ERR: K1 auxiliary contact open at the overtravel reset (K1 welded?)",
+            ),
+            K1Closed => f.write_str("K1 closed: drive power on"),
+            K1Opened(c) => write!(f, "K1 opened: {c}"),
+            Logic(e) => e.fmt(f),
+        }
+    }
+}
+
 /// One line of the safety log.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct LiftSafetyEvent {
@@ -337,8 +433,8 @@ pub struct LiftSafetyEvent {
     pub at: SimTime,
     /// What kind.
     pub kind: LiftEventKind,
-    /// The cause in words, e.g. `tripped: STOP demanded (channel 1 open)`.
-    pub cause: String,
+    /// What happened ([`LiftSafetyCause`]; its `Display` is the log's words).
+    pub cause: LiftSafetyCause,
 }
 
 impl LiftSafetyEvent {
@@ -612,7 +708,10 @@ impl LiftSafety {
         let mut events: Vec<LiftSafetyEvent> = if logged.is_empty() {
             Vec::new()
         } else {
-            logged.iter().map(|e| describe(e, &self.config)).collect()
+            logged
+                .iter()
+                .map(|e| describe(e, &self.config, &ids))
+                .collect()
         };
 
         let k1 = ids.k1.is_some_and(|k| self.logic.local_output_at(k));
@@ -628,11 +727,8 @@ impl LiftSafety {
         };
         if k1 != self.k1 {
             let (kind, cause) = match diag.k1_open_cause {
-                None => (
-                    LiftEventKind::Release,
-                    "K1 closed: drive power on".to_owned(),
-                ),
-                Some(c) => (LiftEventKind::PowerOff, format!("K1 opened: {c}")),
+                None => (LiftEventKind::Release, LiftSafetyCause::K1Closed),
+                Some(c) => (LiftEventKind::PowerOff, LiftSafetyCause::K1Opened(c)),
             };
             events.push(LiftSafetyEvent {
                 at: now,
@@ -685,78 +781,56 @@ impl LiftSafety {
     }
 }
 
-/// A logic event in the lift's words.
-fn describe(e: &LogicEvent, config: &LiftSafetyConfig) -> LiftSafetyEvent {
+/// A logic event in the lift's terms: the events of the lift's two safety functions (the
+/// modules `ids` names) as what they mean for the lift, the rest as the logic tells them.
+fn describe(e: &LogicEvent, config: &LiftSafetyConfig, ids: &Ids) -> LiftSafetyEvent {
     use LiftEventKind::*;
+    use LiftSafetyCause as C;
+    let other = || C::Logic(e.kind.clone());
     let (kind, cause) = match &e.kind {
-        LogicEventKind::Module { module, event, .. } if module == names::ESTOP => match event {
-            FbEvent::SafeStateDemanded { inputs } => {
-                let channels: Vec<String> = (0..2)
-                    .filter(|b| inputs & 1 << b != 0)
-                    .map(|b| (b + 1).to_string())
-                    .collect();
-                (
-                    Trip,
-                    format!(
-                        "tripped: STOP demanded (channel {} open); estop_out off, K1 off in {}",
-                        channels.join(" and "),
-                        config.estop_delay
-                    ),
-                )
-            }
+        LogicEventKind::Module { id, event, .. } if *id == ids.estop => match event {
+            FbEvent::SafeStateDemanded { inputs } => (
+                Trip,
+                C::StopDemanded {
+                    channels: inputs & 0b11,
+                    delay: config.estop_delay,
+                },
+            ),
             FbEvent::DelayedOutputOff => (
                 PowerOff,
-                format!(
-                    "STOP delay of {} elapsed: EStopDelOut off",
-                    config.estop_delay
-                ),
+                C::StopDelayElapsed {
+                    delay: config.estop_delay,
+                },
             ),
-            FbEvent::Restarted => (
-                Release,
-                "STOP circuit restarted by the controller".to_owned(),
-            ),
+            FbEvent::Restarted => (Release, C::StopRestarted),
             FbEvent::Error(FbError::Discrepancy { .. }) => (
                 Error,
-                format!(
-                    "FB_ERR: STOP channels disagree for longer than {}",
-                    config.stop_discrepancy
-                ),
+                C::StopDiscrepancy {
+                    limit: config.stop_discrepancy,
+                },
             ),
-            FbEvent::Error(FbError::Edm { .. }) => (
-                Error,
-                "FB_ERR: K1 auxiliary contact open at the STOP restart (K1 welded?)".to_owned(),
-            ),
-            _ => (Info, e.kind.to_string()),
+            FbEvent::Error(FbError::Edm { .. }) => (Error, C::StopContactOpen),
+            _ => (Info, other()),
         },
-        LogicEventKind::Module { module, event, .. } if module == names::MON => match event {
-            FbEvent::SafeStateDemanded { inputs } => {
-                let which = match inputs & 0b11 {
-                    0b11 => "bottom and top sensors",
-                    0b01 => "bottom sensor",
-                    _ => "top sensor",
-                };
-                (
-                    Trip,
-                    format!("tripped: overtravel {which} (safety monitor not released); K1 off"),
-                )
-            }
-            FbEvent::Restarted => (
-                Release,
-                "overtravel monitor reset by the operator".to_owned(),
+        LogicEventKind::Module { id, event, .. } if *id == ids.mon => match event {
+            FbEvent::SafeStateDemanded { inputs } => (
+                Trip,
+                C::OvertravelTripped {
+                    bottom: inputs & 0b01 != 0,
+                    top: inputs & 0b11 != 0b01,
+                },
             ),
-            FbEvent::Error(FbError::Edm { .. }) => (
-                Error,
-                "FB_ERR: K1 auxiliary contact open at the overtravel reset (K1 welded?)".to_owned(),
-            ),
-            _ => (Info, e.kind.to_string()),
+            FbEvent::Restarted => (Release, C::OvertravelReset),
+            FbEvent::Error(FbError::Edm { .. }) => (Error, C::OvertravelContactOpen),
+            _ => (Info, other()),
         },
-        LogicEventKind::Connection { .. } if e.is_trip() => (Error, e.kind.to_string()),
-        LogicEventKind::GroupTripped { .. } => (Trip, e.kind.to_string()),
-        LogicEventKind::GroupAcknowledged { .. } => (Acknowledge, e.kind.to_string()),
+        LogicEventKind::Connection { .. } if e.is_trip() => (Error, other()),
+        LogicEventKind::GroupTripped { .. } => (Trip, other()),
+        LogicEventKind::GroupAcknowledged { .. } => (Acknowledge, other()),
         LogicEventKind::LocalOutputFault { .. } | LogicEventKind::LogicFault { .. } => {
-            (Error, e.kind.to_string())
+            (Error, other())
         }
-        _ => (Info, e.kind.to_string()),
+        _ => (Info, other()),
     };
     LiftSafetyEvent {
         at: e.at,

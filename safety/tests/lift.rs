@@ -7,12 +7,13 @@ use proptest::prelude::*;
 use proptest::test_runner::RngSeed;
 use safety::kl6904::connection::{ChannelFault, ConnDiag};
 use safety::kl6904::group::GroupState;
+use safety::kl6904::logic::LogicEventKind;
 use safety::kl6904::modules::FbState;
 use safety::kl6904::Project;
 use safety::lift::{K1Cause, LiftEventKind, StopDelayModel};
 use safety::{
-    LiftSafety, LiftSafetyConfig, LiftSafetyEvent, LiftSafetyInputs, LiftSafetyOutputs, SafeLink,
-    SAFETY_SCAN_PERIOD,
+    LiftSafety, LiftSafetyCause, LiftSafetyConfig, LiftSafetyEvent, LiftSafetyInputs,
+    LiftSafetyOutputs, SafeLink, SAFETY_SCAN_PERIOD,
 };
 
 const DELAY_MS: u64 = 9_100;
@@ -89,8 +90,9 @@ impl Sim {
         self.run(20);
     }
 
-    fn logged(&self, needle: &str) -> bool {
-        self.log.iter().any(|e| e.cause.contains(needle))
+    /// `true` if the safety log has an event whose cause is `cause`.
+    fn logged(&self, cause: &LiftSafetyCause) -> bool {
+        self.log.iter().any(|e| e.cause == *cause)
     }
 }
 
@@ -141,7 +143,7 @@ fn start_up_needs_the_controller_restart_and_the_operator_reset() {
     );
     sim.pulse(|i, v| i.operator_reset = v);
     assert!(sim.out.k1);
-    assert!(sim.logged("K1 closed: drive power on"));
+    assert!(sim.logged(&LiftSafetyCause::K1Closed));
 }
 
 #[test]
@@ -156,6 +158,13 @@ fn stop_drops_estop_out_at_once_and_k1_after_the_delay_then_the_controller_resta
     assert_eq!(out.events.len(), 1, "{:?}", out.events);
     assert_eq!(
         out.events[0].cause,
+        LiftSafetyCause::StopDemanded {
+            channels: 0b11,
+            delay: SimDuration::from_millis(DELAY_MS)
+        }
+    );
+    assert_eq!(
+        out.events[0].cause.to_string(),
         "tripped: STOP demanded (channel 1 and 2 open); estop_out off, K1 off in 9.1 s"
     );
     assert_eq!(out.events[0].kind, LiftEventKind::Trip);
@@ -171,9 +180,19 @@ fn stop_drops_estop_out_at_once_and_k1_after_the_delay_then_the_controller_resta
     }
     let out = sim.step().clone();
     assert!(!out.k1, "K1 off exactly at the end of the delay");
-    let causes: Vec<&str> = out.events.iter().map(|e| e.cause.as_str()).collect();
+    let causes: Vec<&LiftSafetyCause> = out.events.iter().map(|e| &e.cause).collect();
     assert_eq!(
         causes,
+        [
+            &LiftSafetyCause::StopDelayElapsed {
+                delay: SimDuration::from_millis(DELAY_MS)
+            },
+            &LiftSafetyCause::K1Opened(K1Cause::StopRestartPending)
+        ]
+    );
+    let words: Vec<String> = causes.iter().map(|c| c.to_string()).collect();
+    assert_eq!(
+        words,
         [
             "STOP delay of 9.1 s elapsed: EStopDelOut off",
             "K1 opened: STOP circuit waiting for the controller's restart"
@@ -190,7 +209,7 @@ fn stop_drops_estop_out_at_once_and_k1_after_the_delay_then_the_controller_resta
         sim.out.k1 && sim.out.estop_out,
         "restarted by the next cabin request"
     );
-    assert!(sim.logged("STOP circuit restarted by the controller"));
+    assert!(sim.logged(&LiftSafetyCause::StopRestarted));
 }
 
 #[test]
@@ -207,7 +226,7 @@ fn a_welded_k1_is_caught_at_the_stop_restart() {
     assert!(!sim.out.k1);
     assert_eq!(sim.out.diag.estop.state, FbState::Error);
     assert_eq!(sim.out.diag.estop.diag, 1 << 4, "EDM1");
-    assert!(sim.logged("FB_ERR: K1 auxiliary contact open at the STOP restart (K1 welded?)"));
+    assert!(sim.logged(&LiftSafetyCause::StopContactOpen));
     sim.pulse(|i, v| i.err_ack = v);
     assert_eq!(
         sim.out.diag.group.state,
@@ -238,7 +257,7 @@ fn the_safe_link_drop_trips_com_err_and_k1_until_acknowledged() {
     );
     assert!(sim.out.diag.stop_link.contains(ConnDiag::WATCHDOG));
     assert!(sim.out.diag.group.errors.com_err);
-    let events: Vec<String> = sim.out.events.iter().map(|e| e.cause.clone()).collect();
+    let events: Vec<String> = sim.out.events.iter().map(|e| e.cause.to_string()).collect();
     assert!(
         events.contains(
             &"COM_ERR: watchdog expired on connection 1 `cabin_stop`: no valid telegram for 101 ms (watchdog 100 ms)".to_owned()
@@ -414,7 +433,13 @@ fn k1_is_never_closed_while_a_hazard_lasts_nor_before_its_reset() {
             "{}: K1 back after the reset; log {:#?}",
             h.name, sim.log
         );
-        assert!(sim.logged("K1 opened:"), "{}: the trip is logged", h.name);
+        assert!(
+            sim.log
+                .iter()
+                .any(|e| matches!(e.cause, LiftSafetyCause::K1Opened(_))),
+            "{}: the trip is logged",
+            h.name
+        );
     }
 }
 
@@ -440,7 +465,14 @@ fn a_logic_fault_keeps_k1_open_for_good() {
     sim.safety.inject_logic_fault("self-test failed");
     sim.step();
     assert!(!sim.out.k1 && sim.out.diag.logic_fault);
-    assert!(sim.logged("logic fault: self-test failed; the whole logic is stopped"));
+    let fault = LiftSafetyCause::Logic(LogicEventKind::LogicFault {
+        cause: "self-test failed".into(),
+    });
+    assert!(sim.logged(&fault));
+    assert_eq!(
+        fault.to_string(),
+        "logic fault: self-test failed; the whole logic is stopped"
+    );
     ack_and_restart_all(&mut sim);
     assert!(!sim.out.k1);
     assert_eq!(sim.out.diag.k1_open_cause, Some(K1Cause::LogicFault));

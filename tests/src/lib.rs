@@ -1,9 +1,11 @@
 //! Helpers of the end-to-end tests: run a scenario file of `scenarios/` or a built scenario on
 //! the whole rig and read its report.
 
-use rig::report::{Actor, Report};
+use controller::ProgramEventKind;
+use rig::report::{Actor, LogEvent, Report};
 use rig::rig::Rig;
 use rig::scenario::Scenario;
+use safety::LiftSafetyCause;
 use std::path::PathBuf;
 
 /// The scenario `scenarios/<name>.toml` of the repository.
@@ -58,14 +60,16 @@ pub fn served(r: &Report) -> Vec<(u8, String)> {
 
 /// `true` if a log line of `who` contains `text`.
 pub fn logged(r: &Report, who: Actor, text: &str) -> bool {
-    r.log.iter().any(|l| l.who == who && l.text.contains(text))
+    r.log
+        .iter()
+        .any(|l| l.who == who && l.text().contains(text))
 }
 
 /// The first time a log line of `who` contains `text`.
 pub fn logged_at(r: &Report, who: Actor, text: &str) -> Option<f64> {
     r.log
         .iter()
-        .find(|l| l.who == who && l.text.contains(text))
+        .find(|l| l.who == who && l.text().contains(text))
         .map(|l| l.at_s)
 }
 
@@ -73,8 +77,36 @@ pub fn logged_at(r: &Report, who: Actor, text: &str) -> Option<f64> {
 pub fn logged_after(r: &Report, who: Actor, text: &str, after_s: f64) -> Option<f64> {
     r.log
         .iter()
-        .find(|l| l.at_s > after_s && l.who == who && l.text.contains(text))
+        .find(|l| l.at_s > after_s && l.who == who && l.text().contains(text))
         .map(|l| l.at_s)
+}
+
+/// The first time the log has an event `is` accepts.
+pub fn event_at(r: &Report, is: impl Fn(&LogEvent) -> bool) -> Option<f64> {
+    r.log.iter().find(|l| is(&l.event)).map(|l| l.at_s)
+}
+
+/// The first time after `after_s` the log has an event `is` accepts.
+pub fn event_after(r: &Report, is: impl Fn(&LogEvent) -> bool, after_s: f64) -> Option<f64> {
+    r.log
+        .iter()
+        .find(|l| l.at_s > after_s && is(&l.event))
+        .map(|l| l.at_s)
+}
+
+/// `true` if the log has an event `is` accepts.
+pub fn has_event(r: &Report, is: impl Fn(&LogEvent) -> bool) -> bool {
+    event_at(r, is).is_some()
+}
+
+/// The built-in program's event `e`.
+pub fn program(e: ProgramEventKind) -> impl Fn(&LogEvent) -> bool {
+    move |l| *l == LogEvent::Controller(e)
+}
+
+/// A safety-logic event `is` accepts.
+pub fn safety_event(is: impl Fn(&LiftSafetyCause) -> bool) -> impl Fn(&LogEvent) -> bool {
+    move |l| matches!(l, LogEvent::Safety(c) if is(c))
 }
 
 /// Asserts that the run broke no safety invariant, printing the log if it did.

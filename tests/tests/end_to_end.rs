@@ -5,9 +5,15 @@
 
 use asi_lift_tests::*;
 use asi_phy::{SimDuration, SimTime};
+use controller::{HaltReason, LostReason, ProgramEventKind as Ctl};
 use lift_model::Button;
+use rig::report::{LogEvent, TripCause};
 use rig::scenario::{Action, Scenario, ScenarioEvent};
 use rig::Actor;
+use safety::kl6904::connection::{ConnDiag, ConnEvent};
+use safety::kl6904::logic::LogicEventKind;
+use safety::lift::K1Cause;
+use safety::LiftSafetyCause as Cause;
 
 fn at(s: f64) -> SimTime {
     SimTime::ZERO + SimDuration::from_secs_f64(s).expect("time")
@@ -110,21 +116,26 @@ fn stop_while_moving_stops_at_the_next_floor_and_resumes_only_on_a_cabin_request
     // Heading up from 1 to 4, STOP at 18 s between floors 1 and 2: the cabin stops at 2.
     assert_eq!(stops_between(&r, 0.0, 50.0), [1, 2]);
     assert!(r.arrivals[1].at_s < 25.0);
-    assert!(logged(
+    assert!(has_event(
         &r,
-        Actor::Controller,
-        "STOP: stops at floor 2, target 4 dropped"
+        program(Ctl::StopDemanded {
+            dropped: Some(4),
+            stop_at: 2
+        })
     ));
     // The safety logic demanded the stop at once and took drive power after its delay.
-    assert!(r
-        .safety
-        .trips
-        .iter()
-        .any(|t| t.at_s == 18.0 && t.cause.contains("STOP demanded")));
-    let k1_off = logged_at(&r, Actor::Safety, "K1 opened").expect("K1 opened");
+    assert!(
+        r.safety
+            .trips
+            .iter()
+            .any(|t| t.at_s == 18.0
+                && matches!(t.cause, TripCause::Logic(Cause::StopDemanded { .. })))
+    );
+    let k1_off =
+        event_at(&r, safety_event(|c| matches!(c, Cause::K1Opened(_)))).expect("K1 opened");
     assert!((27.0..27.2).contains(&k1_off), "{k1_off}");
     // The hall call at 40 s does not resume service; the cabin request at 50 s does.
-    assert!(logged_at(&r, Actor::Controller, "service resumes").is_some_and(|t| t > 50.0));
+    assert!(event_at(&r, program(Ctl::Resumed)).is_some_and(|t| t > 50.0));
     assert_eq!(stops_between(&r, 50.0, 90.0), [4, 3]);
     assert_eq!(served(&r), [(4, "cabin".into()), (3, "hall".into())]);
     assert_eq!(
@@ -155,9 +166,10 @@ fn stop_during_initialisation_holds_it_until_a_cabin_request() {
     let r = run(sc);
     assert_no_violations(&r);
     // K1 opens after the STOP delay and stays open: no restart without a cabin request.
-    let off = logged_at(&r, Actor::Safety, "K1 opened").expect("K1 opened");
+    let off = event_at(&r, safety_event(|c| matches!(c, Cause::K1Opened(_)))).expect("K1 opened");
     assert!((12.0..12.2).contains(&off), "{off}");
-    let on_again = logged_after(&r, Actor::Safety, "K1 closed", off).expect("K1 closed again");
+    let on_again =
+        event_after(&r, safety_event(|c| *c == Cause::K1Closed), off).expect("K1 closed again");
     assert!(on_again > 25.0, "restarted without a request at {on_again}");
     assert!(r.initialised_at_s.is_some_and(|t| t > 25.0));
     assert_eq!(stops(&r), [1, 3]);
@@ -168,13 +180,13 @@ fn overload_blocks_departure_until_the_load_drops() {
     let r = run_file("overload");
     assert_no_violations(&r);
     assert_eq!(stops_between(&r, 0.0, 30.0), [1]);
-    assert!(logged(&r, Actor::Controller, "overloaded: no departure"));
+    assert!(has_event(&r, program(Ctl::OverloadFault)));
     assert!(r
         .safety
         .trips
         .iter()
-        .any(|t| t.cause.contains("overloaded")));
-    let departs = logged_at(&r, Actor::Controller, "departs floor 1 for floor 3").expect("departs");
+        .any(|t| t.cause == TripCause::Logic(Cause::K1Opened(K1Cause::Overloaded))));
+    let departs = event_at(&r, program(Ctl::Departed { from: 1, to: 3 })).expect("departs");
     assert!((30.0..31.0).contains(&departs), "{departs}");
     assert_eq!(stops(&r), [1, 3]);
 }
@@ -183,7 +195,7 @@ fn overload_blocks_departure_until_the_load_drops() {
 fn an_open_door_blocks_departure() {
     let r = run_file("door");
     assert_no_violations(&r);
-    let departs = logged_at(&r, Actor::Controller, "departs floor 1 for floor 2").expect("departs");
+    let departs = event_at(&r, program(Ctl::Departed { from: 1, to: 2 })).expect("departs");
     assert!(
         (25.0..26.0).contains(&departs),
         "left at {departs} s with the door open until 25 s"
@@ -214,10 +226,9 @@ fn the_door_opened_during_travel_halts_the_cabin_between_floors() {
     ];
     let r = run(sc);
     assert_no_violations(&r);
-    let halted =
-        logged_at(&r, Actor::Controller, "halted between floors: door open").expect("halted");
+    let halted = event_at(&r, program(Ctl::Halted(HaltReason::DoorOpen))).expect("halted");
     assert!((13.0..13.5).contains(&halted), "{halted}");
-    assert!(logged_at(&r, Actor::Controller, "continues travel").is_some_and(|t| t >= 20.0));
+    assert!(event_at(&r, program(Ctl::Continued)).is_some_and(|t| t >= 20.0));
     assert_eq!(stops(&r), [1, 3]);
 }
 
@@ -229,7 +240,12 @@ fn an_overtravel_trip_takes_power_until_cranked_back_reset_and_restarted() {
         .safety
         .trips
         .iter()
-        .find(|t| t.cause.contains("overtravel bottom"))
+        .find(|t| {
+            matches!(
+                t.cause,
+                TripCause::Logic(Cause::OvertravelTripped { bottom: true, .. })
+            )
+        })
         .expect("overtravel trip");
     // Cranked at 10 mm/s from where the cabin stood level: the sensor at -60 mm trips
     // (x + 60) / 10 s after 25 s.
@@ -250,17 +266,14 @@ fn an_overtravel_trip_takes_power_until_cranked_back_reset_and_restarted() {
         Actor::Plant,
         "overtravel sensor (Bottom) free again"
     ));
-    assert!(logged_after(
-        &r,
-        Actor::Safety,
-        "overtravel monitor reset by the operator",
-        30.0
-    )
-    .is_some_and(|t| t > 55.0));
+    assert!(
+        event_after(&r, safety_event(|c| *c == Cause::OvertravelReset), 30.0)
+            .is_some_and(|t| t > 55.0)
+    );
     let k1_on = r
         .log
         .iter()
-        .filter(|l| l.who == Actor::Safety && l.text.contains("K1 closed"))
+        .filter(|l| l.event == LogEvent::Safety(Cause::K1Closed))
         .map(|l| l.at_s)
         .next_back()
         .expect("K1 closed again");
@@ -270,10 +283,11 @@ fn an_overtravel_trip_takes_power_until_cranked_back_reset_and_restarted() {
     );
     // The crank moved the cabin out of floor 1's vane while the drive was off: the program no
     // longer trusts its count and finds floor 1 again before the journey.
-    assert!(logged_after(
+    assert!(event_after(
         &r,
-        Actor::Controller,
-        "floor count not trusted (the cabin moved while the drive was off)",
+        program(Ctl::PositionLost {
+            why: LostReason::MovedByHand
+        }),
         25.0
     )
     .is_some_and(|t| t < 40.0));
@@ -287,10 +301,11 @@ fn a_broken_vane_sensor_never_takes_the_cabin_to_an_overtravel_sensor() {
     // With the right sensor stuck off, floor 2's vane shows its short (left) sensor alone,
     // which no working pair shows at floors 2..4: the controller stops at once and
     // initialises again.
-    let caught = logged_at(
+    let caught = event_at(
         &r,
-        Actor::Controller,
-        "floor count not trusted (the vane seen is not the floor counted)",
+        program(Ctl::PositionLost {
+            why: LostReason::WrongVane,
+        }),
     )
     .expect("caught");
     assert!((10.0..16.0).contains(&caught), "{caught}");
@@ -299,7 +314,7 @@ fn a_broken_vane_sensor_never_takes_the_cabin_to_an_overtravel_sensor() {
     assert!(!logged(&r, Actor::Plant, "overtravel sensor"));
     // After the repair at 50 s: floor 1 found (a wrong guess is caught as the cabin leaves
     // the vane), then the interrupted journey to floor 4, then the call pressed meanwhile.
-    let again = logged_after(&r, Actor::Controller, "initialised at floor 1", 50.0).expect("again");
+    let again = event_after(&r, program(Ctl::Initialised), 50.0).expect("again");
     assert!(again < 80.0, "{again}");
     assert_eq!(served(&r), [(4, "cabin".into()), (1, "cabin".into())]);
     let last_two: Vec<u8> = stops(&r).into_iter().rev().take(2).collect();
@@ -310,18 +325,21 @@ fn a_broken_vane_sensor_never_takes_the_cabin_to_an_overtravel_sensor() {
 fn a_lost_cabin_slave_stops_the_cabin_and_service_resumes_after_it_returns() {
     let r = run_file("lost-cabin-slave");
     assert_no_violations(&r);
-    let lost = logged_at(
-        &r,
-        Actor::Controller,
-        "cabin slave or bus lost: cabin stopped",
-    )
-    .expect("reported");
+    let lost = event_at(&r, program(Ctl::BusFault)).expect("reported");
     assert!((20.0..20.1).contains(&lost), "{lost}");
     // No stop while it is away, and no stop anywhere but at floors.
     assert_eq!(stops_between(&r, 20.0, 40.0), Vec::<u8>::new());
     assert!(r.bus.errors.no_response > 0);
     // Back at 40 s: the program initialises again and serves the interrupted call.
-    assert!(logged_after(&r, Actor::Controller, "initialisation", 20.0).is_some_and(|t| t > 40.0));
+    assert!(event_after(
+        &r,
+        |e: &LogEvent| matches!(
+            e,
+            LogEvent::Controller(Ctl::InitStarted { .. } | Ctl::InitHeld(_))
+        ),
+        20.0
+    )
+    .is_some_and(|t| t > 40.0));
     assert_eq!(stops_between(&r, 40.0, 90.0), [1, 4]);
     assert_eq!(served(&r), [(4, "cabin".into())]);
 }
@@ -356,28 +374,31 @@ fn traffic_on_a_noisy_line_is_served_correctly_with_repeats() {
 fn a_silent_safe_link_trips_com_err_and_needs_acknowledge_reset_and_a_request() {
     let r = run_file("safe-link-drop");
     assert_no_violations(&r);
-    assert!(r
-        .safety
-        .trips
-        .iter()
-        .any(|t| t.cause.contains("COM_ERR: watchdog expired")));
-    let k1_off = logged_at(&r, Actor::Safety, "K1 opened: group error (COM_ERR)").expect("K1 off");
-    assert!((18.0..18.2).contains(&k1_off), "{k1_off}");
-    assert!(logged(
+    assert!(r.safety.trips.iter().any(|t| match &t.cause {
+        TripCause::Logic(Cause::Logic(LogicEventKind::Connection {
+            event: ConnEvent::Error { bit, .. },
+            ..
+        })) => *bit == ConnDiag::WATCHDOG,
+        _ => false,
+    }));
+    let k1_off = event_at(
         &r,
-        Actor::Controller,
-        "halted between floors: no drive power"
-    ));
-    assert!(logged_at(&r, Actor::Safety, "ERR_ACK accepted").is_some_and(|t| t >= 30.0));
+        safety_event(|c| matches!(c, Cause::K1Opened(K1Cause::GroupError(e)) if e.com_err)),
+    )
+    .expect("K1 off");
+    assert!((18.0..18.2).contains(&k1_off), "{k1_off}");
+    assert!(has_event(&r, program(Ctl::Halted(HaltReason::NoPower))));
+    assert!(event_at(
+        &r,
+        safety_event(|c| matches!(c, Cause::Logic(LogicEventKind::GroupAcknowledged { .. })))
+    )
+    .is_some_and(|t| t >= 30.0));
     // The cabin request at 35 s restarts the STOP circuit; the cabin completes its stop at
     // floor 2 and then serves the request.
-    assert!(logged_after(
-        &r,
-        Actor::Safety,
-        "STOP circuit restarted by the controller",
-        18.0
-    )
-    .is_some_and(|t| t > 35.0));
+    assert!(
+        event_after(&r, safety_event(|c| *c == Cause::StopRestarted), 18.0)
+            .is_some_and(|t| t > 35.0)
+    );
     assert_eq!(stops_between(&r, 18.0, 90.0), [2, 4]);
 }
 
@@ -385,18 +406,14 @@ fn a_silent_safe_link_trips_com_err_and_needs_acknowledge_reset_and_a_request() 
 fn an_asi_power_fail_takes_the_lift_out_until_power_reset_and_request() {
     let r = run_file("power-fail");
     assert_no_violations(&r);
-    assert!(logged_at(&r, Actor::Controller, "cabin slave or bus lost")
-        .is_some_and(|t| (15.0..15.1).contains(&t)));
+    assert!(event_at(&r, program(Ctl::BusFault)).is_some_and(|t| (15.0..15.1).contains(&t)));
     // The safety monitor loses the overtravel sensors' codes: the overtravel function trips.
     assert!(r
         .safety
         .trips
         .iter()
         .any(|t| (15.0..15.2).contains(&t.at_s)));
-    assert!(
-        logged_after(&r, Actor::Controller, "initialised at floor 1", 15.0)
-            .is_some_and(|t| t > 25.0)
-    );
+    assert!(event_after(&r, program(Ctl::Initialised), 15.0).is_some_and(|t| t > 25.0));
     assert_eq!(stops_between(&r, 30.0, 90.0), [2]);
 }
 

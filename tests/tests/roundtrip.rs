@@ -105,6 +105,6 @@ fn decode_returns_the_telegrams_of_the_trace() {
 fn rig_errors(r: &rig::report::Report) -> Option<String> {
     r.log
         .iter()
-        .find(|l| l.text.contains("could not be written"))
-        .map(|l| l.text.clone())
+        .map(|l| l.text())
+        .find(|t| t.contains("could not be written"))
 }

@@ -3,15 +3,17 @@
 //! without the safe drive, the option off leaving a run as it was, and a small campaign with
 //! the option on.
 
-use asi_lift_tests::{logged, run, run_toml, scenario, stops};
+use asi_lift_tests::{has_event, logged, run, run_toml, safety_event, scenario, stops};
 use asi_phy::SimDuration;
 use rig::campaign::generate::{generate, Generated};
 use rig::campaign::profile::Profile;
 use rig::campaign::summary::summarize;
 use rig::campaign::{execute, judge, line, Execution, LineContext};
-use rig::report::{Report, ViolationKind};
+use rig::report::{Report, TripCause, ViolationKind};
 use rig::scenario::{Action, Fault, Scenario};
 use rig::Actor;
+use safety::drive::Function;
+use safety::LiftSafetyCause as Cause;
 
 /// The STOP circuit's fixed delay before K1 drops (docs/safety.md §6.2).
 const STOP_DELAY_S: f64 = 9.1;
@@ -63,13 +65,18 @@ fn without_the_safe_drive_the_same_stop_waits_9_1_s_for_k1() {
     sc.safe_drive = false;
     let r = run(sc);
     assert!(r.safety.drive.is_none());
-    assert!(logged(&r, Actor::Safety, "STOP delay of 9.1 s elapsed"));
+    assert!(has_event(
+        &r,
+        safety_event(
+            |c| matches!(c, Cause::StopDelayElapsed { delay } if *delay == SimDuration::from_millis(9_100))
+        )
+    ));
     // K1 opens only at 30.1 s: the first K1 opening after the STOP.
     let k1 = r
         .safety
         .trips
         .iter()
-        .find(|t| t.at_s > 21.0 && t.cause.starts_with("K1 opened"))
+        .find(|t| t.at_s > 21.0 && t.cause.is_k1_opened())
         .expect("K1 opened");
     assert!((k1.at_s - 30.1).abs() < 1e-6, "{}", k1.at_s);
 }
@@ -105,7 +112,7 @@ fn a_runaway_at_a_floor_with_the_door_open_ends_in_sos_then_sto_within_the_toler
         .safety
         .trips
         .iter()
-        .any(|t| t.cause.starts_with("safe drive: SOS")));
+        .any(|t| matches!(t.cause, TripCause::Drive(v) if v.function() == Some(Function::Sos))));
     assert!(logged(
         &r,
         Actor::Drive,

@@ -4,15 +4,19 @@
 //! state, and service resumes once the fault is repaired.
 
 use asi_lift_tests::*;
-use rig::report::Report;
+use controller::ProgramEventKind;
+use controller::{HaltReason, LostReason, ProgramEventKind as Ctl};
+use rig::report::{LogEvent, Report, TripCause};
 use rig::scenario::Action;
 use rig::Actor;
+use safety::lift::K1Cause;
+use safety::LiftSafetyCause as Cause;
 
 /// The times the safety logic closed K1.
 fn k1_closed_at(r: &Report) -> Vec<f64> {
     r.log
         .iter()
-        .filter(|l| l.who == Actor::Safety && l.text.contains("K1 closed"))
+        .filter(|l| l.event == LogEvent::Safety(Cause::K1Closed))
         .map(|l| l.at_s)
         .collect()
 }
@@ -23,14 +27,10 @@ fn assert_arrivals_agree(r: &Report) {
         let level = (f64::from(a.floor) - 1.0) * 400.0;
         assert!((a.position_mm - level).abs() <= 10.0, "{a:?}");
     }
-    for line in r
-        .log
-        .iter()
-        .filter(|l| l.text.starts_with("arrives at floor"))
-    {
-        let floor: u8 = line.text["arrives at floor ".len()..]
-            .parse()
-            .expect("floor");
+    for (line, floor) in r.log.iter().filter_map(|l| match l.event {
+        LogEvent::Controller(ProgramEventKind::Arrived { floor }) => Some((l, floor)),
+        _ => None,
+    }) {
         let rest = r
             .arrivals
             .iter()
@@ -57,11 +57,7 @@ door = "closed"
 "#,
     );
     assert_no_violations(&r);
-    assert!(logged(
-        &r,
-        Actor::Controller,
-        "initialisation held: door open"
-    ));
+    assert!(has_event(&r, program(Ctl::InitHeld(HaltReason::DoorOpen))));
     assert!(
         r.initialised_at_s.is_some_and(|t| t > 20.0),
         "{:?}",
@@ -280,11 +276,14 @@ press = "cabin:3"
 "#,
     );
     assert_no_violations(&r);
-    assert!(r
-        .safety
-        .trips
-        .iter()
-        .all(|t| !t.cause.contains("overtravel")));
+    assert!(r.safety.trips.iter().all(|t| !matches!(
+        t.cause,
+        TripCause::Logic(
+            Cause::OvertravelTripped { .. }
+                | Cause::OvertravelContactOpen
+                | Cause::K1Opened(K1Cause::Overtravel { .. } | K1Cause::OvertravelResetPending)
+        )
+    )));
     assert!(r.initialised_at_s.is_some_and(|t| t > 40.0));
     assert_arrivals_agree(&r);
     assert_eq!(served(&r), [(3, "cabin".into())]);
@@ -414,13 +413,7 @@ fault = { kind = "slave-online", slave = 7 }
     );
     assert_no_violations(&r);
     assert_eq!(r.final_state.position_mm, 800.0);
-    assert!(logged_after(
-        &r,
-        Actor::Controller,
-        "initialisation held: door open",
-        63.0
-    )
-    .is_some());
+    assert!(event_after(&r, program(Ctl::InitHeld(HaltReason::DoorOpen)), 63.0).is_some());
 }
 
 #[test]
@@ -473,8 +466,11 @@ press = "cabin:4"
     assert_no_violations(&r);
     let refused =
         logged_at(&r, Actor::Scenario, "K1 is closed: no rescue by hand").expect("refused");
-    let tripped =
-        logged_at(&r, Actor::Safety, "K1 opened: overtravel bottom sensor").expect("trip");
+    let tripped = event_at(
+        &r,
+        safety_event(|c| matches!(c, Cause::K1Opened(K1Cause::Overtravel { bottom: true, .. }))),
+    )
+    .expect("trip");
     let cranked = logged_at(&r, Actor::Scenario, "hand crank +").expect("second rescue");
     assert!(refused < tripped && tripped < cranked, "{}", r.to_text());
     assert!(r.initialised_at_s.is_some_and(|t| t > 32.0));
@@ -495,22 +491,27 @@ fn a_monitor_trip_from_line_noise_halts_safely_until_the_operator_resets() {
     );
     assert_no_violations(&r);
     let dropped = logged_at(&r, Actor::Monitor, "safety sensor 12 not released").expect("drop");
-    let opened = logged_after(&r, Actor::Safety, "K1 opened", dropped).expect("K1 opens");
+    let opened = event_after(
+        &r,
+        safety_event(|c| matches!(c, Cause::K1Opened(_))),
+        dropped,
+    )
+    .expect("K1 opens");
     assert!(opened - dropped < 0.01, "{}", r.to_text());
     assert!(
-        logged_after(&r, Actor::Controller, "halted between floors", opened).is_some(),
+        event_after(
+            &r,
+            |e: &LogEvent| matches!(e, LogEvent::Controller(Ctl::Halted(_))),
+            opened
+        )
+        .is_some(),
         "{}",
         r.to_text()
     );
-    let reset = logged_after(
-        &r,
-        Actor::Safety,
-        "overtravel monitor reset by the operator",
-        opened,
-    )
-    .expect("the operator's reset");
+    let reset = event_after(&r, safety_event(|c| *c == Cause::OvertravelReset), opened)
+        .expect("the operator's reset");
     assert!(reset >= 151.0);
-    assert!(logged_after(&r, Actor::Safety, "K1 closed", reset - 0.001).is_some());
+    assert!(event_after(&r, safety_event(|c| *c == Cause::K1Closed), reset - 0.001).is_some());
     let last = r.served.last().expect("a call served");
     assert!(last.served_at_s > reset, "{last:?}");
     assert_eq!(r.final_state.state, Some(controller::State::AtFloor));
@@ -540,7 +541,12 @@ fn an_attendant_answers_a_monitor_trip_from_line_noise_after_the_repairs() {
     let r = run(sc);
     assert_no_violations(&r);
     let dropped = logged_at(&r, Actor::Monitor, "safety sensor 12 not released").expect("drop");
-    let opened = logged_after(&r, Actor::Safety, "K1 opened", dropped).expect("K1 opens");
+    let opened = event_after(
+        &r,
+        safety_event(|c| matches!(c, Cause::K1Opened(_))),
+        dropped,
+    )
+    .expect("K1 opens");
     let round = logged_after(
         &r,
         Actor::Attendant,
@@ -549,16 +555,11 @@ fn an_attendant_answers_a_monitor_trip_from_line_noise_after_the_repairs() {
     )
     .expect("the attendant's round");
     assert!((round - opened - 2.0).abs() < 0.02, "{}", r.to_text());
-    let reset = logged_after(
-        &r,
-        Actor::Safety,
-        "overtravel monitor reset by the operator",
-        round,
-    )
-    .expect("the attendant's reset");
+    let reset = event_after(&r, safety_event(|c| *c == Cause::OvertravelReset), round)
+        .expect("the attendant's reset");
     // The reset is pressed 7 s after the round begins and taken on its release, 100 ms on.
     assert!((reset - round - 7.1).abs() < 0.02, "{}", r.to_text());
-    assert!(logged_after(&r, Actor::Safety, "K1 closed", reset - 0.001).is_some());
+    assert!(event_after(&r, safety_event(|c| *c == Cause::K1Closed), reset - 0.001).is_some());
     // The first round answered the group error of the safe-link drop at 84 s.
     assert_eq!(r.safety.attendant_rounds, 2);
     assert_eq!(r.final_state.state, Some(controller::State::AtFloor));
@@ -603,9 +604,8 @@ door = "closed"
 "#,
     );
     assert_no_violations(&r);
-    let halted =
-        logged_at(&r, Actor::Controller, "halted between floors: door open").expect("halt");
-    let continued = logged_after(&r, Actor::Controller, "continues travel", halted).expect("on");
+    let halted = event_at(&r, program(Ctl::Halted(HaltReason::DoorOpen))).expect("halt");
+    let continued = event_after(&r, program(Ctl::Continued), halted).expect("on");
     assert!(continued >= halted + 11.0, "{}", r.to_text());
     assert_eq!(served(&r), [(2, "hall".into())]);
 }
@@ -639,11 +639,7 @@ fault = { kind = "slave-online", slave = 10 }
 "#,
     );
     assert_no_violations(&r);
-    assert!(logged(
-        &r,
-        Actor::Controller,
-        "initialisation held: STOP circuit open"
-    ));
+    assert!(has_event(&r, program(Ctl::InitHeld(HaltReason::Stop))));
     assert!(!r.final_state.moving, "{}", r.to_text());
 }
 
@@ -686,7 +682,12 @@ fault = { kind = "vane-stuck-off", sensor = "left" }
     );
     assert_no_violations(&r);
     assert!(
-        logged(&r, Actor::Controller, "level"),
+        has_event(
+            &r,
+            program(Ctl::PositionLost {
+                why: LostReason::MissedLevel
+            })
+        ),
         "the missed level is reported: {}",
         r.to_text()
     );
@@ -725,5 +726,5 @@ reset = true
 "#,
     );
     assert_no_violations(&r);
-    assert!(logged(&r, Actor::Safety, "K1 closed"));
+    assert!(has_event(&r, safety_event(|c| *c == Cause::K1Closed)));
 }

@@ -28,7 +28,7 @@ fn demo_bus_trace_at_power_on() {
     assert!(report
         .log
         .iter()
-        .all(|l| !l.text.contains("trace could not be written")));
+        .all(|l| !l.text().contains("trace could not be written")));
     let text = String::from_utf8(out.bytes()).expect("utf-8");
     // Detection of all 32 addresses, activation of the 11 projected slaves, first cycles.
     assert!(text.lines().count() > 150, "{}", text.lines().count());

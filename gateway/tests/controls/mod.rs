@@ -241,11 +241,11 @@ fn a_paused_run_stands_still_and_goes_on_from_where_it_stood_without_catching_up
         v["run"]["lag_ms"]
     );
     let (report, _) = live.end(true);
-    let web: Vec<&str> = report
+    let web: Vec<String> = report
         .log
         .iter()
         .filter(|l| l.who == Actor::Web)
-        .map(|l| l.text.as_str())
+        .map(rig::report::LogLine::text)
         .collect();
     assert_eq!(web.len(), 3, "{web:?}");
     assert_eq!(web[0], "run paused by the page");
@@ -274,7 +274,7 @@ fn a_run_paused_and_resumed_is_the_same_run_as_one_that_was_not() {
         paused
             .log
             .iter()
-            .any(|l| l.who == Actor::Web && l.text == "run paused by the page"),
+            .any(|l| l.who == Actor::Web && l.text() == "run paused by the page"),
         "the pause came after the run's end: {:?}",
         paused.log
     );
@@ -322,7 +322,7 @@ fn a_restart_runs_the_scenario_again_from_0_with_the_same_seed() {
         restarted
             .log
             .iter()
-            .any(|l| l.who == Actor::Web && l.text.starts_with("restarted by the page")),
+            .any(|l| l.who == Actor::Web && l.text().starts_with("restarted by the page")),
         "{lines:?}"
     );
     assert!(
@@ -371,7 +371,7 @@ fn a_new_speed_takes_effect_at_once_and_a_bad_one_is_refused() {
         report
             .log
             .iter()
-            .any(|l| l.who == Actor::Web && l.text == "speed 10 (was 1), set by the page"),
+            .any(|l| l.who == Actor::Web && l.text() == "speed 10 (was 1), set by the page"),
         "{:?}",
         report.log
     );

@@ -234,7 +234,7 @@ async fn a_press_from_the_page_brings_the_cabin_to_floor_3() {
     assert!(
         r.log
             .iter()
-            .any(|l| l.who == Actor::Web && l.text.contains("cabin button 3")),
+            .any(|l| l.who == Actor::Web && l.text().contains("cabin button 3")),
         "the log names the page's press"
     );
 }
@@ -554,5 +554,5 @@ async fn the_run_controls_work_over_the_socket() {
     assert!(r
         .log
         .iter()
-        .any(|l| l.who == Actor::Web && l.text.starts_with("restarted by the page")));
+        .any(|l| l.who == Actor::Web && l.text().starts_with("restarted by the page")));
 }

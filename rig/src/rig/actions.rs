@@ -58,11 +58,11 @@ impl Rig {
         };
         match rescue {
             Rescue::NotNeeded => {
-                self.log(who, "the cabin needs no rescue".into());
+                self.log(who, "the cabin needs no rescue".to_owned());
                 Ok(())
             }
             Rescue::K1Closed => {
-                self.log(who, "K1 is closed: no rescue by hand".into());
+                self.log(who, "K1 is closed: no rescue by hand".to_owned());
                 Ok(())
             }
             Rescue::Crank(mm) => {
@@ -118,7 +118,7 @@ impl Rig {
                     Some(d) => d.set_encoder_failed(matches!(f, Fault::EncoderFailed)),
                     None => self.log(
                         Actor::Scenario,
-                        "no safe drive, so no encoder: the fault changes nothing".into(),
+                        "no safe drive, so no encoder: the fault changes nothing".to_owned(),
                     ),
                 }
             }
@@ -146,7 +146,7 @@ impl Rig {
                     if on {
                         self.log(
                             Actor::Rig,
-                            "operator presses the safety reset after power-on".into(),
+                            "operator presses the safety reset after power-on".to_owned(),
                         );
                         self.timers
                             .push((t + OPERATOR_PULSE, Timer::OperatorReset(false)));
@@ -157,7 +157,7 @@ impl Rig {
                 Timer::Attendant(Round::Reset) => self.act(t, Actor::Attendant, &Action::Reset),
                 Timer::PowerBack => {
                     self.lab.bus.set_supply_voltage(NOMINAL_VOLTS);
-                    self.log(Actor::Rig, "AS-i power back".into());
+                    self.log(Actor::Rig, "AS-i power back".to_owned());
                     self.plant_dirty = true;
                 }
             }

@@ -4,7 +4,7 @@
 //! output in series with the safety logic's K1 output: STO (with SBC) is K1 opening, the
 //! converter losing power and the brake falling.
 
-use crate::report::{round3, DriveReport, DriveTrip, Ss1Stop, Trip, TripKind};
+use crate::report::{round3, DriveReport, DriveTrip, Ss1Stop, Trip, TripCause, TripKind};
 use crate::waves::DriveSample;
 use asi_phy::SimTime;
 use controller::ControllerConfig;
@@ -134,7 +134,7 @@ impl SafeDriveGuard {
                     trips.push(Trip {
                         at_s,
                         kind: TripKind::Trip,
-                        cause: format!("safe drive: {cause}"),
+                        cause: TripCause::Drive(v),
                     });
                 }
                 DriveEventKind::Requested(Function::Ss1) => {

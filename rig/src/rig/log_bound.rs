@@ -3,7 +3,7 @@
 //! how many between them were left out, so that a client that sends the same command
 //! millions of times costs the run a bounded amount of memory.
 
-use crate::report::{Actor, LogLine};
+use crate::report::{Actor, LogEvent, LogLine};
 use std::collections::VecDeque;
 
 /// One bounded source.
@@ -77,14 +77,14 @@ impl LogBounds {
         let mut out = Vec::new();
         for b in &mut self.bounds {
             if b.left_out > 0 {
-                out.push(LogLine {
-                    at_s: b.left_out_from,
-                    who: b.who,
-                    text: format!(
+                out.push(LogLine::new(
+                    b.left_out_from,
+                    b.who,
+                    LogEvent::Text(format!(
                         "… {} lines left out (of {} `{}` lines the first {} and the last {} are kept)",
                         b.left_out, b.seen, b.who, b.first, b.last
-                    ),
-                });
+                    )),
+                ));
                 b.left_out = 0;
             }
             out.extend(b.tail.drain(..));
@@ -98,11 +98,7 @@ mod tests {
     use super::*;
 
     fn line(i: u32, who: Actor) -> LogLine {
-        LogLine {
-            at_s: f64::from(i),
-            who,
-            text: format!("line {i}"),
-        }
+        LogLine::new(f64::from(i), who, LogEvent::Text(format!("line {i}")))
     }
 
     #[test]
@@ -118,7 +114,7 @@ mod tests {
         assert_eq!(b.tails(5).count(), 2);
         assert_eq!(b.tails(1).count(), 1);
         let rest = b.drain();
-        let texts: Vec<&str> = rest.iter().map(|l| l.text.as_str()).collect();
+        let texts: Vec<String> = rest.iter().map(LogLine::text).collect();
         assert_eq!(
             texts,
             [

@@ -26,8 +26,8 @@ mod words;
 pub use outputs::TransactionObserver;
 
 use crate::report::{
-    round3, Actor, Arrival, CabinAt, FinalState, LogLine, MonitorTrip, OvertravelReached, Report,
-    SlaveDropouts, Trip, TripKind, Violation, ViolationKind,
+    round3, Actor, Arrival, CabinAt, FinalState, LogEvent, LogLine, MonitorTrip, OvertravelReached,
+    Report, SlaveDropouts, Trip, TripCause, TripKind, Violation, ViolationKind,
 };
 use crate::scenario::{Action, Fault, Scenario, ScenarioEvent};
 use crate::waves::{RigSample, WaveOutputs, Waves};
@@ -271,7 +271,7 @@ impl Rig {
             rig.drive = Some(drive::SafeDriveGuard::new(&rig.lift)?);
             rig.log(
                 Actor::Rig,
-                "safe drive: encoder on the motor, drive safety monitor (SS1, SOS, SLS, SDI, SLP; STO through K1)".into(),
+                "safe drive: encoder on the motor, drive safety monitor (SS1, SOS, SLS, SDI, SLP; STO through K1)".to_owned(),
             );
         }
         Ok(rig)
@@ -428,7 +428,10 @@ impl Rig {
             if self.next_plc != scans {
                 scans = self.next_plc;
                 if progress(t, self.end).is_break() {
-                    self.log(Actor::Rig, "the run was stopped early by its caller".into());
+                    self.log(
+                        Actor::Rig,
+                        "the run was stopped early by its caller".to_owned(),
+                    );
                     break;
                 }
             }
@@ -699,16 +702,12 @@ impl Rig {
             });
     }
 
-    fn log(&mut self, who: Actor, text: String) {
-        self.log_at(self.now, who, text);
+    fn log(&mut self, who: Actor, event: impl Into<LogEvent>) {
+        self.log_at(self.now, who, event);
     }
 
-    fn log_at(&mut self, at: SimTime, who: Actor, text: String) {
-        let line = LogLine {
-            at_s: at.as_secs_f64(),
-            who,
-            text,
-        };
+    fn log_at(&mut self, at: SimTime, who: Actor, event: impl Into<LogEvent>) {
+        let line = LogLine::new(at.as_secs_f64(), who, event.into());
         if let Some(line) = self.log_bounds.take(line) {
             self.report.log.push(line);
         }
@@ -824,7 +823,7 @@ impl Rig {
         let mut rig = self.with_controller(Outside::new(scan));
         rig.log(
             Actor::Rig,
-            "controller: external (the built-in PLC program is off)".into(),
+            "controller: external (the built-in PLC program is off)".to_owned(),
         );
         rig
     }
@@ -985,11 +984,11 @@ mod tests {
             }
         }
         let mut report = rig.finish();
-        report.log.push(LogLine {
-            at_s: 0.0,
-            who: Actor::Rig,
-            text: format!("{progress_at:?}"),
-        });
+        report.log.push(LogLine::new(
+            0.0,
+            Actor::Rig,
+            LogEvent::Text(format!("{progress_at:?}")),
+        ));
         report
     }
 
@@ -1003,11 +1002,11 @@ mod tests {
                     progress_at.push(t);
                     std::ops::ControlFlow::Continue(())
                 });
-        report.log.push(LogLine {
-            at_s: 0.0,
-            who: Actor::Rig,
-            text: format!("{progress_at:?}"),
-        });
+        report.log.push(LogLine::new(
+            0.0,
+            Actor::Rig,
+            LogEvent::Text(format!("{progress_at:?}")),
+        ));
         report
     }
 

@@ -153,14 +153,14 @@ impl Rig {
                 self.report.safety.trips.push(Trip {
                     at_s: e.at_s(),
                     kind,
-                    cause: e.cause.clone(),
+                    cause: TripCause::Logic(e.cause.clone()),
                 });
             }
-            self.report.log.push(LogLine {
-                at_s: e.at_s(),
-                who: Actor::Safety,
-                text: e.cause.clone(),
-            });
+            self.report.log.push(LogLine::new(
+                e.at_s(),
+                Actor::Safety,
+                LogEvent::Safety(e.cause.clone()),
+            ));
         }
         self.from_safety = FromSafety {
             estop_out: out.estop_out,
@@ -386,7 +386,7 @@ impl Rig {
                 }
                 _ => {}
             }
-            self.log_at(e.at, Actor::Controller, e.kind.to_string());
+            self.log_at(e.at, Actor::Controller, LogEvent::Controller(e.kind));
         }
     }
 }

@@ -87,6 +87,8 @@ pub struct LogicEvent {
 pub enum LogicEventKind {
     /// A module did something.
     Module {
+        /// The module, as [`TwinSafeLogic::module`] finds it by name.
+        id: ModuleId,
         /// The module's name.
         module: String,
         /// Its type.
@@ -172,6 +174,7 @@ impl fmt::Display for LogicEventKind {
                 module,
                 kind,
                 event,
+                ..
             } => {
                 let who = format!("{kind} `{module}`");
                 match event {
@@ -709,7 +712,7 @@ impl TwinSafeLogic {
             // Events are rare: walk them in place rather than copying them every scan.
             let (reported, at_rest, until) = rt.scan(now, run, image);
             if reported {
-                push_module_events(events, now, &c.modules[m], rt.events());
+                push_module_events(events, now, ModuleId(m), &c.modules[m], rt.events());
             }
             quiet &= at_rest;
             delays_end = earliest(delays_end, until);
@@ -1091,11 +1094,13 @@ fn push_connection_events(
 fn push_module_events(
     out: &mut Vec<LogicEvent>,
     now: SimTime,
+    id: ModuleId,
     cm: &CompiledModule,
     events: &[FbEvent],
 ) {
     for &event in events {
         let kind = LogicEventKind::Module {
+            id,
             module: cm.name.clone(),
             kind: cm.kind,
             event,
