@@ -13,26 +13,29 @@ impl Rig {
         self.log(who, describe(action));
         let result = match action {
             Action::Press { button, hold } => {
-                self.passengers.press(t, *button);
+                self.people.passengers.press(t, *button);
                 self.lift.press(t, *button, *hold)
             }
             Action::Load(l) => self.lift.set_load(t, *l),
             Action::Door { closed } => self.lift.set_door(t, *closed),
             Action::Crank { mm } => self.lift.crank(t, *mm),
             Action::Reset => {
-                self.operator_reset = true;
-                self.timers
+                self.safety.operator_reset = true;
+                self.agenda
+                    .timers
                     .push((t + OPERATOR_PULSE, Timer::OperatorReset(false)));
                 Ok(())
             }
             Action::Rescue => self.rescue(t, who),
             Action::Attend => {
-                self.attendant.start(t);
+                self.people.attendant.start(t);
                 Ok(())
             }
             Action::Ack => {
-                self.err_ack = true;
-                self.timers.push((t + OPERATOR_PULSE, Timer::ErrAck(false)));
+                self.safety.err_ack = true;
+                self.agenda
+                    .timers
+                    .push((t + OPERATOR_PULSE, Timer::ErrAck(false)));
                 Ok(())
             }
             Action::Fault(f) => {
@@ -43,13 +46,14 @@ impl Rig {
         if let Err(e) = result {
             self.log(who, format!("refused by the plant: {e}"));
         }
-        self.plant_dirty = true;
+        self.wiring.plant_dirty = true;
     }
 
     /// The operator's overtravel rescue ([`operator::rescue`]).
     pub(super) fn rescue(&mut self, t: SimTime, who: Actor) -> Result<(), lift_model::PlantError> {
         let rescue = match operator::rescue(&self.lift, self.sc.floors) {
             Rescue::NotNeeded => self
+                .safety
                 .drive
                 .as_ref()
                 .and_then(|d| d.slp_rescue_mm(&self.lift, self.sc.floors))
@@ -86,21 +90,23 @@ impl Rig {
                     self.lab.bus.detach(id);
                 } else {
                     self.lab.bus.attach(id);
-                    self.plant_dirty = true;
+                    self.wiring.plant_dirty = true;
                 }
             }
             Fault::PowerFail { duration } => {
                 self.lab.bus.set_supply_voltage(0.0);
-                self.timers.push((t + duration, Timer::PowerBack));
+                self.agenda.timers.push((t + duration, Timer::PowerBack));
             }
             Fault::SafeLinkDrop { duration } => {
-                self.safety.drop_link(SafeLink::CabinStop, t, duration)
+                self.safety
+                    .logic
+                    .drop_link(SafeLink::CabinStop, t, duration)
             }
             Fault::Vane { sensor, fault } => {
                 if let Err(e) = self.lift.set_vane_fault(t, sensor, fault) {
                     self.log(Actor::Plant, format!("error: {e}"));
                 }
-                self.plant_dirty = true;
+                self.wiring.plant_dirty = true;
             }
             Fault::ConverterRunaway { .. } | Fault::ConverterRepaired => {
                 let runaway = match f {
@@ -110,11 +116,11 @@ impl Rig {
                 if let Err(e) = self.lift.set_converter_runaway(t, runaway) {
                     self.log(Actor::Plant, format!("error: {e}"));
                 }
-                self.plant_dirty = true;
+                self.wiring.plant_dirty = true;
             }
             Fault::EncoderFailed | Fault::EncoderRepaired => {
                 // The scenario reader takes these only with the safe drive.
-                match self.drive.as_mut() {
+                match self.safety.drive.as_mut() {
                     Some(d) => d.set_encoder_failed(matches!(f, Fault::EncoderFailed)),
                     None => self.log(
                         Actor::Scenario,
@@ -127,11 +133,11 @@ impl Rig {
 
     pub(super) fn fire_timers(&mut self, t: SimTime) {
         // None due at almost every step (no timer at all, mostly).
-        if self.timers.iter().all(|(at, _)| *at > t) {
+        if self.agenda.timers.iter().all(|(at, _)| *at > t) {
             return;
         }
         let mut due: Vec<Timer> = Vec::new();
-        self.timers.retain(|(at, timer)| {
+        self.agenda.timers.retain(|(at, timer)| {
             if *at <= t {
                 due.push(*timer);
                 false
@@ -142,23 +148,24 @@ impl Rig {
         for timer in due {
             match timer {
                 Timer::OperatorReset(on) => {
-                    self.operator_reset = on;
+                    self.safety.operator_reset = on;
                     if on {
                         self.log(
                             Actor::Rig,
                             "operator presses the safety reset after power-on".to_owned(),
                         );
-                        self.timers
+                        self.agenda
+                            .timers
                             .push((t + OPERATOR_PULSE, Timer::OperatorReset(false)));
                     }
                 }
-                Timer::ErrAck(on) => self.err_ack = on,
+                Timer::ErrAck(on) => self.safety.err_ack = on,
                 Timer::Attendant(Round::Ack) => self.act(t, Actor::Attendant, &Action::Ack),
                 Timer::Attendant(Round::Reset) => self.act(t, Actor::Attendant, &Action::Reset),
                 Timer::PowerBack => {
                     self.lab.bus.set_supply_voltage(NOMINAL_VOLTS);
                     self.log(Actor::Rig, "AS-i power back".to_owned());
-                    self.plant_dirty = true;
+                    self.wiring.plant_dirty = true;
                 }
             }
         }

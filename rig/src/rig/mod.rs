@@ -109,17 +109,46 @@ enum Round {
 #[derive(Clone)]
 pub struct Rig {
     sc: Scenario,
+    /// The bus with the lab's slaves.
     lab: LabLift,
+    /// The plant.
     lift: Lift,
     /// The lift's PLC: the built-in program ([`Plc`]) unless [`Rig::with_controller`] put
     /// another in its place.
     controller: Box<dyn Controller>,
-    safety: LiftSafety,
-    estop_delay: SimDuration,
+    /// The safety logic, its signals and the safe drive.
+    safety: SafetySide,
+    /// When the rig's own parts are next due.
+    agenda: Agenda,
+    /// What the slaves drive, as the plant has it.
+    wiring: Wiring,
+    /// The lift's passengers and its attendant.
+    people: People,
+    /// The invariant watch and what it watches besides the plant.
+    judge: Judge,
+    report: Report,
+    /// The trace, the waveforms and the observer.
+    outputs: Outputs,
+    /// The sources whose log lines are bounded ([`Rig::bound_log`]).
+    log_bounds: log_bound::LogBounds,
+    /// Every moment is taken ([`Rig::set_pulse_exact`]): no new output passes the rig by.
+    every_moment: bool,
+    /// What the rig's tests look at inside.
+    #[cfg(test)]
+    probes: Probes,
+}
+
+/// When the rig's own parts are next due: the scans, the scenario's events and the timers
+/// (the bus and the plant say when they are due themselves).
+#[derive(Clone)]
+struct Agenda {
+    /// The moment reached.
     now: SimTime,
+    /// The run's end.
     end: SimTime,
     next_plc: SimTime,
     next_safety: SimTime,
+    /// The scenario's next event, as an index into its events.
     next_event: usize,
     timers: Vec<(SimTime, Timer)>,
     /// The earliest of the next PLC scan, the next safety scan, the next scenario event and
@@ -129,16 +158,43 @@ pub struct Rig {
     /// ([`Rig::own_moments_changed`]) rather than at every moment (checked at every moment in
     /// the rig's tests).
     next_own: SimTime,
+}
+
+/// The safety logic with the signals it exchanges, and the safe drive.
+#[derive(Clone)]
+struct SafetySide {
+    logic: LiftSafety,
+    estop_delay: SimDuration,
+    /// What the logic gives the controller.
+    from: FromSafety,
+    /// What the controller gives the logic.
+    to: ToSafety,
+    k1: bool,
+    operator_reset: bool,
+    err_ack: bool,
+    /// The logic's last outputs, for the VCD.
+    out: Option<safety::lift::LiftSafetyDiag>,
+    /// The safe drive (`[drive] safe = true`).
+    drive: Option<drive::SafeDriveGuard>,
+}
+
+/// What the slaves drive, as the plant has it.
+#[derive(Clone)]
+struct Wiring {
     applied: Applied,
     /// The lab's count of drive changes when the rig last read what the slaves drive
     /// ([`asi_bus::lab::LabLift::drive_changes`]); `None` when it must read them again.
     drives_seen: Option<u64>,
+    /// The plant may show the slaves something new.
     plant_dirty: bool,
-    from_safety: FromSafety,
-    to_safety: ToSafety,
-    k1: bool,
-    operator_reset: bool,
-    err_ack: bool,
+}
+
+/// The lift's passengers and its attendant.
+#[derive(Clone)]
+struct People {
+    /// Every press of a call button, for the passengers' waits and the served calls'
+    /// requests.
+    passengers: Passengers,
     /// The lift attendant, once a scenario's `attend` has started it.
     attendant: Attendant,
     /// The last safety scan left the attendant's watch with nothing to count (K1 closed, or
@@ -146,33 +202,29 @@ pub struct Rig {
     /// ([`Attendant::watch`] of a K1 it does not watch only forgets since when it was open,
     /// which it has forgotten already).
     attendant_idle: bool,
-    /// Every moment is taken ([`Rig::set_pulse_exact`]): no new output passes the rig by.
-    every_moment: bool,
-    /// The outputs of the last safety scan the rig took from the logic (K1, EStopOut, the
-    /// diagnosis), which a quiet scan gives again (checked in `Rig::safety_scan`).
-    #[cfg(test)]
-    scanned: Option<(bool, bool, safety::lift::LiftSafetyDiag)>,
-    /// The safety scans taken in stretches of quiet scans ([`Rig::quiet_scans`]).
-    #[cfg(test)]
-    stretch_scans: u64,
-    /// Every press of a call button, for the passengers' waits and the served calls' requests.
-    passengers: Passengers,
+}
+
+/// The invariant watch, and what the rig watches on the bus and the controller for the report.
+#[derive(Clone)]
+struct Judge {
     watch: InvariantWatch,
     /// When the invariant watch's check may be skipped.
     quiet: Quiet,
-    report: Report,
-    /// The trace, the waveforms and the observer.
-    outputs: Outputs,
-    /// The safety logic's last outputs, for the VCD.
-    safety_out: Option<safety::lift::LiftSafetyDiag>,
     /// Drop-outs from LAS.
     las_watch: LasWatch,
     /// Since when the controller holds the cabin for a bus fault.
     bus_fault_since: Option<SimTime>,
-    /// The safe drive (`[drive] safe = true`).
-    drive: Option<drive::SafeDriveGuard>,
-    /// The sources whose log lines are bounded ([`Rig::bound_log`]).
-    log_bounds: log_bound::LogBounds,
+}
+
+/// What the rig's tests look at inside.
+#[cfg(test)]
+#[derive(Clone, Default)]
+struct Probes {
+    /// The outputs of the last safety scan the rig took from the logic (K1, EStopOut, the
+    /// diagnosis), which a quiet scan gives again (checked in `Rig::safety_scan`).
+    scanned: Option<(bool, bool, safety::lift::LiftSafetyDiag)>,
+    /// The safety scans taken in stretches of quiet scans ([`Rig::quiet_scans`]).
+    stretch_scans: u64,
 }
 
 impl Rig {
@@ -211,42 +263,50 @@ impl Rig {
             lift.config().long_track_half_mm,
         );
         let mut rig = Rig {
-            end: SimTime::ZERO + sc.duration,
+            agenda: Agenda {
+                now: SimTime::ZERO,
+                end: SimTime::ZERO + sc.duration,
+                next_plc: SimTime::ZERO,
+                next_safety: SimTime::ZERO,
+                next_event: 0,
+                timers,
+                next_own: SimTime::ZERO,
+            },
             lab,
             lift,
             controller: Box::new(plc),
-            safety,
-            estop_delay,
-            now: SimTime::ZERO,
-            next_plc: SimTime::ZERO,
-            next_safety: SimTime::ZERO,
-            next_event: 0,
-            timers,
-            next_own: SimTime::ZERO,
-            applied: Applied::default(),
-            drives_seen: None,
-            plant_dirty: true,
-            from_safety: FromSafety::default(),
-            to_safety: ToSafety::default(),
-            k1: false,
-            operator_reset: false,
-            err_ack: false,
-            attendant: Attendant::default(),
-            attendant_idle: false,
+            safety: SafetySide {
+                logic: safety,
+                estop_delay,
+                from: FromSafety::default(),
+                to: ToSafety::default(),
+                k1: false,
+                operator_reset: false,
+                err_ack: false,
+                out: None,
+                drive: None,
+            },
+            wiring: Wiring {
+                applied: Applied::default(),
+                drives_seen: None,
+                plant_dirty: true,
+            },
+            people: People {
+                passengers: Passengers::default(),
+                attendant: Attendant::default(),
+                attendant_idle: false,
+            },
+            judge: Judge {
+                watch,
+                quiet: Quiet::default(),
+                las_watch: LasWatch::default(),
+                bus_fault_since: None,
+            },
             every_moment: false,
             #[cfg(test)]
-            scanned: None,
-            #[cfg(test)]
-            stretch_scans: 0,
-            passengers: Passengers::default(),
-            watch,
-            quiet: Quiet::default(),
+            probes: Probes::default(),
             report,
             outputs: Outputs::default(),
-            safety_out: None,
-            las_watch: LasWatch::default(),
-            bus_fault_since: None,
-            drive: None,
             log_bounds: log_bound::LogBounds::default(),
             sc,
         };
@@ -268,7 +328,7 @@ impl Rig {
         );
         rig.own_moments_changed();
         if rig.sc.safe_drive {
-            rig.drive = Some(drive::SafeDriveGuard::new(&rig.lift)?);
+            rig.safety.drive = Some(drive::SafeDriveGuard::new(&rig.lift)?);
             rig.log(
                 Actor::Rig,
                 "safe drive: encoder on the motor, drive safety monitor (SS1, SOS, SLS, SDI, SLP; STO through K1)".to_owned(),
@@ -303,8 +363,8 @@ impl Rig {
         let waves = match self.outputs.copied_waves.take() {
             Some(copied) => copied.continue_into(out),
             None => {
-                let waves = Waves::new(out, self.lab.bus.timing()).starting_at(self.now);
-                match self.drive {
+                let waves = Waves::new(out, self.lab.bus.timing()).starting_at(self.agenda.now);
+                match self.safety.drive {
                     Some(_) => waves.with_drive_safety(),
                     None => waves,
                 }
@@ -355,7 +415,8 @@ impl Rig {
         } else {
             Vec::new()
         };
-        self.outputs.transactions(&records, &pulses, self.now);
+        self.outputs
+            .transactions(&records, &pulses, self.agenda.now);
     }
 
     /// The rig's state for the waveforms at `t`, if they are wanted.
@@ -377,7 +438,7 @@ impl Rig {
         let l = &self.lift;
         let status = self.controller.status();
         let calls = self.controller.pending_calls().unwrap_or_default();
-        let diag = self.safety_out.as_ref();
+        let diag = self.safety.out.as_ref();
         RigSample {
             position_mm: l.position_mm(),
             velocity_mm_s: l.velocity_mm_s(),
@@ -387,22 +448,22 @@ impl Rig {
             overtravel_top_free: l.overtravel_top_free(),
             k1: l.k1_closed(),
             door_closed: l.door_closed(),
-            converter_run: self.applied.run,
-            converter_up: self.applied.up,
-            setpoint_ua: self.applied.setpoint_ua,
+            converter_run: self.wiring.applied.run,
+            converter_up: self.wiring.applied.up,
+            setpoint_ua: self.wiring.applied.setpoint_ua,
             // A controller that tells no state is the outside one of `serve`.
             controller_state: status.state.map_or("external", |s| s.name()),
             floor: status.floor.unwrap_or(0),
             target_floor: status.target.unwrap_or(0),
             fifo_cabin: calls.cabin.len() as u8,
             fifo_hall: calls.hall.len() as u8,
-            estop_out: self.from_safety.estop_out,
+            estop_out: self.safety.from.estop_out,
             group_state: diag.map_or("STOP", |d| d.group.state.name()),
             fb_err: diag.is_some_and(|d| d.group.errors.fb_err),
             com_err: diag.is_some_and(|d| d.group.errors.com_err),
             out_err: diag.is_some_and(|d| d.group.errors.out_err),
             supply_v: self.lab.bus.supply_voltage(),
-            drive: self.drive.as_ref().map(|d| d.sample()),
+            drive: self.safety.drive.as_ref().map(|d| d.sample()),
         }
     }
 
@@ -421,13 +482,13 @@ impl Rig {
         progress: &mut dyn FnMut(SimTime, SimTime) -> std::ops::ControlFlow<()>,
     ) -> Report {
         if let Some(u) = until {
-            self.end = self.end.min(SimTime::ZERO + u);
+            self.agenda.end = self.agenda.end.min(SimTime::ZERO + u);
         }
-        let mut scans = self.next_plc;
-        while let Some(t) = self.advance_to_step(self.end) {
-            if self.next_plc != scans {
-                scans = self.next_plc;
-                if progress(t, self.end).is_break() {
+        let mut scans = self.agenda.next_plc;
+        while let Some(t) = self.advance_to_step(self.agenda.end) {
+            if self.agenda.next_plc != scans {
+                scans = self.agenda.next_plc;
+                if progress(t, self.agenda.end).is_break() {
                     self.log(
                         Actor::Rig,
                         "the run was stopped early by its caller".to_owned(),
@@ -435,7 +496,7 @@ impl Rig {
                     break;
                 }
             }
-            if t == self.end {
+            if t == self.agenda.end {
                 break;
             }
         }
@@ -448,40 +509,40 @@ impl Rig {
     fn next_moment(&self) -> SimTime {
         #[cfg(test)]
         assert_eq!(
-            self.next_own,
+            self.agenda.next_own,
             self.own_next_moment(),
             "the rig's own next moment is stale at {}",
-            self.now
+            self.agenda.now
         );
-        let mut t = self.end.min(self.next_own);
+        let mut t = self.agenda.end.min(self.agenda.next_own);
         if let Some(e) = self.lift.next_event() {
             t = t.min(e);
         }
-        t.max(self.now)
+        t.max(self.agenda.now)
     }
 
     /// The earliest of the next PLC scan, the next safety scan, the next scenario event and
     /// the next timer.
     fn own_next_moment(&self) -> SimTime {
-        self.next_safety.min(self.own_next_but_safety())
+        self.agenda.next_safety.min(self.own_next_but_safety())
     }
 
     /// The earliest of the next PLC scan, the next scenario event and the next timer.
     fn own_next_but_safety(&self) -> SimTime {
-        let mut t = self.next_plc;
-        if let Some(e) = self.sc.events.get(self.next_event) {
+        let mut t = self.agenda.next_plc;
+        if let Some(e) = self.sc.events.get(self.agenda.next_event) {
             t = t.min(e.at);
         }
-        if let Some((at, _)) = self.timers.iter().min_by_key(|(at, _)| *at) {
+        if let Some((at, _)) = self.agenda.timers.iter().min_by_key(|(at, _)| *at) {
             t = t.min(*at);
         }
         t
     }
 
-    /// Works [`Rig::next_own`] out again, after a scan, a scenario event or a timer may have
+    /// Works [`Agenda::next_own`] out again, after a scan, a scenario event or a timer may have
     /// moved.
     fn own_moments_changed(&mut self) {
-        self.next_own = self.own_next_moment();
+        self.agenda.next_own = self.own_next_moment();
     }
 
     /// Handles the rig's next moment, or a slave's new output before it, if it comes no later
@@ -544,18 +605,18 @@ impl Rig {
     /// The pulse-exact path takes every such moment, and the fast-path tests compare the two
     /// ([`Rig::run_observed`] only: the live mode's moments are the caller's).
     fn outputs_pass_until(&self) -> Option<SimTime> {
-        if self.every_moment || self.plant_dirty || self.outputs.waves.is_some() {
+        if self.every_moment || self.wiring.plant_dirty || self.outputs.waves.is_some() {
             return None;
         }
-        self.quiet.through(self.plant_key())
+        self.judge.quiet.through(self.plant_key())
     }
 
     /// A slave took a new output at `t` (before the rig's next moment): the plant gets it.
     fn output_taken(&mut self, t: SimTime) {
-        self.now = t;
+        self.agenda.now = t;
         self.advance_plant(t);
         self.slaves_to_plant(t);
-        if self.plant_dirty {
+        if self.wiring.plant_dirty {
             self.plant_to_slaves();
         }
         self.check_invariants(t);
@@ -563,31 +624,31 @@ impl Rig {
     }
 
     fn step(&mut self, t: SimTime) {
-        self.now = t;
+        self.agenda.now = t;
         self.advance_plant(t);
         while let Some(ev) = self
             .sc
             .events
-            .get(self.next_event)
+            .get(self.agenda.next_event)
             .filter(|e| e.at <= t)
             .cloned()
         {
-            self.next_event += 1;
+            self.agenda.next_event += 1;
             self.apply(t, &ev);
         }
         self.fire_timers(t);
-        if self.plant_dirty {
+        if self.wiring.plant_dirty {
             self.plant_to_slaves();
         }
         self.lab.bus.advance_to(t);
         self.slaves_to_plant(t);
-        if t >= self.next_safety {
+        if t >= self.agenda.next_safety {
             self.safety_scan(t);
-            self.next_safety = t + SAFETY_SCAN_PERIOD;
+            self.agenda.next_safety = t + SAFETY_SCAN_PERIOD;
         }
-        if t >= self.next_plc {
+        if t >= self.agenda.next_plc {
             self.plc_scan(t);
-            self.next_plc = t + self.controller.scan_period();
+            self.agenda.next_plc = t + self.controller.scan_period();
             self.flush_trace();
         }
         self.own_moments_changed();
@@ -602,7 +663,7 @@ impl Rig {
         (
             self.lift.changes(),
             self.lift.velocity_mm_s() != 0.0,
-            self.from_safety.estop_out,
+            self.safety.from.estop_out,
         )
     }
 
@@ -612,7 +673,7 @@ impl Rig {
     #[inline]
     fn check_invariants(&mut self, t: SimTime) {
         let key = self.plant_key();
-        if self.quiet.holds(key, t) {
+        if self.judge.quiet.holds(key, t) {
             #[cfg(test)]
             self.assert_quiet(t);
         } else {
@@ -624,10 +685,10 @@ impl Rig {
     /// nothing and leave the copy as the watch is.
     #[cfg(test)]
     fn assert_quiet(&self, t: SimTime) {
-        let mut full = self.watch.clone();
-        let found = full.check(t, self.observed(), self.estop_delay);
+        let mut full = self.judge.watch.clone();
+        let found = full.check(t, self.observed(), self.safety.estop_delay);
         assert!(
-            found.is_empty() && full == self.watch,
+            found.is_empty() && full == self.judge.watch,
             "a check skipped at {t} finds {found:?} or changes the watch"
         );
     }
@@ -636,14 +697,15 @@ impl Rig {
     #[inline(never)]
     fn check_invariants_now(&mut self, t: SimTime, key: invariants::PlantKey) {
         let seen = self.observed();
-        for found in self.watch.check(t, seen, self.estop_delay) {
+        for found in self.judge.watch.check(t, seen, self.safety.estop_delay) {
             match found {
                 Finding::Violation(kind, detail) => self.violation(t, kind, detail),
                 Finding::OvertravelReached => self.overtravel_reached(t),
             }
         }
-        self.quiet
-            .after_check(&self.watch, key, &seen, self.estop_delay);
+        self.judge
+            .quiet
+            .after_check(&self.judge.watch, key, &seen, self.safety.estop_delay);
     }
 
     /// What the invariant watch looks at now.
@@ -657,13 +719,13 @@ impl Rig {
             overtravel_tripped: !l.overtravel_bottom_free() || !l.overtravel_top_free(),
             k1_closed: l.k1_closed(),
             stop: l.stop_channels() != [true, true],
-            estop_out: self.from_safety.estop_out,
+            estop_out: self.safety.from.estop_out,
             run_commanded: wiring::run_commanded(&self.lab),
             position_mm: l.position_mm(),
-            level_floor: Observed::needs_level_floor(self.drive.is_some(), !l.door_closed())
+            level_floor: Observed::needs_level_floor(self.safety.drive.is_some(), !l.door_closed())
                 .then(|| l.config().level_floor(l.position_mm()))
                 .flatten(),
-            watch_unintended_movement: self.drive.is_some(),
+            watch_unintended_movement: self.safety.drive.is_some(),
         }
     }
 
@@ -703,7 +765,7 @@ impl Rig {
     }
 
     fn log(&mut self, who: Actor, event: impl Into<LogEvent>) {
-        self.log_at(self.now, who, event);
+        self.log_at(self.agenda.now, who, event);
     }
 
     fn log_at(&mut self, at: SimTime, who: Actor, event: impl Into<LogEvent>) {
@@ -717,20 +779,21 @@ impl Rig {
     /// the end; for callers that step the rig themselves).
     pub fn finish(mut self) -> Report {
         self.flush_trace();
-        self.outputs.finish(self.now);
+        self.outputs.finish(self.agenda.now);
         if let Some(e) = self.trace_error().map(str::to_owned) {
             let text = format!("the bus trace could not be written: {e}");
             self.log(Actor::Rig, text);
             self.report.output_error = Some(e);
         }
-        let now = self.now;
+        let now = self.agenda.now;
         self.watch_bus(now);
-        self.las_watch.close(now);
-        if let Some(s) = self.bus_fault_since.take() {
+        self.judge.las_watch.close(now);
+        if let Some(s) = self.judge.bus_fault_since.take() {
             self.report.availability.bus_fault_s += (now - s).as_secs_f64();
         }
         self.report.availability.bus_fault_s = round3(self.report.availability.bus_fault_s);
         let dropouts: Vec<SlaveDropouts> = self
+            .judge
             .las_watch
             .dropouts()
             .map(|(address, count, out)| SlaveDropouts {
@@ -742,7 +805,7 @@ impl Rig {
         let status = self.controller.status();
         let calls = self.controller.pending_calls();
         let stats = self.lab.bus.stats();
-        self.report.simulated_s = self.now.as_secs_f64();
+        self.report.simulated_s = self.agenda.now.as_secs_f64();
         self.report.final_state = FinalState {
             floor: status.floor,
             position_mm: round3(self.lift.position_mm()),
@@ -751,21 +814,26 @@ impl Rig {
             moving: self.lift.velocity_mm_s() != 0.0,
             contactor_closed: self.lift.k1_closed(),
             k1_open_cause: self
-                .safety_out
+                .safety
+                .out
                 .as_ref()
                 .and_then(|d| d.k1_open_cause)
                 .filter(|_| !self.lift.k1_closed())
                 .map(|c| words::k1_open_cause(c, self.lab.monitor()))
                 .or_else(|| {
-                    let d = self.drive.as_ref().filter(|_| !self.lift.k1_closed())?;
+                    let d = self
+                        .safety
+                        .drive
+                        .as_ref()
+                        .filter(|_| !self.lift.k1_closed())?;
                     d.torque_off_cause()
                 }),
             fifo_cabin: calls.as_ref().map(|c| c.cabin.clone()),
             fifo_hall: calls.map(|c| c.hall),
         };
         self.report.bus = words::bus_report(stats, dropouts);
-        self.report.passengers = self.passengers.report();
-        if let Some(d) = self.drive.as_mut() {
+        self.report.passengers = self.people.passengers.report();
+        if let Some(d) = self.safety.drive.as_mut() {
             self.report.safety.drive = Some(d.finish());
         }
         let held_back = self.log_bounds.drain();
@@ -781,7 +849,7 @@ impl Rig {
     /// scenario's end; returns its time. A caller can look at the rig between moments and
     /// [`Rig::schedule`] actions in reaction to what it sees.
     pub fn step_until(&mut self, until: SimTime) -> Option<SimTime> {
-        if self.next_moment() >= self.end {
+        if self.next_moment() >= self.agenda.end {
             return None;
         }
         self.advance(until)
@@ -790,8 +858,8 @@ impl Rig {
     /// Schedules `action` at `at` as if the scenario had it (a time before the next moment
     /// takes effect at the next moment).
     pub fn schedule(&mut self, at: SimTime, action: Action) {
-        let later = &self.sc.events[self.next_event..];
-        let pos = self.next_event + later.partition_point(|e| e.at <= at);
+        let later = &self.sc.events[self.agenda.next_event..];
+        let pos = self.agenda.next_event + later.partition_point(|e| e.at <= at);
         self.sc.events.insert(
             pos,
             ScenarioEvent {
@@ -808,7 +876,7 @@ impl Rig {
     /// and invariant watch run as before.
     pub fn with_controller(mut self, controller: impl Controller) -> Rig {
         self.controller = Box::new(controller);
-        self.next_plc = self.next_plc.max(self.now);
+        self.agenda.next_plc = self.agenda.next_plc.max(self.agenda.now);
         self.own_moments_changed();
         self
     }
@@ -850,7 +918,7 @@ impl Rig {
 
     /// Does `action` now, as a scenario event would; `who` names the actor in the log.
     pub fn act_now(&mut self, who: Actor, action: &Action) {
-        self.act(self.now, who, action);
+        self.act(self.agenda.now, who, action);
         self.own_moments_changed();
     }
 
@@ -861,18 +929,18 @@ impl Rig {
 
     /// When the run ends (the scenario's duration, or the `until` of [`Rig::set_end`]).
     pub fn end(&self) -> SimTime {
-        self.end
+        self.agenda.end
     }
 
     /// Moves the end of the run (to run open-ended, or to stop early); never before the
     /// moment reached.
     pub fn set_end(&mut self, end: SimTime) {
-        self.end = end.max(self.now);
+        self.agenda.end = end.max(self.agenda.now);
     }
 
     /// The safety logic's last outputs (absent before its first scan).
     pub fn safety_diag(&self) -> Option<&safety::lift::LiftSafetyDiag> {
-        self.safety_out.as_ref()
+        self.safety.out.as_ref()
     }
 
     /// The run's log so far (lines from different sources in the order they were written;
@@ -907,7 +975,7 @@ impl Rig {
 
     /// The simulated time reached.
     pub fn now(&self) -> SimTime {
-        self.now
+        self.agenda.now
     }
 
     /// The lab bus and its devices.
@@ -918,7 +986,7 @@ impl Rig {
     /// The lab bus, mutable (to trace it). The rig reads the slaves' outputs afresh at its
     /// next moment, whatever the caller changes.
     pub fn lab_mut(&mut self) -> &mut LabLift {
-        self.drives_seen = None;
+        self.wiring.drives_seen = None;
         &mut self.lab
     }
 
@@ -930,7 +998,7 @@ impl Rig {
     /// The safe drive's control and status bits now (`[drive] safe = true`), as the VCD's
     /// scope `rig.drive_safety` has them; `None` without the safe drive.
     pub fn drive_sample(&self) -> Option<crate::waves::DriveSample> {
-        self.drive.as_ref().map(|d| d.sample())
+        self.safety.drive.as_ref().map(|d| d.sample())
     }
 
     /// The lift plant.
@@ -946,12 +1014,12 @@ impl Rig {
 
     /// The safety logic's STOP delay (SS1): how long K1 may stay closed after STOP.
     pub fn estop_delay(&self) -> SimDuration {
-        self.estop_delay
+        self.safety.estop_delay
     }
 
     /// The safety logic's EStopOut as the controller last got it (`true` = no STOP demand).
     pub fn estop_out(&self) -> bool {
-        self.from_safety.estop_out
+        self.safety.from.estop_out
     }
 }
 
@@ -972,14 +1040,14 @@ mod tests {
     /// ([`Rig::advance_to_step`]): one [`Rig::advance`] per moment, new outputs included.
     fn run_moment_by_moment(sc: Scenario) -> Report {
         let mut rig = Rig::new(sc).expect("a rig for the scenario");
-        let mut scans = rig.next_plc;
+        let mut scans = rig.agenda.next_plc;
         let mut progress_at = Vec::new();
-        while let Some(t) = rig.advance(rig.end) {
-            if rig.next_plc != scans {
-                scans = rig.next_plc;
+        while let Some(t) = rig.advance(rig.agenda.end) {
+            if rig.agenda.next_plc != scans {
+                scans = rig.agenda.next_plc;
                 progress_at.push(t);
             }
-            if t == rig.end {
+            if t == rig.agenda.end {
                 break;
             }
         }
@@ -1050,12 +1118,15 @@ mod tests {
             ..Scenario::defaults()
         };
         let mut rig = Rig::new(sc).expect("a rig for the scenario");
-        while rig.advance_to_step(rig.end).is_some_and(|t| t < rig.end) {}
+        while rig
+            .advance_to_step(rig.agenda.end)
+            .is_some_and(|t| t < rig.agenda.end)
+        {}
         // 30,000 scans, one in ten with a PLC scan.
         assert!(
-            rig.stretch_scans > 24_000,
+            rig.probes.stretch_scans > 24_000,
             "{} scans in stretches",
-            rig.stretch_scans
+            rig.probes.stretch_scans
         );
         assert_eq!(rig.report.served.len(), 1, "the call is served");
     }

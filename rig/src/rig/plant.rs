@@ -37,7 +37,7 @@ impl Rig {
             Ok(ev) => ev,
             Err(e) => return self.plant_error(e),
         };
-        self.plant_dirty = true;
+        self.wiring.plant_dirty = true;
         for e in events {
             match e.kind {
                 Plant::Stopped { position_mm } => self.stopped(e.at, position_mm),
@@ -69,7 +69,7 @@ impl Rig {
     /// The cabin came to rest: an arrival if it stands level at a floor with the drive
     /// commanded to stand still.
     pub(super) fn stopped(&mut self, at: SimTime, position_mm: f64) {
-        if self.applied.run && self.applied.setpoint_ua > STANDSTILL_UA {
+        if self.wiring.applied.run && self.wiring.applied.setpoint_ua > STANDSTILL_UA {
             return;
         }
         let cfg = self.lift.config();
@@ -93,14 +93,14 @@ impl Rig {
         if !self.controller.names_served_calls() {
             // No program tells which call a stop serves: a stop at a floor answers every
             // call waiting there.
-            let served = self.passengers.arrived(floor, at);
+            let served = self.people.passengers.arrived(floor, at);
             self.report.served.extend(served);
         }
     }
 
     /// The plant's signals on the slaves' peripheral inputs.
     pub(super) fn plant_to_slaves(&mut self) {
-        self.plant_dirty = false;
+        self.wiring.plant_dirty = false;
         wiring::plant_to_slaves(&self.lift, &mut self.lab, self.sc.floors);
     }
 
@@ -112,11 +112,11 @@ impl Rig {
     #[inline]
     pub(super) fn slaves_to_plant(&mut self, t: SimTime) {
         let changes = self.lab.drive_changes();
-        if self.drives_seen == Some(changes) {
+        if self.wiring.drives_seen == Some(changes) {
             #[cfg(test)]
             assert_eq!(
                 wiring::slave_outputs(&self.lab),
-                self.applied,
+                self.wiring.applied,
                 "the slaves drive something new at {t} without a drive change counted"
             );
             return;
@@ -128,19 +128,25 @@ impl Rig {
     /// hands the plant what changed.
     #[inline(never)]
     pub(super) fn read_slaves(&mut self, t: SimTime, changes: u64) {
-        self.drives_seen = Some(changes);
+        self.wiring.drives_seen = Some(changes);
         let new = wiring::slave_outputs(&self.lab);
         // At most moments the slaves drive what they drove: the plant is handed only what
         // changed, so nothing then.
-        if new == self.applied {
+        if new == self.wiring.applied {
             return;
         }
-        let result = wiring::apply_to_plant(&mut self.lift, t, &self.applied, &new, self.sc.floors);
+        let result = wiring::apply_to_plant(
+            &mut self.lift,
+            t,
+            &self.wiring.applied,
+            &new,
+            self.sc.floors,
+        );
         if let Err(e) = result {
             self.log(Actor::Plant, format!("error: {e}"));
         }
         // What the plant shows the slaves can change with what it is given.
-        self.plant_dirty = true;
-        self.applied = new;
+        self.wiring.plant_dirty = true;
+        self.wiring.applied = new;
     }
 }

@@ -62,7 +62,7 @@ impl Rig {
     /// [`LasWatch::update`] leaves it then).
     #[inline]
     fn watch_bus_reads(&mut self, t: SimTime, reads: BusReads) {
-        if !reads.las_seen(self.las_watch.seen()) {
+        if !reads.las_seen(self.judge.las_watch.seen()) {
             self.las_moved(t, reads.las);
         }
         if reads.drops {
@@ -81,7 +81,7 @@ impl Rig {
     /// back to the log.
     #[inline(never)]
     fn las_moved(&mut self, t: SimTime, las: Option<u32>) {
-        let (left, back) = self.las_watch.update(t, las);
+        let (left, back) = self.judge.las_watch.update(t, las);
         if left | back != 0 {
             self.log_las(t, left, back);
         }
@@ -127,20 +127,23 @@ impl Rig {
     /// diagnosis, K1), so nothing is handed on, where nothing else looks at them at this
     /// scan: the safe drive's scan (it runs every scan) and the attendant's watch while it
     /// counts (after a scan that found K1 open for a cause a round answers, see
-    /// [`Rig::attendant_idle`]).
+    /// [`People::attendant_idle`]).
     pub(super) fn safety_scan(&mut self, t: SimTime) {
         let reads = BusReads::of(&self.lab.bus, self.lab.monitor);
         self.watch_bus_reads(t, reads);
         let inputs = self.safety_inputs(reads);
-        if self.attendant_idle && self.drive.is_none() && self.safety.scan_if_quiet(t, &inputs) {
+        if self.people.attendant_idle
+            && self.safety.drive.is_none()
+            && self.safety.logic.scan_if_quiet(t, &inputs)
+        {
             #[cfg(test)]
             self.assert_quiet_scan_kept(t);
             return;
         }
-        let out = self.safety.scan(t, &inputs);
+        let out = self.safety.logic.scan(t, &inputs);
         #[cfg(test)]
         {
-            self.scanned = Some((out.k1, out.estop_out, out.diag));
+            self.probes.scanned = Some((out.k1, out.estop_out, out.diag));
         }
         for e in &out.events {
             let kind = match e.kind {
@@ -162,24 +165,29 @@ impl Rig {
                 LogEvent::Safety(e.cause.clone()),
             ));
         }
-        self.from_safety = FromSafety {
+        self.safety.from = FromSafety {
             estop_out: out.estop_out,
         };
         let k1 = self.drive_scan(t, out.estop_out, out.k1);
-        let drive_tripped = self.drive.as_ref().is_some_and(|d| d.error().is_some());
+        let drive_tripped = self
+            .safety
+            .drive
+            .as_ref()
+            .is_some_and(|d| d.error().is_some());
         let answered = out
             .diag
             .k1_open_cause
             .as_ref()
             .is_some_and(operator::answers);
         let watched = answered || (drive_tripped && !k1);
-        self.attendant_idle = !watched;
-        if self.attendant.watch(t, watched) {
-            let cause = out
-                .diag
-                .k1_open_cause
-                .map(|c| c.to_string())
-                .or_else(|| self.drive.as_ref().and_then(|d| d.torque_off_cause()));
+        self.people.attendant_idle = !watched;
+        if self.people.attendant.watch(t, watched) {
+            let cause = out.diag.k1_open_cause.map(|c| c.to_string()).or_else(|| {
+                self.safety
+                    .drive
+                    .as_ref()
+                    .and_then(|d| d.torque_off_cause())
+            });
             self.log(
                 Actor::Attendant,
                 format!(
@@ -190,17 +198,19 @@ impl Rig {
             self.report.safety.attendant_rounds += 1;
             self.act(t, Actor::Attendant, &Action::Rescue);
             let ack = t + ATTENDANT_ACK_AFTER;
-            self.timers.push((ack, Timer::Attendant(Round::Ack)));
+            self.agenda.timers.push((ack, Timer::Attendant(Round::Ack)));
             let reset = ack + ATTENDANT_RESET_AFTER;
-            self.timers.push((reset, Timer::Attendant(Round::Reset)));
+            self.agenda
+                .timers
+                .push((reset, Timer::Attendant(Round::Reset)));
         }
-        self.safety_out = Some(out.diag);
-        if k1 != self.k1 {
-            self.k1 = k1;
+        self.safety.out = Some(out.diag);
+        if k1 != self.safety.k1 {
+            self.safety.k1 = k1;
             if let Err(e) = self.lift.set_contactor(t, k1) {
                 self.log(Actor::Plant, format!("error: {e}"));
             }
-            self.plant_dirty = true;
+            self.wiring.plant_dirty = true;
         }
     }
 
@@ -233,22 +243,25 @@ impl Rig {
         let Some(through) = quiet else {
             return Stretch::None;
         };
-        if t != self.next_safety || !self.attendant_idle || self.drive.is_some() {
+        if t != self.agenda.next_safety
+            || !self.people.attendant_idle
+            || self.safety.drive.is_some()
+        {
             return Stretch::None;
         }
         let monitor = self.lab.monitor;
         let reads = BusReads::of(&self.lab.bus, monitor);
-        if !reads.las_seen(self.las_watch.seen()) || reads.drops {
+        if !reads.las_seen(self.judge.las_watch.seen()) || reads.drops {
             return Stretch::None;
         }
         // What the slaves drive is read at a step when the drive count has moved: the bus
         // stops where it has.
         let drives = self.lab.bus.drive_count();
-        if drives.is_none() || self.drives_seen != drives {
+        if drives.is_none() || self.wiring.drives_seen != drives {
             return Stretch::None;
         }
         let inputs = self.safety_inputs(reads);
-        let Some(logic_quiet) = self.safety.quiet_before(&inputs) else {
+        let Some(logic_quiet) = self.safety.logic.quiet_before(&inputs) else {
             return Stretch::None;
         };
         let after = |at: SimTime| {
@@ -257,7 +270,7 @@ impl Rig {
         };
         let mut until = self
             .own_next_but_safety()
-            .min(self.end)
+            .min(self.agenda.end)
             .min(logic_quiet)
             .min(after(through))
             .min(after(limit));
@@ -278,18 +291,21 @@ impl Rig {
             // quiet holds), and the quiet scans, taken together after it.
             let mut g = t;
             for _ in 0..run.passed {
-                self.now = g;
+                self.agenda.now = g;
                 self.advance_plant(g);
                 self.check_invariants(g);
                 g += SAFETY_SCAN_PERIOD;
             }
-            let kept = self.safety.scans_if_quiet(t, self.now, run.passed, &inputs);
+            let kept = self
+                .safety
+                .logic
+                .scans_if_quiet(t, self.agenda.now, run.passed, &inputs);
             debug_assert!(kept, "the safety scans from {t} are not quiet ones");
             #[cfg(test)]
             {
-                self.stretch_scans += u64::from(run.passed);
+                self.probes.stretch_scans += u64::from(run.passed);
             }
-            self.next_safety = g;
+            self.agenda.next_safety = g;
             self.own_moments_changed();
         }
         match run.stop {
@@ -311,11 +327,11 @@ impl Rig {
             stop_ch2: ch2,
             overtravel_bottom_released: reads.releases(SAFETY_BOTTOM),
             overtravel_top_released: reads.releases(SAFETY_TOP),
-            overloaded: self.to_safety.overloaded,
+            overloaded: self.safety.to.overloaded,
             k1_aux: self.lift.k1_aux_closed(),
-            operator_reset: self.operator_reset,
-            err_ack: self.err_ack,
-            controller_restart: self.to_safety.restart,
+            operator_reset: self.safety.operator_reset,
+            err_ack: self.safety.err_ack,
+            controller_restart: self.safety.to.restart,
         }
     }
 
@@ -324,9 +340,10 @@ impl Rig {
     #[cfg(test)]
     fn assert_quiet_scan_kept(&self, t: SimTime) {
         assert_eq!(
-            self.scanned
+            self.probes
+                .scanned
                 .map(|(k1, estop_out, diag)| (k1, estop_out, Some(diag))),
-            Some((self.k1, self.from_safety.estop_out, self.safety_out)),
+            Some((self.safety.k1, self.safety.from.estop_out, self.safety.out)),
             "a quiet scan at {t} gives the rig something new"
         );
     }
@@ -335,16 +352,16 @@ impl Rig {
     /// EStopOut `estop_out`, its K1 output `k1`); returns K1's coil: the safety logic's output
     /// and the drive's torque enable in series. Without the safe drive, `k1` as it is.
     pub(super) fn drive_scan(&mut self, t: SimTime, estop_out: bool, k1: bool) -> bool {
-        let Some(guard) = self.drive.as_mut() else {
+        let Some(guard) = self.safety.drive.as_mut() else {
             return k1;
         };
         let signals = drive::Signals {
             estop_out,
             initialising: self.controller.status().initialising(),
-            run: self.applied.run,
-            up: self.applied.up,
-            setpoint_ua: self.applied.setpoint_ua,
-            reset: self.operator_reset,
+            run: self.wiring.applied.run,
+            up: self.wiring.applied.up,
+            setpoint_ua: self.wiring.applied.setpoint_ua,
+            reset: self.safety.operator_reset,
             door_closed: self.lift.door_closed(),
             position_mm: self.lift.position_mm(),
             velocity_mm_s: self.lift.velocity_mm_s(),
@@ -357,18 +374,18 @@ impl Rig {
     }
 
     pub(super) fn plc_scan(&mut self, t: SimTime) {
-        self.to_safety = self
+        self.safety.to = self
             .controller
-            .scan(t, self.lab.bus.image_mut(), self.from_safety);
+            .scan(t, self.lab.bus.image_mut(), self.safety.from);
         let held = self.controller.status().bus_fault();
-        match (self.bus_fault_since, held) {
+        match (self.judge.bus_fault_since, held) {
             (None, true) => {
-                self.bus_fault_since = Some(t);
+                self.judge.bus_fault_since = Some(t);
                 self.report.availability.bus_fault_holds += 1;
             }
             (Some(s), false) => {
                 self.report.availability.bus_fault_s += (t - s).as_secs_f64();
-                self.bus_fault_since = None;
+                self.judge.bus_fault_since = None;
             }
             _ => {}
         }
@@ -379,9 +396,9 @@ impl Rig {
                 }
                 Ctl::StopDemanded {
                     dropped: Some(f), ..
-                } => self.passengers.target_dropped(f, e.at),
+                } => self.people.passengers.target_dropped(f, e.at),
                 Ctl::Served(s) => {
-                    let served = self.passengers.served(&s, e.at);
+                    let served = self.people.passengers.served(&s, e.at);
                     self.report.served.push(served);
                 }
                 _ => {}
