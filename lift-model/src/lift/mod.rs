@@ -109,15 +109,18 @@ struct Converter {
 }
 
 /// The events queued since the caller last drained them, in time order.
-pub struct Events<'a>(std::collections::vec_deque::Drain<'a, PlantEvent>);
+///
+/// At almost every moment of a run none is queued: then no drain of the queue is made, and
+/// [`ExactSizeIterator::len`] says 0 at once.
+pub struct Events<'a>(Option<std::collections::vec_deque::Drain<'a, PlantEvent>>);
 
 impl Iterator for Events<'_> {
     type Item = PlantEvent;
     fn next(&mut self) -> Option<PlantEvent> {
-        self.0.next()
+        self.0.as_mut()?.next()
     }
     fn size_hint(&self) -> (usize, Option<usize>) {
-        self.0.size_hint()
+        self.0.as_ref().map_or((0, Some(0)), |d| d.size_hint())
     }
 }
 

@@ -58,18 +58,10 @@ impl Lift {
     /// largest burst.
     pub fn advance_to(&mut self, t: SimTime) -> Result<Events<'_>, PlantError> {
         self.catch_up(t)?;
-        Ok(Events(self.events.drain(..)))
-    }
-
-    /// Moves the plant to `t` as [`Lift::advance_to`] does, but leaves the edges queued;
-    /// returns whether there are any (which `advance_to(t)` then hands out).
-    ///
-    /// For a caller that moves the plant at every moment of a run: at almost every moment
-    /// there is no edge, and this tells so without handing out an empty drain.
-    #[inline]
-    pub fn catch_up_to(&mut self, t: SimTime) -> Result<bool, PlantError> {
-        self.catch_up(t)?;
-        Ok(!self.events.is_empty())
+        if self.events.is_empty() {
+            return Ok(Events(None));
+        }
+        Ok(Events(Some(self.events.drain(..))))
     }
 
     /// A count that moves at every input and at every handled edge: while it stays, the
@@ -475,30 +467,6 @@ mod tests {
     }
 
     proptest! {
-        /// [`Lift::catch_up_to`] and then [`Lift::advance_to`] only when it tells of edges
-        /// give what `advance_to` at every moment gives: the same edges at the same times,
-        /// the same state after every moment.
-        #[test]
-        fn catching_up_and_draining_only_when_told_is_advancing(steps in inputs()) {
-            let lift = Lift::new(LiftConfig { initial_position_mm: 20.0, ..LiftConfig::default() })
-                .expect("a lift");
-            let (mut every, mut told) = (lift.clone(), lift);
-            let mut t = SimTime::ZERO;
-            for (dt, input) in &steps {
-                t += SimDuration::from_nanos(*dt);
-                apply(&mut every, t, input);
-                apply(&mut told, t, input);
-                let reference: Vec<_> = every.advance_to(t).expect("forward").collect();
-                let events: Vec<_> = if told.catch_up_to(t).expect("forward") {
-                    told.advance_to(t).expect("forward").collect()
-                } else {
-                    Vec::new()
-                };
-                prop_assert_eq!(events, reference);
-                prop_assert_eq!(format!("{told:?}"), format!("{every:?}"));
-            }
-        }
-
         /// While [`Lift::changes`] stays, every output but the position and the velocity
         /// stays, and so do the motion segment and the next edge.
         #[test]

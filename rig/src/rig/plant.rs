@@ -2,25 +2,18 @@
 //! plant shows handed to the slaves' inputs, and what the slaves drive handed to the plant.
 
 use super::*;
+use lift_model::{Events, PlantError, PlantEvent};
 
 impl Rig {
     /// Brings the plant to `t` and handles its edges on the way.
-    #[inline]
+    #[inline(always)]
     pub(super) fn advance_plant(&mut self, t: SimTime) {
-        // No edge at almost every moment: nothing to collect then.
-        match self.lift.catch_up_to(t) {
-            Ok(false) => {
-                // What it replaces: `advance_to`, whose drain is empty then.
-                #[cfg(test)]
-                assert_eq!(
-                    self.lift.advance_to(t).map(|ev| ev.len()),
-                    Ok(0),
-                    "the plant has edges at {t} that it did not tell"
-                );
-            }
-            Ok(true) => self.plant_edges(t),
-            Err(e) => self.plant_error(e),
-        }
+        let edges = match self.lift.advance_to(t) {
+            // No edge at almost every moment: nothing to hand on then.
+            Ok(edges) if edges.len() == 0 => return,
+            r => gather(r),
+        };
+        self.plant_edges(edges);
     }
 
     #[cold]
@@ -29,12 +22,11 @@ impl Rig {
         self.log(Actor::Plant, format!("error: {e}"));
     }
 
-    /// The plant's edges up to `t`, which it has reached.
+    /// The plant's edges on its way to the moment it has reached (or why it could not go).
     #[inline(never)]
-    pub(super) fn plant_edges(&mut self, t: SimTime) {
-        let events = self.lift.advance_to(t).map(|ev| ev.collect::<Vec<_>>());
-        let events = match events {
-            Ok(ev) => ev,
+    pub(super) fn plant_edges(&mut self, edges: Result<Vec<PlantEvent>, PlantError>) {
+        let events = match edges {
+            Ok(events) => events,
             Err(e) => return self.plant_error(e),
         };
         self.wiring.plant_dirty = true;
@@ -149,4 +141,10 @@ impl Rig {
         self.wiring.plant_dirty = true;
         self.wiring.applied = new;
     }
+}
+
+/// The plant's edges, taken out of its queue.
+#[inline(never)]
+fn gather(edges: Result<Events<'_>, PlantError>) -> Result<Vec<PlantEvent>, PlantError> {
+    edges.map(Iterator::collect)
 }
