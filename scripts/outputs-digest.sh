@@ -17,7 +17,8 @@ out="$(mktemp -d)"
 trap 'rm -rf "$out"' EXIT
 # Outputs name their input files: run in the temporary directory with relative names, so that
 # the lists of two runs compare.
-cp -r scenarios "$out/scenarios"
+# -L: the repository's scenarios/ is a link to rig/scenarios/; copy the files, not the link.
+cp -rL scenarios "$out/scenarios"
 cd "$out"
 digest() { if [ -f "$1" ]; then sha256sum "$1" | awk -v n="$2" '{print $1 "  " n}'; else echo "missing  $2"; fi; }
 for sc in scenarios/*.toml; do

@@ -1,7 +1,7 @@
 //! One simulated hour of a 31-slave bus in normal operation at pulse level, timed on the wall
 //! clock (the target: under 5 s, i.e. at least 5 M transactions per second).
 //!
-//! `cargo run --release -p asi-bus --example hour` (an optional argument gives the
+//! `cargo run --release -p asi-lift-bus --example hour` (an optional argument gives the
 //! simulated seconds, default 3600; a second argument `lab` runs the lab lift's bus instead,
 //! with its handshake devices and the safety monitor).
 

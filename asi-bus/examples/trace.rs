@@ -1,6 +1,6 @@
 //! Prints the transaction trace of the lab lift's bus from power-on, with statistics.
 //!
-//! `cargo run -p asi-bus --example trace -- 30` (milliseconds of simulated time).
+//! `cargo run -p asi-lift-bus --example trace -- 30` (milliseconds of simulated time).
 
 use asi_bus::lab::LabLift;
 use asi_phy::SimTime;

@@ -2,7 +2,7 @@
 //! with `Receiver::push_slice` a given number of times: a deterministic driver for counting
 //! instructions per telegram of arbitrary-pulse decoding.
 //!
-//! `cargo build --release -p asi-phy --example decode_line`, then
+//! `cargo build --release -p asi-lift-phy --example decode_line`, then
 //! `valgrind --tool=callgrind target/release/examples/decode_line 100` and the same with `0`:
 //! the difference over 100 × 4096 telegrams is the cost of one telegram. With a second
 //! argument `trains` the line goes as encoded trains (`LineDecoder::push_train`), as the bus

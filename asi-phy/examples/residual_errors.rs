@@ -1,6 +1,6 @@
 //! How many pulse faults does it take to fool the seven receiver checks?
 //!
-//! `cargo run --release -p asi-phy --example residual_errors`
+//! `cargo run --release -p asi-lift-phy --example residual_errors`
 //!
 //! 1. The exact minimum, over every pair of distinct valid telegrams of one kind, of the number
 //!    of pulse faults (drop, insert, flip, shift by one grid step) that turns one telegram's

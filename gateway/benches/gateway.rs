@@ -25,7 +25,7 @@
 //! the two cores less than an async client would, so more of the machine is left to the
 //! gateway.
 //!
-//! `cargo bench -p gateway --bench gateway` (arguments after `--`: the simulated seconds of
+//! `cargo bench -p asi-lift-gateway --bench gateway` (arguments after `--`: the simulated seconds of
 //! part 1, default 20). About 25 s.
 
 use asi_phy::{Call, SimDuration, SimTime};
@@ -451,7 +451,7 @@ fn main() {
         .skip(1)
         .find_map(|a| a.parse().ok())
         .unwrap_or(20);
-    println!("cargo bench -p gateway --bench gateway -- {seconds}");
+    println!("cargo bench -p asi-lift-gateway --bench gateway -- {seconds}");
     println!();
 
     let t = throughput(seconds);

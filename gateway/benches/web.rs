@@ -11,7 +11,7 @@
 //! stream's cost is C − A. Targets: at least 20 snapshots per second to every client, the
 //! simulation keeping real time, and the stream below 5 % of one core.
 //!
-//! `cargo bench -p gateway --bench web` (argument after `--`: the wall seconds of each run,
+//! `cargo bench -p asi-lift-gateway --bench web` (argument after `--`: the wall seconds of each run,
 //! default 10). About 35 s.
 
 use futures_util::StreamExt;

@@ -6,7 +6,7 @@
 //! controller write the map for a simulated minute and holds the watch to an independent
 //! referee ([`referee`]).
 //!
-//! `cargo test -p gateway --test hostile` (the big property test: `-- --ignored a_thousand`).
+//! `cargo test -p asi-lift-gateway --test hostile` (the big property test: `-- --ignored a_thousand`).
 //! A judge defect found here stays as a test of the right verdict.
 
 use asi_phy::{SimDuration, SimTime};

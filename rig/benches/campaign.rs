@@ -2,7 +2,7 @@
 //! profile, seed 1, 24 runs, shrinking off) with 1 and with 2 worker threads. Not a timed
 //! test: it prints the figures that README.md ("Campaigns") quotes.
 //!
-//! `cargo bench -p rig --bench campaign` (arguments after `--`: the number of runs, default 24).
+//! `cargo bench -p asi-lift-rig --bench campaign` (arguments after `--`: the number of runs, default 24).
 
 use rig::campaign::profile::Profile;
 use rig::campaign::run::{run_campaign, Plan, Shard};

@@ -9,7 +9,7 @@
 //! Each path runs three times (`runs=N` for another count) and the median wall time is the
 //! figure, with the range beside it: a single run on a shared machine can be a fifth off.
 //!
-//! `cargo bench -p rig --bench rig` (arguments after `--`: simulated seconds, default 3600;
+//! `cargo bench -p asi-lift-rig --bench rig` (arguments after `--`: simulated seconds, default 3600;
 //! `lab`, `full` or `noise` to run only that rig; `fast` to skip the pulse-exact runs;
 //! `runs=N`).
 

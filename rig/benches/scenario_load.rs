@@ -2,7 +2,7 @@
 //! timed on the wall clock in a release build. The target is well under a second (the reader
 //! is linear in the file: places are found by a binary search over the line starts).
 //!
-//! `cargo bench -p rig --bench scenario_load` (an argument after `--`: the number of events,
+//! `cargo bench -p asi-lift-rig --bench scenario_load` (an argument after `--`: the number of events,
 //! default 100000).
 
 use rig::scenario::{Scenario, DEFAULT_HOLD};

@@ -7,7 +7,7 @@
 //! for, the allocator's own overhead left out). Wall times are the median of `runs=N` clones
 //! (default 201) at each moment, without the profiler.
 //!
-//! `cargo bench -p rig --bench snapshot` (arguments after `--`: scenario names, default
+//! `cargo bench -p asi-lift-rig --bench snapshot` (arguments after `--`: scenario names, default
 //! `demo noise safe-drive`; `runs=N`).
 
 use asi_phy::{SimDuration, SimTime};

@@ -1,6 +1,7 @@
 //! The scenarios of the repository's `scenarios/` directory, built into the library (and so
 //! into the `asi-lift` command after `cargo install`): `asi-lift scenarios` lists them,
-//! `asi-lift run NAME` runs one.
+//! `asi-lift run NAME` runs one. The files live in this package's own `scenarios/` (the
+//! repository's is a link to it), so that the published package holds the files it builds in.
 
 use super::{Scenario, ScenarioError};
 
@@ -19,7 +20,7 @@ macro_rules! builtins {
         pub const BUILTINS: &[Builtin] = &[
             $(Builtin {
                 name: $name,
-                text: include_str!(concat!("../../../scenarios/", $name, ".toml")),
+                text: include_str!(concat!("../../scenarios/", $name, ".toml")),
             }),*
         ];
     };
@@ -89,7 +90,7 @@ mod tests {
 
     #[test]
     fn every_file_of_the_scenarios_directory_is_built_in_and_reads() {
-        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenarios");
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios");
         let mut files: Vec<String> = std::fs::read_dir(&dir)
             .expect("scenarios/")
             .filter_map(|e| {

@@ -290,7 +290,7 @@ mod round_trip {
 
     #[test]
     fn the_written_scenario_files_are_readable() {
-        let sc = Scenario::from_toml("demo.toml", include_str!("../../../scenarios/demo.toml"))
+        let sc = Scenario::from_toml("demo.toml", include_str!("../../scenarios/demo.toml"))
             .expect("demo");
         let text = sc.to_toml();
         assert!(
@@ -321,7 +321,7 @@ fn the_start_range_is_the_shaft_between_the_mechanical_ends() {
 
 #[test]
 fn the_demo_is_valid() {
-    let text = include_str!("../../../scenarios/demo.toml");
+    let text = include_str!("../../scenarios/demo.toml");
     let s = Scenario::from_toml("demo.toml", text).expect("demo");
     assert!(!s.events.is_empty());
     assert_eq!(Scenario::demo(), Ok(s));
@@ -409,7 +409,7 @@ mod fuzz {
     fn files() -> &'static [String] {
         static FILES: std::sync::OnceLock<Vec<String>> = std::sync::OnceLock::new();
         FILES.get_or_init(|| {
-            let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenarios");
+            let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios");
             let mut names: Vec<_> = std::fs::read_dir(&dir)
                 .expect("scenarios/")
                 .filter_map(|e| e.ok().map(|e| e.path()))

@@ -1,6 +1,7 @@
-//! The stand scenarios of the repository's `scenarios/stand/` directory, one per test guide of
-//! appendix A of the SafeMOTION thesis, built into the library: `asi-lift stand` lists them,
-//! `asi-lift stand NAME` runs one.
+//! The stand scenarios of the repository's `scenarios/stand/` directory (this package's own
+//! `scenarios/stand/`, like the built-in scenarios), one per test guide of appendix A of the
+//! SafeMOTION thesis, built into the library: `asi-lift stand` lists them, `asi-lift stand
+//! NAME` runs one.
 
 use super::StandScenario;
 use crate::scenario::builtin::Builtin;
@@ -12,7 +13,7 @@ macro_rules! stand_builtins {
         pub const STAND_BUILTINS: &[Builtin] = &[
             $(Builtin {
                 name: $name,
-                text: include_str!(concat!("../../../scenarios/stand/", $name, ".toml")),
+                text: include_str!(concat!("../../scenarios/stand/", $name, ".toml")),
             }),*
         ];
     };

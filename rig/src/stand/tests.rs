@@ -362,7 +362,7 @@ curtain = "break"
 /// built in.
 #[test]
 fn every_stand_scenario_is_built_in_and_deterministic() {
-    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenarios/stand");
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/stand");
     let mut files: Vec<String> = std::fs::read_dir(&dir)
         .expect("scenarios/stand/")
         .filter_map(|e| {
