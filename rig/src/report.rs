@@ -655,8 +655,10 @@ impl std::fmt::Display for LogLine {
     }
 }
 
-/// What a [`LogLine`] says: the safety logic's and the controller's events as they are, the
-/// rest in words. `Display` gives the log's words.
+/// What a [`LogLine`] says: the events of the safety logic, the controller, the plant, the
+/// bus, the safety monitor and the safe drive as they are; the rest (the scenario's and the
+/// operator's actions, the gateway's clients, the rig's notes) in words. `Display` gives the
+/// log's words.
 #[derive(Clone, Debug, PartialEq)]
 #[non_exhaustive]
 pub enum LogEvent {
@@ -664,15 +666,117 @@ pub enum LogEvent {
     Safety(safety::LiftSafetyCause),
     /// The built-in program reported this ([`Actor::Controller`]).
     Controller(controller::ProgramEventKind),
+    /// The plant ([`Actor::Plant`]).
+    Plant(PlantLog),
+    /// A slave left the master's list of active slaves (`left`), or came back
+    /// ([`Actor::Bus`]).
+    Las {
+        /// The slave's address.
+        address: u8,
+        /// `true`: it left; `false`: it came back.
+        left: bool,
+    },
+    /// The Safety-at-Work monitor does not release the safety sensor at `address`, for
+    /// `why` ([`Actor::Monitor`]).
+    MonitorDrop {
+        /// The sensor's address.
+        address: u8,
+        /// Why.
+        why: asi_slaves::monitor::NotReleased,
+    },
+    /// The safe drive ([`Actor::Drive`]).
+    Drive(safety::drive::DriveEventKind),
     /// Anything else, in words.
     Text(String),
 }
 
+/// What the plant did that the log tells.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[non_exhaustive]
+pub enum PlantLog {
+    /// The cabin came to rest level at `floor`, `offset_mm` from its level.
+    AtRest {
+        /// The floor.
+        floor: u8,
+        /// Above (+) or below (−) the floor's level, mm.
+        offset_mm: f64,
+    },
+    /// The cabin hit a mechanical end.
+    Crash {
+        /// Which end.
+        end: lift_model::End,
+        /// At this speed, mm/s.
+        impact_mm_s: f64,
+    },
+    /// An overtravel sensor tripped with the cabin at `position_mm`.
+    OvertravelTripped {
+        /// Which end's sensor.
+        end: lift_model::End,
+        /// The cabin's position, mm.
+        position_mm: f64,
+    },
+    /// An overtravel sensor is free again.
+    OvertravelFree {
+        /// Which end's sensor.
+        end: lift_model::End,
+    },
+    /// The converter's fault output changed.
+    ConverterFault {
+        /// Its new level.
+        fault: bool,
+    },
+}
+
+impl std::fmt::Display for PlantLog {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            PlantLog::AtRest { floor, offset_mm } => {
+                write!(
+                    f,
+                    "cabin at rest level at floor {floor} ({offset_mm:+.1} mm)"
+                )
+            }
+            PlantLog::Crash { end, impact_mm_s } => write!(
+                f,
+                "crash into the mechanical end ({end:?}) at {impact_mm_s:.1} mm/s"
+            ),
+            PlantLog::OvertravelTripped { end, position_mm } => {
+                write!(
+                    f,
+                    "overtravel sensor ({end:?}) tripped at {position_mm:.1} mm"
+                )
+            }
+            PlantLog::OvertravelFree { end } => write!(f, "overtravel sensor ({end:?}) free again"),
+            PlantLog::ConverterFault { fault } => write!(f, "converter fault: {fault:?}"),
+        }
+    }
+}
+
 impl std::fmt::Display for LogEvent {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        use safety::drive::DriveEventKind;
         match self {
             LogEvent::Safety(c) => c.fmt(f),
             LogEvent::Controller(e) => e.fmt(f),
+            LogEvent::Plant(p) => p.fmt(f),
+            LogEvent::Las {
+                address,
+                left: true,
+            } => {
+                write!(f, "slave {address} dropped out of LAS")
+            }
+            LogEvent::Las { address, .. } => write!(f, "slave {address} back in LAS"),
+            LogEvent::MonitorDrop { address, why } => write!(
+                f,
+                "safety sensor {address} not released: {}",
+                crate::rig::monitor_drop_words(*why).1
+            ),
+            // K1 is in series with the drive's torque enable (the safe drive's wiring).
+            LogEvent::Drive(DriveEventKind::TorqueOff) => {
+                f.write_str("torque off (STO): K1 opens, the brake falls")
+            }
+            LogEvent::Drive(DriveEventKind::TorqueOn) => f.write_str("torque on: K1 may close"),
+            LogEvent::Drive(e) => e.fmt(f),
             LogEvent::Text(t) => f.write_str(t),
         }
     }

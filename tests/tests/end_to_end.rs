@@ -7,9 +7,9 @@ use asi_lift_tests::*;
 use asi_phy::{SimDuration, SimTime};
 use controller::{HaltReason, LostReason, ProgramEventKind as Ctl};
 use lift_model::Button;
-use rig::report::{LogEvent, TripCause};
+use lift_model::End;
+use rig::report::{LogEvent, PlantLog, TripCause};
 use rig::scenario::{Action, Scenario, ScenarioEvent};
-use rig::Actor;
 use safety::kl6904::connection::{ConnDiag, ConnEvent};
 use safety::kl6904::logic::LogicEventKind;
 use safety::lift::K1Cause;
@@ -261,11 +261,10 @@ fn an_overtravel_trip_takes_power_until_cranked_back_reset_and_restarted() {
         "{} vs {expected}",
         trip.at_s
     );
-    assert!(logged(
-        &r,
-        Actor::Plant,
-        "overtravel sensor (Bottom) free again"
-    ));
+    assert!(has_event(&r, |e| *e
+        == LogEvent::Plant(PlantLog::OvertravelFree {
+            end: End::Bottom
+        })));
     assert!(
         event_after(&r, safety_event(|c| *c == Cause::OvertravelReset), 30.0)
             .is_some_and(|t| t > 55.0)
@@ -311,7 +310,12 @@ fn a_broken_vane_sensor_never_takes_the_cabin_to_an_overtravel_sensor() {
     assert!((10.0..16.0).contains(&caught), "{caught}");
     // It hunts for floor 1 without ever reaching an overtravel sensor; K1 never drops.
     assert!(r.safety.trips.is_empty(), "{:?}", r.safety.trips);
-    assert!(!logged(&r, Actor::Plant, "overtravel sensor"));
+    assert!(!has_event(&r, |e| {
+        matches!(
+            e,
+            LogEvent::Plant(PlantLog::OvertravelTripped { .. } | PlantLog::OvertravelFree { .. })
+        )
+    }));
     // After the repair at 50 s: floor 1 found (a wrong guess is caught as the cabin leaves
     // the vane), then the interrupted journey to floor 4, then the call pressed meanwhile.
     let again = event_after(&r, program(Ctl::Initialised), 50.0).expect("again");

@@ -6,9 +6,8 @@ use asi_lift_tests::*;
 use asi_phy::{SimDuration, SimTime};
 use controller::ProgramEventKind as Ctl;
 use lift_model::Button;
-use rig::report::Report;
+use rig::report::{LogEvent, Report};
 use rig::scenario::{Action, Fault, ScenarioEvent};
-use rig::Actor;
 
 fn at(s: f64) -> SimTime {
     SimTime::ZERO + SimDuration::from_secs_f64(s).expect("time")
@@ -37,11 +36,14 @@ fn press(s: f64, button: Button) -> ScenarioEvent {
 fn every_silence_follows_a_dropout(r: &Report) {
     for m in &r.safety.monitor {
         assert_eq!(m.cause, "silence", "{m:?}");
-        let text = format!("slave {} dropped out of LAS", m.address);
+        let left = LogEvent::Las {
+            address: m.address,
+            left: true,
+        };
         let dropped = r
             .log
             .iter()
-            .filter(|l| l.who == Actor::Bus && l.text() == text && l.at_s <= m.at_s)
+            .filter(|l| l.event == left && l.at_s <= m.at_s)
             .map(|l| l.at_s)
             .next_back();
         assert!(

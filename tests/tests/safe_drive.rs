@@ -3,16 +3,16 @@
 //! without the safe drive, the option off leaving a run as it was, and a small campaign with
 //! the option on.
 
-use asi_lift_tests::{has_event, logged, run, run_toml, safety_event, scenario, stops};
+use asi_lift_tests::{has_event, run, run_toml, safety_event, scenario, stops};
 use asi_phy::SimDuration;
+use lift_model::End;
 use rig::campaign::generate::{generate, Generated};
 use rig::campaign::profile::Profile;
 use rig::campaign::summary::summarize;
 use rig::campaign::{execute, judge, line, Execution, LineContext};
-use rig::report::{Report, TripCause, ViolationKind};
+use rig::report::{LogEvent, PlantLog, Report, TripCause, ViolationKind};
 use rig::scenario::{Action, Fault, Scenario};
-use rig::Actor;
-use safety::drive::Function;
+use safety::drive::{DriveEventKind, Function};
 use safety::LiftSafetyCause as Cause;
 
 /// The STOP circuit's fixed delay before K1 drops (docs/safety.md §6.2).
@@ -51,11 +51,13 @@ fn stop_is_ss1_the_torque_goes_off_once_the_car_stands_well_before_9_1_s() {
     let off = stop.torque_off_at_s.expect("off");
     let after_rest = off - rest.at_s;
     assert!((0.489..=0.5).contains(&after_rest), "{after_rest}");
-    assert!(logged(&r, Actor::Drive, "torque off (STO): K1 opens"));
+    assert!(has_event(&r, |e| *e == LogEvent::Drive(DriveEventKind::TorqueOff)));
     // The cabin request at 40 s restarts the STOP circuit: SS1 ends, service goes on; the
     // door opened at floor 3 is SOS, which holds without a trip.
     assert_eq!(stops(&r), vec![1, 2, 3, 1]);
-    assert!(logged(&r, Actor::Drive, "SOS reached its safe state"));
+    assert!(has_event(&r, |e| {
+        *e == LogEvent::Drive(DriveEventKind::SafeStateReached(Function::Sos))
+    }));
     assert!(r.final_state.contactor_closed);
 }
 
@@ -113,11 +115,7 @@ fn a_runaway_at_a_floor_with_the_door_open_ends_in_sos_then_sto_within_the_toler
         .trips
         .iter()
         .any(|t| matches!(t.cause, TripCause::Drive(v) if v.function() == Some(Function::Sos))));
-    assert!(logged(
-        &r,
-        Actor::Drive,
-        "error acknowledged by S_Control_Reset"
-    ));
+    assert!(has_event(&r, |e| *e == LogEvent::Drive(DriveEventKind::Reset)));
     assert!(r.final_state.contactor_closed, "{}", r.to_text());
     assert!(r.to_text().contains("SOS tripped"));
 }
@@ -148,11 +146,7 @@ fn a_failed_encoder_stops_the_car_between_floors_until_repaired_and_reset() {
     let r = run(scenario("safe-drive-encoder"));
     assert!(r.violations.is_empty(), "{}", r.to_text());
     assert_eq!(drive(&r).trips.len(), 1, "{:?}", drive(&r).trips);
-    assert!(logged(
-        &r,
-        Actor::Drive,
-        "error acknowledged by S_Control_Reset"
-    ));
+    assert!(has_event(&r, |e| *e == LogEvent::Drive(DriveEventKind::Reset)));
     let floors: Vec<u8> = r.arrivals.iter().map(|a| a.floor).collect();
     assert_eq!(floors, [1, 4, 2], "{}", r.to_text());
     assert!(r.final_state.contactor_closed);
@@ -449,6 +443,14 @@ fn slp_stops_a_runaway_on_the_journey_up_and_the_overtravel_sensor_backs_it() {
         d.trips[0].position_mm
     );
     assert!((r.final_state.position_mm - 1273.5).abs() < 0.1);
-    assert!(logged(&r, Actor::Plant, "overtravel sensor (Top) tripped"));
-    assert!(!logged(&r, Actor::Plant, "crash"));
+    assert!(has_event(&r, |e| {
+        matches!(
+            e,
+            LogEvent::Plant(PlantLog::OvertravelTripped { end: End::Top, .. })
+        )
+    }));
+    assert!(!has_event(&r, |e| matches!(
+        e,
+        LogEvent::Plant(PlantLog::Crash { .. })
+    )));
 }

@@ -490,7 +490,10 @@ fn a_monitor_trip_from_line_noise_halts_safely_until_the_operator_resets() {
         include_str!("data/noise-trip-after-recovery.toml"),
     );
     assert_no_violations(&r);
-    let dropped = logged_at(&r, Actor::Monitor, "safety sensor 12 not released").expect("drop");
+    let dropped = event_at(&r, |e| {
+        matches!(e, LogEvent::MonitorDrop { address: 12, .. })
+    })
+    .expect("drop");
     let opened = event_after(
         &r,
         safety_event(|c| matches!(c, Cause::K1Opened(_))),
@@ -540,7 +543,10 @@ fn an_attendant_answers_a_monitor_trip_from_line_noise_after_the_repairs() {
     sc.events.sort_by_key(|e| e.at);
     let r = run(sc);
     assert_no_violations(&r);
-    let dropped = logged_at(&r, Actor::Monitor, "safety sensor 12 not released").expect("drop");
+    let dropped = event_at(&r, |e| {
+        matches!(e, LogEvent::MonitorDrop { address: 12, .. })
+    })
+    .expect("drop");
     let opened = event_after(
         &r,
         safety_event(|c| matches!(c, Cause::K1Opened(_))),

@@ -99,14 +99,14 @@ pub(super) struct Signals {
 
 impl SafeDriveGuard {
     /// One scan at `t`: the monitor's requests from `s`, its trips recorded (also in `trips`,
-    /// the report's safety trips); returns the torque enable (in series with K1) and the log's
-    /// lines.
+    /// the report's safety trips); returns the torque enable (in series with K1) and the
+    /// events for the log.
     pub(super) fn scan(
         &mut self,
         t: SimTime,
         s: &Signals,
         trips: &mut Vec<Trip>,
-    ) -> (bool, Vec<(SimTime, String)>) {
+    ) -> (bool, Vec<(SimTime, DriveEventKind)>) {
         let inputs = LiftDriveInputs {
             estop_out: s.estop_out,
             door_closed: s.door_closed,
@@ -167,18 +167,7 @@ impl SafeDriveGuard {
                     | DriveEventKind::SafeStateReached(Function::Sls(_) | Function::Slp)
             );
             if !chatter {
-                let text = match e.kind {
-                    DriveEventKind::TorqueOff => {
-                        "torque off (STO): K1 opens, the brake falls".into()
-                    }
-                    DriveEventKind::TorqueOn => "torque on: K1 may close".into(),
-                    _ => {
-                        let text = e.to_string();
-                        text.split_once(": ")
-                            .map_or(text.clone(), |(_, r)| r.to_owned())
-                    }
-                };
-                lines.push((e.at, text));
+                lines.push((e.at, e.kind));
             }
         }
         (out.torque_enabled, lines)

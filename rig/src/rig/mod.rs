@@ -24,10 +24,11 @@ mod wiring;
 mod words;
 
 pub use outputs::TransactionObserver;
+pub(crate) use words::monitor_drop as monitor_drop_words;
 
 use crate::report::{
     round3, Actor, Arrival, CabinAt, FinalState, LogEvent, LogLine, MonitorTrip, OvertravelReached,
-    Report, SlaveDropouts, Trip, TripCause, TripKind, Violation, ViolationKind,
+    PlantLog, Report, SlaveDropouts, Trip, TripCause, TripKind, Violation, ViolationKind,
 };
 use crate::scenario::{Action, Fault, Scenario, ScenarioEvent};
 use crate::waves::{RigSample, WaveOutputs, Waves};

@@ -34,24 +34,24 @@ impl Rig {
             match e.kind {
                 Plant::Stopped { position_mm } => self.stopped(e.at, position_mm),
                 Plant::Crash { end, impact_mm_s } => {
-                    let text =
-                        format!("crash into the mechanical end ({end:?}) at {impact_mm_s:.1} mm/s");
-                    self.log_at(e.at, Actor::Plant, text.clone());
-                    self.violation(e.at, ViolationKind::MechanicalEnd, text);
+                    let crash = PlantLog::Crash { end, impact_mm_s };
+                    self.log_at(e.at, Actor::Plant, LogEvent::Plant(crash));
+                    self.violation(e.at, ViolationKind::MechanicalEnd, crash.to_string());
                 }
                 Plant::Overtravel { end, tripped } => {
-                    let text = if tripped {
-                        format!(
-                            "overtravel sensor ({end:?}) tripped at {:.1} mm",
-                            self.lift.position_mm()
-                        )
+                    let p = if tripped {
+                        PlantLog::OvertravelTripped {
+                            end,
+                            position_mm: self.lift.position_mm(),
+                        }
                     } else {
-                        format!("overtravel sensor ({end:?}) free again")
+                        PlantLog::OvertravelFree { end }
                     };
-                    self.log_at(e.at, Actor::Plant, text);
+                    self.log_at(e.at, Actor::Plant, LogEvent::Plant(p));
                 }
                 Plant::ConverterFault { fault } => {
-                    self.log_at(e.at, Actor::Plant, format!("converter fault: {fault:?}"));
+                    let p = PlantLog::ConverterFault { fault };
+                    self.log_at(e.at, Actor::Plant, LogEvent::Plant(p));
                 }
                 _ => {}
             }
@@ -74,14 +74,11 @@ impl Rig {
             at_s: at.as_secs_f64(),
             position_mm: round3(position_mm),
         });
-        self.log_at(
-            at,
-            Actor::Plant,
-            format!(
-                "cabin at rest level at floor {floor} ({:+.1} mm)",
-                position_mm - level
-            ),
-        );
+        let rest = PlantLog::AtRest {
+            floor,
+            offset_mm: position_mm - level,
+        };
+        self.log_at(at, Actor::Plant, LogEvent::Plant(rest));
         if !self.controller.names_served_calls() {
             // No program tells which call a stop serves: a stop at a floor answers every
             // call waiting there.

@@ -92,10 +92,18 @@ impl Rig {
     fn log_las(&mut self, t: SimTime, left: u32, back: u32) {
         for i in 1..32u8 {
             if left & (1 << i) != 0 {
-                self.log_at(t, Actor::Bus, format!("slave {i} dropped out of LAS"));
+                let e = LogEvent::Las {
+                    address: i,
+                    left: true,
+                };
+                self.log_at(t, Actor::Bus, e);
             }
             if back & (1 << i) != 0 {
-                self.log_at(t, Actor::Bus, format!("slave {i} back in LAS"));
+                let e = LogEvent::Las {
+                    address: i,
+                    left: false,
+                };
+                self.log_at(t, Actor::Bus, e);
             }
         }
     }
@@ -104,13 +112,13 @@ impl Rig {
     #[inline(never)]
     fn log_drops(&mut self, drops: Vec<asi_slaves::monitor::MonitorDrop>) {
         for d in drops {
-            let (cause, text) = words::monitor_drop(d.why);
+            let (cause, _) = words::monitor_drop(d.why);
             let address = d.address.get();
-            self.log_at(
-                d.at,
-                Actor::Monitor,
-                format!("safety sensor {address} not released: {text}"),
-            );
+            let e = LogEvent::MonitorDrop {
+                address,
+                why: d.why,
+            };
+            self.log_at(d.at, Actor::Monitor, e);
             self.report.safety.monitor.push(MonitorTrip {
                 at_s: d.at.as_secs_f64(),
                 address,
@@ -367,8 +375,8 @@ impl Rig {
             velocity_mm_s: self.lift.velocity_mm_s(),
         };
         let (torque, lines) = guard.scan(t, &signals, &mut self.report.safety.trips);
-        for (at, text) in lines {
-            self.log_at(at, Actor::Drive, text);
+        for (at, e) in lines {
+            self.log_at(at, Actor::Drive, LogEvent::Drive(e));
         }
         k1 && torque
     }

@@ -9,7 +9,7 @@ use lab::address::{SAFETY_BOTTOM, SAFETY_TOP};
 use safety::lift::K1Cause;
 
 /// A drop of the Safety-at-Work monitor: its cause's key in the report and its words.
-pub(super) fn monitor_drop(why: NotReleased) -> (&'static str, String) {
+pub(crate) fn monitor_drop(why: NotReleased) -> (&'static str, String) {
     match why {
         NotReleased::Tripped => ("0000", "the sensor sends 0000".to_string()),
         NotReleased::WrongCode { expected, got } => (

@@ -244,8 +244,13 @@ impl DriveEvent {
 
 impl fmt::Display for DriveEvent {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{}: ", self.at)?;
-        match &self.kind {
+        write!(f, "{}: {}", self.at, self.kind)
+    }
+}
+
+impl fmt::Display for DriveEventKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
             DriveEventKind::Requested(fun) => write!(f, "{fun} requested (control bit FALSE)"),
             DriveEventKind::SafeStateReached(fun) => {
                 write!(f, "{fun} reached its safe state (status TRUE)")
