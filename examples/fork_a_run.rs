@@ -34,7 +34,7 @@ fn fork() -> Result<Forked, Box<dyn Error>> {
     // Step moment by moment to the fork: between moments the rig can be read and acted on.
     while rig.step_until(FORK_AT).is_some() {}
     let converter = SlaveAddr::a(lab::address::CONVERTER).ok_or("no address")?;
-    let converter_outputs = rig.lab().bus.image().output.nibble(converter).get();
+    let converter_outputs = rig.lab().bus().image().output.nibble(converter).get();
 
     let copy = rig.clone();
     let mut stopped = rig.clone();

@@ -13,7 +13,7 @@ use std::time::Instant;
 fn main() {
     let lab = std::env::args().nth(2).as_deref() == Some("lab");
     let bus = if lab {
-        LabLift::new().map(|l| l.bus)
+        LabLift::new().map(LabLift::into_bus)
     } else {
         io_bus(31, AC2726)
     };

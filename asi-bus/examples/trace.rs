@@ -17,13 +17,13 @@ fn main() {
             std::process::exit(1);
         }
     };
-    lab.bus.enable_trace(1 << 20);
-    lab.bus.advance_to(SimTime::from_millis(ms));
-    for r in lab.bus.drain_trace() {
+    lab.bus_mut().enable_trace(1 << 20);
+    lab.bus_mut().advance_to(SimTime::from_millis(ms));
+    for r in lab.bus_mut().drain_trace() {
         println!("{r}");
     }
-    let m = lab.bus.master();
-    println!("{}", lab.bus.stats());
+    let m = lab.bus().master();
+    println!("{}", lab.bus().stats());
     println!("phase {:?}, flags {}", m.phase(), m.flags());
     println!("LDS {}  LAS {}  LPS {}", m.lds(), m.las(), m.lps());
 }

@@ -58,11 +58,11 @@ fn extra_addresses(n: u8) -> Result<&'static [u8], ConfigError> {
 #[derive(Clone, Debug)]
 pub struct LabLift {
     /// The bus.
-    pub bus: Bus,
+    pub(crate) bus: Bus,
     /// The slaves by address (index = address; `None` where the lab has no slave).
-    pub ids: [Option<SlaveId>; 32],
+    ids: [Option<SlaveId>; 32],
     /// The Safety-at-Work monitor of addresses 11 and 12.
-    pub monitor: MonitorId,
+    monitor: MonitorId,
 }
 
 /// A device that drives the plant, and what it drives as one number to compare (see
@@ -279,6 +279,26 @@ impl LabLift {
             &[addr(SAFETY_BOTTOM)?, addr(SAFETY_TOP)?],
         ));
         Ok(LabLift { bus, ids, monitor })
+    }
+
+    /// The bus.
+    pub fn bus(&self) -> &Bus {
+        &self.bus
+    }
+
+    /// The bus, mutable.
+    pub fn bus_mut(&mut self) -> &mut Bus {
+        &mut self.bus
+    }
+
+    /// The bus alone, without the lab's typed access to its devices.
+    pub fn into_bus(self) -> Bus {
+        self.bus
+    }
+
+    /// The Safety-at-Work monitor of addresses 11 and 12, on the bus ([`Bus::monitor`]).
+    pub fn monitor_id(&self) -> MonitorId {
+        self.monitor
     }
 
     /// A count that moves whenever what the plant-driving devices drive may have changed:

@@ -12,9 +12,9 @@
 //! use asi_phy::SimTime;
 //!
 //! let mut lab = LabLift::new().expect("lab bus");
-//! lab.bus.advance_to(SimTime::from_millis(60));
-//! assert!(lab.bus.is_running());
-//! assert!(lab.bus.master().flags().config_ok());
+//! lab.bus_mut().advance_to(SimTime::from_millis(60));
+//! assert!(lab.bus().is_running());
+//! assert!(lab.bus().master().flags().config_ok());
 //! ```
 //!
 //! Modules: [`bus`] (the segment), [`lab`] (the lab lift bus).

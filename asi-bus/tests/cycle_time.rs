@@ -139,12 +139,12 @@ fn the_lab_bus_with_extra_modules_follows_the_same_formula() {
     use asi_bus::lab::LabLift;
     for (extra, want) in [(0u8, 13u64), (9, 22), (20, 32)] {
         let mut lab = LabLift::with_extra(MasterConfig::default(), extra).expect("lab bus");
-        lab.bus.advance_to(ms(60));
-        assert!(lab.bus.is_running(), "extra = {extra}");
-        assert_eq!(lab.bus.master().las().len(), 11 + extra as u32);
-        let before = lab.bus.stats();
-        lab.bus.advance_to(ms(200));
-        let s = lab.bus.stats();
+        lab.bus_mut().advance_to(ms(60));
+        assert!(lab.bus().is_running(), "extra = {extra}");
+        assert_eq!(lab.bus().master().las().len(), 11 + extra as u32);
+        let before = lab.bus().stats();
+        lab.bus_mut().advance_to(ms(200));
+        let s = lab.bus().stats();
         assert!(s.cycles > before.cycles + 10);
         assert_eq!(s.cycle_min, us(want * 154), "extra = {extra}");
         assert_eq!(s.cycle_max, us(want * 154), "extra = {extra}");

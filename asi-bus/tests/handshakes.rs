@@ -22,16 +22,16 @@ fn run_plc(
 ) -> SimTime {
     let mut next_scan = ms(30);
     loop {
-        let t = lab.bus.poll_at().min(next_scan);
+        let t = lab.bus().poll_at().min(next_scan);
         assert!(t <= limit, "not done by {limit}");
-        lab.bus.advance_to(t);
+        lab.bus_mut().advance_to(t);
         if t == next_scan {
-            scan(&mut lab.bus);
+            scan(lab.bus_mut());
             next_scan += SCAN;
         }
         if done(lab) {
             // Let the transaction in progress finish, so the trace shows it.
-            lab.bus.advance_to(t + us(154));
+            lab.bus_mut().advance_to(t + us(154));
             return t;
         }
     }
@@ -82,7 +82,7 @@ fn floor_display_word_and_up_button() {
             // Done once the button report was acknowledged and the next word requested.
             lab.floor(1).and_then(|f| f.display()) == Some(word)
                 && calls.get().up
-                && lab.bus.image().input.nibble(a(1)).get() == 0b0111
+                && lab.bus().image().input.nibble(a(1)).get() == 0b0111
         },
     );
     assert!(!calls.get().down);
@@ -91,7 +91,7 @@ fn floor_display_word_and_up_button() {
         None,
         "floor 2 got nothing"
     );
-    let trace = lab.bus.drain_trace();
+    let trace = lab.bus_mut().drain_trace();
     insta::assert_snapshot!(folded(&exchanges_with(&trace, 1)));
 }
 
@@ -126,7 +126,7 @@ fn cabin_32_bit_button_word() {
     );
     assert_eq!(got.get(), Some(want));
     assert_eq!(plc.words().bad(), 0);
-    let trace = lab.bus.drain_trace();
+    let trace = lab.bus_mut().drain_trace();
     insta::assert_snapshot!(folded(&exchanges_with(&trace, 6)));
 }
 
@@ -149,7 +149,7 @@ fn cabin_display_word() {
 #[test]
 fn one_s73_value_to_the_current_loop_output() {
     let mut lab = running_lab(29);
-    lab.bus.image_mut().output.set_analog(10, 1, 11_000);
+    lab.bus_mut().image_mut().output.set_analog(10, 1, 11_000);
     let mut at = Vec::new();
     let mut last = 0;
     run_plc(
@@ -160,7 +160,7 @@ fn one_s73_value_to_the_current_loop_output() {
             let out = lab.analog_output().expect("AC2618");
             if out.values_received() != last {
                 last = out.values_received();
-                at.push((lab.bus.now(), out.current_ua(1)));
+                at.push((lab.bus().now(), out.current_ua(1)));
             }
             out.current_ua(1) == 11_000
         },
@@ -173,7 +173,7 @@ fn one_s73_value_to_the_current_loop_output() {
             SimDuration::from_nanos(7 * cycle.as_nanos())
         );
     }
-    let trace = lab.bus.drain_trace();
+    let trace = lab.bus_mut().drain_trace();
     insta::assert_snapshot!(folded(&exchanges_with(&trace, 10)));
 }
 
@@ -189,8 +189,8 @@ fn a_held_floor_button_is_one_press() {
     let mut scan_until =
         |lab: &mut LabLift, until: SimTime, reports: &mut u32, presses: &mut u32| {
             while at < until {
-                lab.bus.advance_to(at);
-                plc_step(&mut lab.bus, 1, |i| plc.step(i));
+                lab.bus_mut().advance_to(at);
+                plc_step(lab.bus_mut(), 1, |i| plc.step(i));
                 *reports += plc.take_calls().up as u32;
                 *presses += plc.take_presses().up as u32;
                 at += SCAN;

@@ -18,11 +18,11 @@ fn input_nibbles_land_where_table_4_1_puts_them() {
     lab.converter_mut().expect("converter").set_fault(true);
     // Slave 8 (word 2 bits 15..12): load level 2, D2 = operation ready.
     lab.load_sensor_mut().expect("load").set_level(2);
-    lab.bus.advance_to(ms(45));
-    let w = |i| lab.bus.image().input.word(i);
+    lab.bus_mut().advance_to(ms(45));
+    let w = |i| lab.bus().image().input.word(i);
     assert_eq!(w(1) & 0x000F, 0b0011, "slave 7 in word 1 bits 3..0");
     assert_eq!(w(2) >> 12, 0b0110, "slave 8 in word 2 bits 15..12");
-    assert_eq!(lab.bus.image().input.nibble(a(8)).get(), 0b0110);
+    assert_eq!(lab.bus().image().input.nibble(a(8)).get(), 0b0110);
     // Slaves 11 and 12 (word 2 bits 3..0, word 3 bits 15..12) show their safety codes.
     let s11 = (w(2) & 0xF) as u8;
     let s12 = (w(3) >> 12) as u8;
@@ -50,16 +50,19 @@ fn input_nibbles_land_where_table_4_1_puts_them() {
 fn output_nibbles_reach_the_slaves_from_table_4_1_positions() {
     let mut lab = running_lab(40);
     // Slave 7 is word 1 bits 3..0: run (D0) and up (D1).
-    let w1 = lab.bus.image().output.word(1);
-    lab.bus.image_mut().output.set_word(1, (w1 & !0xF) | 0b0011);
-    lab.bus.advance_to(ms(45));
+    let w1 = lab.bus().image().output.word(1);
+    lab.bus_mut()
+        .image_mut()
+        .output
+        .set_word(1, (w1 & !0xF) | 0b0011);
+    lab.bus_mut().advance_to(ms(45));
     let c = lab.converter().expect("converter");
     assert!(c.run() && c.direction_up());
-    lab.bus
+    lab.bus_mut()
         .image_mut()
         .output
         .set_nibble(a(7), Nibble::from_low_bits(0b0001));
-    lab.bus.advance_to(ms(50));
+    lab.bus_mut().advance_to(ms(50));
     let c = lab.converter().expect("converter");
     assert!(c.run() && !c.direction_up());
 }
@@ -67,22 +70,22 @@ fn output_nibbles_reach_the_slaves_from_table_4_1_positions() {
 #[test]
 fn flags_f0_to_f3_in_word_0() {
     let mut lab = running_lab(40);
-    let f = |lab: &LabLift| lab.bus.image().input.word(0) >> 12;
+    let f = |lab: &LabLift| lab.bus().image().input.word(0) >> 12;
     // Protected mode, configuration OK, power OK, periphery OK: only F3 (not active) = 1.
     assert_eq!(f(&lab), 0b1000);
     // F0: a projected slave missing.
     let conv = lab.slave_id(7).expect("7");
-    lab.bus.detach(conv);
-    lab.bus.advance_to(ms(60));
+    lab.bus_mut().detach(conv);
+    lab.bus_mut().advance_to(ms(60));
     assert_eq!(f(&lab), 0b1001);
-    lab.bus.attach(conv);
-    lab.bus.advance_to(ms(250));
+    lab.bus_mut().attach(conv);
+    lab.bus_mut().advance_to(ms(250));
     assert_eq!(f(&lab), 0b1000);
     // F1: AS-i power fail.
-    lab.bus.set_supply_voltage(20.0);
+    lab.bus_mut().set_supply_voltage(20.0);
     assert_eq!(f(&lab) & 0b0010, 0b0010);
-    lab.bus.set_supply_voltage(30.0);
-    lab.bus.advance_to(ms(300));
+    lab.bus_mut().set_supply_voltage(30.0);
+    lab.bus_mut().advance_to(ms(300));
     assert_eq!(f(&lab), 0b1000);
 }
 
@@ -178,30 +181,30 @@ fn analog_input_words_of_slaves_10_to_31() {
 #[test]
 fn host_flag_offline_sends_default_outputs_then_stops() {
     let mut lab = running_lab(40);
-    lab.bus.enable_trace(100_000);
-    lab.bus
+    lab.bus_mut().enable_trace(100_000);
+    lab.bus_mut()
         .image_mut()
         .output
         .set_nibble(a(7), Nibble::from_low_bits(1));
-    lab.bus.advance_to(ms(45));
+    lab.bus_mut().advance_to(ms(45));
     assert!(lab.converter().expect("c").run());
-    let w0 = lab.bus.image().output.word(0);
-    lab.bus
+    let w0 = lab.bus().image().output.word(0);
+    lab.bus_mut()
         .image_mut()
         .output
         .set_word(0, w0 | HostFlags::WORD0_OFFLINE);
-    lab.bus.advance_to(ms(60));
-    let m = lab.bus.master();
+    lab.bus_mut().advance_to(ms(60));
+    let m = lab.bus().master();
     assert_eq!(m.phase(), Phase::Offline);
     assert!(m.flags().offline_ready());
     assert!(m.host_flags().offline);
     assert_eq!(
-        lab.bus.image().input.nibble(a(8)),
+        lab.bus().image().input.nibble(a(8)),
         Nibble::ZERO,
         "inputs zeroed"
     );
     // The converter got the default outputs 1111 on the way out.
-    let trace = lab.bus.drain_trace();
+    let trace = lab.bus_mut().drain_trace();
     let offline: Vec<_> = trace.iter().filter(|r| r.kind == TxKind::Offline).collect();
     assert_eq!(offline.len(), 11);
     assert!(offline.iter().all(|r| r.request.info() == 0b01111));
@@ -210,27 +213,27 @@ fn host_flag_offline_sends_default_outputs_then_stops() {
     // 1111 is the slave IC's passive state: the converter's relays open (ZMD ASI4U §3.7.1).
     assert!(!c.run() && !c.direction_up());
     assert_eq!(
-        lab.bus.poll_at(),
+        lab.bus().poll_at(),
         asi_phy::SimTime::MAX,
         "quiet until the PLC acts"
     );
     // Back on line.
-    lab.bus.image_mut().output.set_word(0, w0);
-    lab.bus.advance_to(ms(100));
-    assert!(lab.bus.is_running());
+    lab.bus_mut().image_mut().output.set_word(0, w0);
+    lab.bus_mut().advance_to(ms(100));
+    assert!(lab.bus().is_running());
 }
 
 #[test]
 fn host_flag_lock_data_exchange_sends_1111() {
     let mut lab = running_lab(40);
-    lab.bus.enable_trace(100_000);
-    lab.bus
+    lab.bus_mut().enable_trace(100_000);
+    lab.bus_mut()
         .image_mut()
         .output
         .set_word(0, HostFlags::WORD0_LOCK_DATA_EXCHANGE);
-    lab.bus.advance_to(ms(50));
-    assert!(!lab.bus.master().host_flags().data_exchange_active);
-    let trace = lab.bus.drain_trace();
+    lab.bus_mut().advance_to(ms(50));
+    assert!(!lab.bus().master().host_flags().data_exchange_active);
+    let trace = lab.bus_mut().drain_trace();
     let late: Vec<_> = trace
         .iter()
         .filter(|r| r.start > ms(43) && matches!(r.request.call(), Call::DataExchange { .. }))

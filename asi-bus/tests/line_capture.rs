@@ -17,19 +17,19 @@ fn the_recorded_line_decodes_to_the_trace() {
     for rate in [0.0, 0.002] {
         let mut lab = LabLift::new().expect("lab bus");
         if rate > 0.0 {
-            lab.bus.set_line_faults(
+            lab.bus_mut().set_line_faults(
                 7,
                 FaultRates::uniform(asi_phy::PulseErrorRate::new(rate).expect("a probability")),
             );
         }
-        lab.bus.enable_trace(100_000);
-        lab.bus.record_line(true);
-        lab.bus.advance_to(SimTime::from_millis(200));
-        let mut pulses = lab.bus.take_line_pulses();
+        lab.bus_mut().enable_trace(100_000);
+        lab.bus_mut().record_line(true);
+        lab.bus_mut().advance_to(SimTime::from_millis(200));
+        let mut pulses = lab.bus_mut().take_line_pulses();
         pulses.sort_by_key(|p| p.at);
         let rx = Receiver::new(BusTiming::default().receiver(Expect::Both));
         let decoded: Vec<_> = Receiver::decode(&mut { rx }, pulses).collect();
-        let trace = lab.bus.drain_trace();
+        let trace = lab.bus_mut().drain_trace();
         assert!(trace.len() > 1000);
         // Every transaction whose telegrams arrived intact is in the decoded line, in order.
         let mut i = 0;

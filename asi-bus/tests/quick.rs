@@ -50,7 +50,7 @@ fn act() -> impl Strategy<Value = Act> {
 
 /// Everything the two buses must agree on.
 fn state(lab: &mut LabLift) -> String {
-    let bus = &mut lab.bus;
+    let bus = lab.bus_mut();
     let trace = bus.drain_trace();
     let pulses = bus.take_line_pulses();
     let mut s = format!(
@@ -71,34 +71,34 @@ fn step(lab: &mut LabLift, now: &mut SimTime, a: &Act) -> Option<SimTime> {
     match *a {
         Act::Before(us) => {
             let until = *now + SimDuration::from_micros(us);
-            let r = lab.bus.advance_before(until);
+            let r = lab.bus_mut().advance_before(until);
             *now = r.unwrap_or(until);
             return r;
         }
         Act::To(us) => {
             *now += SimDuration::from_micros(us);
-            lab.bus.advance_to(*now);
+            lab.bus_mut().advance_to(*now);
         }
-        Act::Write(i, v) => lab.bus.image_mut().output.set_word(i, v),
-        Act::Volts(v) => lab.bus.set_supply_voltage(v),
+        Act::Write(i, v) => lab.bus_mut().image_mut().output.set_word(i, v),
+        Act::Volts(v) => lab.bus_mut().set_supply_voltage(v),
         Act::Pull(n) => {
             if let Some(id) = lab.slave_id(n) {
-                if lab.bus.is_attached(id) {
-                    lab.bus.detach(id);
+                if lab.bus().is_attached(id) {
+                    lab.bus_mut().detach(id);
                 } else {
-                    lab.bus.attach(id);
+                    lab.bus_mut().attach(id);
                 }
             }
         }
-        Act::Noise(seed, rate) => lab.bus.set_line_faults(
+        Act::Noise(seed, rate) => lab.bus_mut().set_line_faults(
             seed,
             FaultRates::uniform(PulseErrorRate::new(rate).expect("a probability")),
         ),
-        Act::Quiet => lab.bus.set_line_faults(0, FaultRates::NONE),
+        Act::Quiet => lab.bus_mut().set_line_faults(0, FaultRates::NONE),
         Act::Corrupt(i) => lab
-            .bus
+            .bus_mut()
             .corrupt_next_telegram(vec![PulseFault::Drop { index: i }]),
-        Act::Record(on) => lab.bus.record_line(on),
+        Act::Record(on) => lab.bus_mut().record_line(on),
         Act::Buttons(floor, up, down) => {
             if let Some(f) = lab.floor_mut(floor) {
                 f.set_buttons(up, down);
@@ -123,13 +123,13 @@ proptest! {
     ) {
         let mut quick = LabLift::new().expect("lab");
         let mut exact = LabLift::new().expect("lab");
-        exact.bus.set_pulse_exact(true);
+        exact.bus_mut().set_pulse_exact(true);
         for lab in [&mut quick, &mut exact] {
             // The rig's watch (the floor stations, the cabin display, the converter, the set
             // point), none, or any.
-            lab.bus.watch_outputs(watch);
-            lab.bus.enable_trace(1 << 20);
-            lab.bus.advance_to(ms(start_ms));
+            lab.bus_mut().watch_outputs(watch);
+            lab.bus_mut().enable_trace(1 << 20);
+            lab.bus_mut().advance_to(ms(start_ms));
         }
         let (mut tq, mut te) = (ms(start_ms), ms(start_ms));
         prop_assert_eq!(state(&mut quick), state(&mut exact));

@@ -20,34 +20,34 @@ proptest! {
         pulls in proptest::collection::vec((0u64..120, 1u8..13), 0..4),
     ) {
         let mut lab = LabLift::new().expect("lab");
-        lab.bus.enable_trace(4096);
+        lab.bus_mut().enable_trace(4096);
         let mut previous: Option<TransactionRecord> = None;
         let mut repeats = 0u64;
-        lab.bus.set_line_faults(seed, FaultRates::uniform(asi_phy::PulseErrorRate::new(rate).expect("a probability")));
+        lab.bus_mut().set_line_faults(seed, FaultRates::uniform(asi_phy::PulseErrorRate::new(rate).expect("a probability")));
         for t in 0..120u64 {
             for (i, v, at) in &writes {
                 if *at == t {
-                    lab.bus.image_mut().output.set_word(*i, *v);
+                    lab.bus_mut().image_mut().output.set_word(*i, *v);
                 }
             }
             for (at, v) in &volts {
                 if *at == t {
-                    lab.bus.set_supply_voltage(*v);
+                    lab.bus_mut().set_supply_voltage(*v);
                 }
             }
             for (at, n) in &pulls {
                 if *at == t {
                     if let Some(id) = lab.slave_id(*n) {
-                        if lab.bus.is_attached(id) {
-                            lab.bus.detach(id);
+                        if lab.bus().is_attached(id) {
+                            lab.bus_mut().detach(id);
                         } else {
-                            lab.bus.attach(id);
+                            lab.bus_mut().attach(id);
                         }
                     }
                 }
             }
-            lab.bus.advance_to(ms(t) + SimDuration::from_micros(500));
-            for r in lab.bus.drain_trace() {
+            lab.bus_mut().advance_to(ms(t) + SimDuration::from_micros(500));
+            for r in lab.bus_mut().drain_trace() {
                 if r.repeat {
                     repeats += 1;
                     let first = previous.as_ref();
@@ -63,8 +63,8 @@ proptest! {
                 previous = Some(r);
             }
         }
-        let dropped = lab.bus.trace_ring_mut().map_or(0, |ring| ring.dropped());
+        let dropped = lab.bus_mut().trace_ring_mut().map_or(0, |ring| ring.dropped());
         prop_assert_eq!(dropped, 0);
-        prop_assert_eq!(lab.bus.stats().repeats, repeats);
+        prop_assert_eq!(lab.bus().stats().repeats, repeats);
     }
 }

@@ -13,7 +13,7 @@ const SENSORS: [u8; 2] = [11, 12];
 /// The lab bus with line noise `p` from power-on, run until both sensors are released.
 fn noisy_lab(seed: u64, p: f64) -> LabLift {
     let mut lab = LabLift::new().expect("lab");
-    lab.bus.set_line_faults(
+    lab.bus_mut().set_line_faults(
         seed,
         FaultRates::uniform(asi_phy::PulseErrorRate::new(p).expect("a probability")),
     );
@@ -24,13 +24,13 @@ fn noisy_lab(seed: u64, p: f64) -> LabLift {
             t < SimTime::from_millis(2000),
             "taught within 2 s at p = {p}"
         );
-        lab.bus.advance_to(t);
+        lab.bus_mut().advance_to(t);
     }
     lab
 }
 
 fn in_las(lab: &LabLift, n: u8) -> bool {
-    lab.bus.master().las().contains(a(n))
+    lab.bus().master().las().contains(a(n))
 }
 
 proptest! {
@@ -44,17 +44,17 @@ proptest! {
         p in prop_oneof![Just(1e-3), Just(5e-3)],
     ) {
         let mut lab = noisy_lab(seed, p);
-        let start = lab.bus.now();
+        let start = lab.bus().now();
         let mut left_las = [false; 2];
         for k in 1..=3000u64 {
-            lab.bus.advance_to(start + SimDuration::from_millis(k));
+            lab.bus_mut().advance_to(start + SimDuration::from_millis(k));
             for (i, &n) in SENSORS.iter().enumerate() {
                 left_las[i] |= !in_las(&lab, n);
                 prop_assert!(
                     lab.released(n) || left_las[i],
                     "sensor {} dropped at {} while in LAS: {:?}",
                     n,
-                    lab.bus.now(),
+                    lab.bus().now(),
                     lab.monitor().and_then(|m| m.state(addr(n)))
                 );
             }
@@ -68,17 +68,17 @@ proptest! {
     #[test]
     fn noise_never_releases_a_tripped_sensor(seed in any::<u64>(), p in 1e-3f64..3e-2) {
         let mut lab = noisy_lab(seed, 1e-3);
-        lab.bus.set_line_faults(seed ^ 0x5a5a, FaultRates::uniform(asi_phy::PulseErrorRate::new(p).expect("a probability")));
+        lab.bus_mut().set_line_faults(seed ^ 0x5a5a, FaultRates::uniform(asi_phy::PulseErrorRate::new(p).expect("a probability")));
         for n in SENSORS {
             lab.safety_sensor_mut(n).expect("sensor").set_free(false);
         }
-        let start = lab.bus.now();
+        let start = lab.bus().now();
         // The 0000 reaches the monitor within the tolerance time at the latest.
-        lab.bus.advance_to(start + SimDuration::from_millis(45));
+        lab.bus_mut().advance_to(start + SimDuration::from_millis(45));
         for k in 46..=1500u64 {
-            lab.bus.advance_to(start + SimDuration::from_millis(k));
+            lab.bus_mut().advance_to(start + SimDuration::from_millis(k));
             for n in SENSORS {
-                prop_assert!(!lab.released(n), "sensor {} released at {}", n, lab.bus.now());
+                prop_assert!(!lab.released(n), "sensor {} released at {}", n, lab.bus().now());
             }
         }
         for n in SENSORS {

@@ -7,24 +7,25 @@ use asi_phy::{Call, SimDuration};
 
 fn first_ready_exchange(offset_us: u64) -> (SimDuration, u64) {
     let mut lab = running_lab(40);
-    lab.bus.advance_to(ms(45));
-    let _ = lab.bus.drain_trace();
+    lab.bus_mut().advance_to(ms(45));
+    let _ = lab.bus_mut().drain_trace();
     // Find the start of the next Data_Exchange with the converter (address 7).
     let cycle = us(13 * 154);
-    lab.bus.advance_to(lab.bus.now() + cycle);
+    let now = lab.bus().now();
+    lab.bus_mut().advance_to(now + cycle);
     let last7 = lab
-        .bus
+        .bus_mut()
         .drain_trace()
         .into_iter()
         .rfind(|r| matches!(r.request.call(), Call::DataExchange { address, .. } if address.get() == 7))
         .expect("an exchange with 7")
         .start;
     let next7 = last7 + cycle;
-    lab.bus.advance_to(next7 + us(offset_us));
+    lab.bus_mut().advance_to(next7 + us(offset_us));
     lab.converter_mut().expect("converter").set_ready(true);
-    lab.bus.advance_to(next7 + cycle + cycle);
+    lab.bus_mut().advance_to(next7 + cycle + cycle);
     let first = lab
-        .bus
+        .bus_mut()
         .drain_trace()
         .into_iter()
         .find(|r| {

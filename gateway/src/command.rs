@@ -195,7 +195,7 @@ pub fn apply(rig: &mut Rig, cmd: &Command, seed: u64) -> Result<(), String> {
                 Ok(r) if r.get() > 0.0 => FaultRates::uniform(r),
                 _ => FaultRates::NONE,
             };
-            rig.lab_mut().bus.set_line_faults(seed, rates);
+            rig.lab_mut().bus_mut().set_line_faults(seed, rates);
             rig.log_now(Actor::Web, format!("line noise: pulse error rate {rate}"));
             Ok(())
         }

@@ -254,7 +254,7 @@ impl Gateway {
 
     fn coil(&self, rig: &Rig, i: u16) -> Option<bool> {
         if i < IMAGE_BITS {
-            return Some(image_bit(rig.lab().bus.image().output.words(), i));
+            return Some(image_bit(rig.lab().bus().image().output.words(), i));
         }
         match i.checked_sub(SAFETY_BITS)? {
             0 => Some(self.signals.restart),
@@ -265,7 +265,7 @@ impl Gateway {
 
     fn discrete_input(&self, rig: &Rig, i: u16) -> Option<bool> {
         if i < IMAGE_BITS {
-            return Some(image_bit(rig.lab().bus.image().input.words(), i));
+            return Some(image_bit(rig.lab().bus().image().input.words(), i));
         }
         if (LIST_BITS..FLAG_BITS).contains(&i) {
             let k = i - LIST_BITS;
@@ -273,7 +273,7 @@ impl Gateway {
             return Some(list_bits(list)[usize::from(k % 64)]);
         }
         if (FLAG_BITS..FLAG_BITS + EC_FLAGS.len() as u16).contains(&i) {
-            let flags = rig.lab().bus.master().flags();
+            let flags = rig.lab().bus().master().flags();
             return Some(flags.has(EC_FLAGS[usize::from(i - FLAG_BITS)]));
         }
         let k = i.checked_sub(SAFETY_BITS)?;
@@ -294,9 +294,9 @@ impl Gateway {
 
     fn input_register(&self, rig: &Rig, now: SimTime, i: u16) -> Option<u16> {
         if i < IMAGE_REGISTERS {
-            return Some(rig.lab().bus.image().input.word(usize::from(i)));
+            return Some(rig.lab().bus().image().input.word(usize::from(i)));
         }
-        let master = rig.lab().bus.master();
+        let master = rig.lab().bus().master();
         if (LIST_REGISTERS..FLAGS_REGISTER).contains(&i) {
             let k = i - LIST_REGISTERS;
             let list = lists(rig)[usize::from(k / 4)];
@@ -313,19 +313,19 @@ impl Gateway {
                 );
             }
             CONFIG_ERROR_REGISTER => {
-                let config_error = rig.lab().bus.image().input.word(0) & F0_CONFIG_ERROR != 0;
+                let config_error = rig.lab().bus().image().input.word(0) & F0_CONFIG_ERROR != 0;
                 return Some(u16::from(config_error));
             }
             SAFETY_REGISTER => return Some(self.safety_bits(rig)),
             LOAD_REGISTER => {
                 let nibble = SlaveAddr::a(LOAD_SENSOR)
-                    .map_or(0, |a| rig.lab().bus.image().input.nibble(a).get());
+                    .map_or(0, |a| rig.lab().bus().image().input.nibble(a).get());
                 return Some(u16::from(nibble & 0b11));
             }
             _ => {}
         }
         if (ERROR_REGISTERS..ERROR_REGISTERS + 16).contains(&i) {
-            let stats = rig.lab().bus.stats();
+            let stats = rig.lab().bus().stats();
             let k = usize::from(i - ERROR_REGISTERS);
             let count = if k / 2 < 7 {
                 stats.response_errors[k / 2] + stats.request_errors[k / 2]
@@ -335,7 +335,7 @@ impl Gateway {
             return Some(word_of(count, 2, k % 2));
         }
         if (CYCLE_REGISTERS..CYCLE_REGISTERS + 3).contains(&i) {
-            let stats = rig.lab().bus.stats();
+            let stats = rig.lab().bus().stats();
             let us = |d: SimDuration| (d.as_nanos() / 1000).min(u64::from(u16::MAX)) as u16;
             let mean = stats
                 .cycle_total
@@ -357,12 +357,12 @@ impl Gateway {
 
     fn holding(&self, rig: &Rig, i: u16) -> Option<u16> {
         if i < IMAGE_REGISTERS {
-            return Some(rig.lab().bus.image().output.word(usize::from(i)));
+            return Some(rig.lab().bus().image().output.word(usize::from(i)));
         }
         if (INPUT_MIRROR..INPUT_MIRROR + IMAGE_REGISTERS).contains(&i) {
             return Some(
                 rig.lab()
-                    .bus
+                    .bus()
                     .image()
                     .input
                     .word(usize::from(i - INPUT_MIRROR)),
@@ -387,7 +387,7 @@ impl Gateway {
         }
         for (i, &v) in addrs.zip(vs) {
             if i < IMAGE_BITS {
-                let image = &mut rig.lab_mut().bus.image_mut().output;
+                let image = &mut rig.lab_mut().bus_mut().image_mut().output;
                 let (w, bit) = image_bit_position(i);
                 let word = image.word(w);
                 image.set_word(
@@ -438,7 +438,7 @@ impl Gateway {
         for (i, &v) in addrs.zip(vs) {
             if i < IMAGE_REGISTERS {
                 rig.lab_mut()
-                    .bus
+                    .bus_mut()
                     .image_mut()
                     .output
                     .set_word(usize::from(i), v);
@@ -531,7 +531,7 @@ impl Gateway {
         }
         self.tripped = true;
         self.watchdog_trips += 1;
-        let image = &mut rig.lab_mut().bus.image_mut().output;
+        let image = &mut rig.lab_mut().bus_mut().image_mut().output;
         for w in 0..IMAGE_WORDS {
             image.set_word(w, 0);
         }
@@ -589,7 +589,7 @@ fn image_bit(words: &[u16; IMAGE_WORDS], i: u16) -> bool {
 
 /// LAS, LDS, LPS and LPF.
 fn lists(rig: &Rig) -> [SlaveList; 4] {
-    let m = rig.lab().bus.master();
+    let m = rig.lab().bus().master();
     [m.las(), m.lds(), m.lps(), m.lpf()]
 }
 

@@ -130,7 +130,7 @@ fn any_modbus_request_through_the_map_is_served_whole_or_refused_and_changes_not
         .run(&request(), |req| {
             let mut w = world.borrow_mut();
             let World { rig, gw, at, .. } = &mut *w;
-            let outputs_before = *rig.lab().bus.image().output.words();
+            let outputs_before = *rig.lab().bus().image().output.words();
             let answer = gw.serve(rig, *at, &req);
             match (&req, &answer) {
                 (Request::ReadCoils(_, n), Ok(Response::ReadCoils(v)))
@@ -171,7 +171,7 @@ fn any_modbus_request_through_the_map_is_served_whole_or_refused_and_changes_not
                         code
                     );
                     // Refused: the output image is as it was.
-                    prop_assert_eq!(&outputs_before, rig.lab().bus.image().output.words());
+                    prop_assert_eq!(&outputs_before, rig.lab().bus().image().output.words());
                 }
                 (q, a) => prop_assert!(false, "{:?} answered {:?}", q, a),
             }

@@ -93,7 +93,7 @@ impl Ttk {
         // The controller's signals to the safety logic: the restart pulse of a move, and the
         // overload as the built-in program reads it (a load sensor that is off the bus or not
         // ready counts as overloaded), at every message.
-        let load = LoadReading::of(&rig.lab().bus.image().input);
+        let load = LoadReading::of(&rig.lab().bus().image().input);
         gw.set_signals(
             rig,
             ToSafety {
@@ -173,7 +173,7 @@ impl Ttk {
     fn motor(&mut self, rig: &mut Rig, at: SimTime, dir: i8) {
         let dir = dir.signum();
         let moving = dir != 0;
-        let image = &mut rig.lab_mut().bus.image_mut();
+        let image = &mut rig.lab_mut().bus_mut().image_mut();
         if let Some(a) = SlaveAddr::a(CONVERTER) {
             let nibble = u8::from(moving) | u8::from(dir > 0) << 1;
             if let Some(n) = asi_phy::Nibble::new(nibble) {
@@ -236,7 +236,7 @@ impl Ttk {
                 }
             }
         }
-        let image = rig.lab_mut().bus.image_mut();
+        let image = rig.lab_mut().bus_mut().image_mut();
         for (i, station) in self.floors.iter_mut().enumerate() {
             if let Some(a) = SlaveAddr::a(FLOOR_1 + i as u8) {
                 image

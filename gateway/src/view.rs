@@ -357,9 +357,9 @@ pub fn build(rig: &Rig, run: Run, telegrams: Option<&Telegrams>) -> View {
         .map(|id| display(id, lift.display(id)))
         .collect();
 
-    let master = lab.bus.master();
+    let master = lab.bus().master();
     let (las, lds, lps, lpf) = (master.las(), master.lds(), master.lps(), master.lpf());
-    let image = lab.bus.image();
+    let image = lab.bus().image();
     let slaves = (1..64u8)
         .filter_map(SlaveAddr::from_index)
         .filter(|a| lds.contains(*a) || las.contains(*a) || lps.contains(*a) || lpf.contains(*a))
@@ -375,7 +375,7 @@ pub fn build(rig: &Rig, run: Run, telegrams: Option<&Telegrams>) -> View {
             output: nibble(image.output.nibble(a).get()),
         })
         .collect();
-    let stats = lab.bus.stats();
+    let stats = lab.bus().stats();
     let mean = stats
         .cycle_total
         .as_nanos()
@@ -386,7 +386,7 @@ pub fn build(rig: &Rig, run: Run, telegrams: Option<&Telegrams>) -> View {
         .map(|&c| (check_key(c), stats.errors(c)))
         .collect();
     errors.push(("no_response", stats.no_response));
-    let rates = lab.bus.line_fault_rates();
+    let rates = lab.bus().line_fault_rates();
     let bus = BusView {
         phase: match master.phase() {
             Phase::Offline => "offline",
@@ -401,7 +401,7 @@ pub fn build(rig: &Rig, run: Run, telegrams: Option<&Telegrams>) -> View {
         repeats: stats.repeats,
         errors,
         line_noise: rates.drop + rates.insert + rates.flip + rates.shift,
-        supply_v: lab.bus.supply_voltage(),
+        supply_v: lab.bus().supply_voltage(),
         telegrams: telegrams
             .map(|t| t.borrow().iter().map(|r| r.to_string()).collect())
             .unwrap_or_default(),

@@ -34,7 +34,7 @@
 //! let mut rig = Rig::new(sc)?;
 //! while rig.step_until(SimTime::from_millis(5_000)).is_some() {}
 //! let converter = SlaveAddr::a(lab::address::CONVERTER).expect("an address");
-//! assert!(rig.lab().bus.image().output.nibble(converter).bit(0));
+//! assert!(rig.lab().bus().image().output.nibble(converter).bit(0));
 //! assert!(rig.lift().velocity_mm_s() < 0.0);
 //! // Stepped or not, the run is the same: `run` goes on from the moment reached.
 //! assert_eq!(rig.run(None), report);

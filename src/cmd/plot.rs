@@ -75,7 +75,7 @@ impl DriveBits {
 impl Sample {
     fn of(rig: &Rig) -> Sample {
         let lift = rig.lift();
-        let stats = rig.lab().bus.stats();
+        let stats = rig.lab().bus().stats();
         Sample {
             t_s: rig.now().as_secs_f64(),
             position_mm: lift.position_mm(),

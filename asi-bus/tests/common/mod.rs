@@ -35,9 +35,9 @@ pub fn io_bus(n: u8) -> Bus {
 /// The lab bus in normal operation at `at_ms`, tracing.
 pub fn running_lab(at_ms: u64) -> LabLift {
     let mut lab = LabLift::new().expect("lab");
-    lab.bus.advance_to(ms(at_ms));
-    assert!(lab.bus.is_running());
-    lab.bus.enable_trace(1_000_000);
+    lab.bus_mut().advance_to(ms(at_ms));
+    assert!(lab.bus().is_running());
+    lab.bus_mut().enable_trace(1_000_000);
     lab
 }
 

@@ -87,14 +87,14 @@ impl Rig {
                     return;
                 };
                 if matches!(f, Fault::SlaveOffline { .. }) {
-                    self.lab.bus.detach(id);
+                    self.lab.bus_mut().detach(id);
                 } else {
-                    self.lab.bus.attach(id);
+                    self.lab.bus_mut().attach(id);
                     self.wiring.plant_dirty = true;
                 }
             }
             Fault::PowerFail { duration } => {
-                self.lab.bus.set_supply_voltage(0.0);
+                self.lab.bus_mut().set_supply_voltage(0.0);
                 self.agenda.timers.push((t + duration, Timer::PowerBack));
             }
             Fault::SafeLinkDrop { duration } => {
@@ -163,7 +163,7 @@ impl Rig {
                 Timer::Attendant(Round::Ack) => self.act(t, Actor::Attendant, &Action::Ack),
                 Timer::Attendant(Round::Reset) => self.act(t, Actor::Attendant, &Action::Reset),
                 Timer::PowerBack => {
-                    self.lab.bus.set_supply_voltage(NOMINAL_VOLTS);
+                    self.lab.bus_mut().set_supply_voltage(NOMINAL_VOLTS);
                     self.log(Actor::Rig, "AS-i power back".to_owned());
                     self.wiring.plant_dirty = true;
                 }

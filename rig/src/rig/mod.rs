@@ -237,11 +237,12 @@ impl Rig {
             ..LiftConfig::default()
         })?;
         let mut lab = LabLift::with_extra(asi_master::MasterConfig::default(), sc.extra_slaves)?;
-        lab.bus.watch_outputs(wiring::drives_plant());
-        lab.bus.enable_trace(0);
+        lab.bus_mut().watch_outputs(wiring::drives_plant());
+        lab.bus_mut().enable_trace(0);
         let rate = PulseErrorRate::new(sc.pulse_error_rate)?;
         if rate.get() > 0.0 {
-            lab.bus.set_line_faults(sc.seed, FaultRates::uniform(rate));
+            lab.bus_mut()
+                .set_line_faults(sc.seed, FaultRates::uniform(rate));
         }
         let plc = Plc::new(ControllerConfig {
             floors: sc.floors,
@@ -350,7 +351,7 @@ impl Rig {
     /// every scenario and for random ones with faults); the exact path is what the speed of
     /// the fast one is measured against (`docs/dev/performance.md`).
     pub fn set_pulse_exact(&mut self, on: bool) {
-        self.lab.bus.set_pulse_exact(on);
+        self.lab.bus_mut().set_pulse_exact(on);
         self.every_moment = on;
     }
 
@@ -360,11 +361,11 @@ impl Rig {
     /// reached.
     pub fn waves_to(&mut self, out: WaveOutputs) {
         self.enable_trace_ring();
-        self.lab.bus.record_line(true);
+        self.lab.bus_mut().record_line(true);
         let waves = match self.outputs.copied_waves.take() {
             Some(copied) => copied.continue_into(out),
             None => {
-                let waves = Waves::new(out, self.lab.bus.timing()).starting_at(self.agenda.now);
+                let waves = Waves::new(out, self.lab.bus().timing()).starting_at(self.agenda.now);
                 match self.safety.drive {
                     Some(_) => waves.with_drive_safety(),
                     None => waves,
@@ -384,9 +385,9 @@ impl Rig {
     fn enable_trace_ring(&mut self) {
         // A copy of a rig keeps the records its original had not yet handed on: its new
         // outputs get them.
-        if self.lab.bus.trace_ring_mut().is_none() {
+        if self.lab.bus_mut().trace_ring_mut().is_none() {
             // A PLC scan spans about 65 transactions of the lab bus; the ring holds far more.
-            self.lab.bus.enable_trace(1 << 16);
+            self.lab.bus_mut().enable_trace(1 << 16);
         }
     }
 
@@ -401,18 +402,18 @@ impl Rig {
         // A copy of a rig that had outputs keeps recording for the outputs it is given
         // before its first step ([`Rig::enable_trace_ring`], [`Rig::waves_to`]); given none,
         // nothing wants the records.
-        if self.outputs.waves.is_none() && self.lab.bus.records_line() {
-            self.lab.bus.record_line(false);
+        if self.outputs.waves.is_none() && self.lab.bus().records_line() {
+            self.lab.bus_mut().record_line(false);
         }
         if !self.outputs.wanted() {
-            if self.lab.bus.trace_ring_mut().is_some() {
-                self.lab.bus.enable_trace(0);
+            if self.lab.bus_mut().trace_ring_mut().is_some() {
+                self.lab.bus_mut().enable_trace(0);
             }
             return;
         }
-        let records = self.lab.bus.drain_trace();
+        let records = self.lab.bus_mut().drain_trace();
         let pulses = if self.outputs.waves.is_some() {
-            self.lab.bus.take_line_pulses()
+            self.lab.bus_mut().take_line_pulses()
         } else {
             Vec::new()
         };
@@ -463,7 +464,7 @@ impl Rig {
             fb_err: diag.is_some_and(|d| d.group.errors.fb_err),
             com_err: diag.is_some_and(|d| d.group.errors.com_err),
             out_err: diag.is_some_and(|d| d.group.errors.out_err),
-            supply_v: self.lab.bus.supply_voltage(),
+            supply_v: self.lab.bus().supply_voltage(),
             drive: self.safety.drive.as_ref().map(|d| d.sample()),
         }
     }
@@ -556,7 +557,7 @@ impl Rig {
         if t > limit {
             return None;
         }
-        if let Some(at) = self.lab.bus.advance_before(t) {
+        if let Some(at) = self.lab.bus_mut().advance_before(t) {
             self.output_taken(at);
             return Some(at);
         }
@@ -576,7 +577,7 @@ impl Rig {
                 return None;
             }
             let quiet = self.outputs_pass_until();
-            self.lab.bus.pass_quiet_outputs_until(quiet);
+            self.lab.bus_mut().pass_quiet_outputs_until(quiet);
             match self.quiet_scans(t, quiet, limit) {
                 scans::Stretch::None => {}
                 scans::Stretch::Went => continue,
@@ -585,7 +586,7 @@ impl Rig {
                     return Some(at);
                 }
             }
-            match self.lab.bus.advance_before(t) {
+            match self.lab.bus_mut().advance_before(t) {
                 Some(at) => self.output_taken(at),
                 None => {
                     self.step(t);
@@ -641,7 +642,7 @@ impl Rig {
         if self.wiring.plant_dirty {
             self.plant_to_slaves();
         }
-        self.lab.bus.advance_to(t);
+        self.lab.bus_mut().advance_to(t);
         self.slaves_to_plant(t);
         if t >= self.agenda.next_safety {
             self.safety_scan(t);
@@ -805,7 +806,7 @@ impl Rig {
             .collect();
         let status = self.controller.status();
         let calls = self.controller.pending_calls();
-        let stats = self.lab.bus.stats();
+        let stats = self.lab.bus().stats();
         self.report.simulated_s = self.agenda.now.as_secs_f64();
         self.report.final_state = FinalState {
             floor: status.floor,

@@ -66,14 +66,15 @@ impl Rig {
             self.las_moved(t, reads.las);
         }
         if reads.drops {
-            let drops = self.lab.bus.take_monitor_drops(self.lab.monitor);
+            let monitor = self.lab.monitor_id();
+            let drops = self.lab.bus_mut().take_monitor_drops(monitor);
             self.log_drops(drops);
         }
     }
 
     /// [`Rig::watch_bus_reads`] of the bus as it is, at `t` (the end of a run).
     pub(super) fn watch_bus(&mut self, t: SimTime) {
-        let reads = BusReads::of(&self.lab.bus, self.lab.monitor);
+        let reads = BusReads::of(self.lab.bus(), self.lab.monitor_id());
         self.watch_bus_reads(t, reads);
     }
 
@@ -137,7 +138,7 @@ impl Rig {
     /// counts (after a scan that found K1 open for a cause a round answers, see
     /// [`People::attendant_idle`]).
     pub(super) fn safety_scan(&mut self, t: SimTime) {
-        let reads = BusReads::of(&self.lab.bus, self.lab.monitor);
+        let reads = BusReads::of(self.lab.bus(), self.lab.monitor_id());
         self.watch_bus_reads(t, reads);
         let inputs = self.safety_inputs(reads);
         if self.people.attendant_idle
@@ -257,14 +258,14 @@ impl Rig {
         {
             return Stretch::None;
         }
-        let monitor = self.lab.monitor;
-        let reads = BusReads::of(&self.lab.bus, monitor);
+        let monitor = self.lab.monitor_id();
+        let reads = BusReads::of(self.lab.bus(), monitor);
         if !reads.las_seen(self.judge.las_watch.seen()) || reads.drops {
             return Stretch::None;
         }
         // What the slaves drive is read at a step when the drive count has moved: the bus
         // stops where it has.
-        let drives = self.lab.bus.drive_count();
+        let drives = self.lab.bus().drive_count();
         if drives.is_none() || self.wiring.drives_seen != drives {
             return Stretch::None;
         }
@@ -290,7 +291,7 @@ impl Rig {
         }
         let run = self
             .lab
-            .bus
+            .bus_mut()
             .advance_grid(t, SAFETY_SCAN_PERIOD, until, |bus| {
                 BusReads::of(bus, monitor) == reads && bus.drive_count() == drives
             });
@@ -384,7 +385,7 @@ impl Rig {
     pub(super) fn plc_scan(&mut self, t: SimTime) {
         self.safety.to = self
             .controller
-            .scan(t, self.lab.bus.image_mut(), self.safety.from);
+            .scan(t, self.lab.bus_mut().image_mut(), self.safety.from);
         let held = self.controller.status().bus_fault();
         match (self.judge.bus_fault_since, held) {
             (None, true) => {

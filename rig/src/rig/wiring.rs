@@ -65,7 +65,7 @@ pub(super) fn plant_to_slaves(l: &Lift, lab: &mut LabLift, floors: u8) {
 /// (slave 7, D0): the command before the bus carries it to the slave.
 pub(super) fn run_commanded(lab: &LabLift) -> bool {
     asi_phy::SlaveAddr::a(CONVERTER).is_some_and(|a| {
-        asi_slaves::devices::Converter::relays(lab.bus.image().output.nibble(a)).bit(0)
+        asi_slaves::devices::Converter::relays(lab.bus().image().output.nibble(a)).bit(0)
     })
 }
 

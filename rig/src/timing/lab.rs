@@ -22,7 +22,7 @@ pub(super) fn run_lab(
     let sc = lab_scenario(opts, extra);
     let plc_scan = sc.plc_scan;
     let mut rig = Rig::new(sc)?;
-    let timing = *rig.lab().bus.timing();
+    let timing = *rig.lab().bus().timing();
     let shared = Arc::new(Mutex::new(Collector::new(
         &timing,
         opts.pulse_error_rate,
@@ -30,13 +30,13 @@ pub(super) fn run_lab(
     )));
     let sink = Arc::clone(&shared);
     rig.lab_mut()
-        .bus
+        .bus_mut()
         .set_trace_callback(Some(Box::new(move |r| lock(&sink).record(r))));
     let init_resets = initialise(&mut rig)?;
     let (words, window) = measure_window(&mut rig, &shared, opts.duration);
     let mut latencies = sample_latencies(&mut rig, &shared, opts);
     latencies.operator_resets += init_resets;
-    rig.lab_mut().bus.set_trace_callback(None);
+    rig.lab_mut().bus_mut().set_trace_callback(None);
     drop(rig);
     let collector = take(&shared);
     let lab = LabTiming {
@@ -87,15 +87,15 @@ fn measure_window(
 ) -> (WordTimers, BusWindow) {
     let start = rig.now();
     lock(shared).start_window();
-    let before = rig.lab().bus.stats();
-    let las_at_start = rig.lab().bus.master().las().len();
+    let before = rig.lab().bus().stats();
+    let las_at_start = rig.lab().bus().master().las().len();
     let mut words = WordTimers::new();
     words.poll(rig);
     while rig.step_until(start + duration).is_some() {
         words.poll(rig);
     }
     lock(shared).end_window();
-    let after = rig.lab().bus.stats();
+    let after = rig.lab().bus().stats();
     let window = BusWindow {
         failed_after_repeat: after.failed_after_repeat - before.failed_after_repeat,
         dropouts: after.dropouts - before.dropouts,
