@@ -769,7 +769,7 @@ impl std::fmt::Display for LogEvent {
             LogEvent::MonitorDrop { address, why } => write!(
                 f,
                 "safety sensor {address} not released: {}",
-                crate::rig::monitor_drop_words(*why).1
+                monitor_drop(*why).1
             ),
             // K1 is in series with the drive's torque enable (the safe drive's wiring).
             LogEvent::Drive(DriveEventKind::TorqueOff) => {
@@ -1106,4 +1106,22 @@ impl Report {
 /// (µm, ms, µs).
 pub fn round3(x: f64) -> f64 {
     (x * 1000.0).round() / 1000.0
+}
+
+/// A drop of the Safety-at-Work monitor: its cause's key in the report and its words.
+pub(crate) fn monitor_drop(why: asi_slaves::monitor::NotReleased) -> (&'static str, String) {
+    match why {
+        asi_slaves::monitor::NotReleased::Tripped => ("0000", "the sensor sends 0000".to_string()),
+        asi_slaves::monitor::NotReleased::WrongCode { expected, got } => (
+            "wrong-code",
+            format!("wrong code {got:04b} (expected {expected:04b})"),
+        ),
+        asi_slaves::monitor::NotReleased::Frozen { code } => {
+            ("frozen-code", format!("frozen code {code:04b}"))
+        }
+        _ => (
+            "silence",
+            "no valid code within the tolerance time".to_string(),
+        ),
+    }
 }

@@ -490,16 +490,7 @@ fn a_monitor_trip_from_line_noise_halts_safely_until_the_operator_resets() {
         include_str!("data/noise-trip-after-recovery.toml"),
     );
     assert_no_violations(&r);
-    let dropped = event_at(&r, |e| {
-        matches!(e, LogEvent::MonitorDrop { address: 12, .. })
-    })
-    .expect("drop");
-    let opened = event_after(
-        &r,
-        safety_event(|c| matches!(c, Cause::K1Opened(_))),
-        dropped,
-    )
-    .expect("K1 opens");
+    let (dropped, opened) = sensor_12_dropped_and_k1_opened(&r);
     assert!(opened - dropped < 0.01, "{}", r.to_text());
     assert!(
         event_after(
@@ -518,6 +509,21 @@ fn a_monitor_trip_from_line_noise_halts_safely_until_the_operator_resets() {
     let last = r.served.last().expect("a call served");
     assert!(last.served_at_s > reset, "{last:?}");
     assert_eq!(r.final_state.state, Some(controller::State::AtFloor));
+}
+
+/// When the monitor first dropped sensor 12, and when K1 opened after it.
+fn sensor_12_dropped_and_k1_opened(r: &Report) -> (f64, f64) {
+    let dropped = event_at(r, |e| {
+        matches!(e, LogEvent::MonitorDrop { address: 12, .. })
+    })
+    .expect("sensor 12 dropped");
+    let opened = event_after(
+        r,
+        safety_event(|c| matches!(c, Cause::K1Opened(_))),
+        dropped,
+    )
+    .expect("K1 opens");
+    (dropped, opened)
 }
 
 #[test]
@@ -543,16 +549,7 @@ fn an_attendant_answers_a_monitor_trip_from_line_noise_after_the_repairs() {
     sc.events.sort_by_key(|e| e.at);
     let r = run(sc);
     assert_no_violations(&r);
-    let dropped = event_at(&r, |e| {
-        matches!(e, LogEvent::MonitorDrop { address: 12, .. })
-    })
-    .expect("drop");
-    let opened = event_after(
-        &r,
-        safety_event(|c| matches!(c, Cause::K1Opened(_))),
-        dropped,
-    )
-    .expect("K1 opens");
+    let (_, opened) = sensor_12_dropped_and_k1_opened(&r);
     let round = logged_after(
         &r,
         Actor::Attendant,

@@ -24,7 +24,6 @@ mod wiring;
 mod words;
 
 pub use outputs::TransactionObserver;
-pub(crate) use words::monitor_drop as monitor_drop_words;
 
 use crate::report::{
     round3, Actor, Arrival, CabinAt, FinalState, LogEvent, LogLine, MonitorTrip, OvertravelReached,

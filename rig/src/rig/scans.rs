@@ -113,7 +113,7 @@ impl Rig {
     #[inline(never)]
     fn log_drops(&mut self, drops: Vec<asi_slaves::monitor::MonitorDrop>) {
         for d in drops {
-            let (cause, _) = words::monitor_drop(d.why);
+            let (cause, _) = crate::report::monitor_drop(d.why);
             let address = d.address.get();
             let e = LogEvent::MonitorDrop {
                 address,

@@ -8,22 +8,6 @@ use asi_slaves::monitor::{NotReleased, SafetyMonitor};
 use lab::address::{SAFETY_BOTTOM, SAFETY_TOP};
 use safety::lift::K1Cause;
 
-/// A drop of the Safety-at-Work monitor: its cause's key in the report and its words.
-pub(crate) fn monitor_drop(why: NotReleased) -> (&'static str, String) {
-    match why {
-        NotReleased::Tripped => ("0000", "the sensor sends 0000".to_string()),
-        NotReleased::WrongCode { expected, got } => (
-            "wrong-code",
-            format!("wrong code {got:04b} (expected {expected:04b})"),
-        ),
-        NotReleased::Frozen { code } => ("frozen-code", format!("frozen code {code:04b}")),
-        _ => (
-            "silence",
-            "no valid code within the tolerance time".to_string(),
-        ),
-    }
-}
-
 /// Why K1 is open, in words; an overtravel sensor the monitor does not release is told
 /// apart: tripped (0000) or not heard.
 pub(super) fn k1_open_cause(c: K1Cause, monitor: Option<&SafetyMonitor>) -> String {
