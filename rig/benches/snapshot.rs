@@ -1,14 +1,15 @@
 //! What a snapshot of the rig costs: the wall time of `Rig::clone`, the rig's size in place
-//! and the heap bytes a clone allocates, for the built-in scenarios at moments through their first minute, against the
-//! wall time the rig takes to run one simulated second from there (what a fault explorer that
-//! forks at a moment and runs on weighs it against).
+//! and the heap bytes a clone allocates, for built-in scenarios at moments through their
+//! first minute, against the wall time the rig takes to run one simulated second from there
+//! (what a fault explorer that forks at a moment and runs on weighs it against).
 //!
 //! The bytes are what dhat's heap profiler counts while one clone runs (its blocks as asked
 //! for, the allocator's own overhead left out). Wall times are the median of `runs=N` clones
 //! (default 201) at each moment, without the profiler.
 //!
-//! `cargo bench -p asi-lift-rig --bench snapshot` (arguments after `--`: scenario names, default
-//! `demo noise safe-drive`; `runs=N`).
+//! `cargo bench -p asi-lift-rig --bench snapshot --features heap-count` (the feature brings
+//! in dhat for this bench alone; arguments after `--`: scenario names, default `demo noise
+//! safe-drive`; `runs=N`).
 
 use asi_phy::{SimDuration, SimTime};
 use rig::scenario::builtin::Builtin;
