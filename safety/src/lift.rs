@@ -817,7 +817,7 @@ fn describe(e: &LogicEvent, config: &LiftSafetyConfig, ids: &Ids) -> LiftSafetyE
                 Trip,
                 C::OvertravelTripped {
                     bottom: inputs & 0b01 != 0,
-                    top: inputs & 0b11 != 0b01,
+                    top: inputs & 0b10 != 0,
                 },
             ),
             FbEvent::Restarted => (Release, C::OvertravelReset),
