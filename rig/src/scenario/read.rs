@@ -173,7 +173,10 @@ impl<'a> Locator<'a> {
         };
         let line = line_text(line_no);
         let key = match line.split_once('=') {
-            Some((k, _)) if !line.trim_start().starts_with('[') => k.trim().to_owned(),
+            // A key of thousands of characters (a binary file) is named by its start.
+            Some((k, _)) if !line.trim_start().starts_with('[') => {
+                asi_phy::waveform::excerpt(k.trim()).into_owned()
+            }
             _ => return String::new(),
         };
         // The table it is in: the nearest header above it.
