@@ -435,7 +435,7 @@ pub fn io_bus(n: u8, codes: SlaveCodes) -> Result<Bus, ConfigError> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::bus::{GridRun, GridStop};
+    use crate::bus::{LookWatch, Stop};
 
     fn ms(n: u64) -> asi_phy::SimTime {
         asi_phy::SimTime::from_millis(n)
@@ -511,7 +511,7 @@ mod tests {
     /// output: its analog transfer gives a new output nibble at nearly every cycle.
     fn analog_transfer() -> LabLift {
         let mut lab = LabLift::new().expect("the lab bus");
-        lab.bus.watch_outputs(u32::MAX);
+        watch_all(&mut lab);
         lab.bus
             .image_mut()
             .output
@@ -526,14 +526,15 @@ mod tests {
         let lab = analog_transfer;
         let mut stops = lab();
         let mut at = Vec::new();
-        while let Some(t) = stops.bus.advance_before(ms(300)) {
+        while let Some(Stop::Output(t)) = stops.bus.advance_before(ms(300)) {
             at.push(t);
         }
         assert!(at.len() > 5, "{} new outputs", at.len());
         for w in at.windows(2) {
             let mut to = lab();
             to.bus.advance_to(w[0]);
-            assert_eq!(to.bus.advance_before(ms(300)), Some(w[1]), "after {}", w[0]);
+            let next = to.bus.advance_before(ms(300));
+            assert_eq!(next, Some(Stop::Output(w[1])), "after {}", w[0]);
         }
     }
 
@@ -547,7 +548,7 @@ mod tests {
         let mut every = lab();
         let mut stops = Vec::new();
         let mut count = every.drive_changes();
-        while let Some(t) = every.bus.advance_before(ms(400)) {
+        while let Some(Stop::Output(t)) = every.bus.advance_before(ms(400)) {
             stops.push((t, every.drive_changes() != count));
             count = every.drive_changes();
         }
@@ -565,9 +566,11 @@ mod tests {
             .map(|&(t, _)| t);
         for until in [ms(0), ms(150), ms(400)].into_iter().chain(edge) {
             let mut passing = lab();
-            passing.bus.pass_quiet_outputs_until(Some(until));
+            let mut w = passing.bus.watching();
+            w.drives_only_through = Some(until);
+            passing.bus.watch(w);
             let mut seen = Vec::new();
-            while let Some(t) = passing.bus.advance_before(ms(400)) {
+            while let Some(Stop::Output(t)) = passing.bus.advance_before(ms(400)) {
                 seen.push(t);
             }
             let expected: Vec<asi_phy::SimTime> = stops
@@ -580,123 +583,123 @@ mod tests {
         }
     }
 
-    /// What [`Bus::advance_grid`] stands for: an application that steps to each grid point
-    /// (`advance_before` the point, then `advance_to` it) and looks at the bus there. A new
-    /// output at the point itself is what `advance_before` of the next nanosecond returns.
-    fn grid_by_steps(
-        bus: &mut Bus,
-        first: asi_phy::SimTime,
-        period: asi_phy::SimDuration,
-        until: asi_phy::SimTime,
-        same: &dyn Fn(&Bus) -> bool,
-    ) -> GridRun {
-        let mut passed = 0;
-        let mut g = first;
+    /// What the look watch ([`crate::bus::Watch::look`]) stands for: an application that steps to each of
+    /// its times (`advance_before` the time, then `advance_to` it) and looks at the bus there,
+    /// then runs on to `until`. A new output at the time itself is what `advance_before` of
+    /// the next nanosecond returns.
+    fn look_by_steps(bus: &mut Bus, w: LookWatch, until: asi_phy::SimTime) -> Option<Stop> {
+        let mut g = w.first;
         while g < until {
             let taken = bus.advance_before(g + asi_phy::SimDuration::from_nanos(1));
             match taken {
-                Some(at) if at < g => {
-                    return GridRun {
-                        passed,
-                        stop: Some(GridStop::Output(at)),
-                    }
-                }
+                Some(Stop::Output(at)) if at < g => return taken,
                 _ => bus.advance_to(g),
             }
-            if taken.is_some() || !same(bus) {
-                return GridRun {
-                    passed,
-                    stop: Some(GridStop::Point(g)),
-                };
+            if taken.is_some() || bus.look(w.monitor) != w.seen {
+                return Some(Stop::Look(g));
             }
-            passed += 1;
-            g += period;
+            g += w.period;
         }
-        GridRun { passed, stop: None }
+        bus.advance_before(until)
     }
 
-    /// Runs `lab` to `end` in grid runs from 1 ms (`by_steps`: as `grid_by_steps`), each to
-    /// the next 10 ms and looking for the `key` the bus had at its start, going on after every
-    /// stop as an application would (from a point it stopped at, the next one; from a new
-    /// output, the point it did not pass); returns the runs.
-    fn grid_runs<K: PartialEq>(
-        lab: &mut LabLift,
-        by_steps: bool,
-        end: u64,
-        key: &dyn Fn(&Bus) -> K,
-    ) -> Vec<GridRun> {
+    /// Runs `lab` to `end` with the look watch from 1 ms every 1 ms (`by_steps`: as
+    /// `look_by_steps`), each call to the next 10 ms and looking for the look the bus had
+    /// at its start, going on after every stop as an application would (from a time it
+    /// stopped at, the next one; from a new output, the time it did not pass); returns the
+    /// stops.
+    fn look_runs(lab: &mut LabLift, by_steps: bool, end: u64) -> Vec<Option<Stop>> {
         let period = asi_phy::SimDuration::from_millis(1);
+        let monitor = lab.monitor_id();
         let mut runs = Vec::new();
         let mut g = ms(1);
         while g < ms(end) {
             let until = ms((g.as_nanos() / 10_000_000 + 1) * 10).min(ms(end));
-            let start = key(&lab.bus);
-            let same = |bus: &Bus| key(bus) == start;
-            let run = if by_steps {
-                grid_by_steps(&mut lab.bus, g, period, until, &same)
-            } else {
-                lab.bus.advance_grid(g, period, until, same)
+            let w = LookWatch {
+                monitor,
+                first: g,
+                period,
+                seen: lab.bus.look(monitor),
             };
-            for _ in 0..run.passed {
-                g += period;
-            }
-            if let Some(GridStop::Point(_)) = run.stop {
-                g += period;
-            }
-            runs.push(run);
+            let stop = if by_steps {
+                look_by_steps(&mut lab.bus, w, until)
+            } else {
+                let mut watch = lab.bus.watching();
+                watch.look = Some(w);
+                lab.bus.watch(watch);
+                let stop = lab.bus.advance_before(until);
+                watch.look = None;
+                lab.bus.watch(watch);
+                stop
+            };
+            g = match stop {
+                None => until,
+                Some(Stop::Look(at)) => at + period,
+                Some(Stop::Output(at)) => {
+                    while g <= at {
+                        g += period;
+                    }
+                    g
+                }
+            };
+            runs.push(stop);
         }
         runs
     }
 
-    /// Two copies of `lab()` run 300 ms in grid runs looking at `key`, one by
-    /// `advance_grid` and one by steps: the same runs, transactions and statistics. Returns
-    /// the runs, for the caller to check that they stop where it expects.
-    fn grid_runs_agree<K: PartialEq>(
-        lab: impl Fn() -> LabLift,
-        key: &dyn Fn(&Bus) -> K,
-    ) -> Vec<GridRun> {
+    /// Two copies of `lab()` run 300 ms with the look watch, one by the watch and one by
+    /// steps: the same stops, transactions and statistics. Returns the stops, for the caller
+    /// to check that they stop where it expects.
+    fn look_runs_agree(lab: impl Fn() -> LabLift) -> Vec<Option<Stop>> {
         let (mut a, mut b) = (lab(), lab());
-        let by_grid = grid_runs(&mut a, false, 300, key);
-        let by_steps = grid_runs(&mut b, true, 300, key);
-        assert_eq!(by_grid, by_steps);
+        let by_watch = look_runs(&mut a, false, 300);
+        let by_steps = look_runs(&mut b, true, 300);
+        assert_eq!(by_watch, by_steps);
         assert_eq!(a.bus.drain_trace(), b.bus.drain_trace());
         assert_eq!(a.bus.stats(), b.bus.stats());
-        by_grid
+        by_watch
     }
 
-    /// A grid run stops where an application stepping to each grid point would: at a new
-    /// output before a point, at a point where one came or where its look changed, and
-    /// nowhere else; and the bus goes through the same transactions. Looked at: the master's
-    /// LAS and phase through the start-up from power-on (the look changes as slaves join),
-    /// and the drive count while the set-point's transfer hands out new nibbles, some of
-    /// which pass ([`Bus::pass_quiet_outputs_until`]).
+    /// Watches every address's outputs.
+    fn watch_all(lab: &mut LabLift) {
+        let mut w = lab.bus.watching();
+        w.outputs = u32::MAX;
+        lab.bus.watch(w);
+    }
+
+    /// The look watch stops where an application stepping to each of its times would: at a
+    /// new output before a time, at a time where one came or where the look changed, and
+    /// nowhere else; and the bus goes through the same transactions. Through the start-up
+    /// from power-on (the look changes as slaves join the LAS and the monitor releases), and
+    /// while the set-point's transfer hands out new nibbles that move the drive count, some
+    /// of which pass ([`crate::bus::Watch::drives_only_through`]).
     #[test]
-    fn a_grid_run_stops_where_steps_to_each_grid_point_would() {
-        let las = |b: &Bus| (b.master().phase(), b.master().las().bits());
+    fn the_look_watch_stops_where_steps_to_each_time_would() {
         let startup = || {
             let mut lab = LabLift::new().expect("the lab bus");
-            lab.bus.watch_outputs(u32::MAX);
+            watch_all(&mut lab);
             lab.bus.enable_trace(1 << 16);
             lab
         };
-        let runs = grid_runs_agree(startup, &las);
-        let points = runs
+        let runs = look_runs_agree(startup);
+        let looks = runs
             .iter()
-            .filter(|r| matches!(r.stop, Some(GridStop::Point(_))))
+            .filter(|r| matches!(r, Some(Stop::Look(_))))
             .count();
-        assert!(points > 0, "the LAS never changed: {runs:?}");
+        assert!(looks > 0, "the look never changed: {runs:?}");
 
         let transfer = || {
             let mut lab = analog_transfer();
             lab.bus.enable_trace(1 << 16);
-            lab.bus.pass_quiet_outputs_until(Some(ms(150)));
+            let mut w = lab.bus.watching();
+            w.drives_only_through = Some(ms(150));
+            lab.bus.watch(w);
             lab
         };
-        let count = |bus: &Bus| bus.drive_count();
-        let runs = grid_runs_agree(transfer, &count);
+        let runs = look_runs_agree(transfer);
         let outputs = runs
             .iter()
-            .filter(|r| matches!(r.stop, Some(GridStop::Output(_))))
+            .filter(|r| matches!(r, Some(Stop::Output(_))))
             .count();
         assert!(outputs > 0, "no new output stopped a run: {runs:?}");
     }

@@ -22,4 +22,4 @@
 pub mod bus;
 pub mod lab;
 
-pub use bus::{Bus, GridRun, GridStop, MonitorId, SlaveId};
+pub use bus::{Bus, Look, LookWatch, MonitorId, SlaveId, Stop, Watch};

@@ -13,6 +13,7 @@
 
 use crate::common::*;
 use asi_bus::lab::LabLift;
+use asi_bus::{Stop, Watch};
 use asi_phy::{FaultRates, PulseErrorRate, PulseFault, SimDuration, SimTime};
 use proptest::prelude::*;
 
@@ -67,12 +68,15 @@ fn state(lab: &mut LabLift) -> String {
     s
 }
 
-fn step(lab: &mut LabLift, now: &mut SimTime, a: &Act) -> Option<SimTime> {
+fn step(lab: &mut LabLift, now: &mut SimTime, a: &Act) -> Option<Stop> {
     match *a {
         Act::Before(us) => {
             let until = *now + SimDuration::from_micros(us);
             let r = lab.bus_mut().advance_before(until);
-            *now = r.unwrap_or(until);
+            *now = match r {
+                Some(Stop::Output(t) | Stop::Look(t)) => t,
+                None => until,
+            };
             return r;
         }
         Act::To(us) => {
@@ -127,7 +131,10 @@ proptest! {
         for lab in [&mut quick, &mut exact] {
             // The rig's watch (the floor stations, the cabin display, the converter, the set
             // point), none, or any.
-            lab.bus_mut().watch_outputs(watch);
+            lab.bus_mut().watch(Watch {
+                outputs: watch,
+                ..Watch::default()
+            });
             lab.bus_mut().enable_trace(1 << 20);
             lab.bus_mut().advance_to(ms(start_ms));
         }

@@ -538,6 +538,8 @@ pub struct LiftSafety {
     /// The inputs and outputs of the last scan (its events aside), for a scan that changes
     /// nothing ([`LiftSafety::scan`]).
     last: Option<LastScan>,
+    /// The time of the last scan, a left-out one ([`LiftSafety::skip_through`]) included.
+    scanned: Option<SimTime>,
 }
 
 /// What a scan was given and gave, its events aside.
@@ -580,6 +582,7 @@ impl LiftSafety {
             ids,
             k1: false,
             last: None,
+            scanned: None,
         })
     }
 
@@ -630,7 +633,9 @@ impl LiftSafety {
     /// reads, and the outputs are the last scan's with no events (K1 did not change either).
     /// Every other scan is taken in full ([`LiftSafety::full_scan`]).
     pub fn scan(&mut self, now: SimTime, inputs: &LiftSafetyInputs) -> LiftSafetyOutputs {
-        if self.scan_if_quiet(now, inputs) {
+        let same = self.last.as_ref().is_some_and(|l| l.inputs.same_as(inputs));
+        if same && self.logic.quiet_scan(now) {
+            self.scanned = Some(now);
             if let Some(last) = &self.last {
                 return LiftSafetyOutputs {
                     k1: last.k1,
@@ -643,43 +648,71 @@ impl LiftSafety {
         self.full_scan(now, inputs)
     }
 
-    /// The scan at `now` with `inputs` where it is a quiet one (see [`LiftSafety::scan`]: the
-    /// inputs of the last scan, the logic at rest, nothing due by `now`): the logic is moved
-    /// on as that scan moves it, and `true`; the outputs are the last scan's, with no events.
-    /// `false`, with nothing changed, where the scan must be taken in full. For a caller that
-    /// keeps the last scan's outputs and needs nothing new from a quiet scan.
-    #[inline]
-    pub fn scan_if_quiet(&mut self, now: SimTime, inputs: &LiftSafetyInputs) -> bool {
-        self.scans_if_quiet(now, now, 1, inputs)
-    }
-
-    /// `n` (at least one) scans with `inputs` from `first` to `last`, in time order, where each
-    /// is a quiet one ([`LiftSafety::scan_if_quiet`]), all or none: `true` if so (the logic is
-    /// moved on as those scans move it), `false` with nothing changed. For a caller that
-    /// takes a stretch of quiet scans together ([`LiftSafety::quiet_before`] tells how far
-    /// one goes).
-    #[inline]
-    pub fn scans_if_quiet(
-        &mut self,
-        first: SimTime,
-        last: SimTime,
-        n: u32,
-        inputs: &LiftSafetyInputs,
-    ) -> bool {
-        self.last.as_ref().is_some_and(|l| l.inputs.same_as(inputs))
-            && self.logic.quiet_scans(first, last, n)
-    }
-
-    /// The time before which every scan with `inputs` is a quiet one
-    /// ([`LiftSafety::scan_if_quiet`] holds for each, in time order, from the last scan's time
-    /// on), as long as no fault is injected; `None` if the next scan with them may not be:
-    /// they are not the last scan's inputs, or the logic is not at rest. For a caller that
-    /// takes a stretch of quiet scans together.
-    pub fn quiet_before(&self, inputs: &LiftSafetyInputs) -> Option<SimTime> {
-        if !self.last.as_ref().is_some_and(|l| l.inputs.same_as(inputs)) {
-            return None;
+    /// The time of the next scan that may give anything new with `inputs`, for a caller that
+    /// scans every [`SAFETY_SCAN_PERIOD`]: the next period after the last scan, or, where
+    /// `inputs` are the last scan's and that scan left the logic at rest, the first scan time
+    /// on that grid at which the rest may end (a scheduled fault falls due or a delay ends;
+    /// [`SimTime::MAX`]: not before an input changes or a fault is injected). Every scan
+    /// before it would be a quiet one, with the last scan's outputs and no events: the
+    /// caller may leave those out and tell the logic so ([`LiftSafety::skip_through`]).
+    /// [`SimTime::ZERO`] before the first scan.
+    pub fn poll_at(&self, inputs: &LiftSafetyInputs) -> SimTime {
+        let Some(scanned) = self.scanned else {
+            return SimTime::ZERO;
+        };
+        let period = SAFETY_SCAN_PERIOD.as_nanos();
+        let next = scanned.as_nanos().saturating_add(period);
+        let same = self.last.as_ref().is_some_and(|l| l.inputs.same_as(inputs));
+        let rest_ends = match self.logic.quiet_before() {
+            Some(end) if same => end.as_nanos(),
+            _ => next,
+        };
+        if rest_ends <= next {
+            return SimTime::from_nanos(next);
         }
-        self.logic.quiet_before()
+        if rest_ends == u64::MAX {
+            return SimTime::MAX;
+        }
+        // The first grid time not before the rest's end.
+        let periods = (rest_ends - scanned.as_nanos()).div_ceil(period);
+        SimTime::from_nanos(
+            periods
+                .checked_mul(period)
+                .and_then(|d| d.checked_add(scanned.as_nanos()))
+                .unwrap_or(u64::MAX),
+        )
+    }
+
+    /// The caller left out its scans on the grid after the last scan (every
+    /// [`SAFETY_SCAN_PERIOD`]) up to `through` (inclusive), with the last scan's inputs,
+    /// each before [`LiftSafety::poll_at`] of them: they are taken now, as the quiet scans
+    /// they are, all or none. `true` if so (or there was none to take); `false`, with
+    /// nothing changed, if one of them would not be quiet: the caller must scan it.
+    pub fn skip_through(&mut self, through: SimTime) -> bool {
+        // Before the first scan there is no grid, and no scan to take.
+        let Some(scanned) = self.scanned else {
+            return true;
+        };
+        let period = SAFETY_SCAN_PERIOD.as_nanos();
+        let Some(since) = through.checked_duration_since(scanned) else {
+            return true;
+        };
+        let periods = since.as_nanos() / period;
+        if periods == 0 {
+            return true;
+        }
+        let (Ok(n), Some(first), Some(last)) = (
+            u32::try_from(periods),
+            scanned.checked_add(SAFETY_SCAN_PERIOD),
+            scanned.checked_add(SimDuration::from_nanos(periods * period)),
+        ) else {
+            return false;
+        };
+        if self.last.is_none() || !self.logic.quiet_scans(first, last, n) {
+            return false;
+        }
+        self.scanned = Some(last);
+        true
     }
 
     /// One safety scan at `now` with `inputs`, every step taken: the inputs set, the logic's
@@ -743,6 +776,7 @@ impl LiftSafety {
             estop_out,
             diag,
         });
+        self.scanned = Some(now);
         LiftSafetyOutputs {
             k1,
             estop_out,
@@ -991,7 +1025,7 @@ mod tests {
 
     /// `true` if the two are in the same state: the logic field by field and the wrapper's own.
     fn same(a: &LiftSafety, b: &LiftSafety) -> bool {
-        a.k1 == b.k1 && a.last == b.last && a.logic.same_state(&b.logic)
+        a.k1 == b.k1 && a.last == b.last && a.scanned == b.scanned && a.logic.same_state(&b.logic)
     }
 
     /// The scan with its quiet way against the full scan (the reference, every step taken
@@ -1066,5 +1100,78 @@ mod tests {
         }
         // The quiet way must be taken often, or the test shows nothing.
         assert!(quiet * 2 > scans, "{quiet} of {scans} scans quiet");
+    }
+
+    /// A caller that leaves out the scans before [`LiftSafety::poll_at`] and tells the logic
+    /// so ([`LiftSafety::skip_through`]) gets what a caller that scans every period gets: two
+    /// `LiftSafety` side by side over long random runs on the 1 ms grid, one scanned every
+    /// period, the other only where its inputs changed, a fault was injected or its deadline
+    /// came; the same outputs at each of its scans and the same whole state after them.
+    #[test]
+    fn scans_left_out_before_the_deadline_are_the_scans_taken() {
+        let (mut left_out, mut scans) = (0u64, 0u64);
+        for seed in 1..=60u64 {
+            let mut driver = Driver {
+                rng: Rng(seed.wrapping_mul(0x2545_f491_4f6c_dd1d) | 1),
+                planned: Vec::new(),
+            };
+            let mut config = LiftSafetyConfig::default();
+            if seed % 2 == 0 {
+                config.estop_delay = SimDuration::from_millis(driver.rng.below(300));
+            }
+            let mut every = LiftSafety::new(config.clone()).expect("the lift project");
+            let mut lazy = LiftSafety::new(config).expect("the lift project");
+            let mut inputs = LiftSafetyInputs::healthy();
+            let mut now = SimTime::from_millis(driver.rng.below(5));
+            let mut k1 = false;
+            for step in 0..4000 {
+                let faults = driver.step(&mut inputs, k1, now);
+                let changed = !faults.is_empty()
+                    || lazy.last.is_none_or(|l| l.inputs != inputs)
+                    || now >= lazy.poll_at(&inputs);
+                if changed {
+                    // The scans left out come before the fault and this scan.
+                    let before = now - SAFETY_SCAN_PERIOD;
+                    assert!(
+                        lazy.skip_through(before),
+                        "seed {seed} step {step} at {now}"
+                    );
+                }
+                for fault in faults {
+                    match fault {
+                        Fault::Link(link, at, f) => {
+                            every.inject_link_fault(link, at, f);
+                            lazy.inject_link_fault(link, at, f);
+                        }
+                        Fault::K1Output(faulty) => {
+                            every.set_k1_output_fault(faulty);
+                            lazy.set_k1_output_fault(faulty);
+                        }
+                    }
+                }
+                let a = every.scan(now, &inputs);
+                if changed {
+                    let b = lazy.scan(now, &inputs);
+                    assert_eq!(a, b, "seed {seed} step {step} at {now}");
+                    assert!(same(&every, &lazy), "seed {seed} step {step} at {now}");
+                } else {
+                    assert!(
+                        a.events.is_empty(),
+                        "seed {seed} step {step}: left out {a:?}"
+                    );
+                    left_out += 1;
+                }
+                scans += 1;
+                k1 = a.k1;
+                now += SAFETY_SCAN_PERIOD;
+            }
+            assert!(
+                lazy.skip_through(now - SAFETY_SCAN_PERIOD),
+                "seed {seed} at the end"
+            );
+            assert!(same(&every, &lazy), "seed {seed} at the end");
+        }
+        // Most scans must be left out, or the test shows nothing.
+        assert!(left_out * 2 > scans, "{left_out} of {scans} scans left out");
     }
 }

@@ -132,18 +132,9 @@ impl Bus {
     /// `true` if monitor `id` releases the safety slave at `address` (`false` without that
     /// monitor). What the monitor releases is not its receiver's state: this may be asked
     /// while a run of clean transactions has not been written into the receivers
-    /// ([`Bus::advance_grid`]'s look).
+    /// ([`Bus::look`]).
     pub fn monitor_releases(&self, id: MonitorId, address: Address) -> bool {
         self.monitors.get(id.0).is_some_and(|m| m.released(address))
-    }
-
-    /// [`SafetyMonitor::releases`] of monitor `id` (none without it): the addresses it
-    /// releases and whether it has dropped a release since the last
-    /// [`Bus::take_monitor_drops`] (may be asked as [`Bus::monitor_releases`]).
-    pub fn monitor_look(&self, id: MonitorId) -> (u32, bool) {
-        self.monitors
-            .get(id.0)
-            .map_or((0, false), SafetyMonitor::releases)
     }
 
     /// A monitor, mutable.

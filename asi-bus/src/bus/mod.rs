@@ -56,13 +56,13 @@ use asi_slaves::monitor::SafetyMonitor;
 use asi_slaves::slave::{Peripheral, Slave};
 
 mod access;
-mod grid;
 mod hooks;
 mod outputs;
 mod quick;
+mod watch;
 
-pub use grid::{GridRun, GridStop};
 use outputs::NO_OUTPUT;
+pub use watch::{Look, LookWatch, Stop, Watch};
 
 /// A request taken by a slave, as the bus tells it: a Data_Exchange from its bits
 /// ([`Request::as_data_exchange`]), every other by its call, decoded once.
@@ -256,8 +256,8 @@ pub struct Bus {
     slaves_powered: bool,
     cur: Option<Current>,
     stats: BusStats,
-    /// Addresses whose new output nibbles end [`Bus::advance_before`] early.
-    watch: u32,
+    /// What the application watches: where [`Bus::advance_before`] ends early.
+    watch: Watch,
     /// The last output nibble each address took in a Data_Exchange.
     last_out: [u8; 32],
     /// A watched address took a new output nibble in the current event.
@@ -268,11 +268,8 @@ pub struct Bus {
     drive_total: u64,
     /// A slave's device counts its drive changes ([`Slave::drive_counted`]).
     drive_counted: bool,
-    /// The drive count when the bus last looked ([`Bus::pass_quiet_outputs_until`]).
+    /// The drive count when the bus last looked ([`Watch::drives_only_through`]).
     drive_seen: u64,
-    /// Up to this time a new output nibble that moved no drive passes without ending
-    /// [`Bus::advance_before`] ([`Bus::pass_quiet_outputs_until`]).
-    quiet_outputs_until: Option<SimTime>,
     ring: Option<TraceRing>,
     callback: Callback,
     /// The frames of a response, kept between transactions so that none allocates.
@@ -324,13 +321,12 @@ impl Bus {
             slaves_powered: true,
             cur: None,
             stats: BusStats::default(),
-            watch: 0,
+            watch: Watch::default(),
             last_out: [NO_OUTPUT; 32],
             output_taken: false,
             drive_total: 0,
             drive_counted: false,
             drive_seen: 0,
-            quiet_outputs_until: None,
             ring: None,
             callback: Callback(None),
             response_frames: Vec::new(),
@@ -412,7 +408,7 @@ impl Bus {
 
     /// [`Bus::advance_to`], the receivers left unsettled ([`Bus::settle`]); `true` if a
     /// watched slave took a new output nibble in it (one that did not pass,
-    /// [`Bus::pass_quiet_outputs_until`]).
+    /// [`Watch::drives_only_through`]).
     #[inline]
     fn run_to(&mut self, now: SimTime) -> bool {
         self.horizon = now;
@@ -427,15 +423,18 @@ impl Bus {
         taken
     }
 
-    /// Processes the events before `until`, returning early with the event's time when a
-    /// watched slave ([`Bus::watch_outputs`]) took a new output nibble in it; `None` when
-    /// every event before `until` is done. The bus's time stays at the last event processed,
-    /// so an application that drives the bus this way runs long stretches without stepping
-    /// at every event, and still sees every output change at its moment.
-    pub fn advance_before(&mut self, until: SimTime) -> Option<SimTime> {
-        let taken = self.run_before(until);
+    /// Processes the events before `until`, returning early where something the application
+    /// watches ([`Bus::watch`]) happened ([`Stop`]); `None` when every event before `until` is
+    /// done. The bus's time stays at the last event processed, so an application that drives
+    /// the bus this way runs long stretches without stepping at every event, and still sees
+    /// every change it watches at its moment.
+    pub fn advance_before(&mut self, until: SimTime) -> Option<Stop> {
+        let stop = match self.watch.look {
+            Some(w) => self.run_watching(w, until),
+            None => self.run_before(until).map(Stop::Output),
+        };
         self.settle();
-        taken
+        stop
     }
 
     /// [`Bus::advance_before`], the receivers left unsettled ([`Bus::settle`]).

@@ -1,7 +1,7 @@
 //! What the application watches of the slaves' outputs: the addresses whose new output
-//! nibbles end [`Bus::advance_before`] early ([`Bus::watch_outputs`]), and the new nibbles
+//! nibbles end [`Bus::advance_before`] early ([`Watch::outputs`]), and the new nibbles
 //! that change nothing a slave drives, which may pass ([`Bus::drive_count`],
-//! [`Bus::pass_quiet_outputs_until`]).
+//! [`Watch::drives_only_through`]).
 
 use super::*;
 
@@ -22,14 +22,6 @@ pub(super) enum OutputNote {
 }
 
 impl Bus {
-    /// Sets the addresses whose slaves drive something outside the bus (a plant): when one of
-    /// them takes a Data_Exchange whose output nibble differs from its last one,
-    /// [`Bus::advance_before`] returns at that moment, so the application can hand the new
-    /// output on exactly then.
-    pub fn watch_outputs(&mut self, addresses: u32) {
-        self.watch = addresses;
-    }
-
     /// A count that moves whenever what a counting slave device drives
     /// ([`Peripheral::drive_changes`](asi_slaves::slave::Peripheral::drive_changes)) may have
     /// changed: at each call into the slaves in which one's count moved, and at each of the
@@ -45,19 +37,8 @@ impl Bus {
         self.drive_total += 1;
     }
 
-    /// Up to `until` (inclusive; `None`: never), a watched slave's new output nibble (or a
-    /// call that writes to it, after which its next nibble counts as new) does not end
-    /// [`Bus::advance_before`] where the drive count ([`Bus::drive_count`]) has not
-    /// moved since the bus last looked at it: it changed nothing the slave drives. For an
-    /// application to whom such a moment would do nothing (the rig while the plant has
-    /// nothing for the slaves and its invariant watch nothing to check); any other new nibble
-    /// ends the call as before.
-    pub fn pass_quiet_outputs_until(&mut self, until: Option<SimTime>) {
-        self.quiet_outputs_until = until;
-    }
-
     /// Whether a new output nibble taken at the bus's time passes without ending
-    /// [`Bus::advance_before`] ([`Bus::pass_quiet_outputs_until`]): within the time given, and
+    /// [`Bus::advance_before`] ([`Watch::drives_only_through`]): within the time given, and
     /// the drive count has not moved since the bus last looked (which it now has).
     #[inline(never)]
     fn output_passes_quietly(&mut self) -> bool {
@@ -66,7 +47,11 @@ impl Bus {
         };
         let moved = c != self.drive_seen;
         self.drive_seen = c;
-        !moved && self.quiet_outputs_until.is_some_and(|u| self.now <= u)
+        !moved
+            && self
+                .watch
+                .drives_only_through
+                .is_some_and(|u| self.now <= u)
     }
 
     /// What request `req`, taken by a slave, does to what the watched slaves drive: a
@@ -75,7 +60,7 @@ impl Bus {
     /// from its bits, without decoding the call (`told`, [`Told::of`] `req`).
     pub(super) fn output_note(&self, req: Request, told: Told) -> OutputNote {
         let exchange_note = |a: usize, data: u8| {
-            if self.watch >> a & 1 == 1 && self.last_out[a] != data {
+            if self.watch.outputs >> a & 1 == 1 && self.last_out[a] != data {
                 OutputNote::New(a, data)
             } else {
                 OutputNote::Same
@@ -96,7 +81,7 @@ impl Bus {
             | Call::ReadId2 { .. }
             | Call::ReadStatus { .. } => OutputNote::Same,
             Call::BroadcastReset => OutputNote::ForgetAll,
-            _ if self.watch >> a & 1 == 1 => OutputNote::Forget(a),
+            _ if self.watch.outputs >> a & 1 == 1 => OutputNote::Forget(a),
             _ => OutputNote::Same,
         }
     }
@@ -118,7 +103,7 @@ impl Bus {
             }
             OutputNote::ForgetAll => {
                 self.last_out = [NO_OUTPUT; 32];
-                self.output_taken |= self.watch != 0;
+                self.output_taken |= self.watch.outputs != 0;
             }
         }
     }

@@ -33,6 +33,7 @@ use crate::scenario::{Action, Fault, Scenario, ScenarioEvent};
 use crate::waves::{RigSample, WaveOutputs, Waves};
 use asi_bus::bus::NOMINAL_VOLTS;
 use asi_bus::lab::LabLift;
+use asi_bus::Stop;
 use asi_phy::fault::{FaultRates, PulseErrorRate};
 use asi_phy::{SimDuration, SimTime};
 use asi_trace::trace::TraceFormat;
@@ -236,7 +237,10 @@ impl Rig {
             ..LiftConfig::default()
         })?;
         let mut lab = LabLift::with_extra(asi_master::MasterConfig::default(), sc.extra_slaves)?;
-        lab.bus_mut().watch_outputs(wiring::drives_plant());
+        lab.bus_mut().watch(asi_bus::Watch {
+            outputs: wiring::drives_plant(),
+            ..asi_bus::Watch::default()
+        });
         lab.bus_mut().enable_trace(0);
         let rate = PulseErrorRate::new(sc.pulse_error_rate)?;
         if rate.get() > 0.0 {
@@ -556,7 +560,8 @@ impl Rig {
         if t > limit {
             return None;
         }
-        if let Some(at) = self.lab.bus_mut().advance_before(t) {
+        // No look watch is set here: every stop is a new output.
+        if let Some(Stop::Output(at) | Stop::Look(at)) = self.lab.bus_mut().advance_before(t) {
             self.output_taken(at);
             return Some(at);
         }
@@ -576,7 +581,10 @@ impl Rig {
                 return None;
             }
             let quiet = self.outputs_pass_until();
-            self.lab.bus_mut().pass_quiet_outputs_until(quiet);
+            let bus = self.lab.bus_mut();
+            let mut watch = bus.watching();
+            watch.drives_only_through = quiet;
+            bus.watch(watch);
             match self.quiet_scans(t, quiet, limit) {
                 scans::Stretch::None => {}
                 scans::Stretch::Went => continue,
@@ -586,7 +594,7 @@ impl Rig {
                 }
             }
             match self.lab.bus_mut().advance_before(t) {
-                Some(at) => self.output_taken(at),
+                Some(Stop::Output(at) | Stop::Look(at)) => self.output_taken(at),
                 None => {
                     self.step(t);
                     return Some(t);
@@ -596,7 +604,7 @@ impl Rig {
     }
 
     /// Until when (inclusive) a slave's new output nibble that changes nothing it drives may
-    /// pass the rig by ([`asi_bus::bus::Bus::pass_quiet_outputs_until`]), `None`: never.
+    /// pass the rig by ([`asi_bus::Watch::drives_only_through`]), `None`: never.
     ///
     /// Its moment ([`Rig::output_taken`]) would do nothing but move the rig's and the plant's
     /// time: the plant has no edge before the rig's next moment, the slaves drive what they

@@ -2,7 +2,7 @@
 //! the PLC's, each with what it hands to the report and the log.
 
 use super::*;
-use asi_bus::{Bus, GridStop, MonitorId};
+use asi_bus::{Look, LookWatch, Stop};
 
 /// What [`Rig::quiet_scans`] did.
 pub(super) enum Stretch {
@@ -16,38 +16,23 @@ pub(super) enum Stretch {
     StepAt(SimTime),
 }
 
-/// What the safety scan reads of the bus: the master's LAS (A slots) in normal operation
-/// (`None` outside it), the addresses the safety monitor releases (bit `a` for address `a`;
-/// the scan reads the overtravel sensors'), and whether it has dropped a release since the
-/// last look.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-struct BusReads {
-    las: Option<u32>,
-    released: u32,
-    drops: bool,
-}
-
-impl BusReads {
-    #[inline]
-    fn of(bus: &Bus, monitor: MonitorId) -> BusReads {
-        let m = bus.master();
-        let las = (m.phase() == asi_master::Phase::NormalOperation).then(|| m.las().bits() as u32);
-        let (released, drops) = bus.monitor_look(monitor);
-        BusReads {
-            las,
-            released,
-            drops,
-        }
-    }
-
+/// What the safety scan reads of the bus ([`Look`]): the master's LAS (A slots) in normal
+/// operation, the addresses the safety monitor releases (the scan reads the overtravel
+/// sensors'), whether it has dropped a release since the last look, and the drive count.
+trait Reads {
     /// `true` if the master is in normal operation with the LAS the watch saw last (`seen`,
     /// [`LasWatch::seen`]): the watch then has nothing to note.
+    fn las_seen(&self, seen: Option<u32>) -> bool;
+    /// `true` if the monitor releases the safety sensor at `address`.
+    fn releases(&self, address: u8) -> bool;
+}
+
+impl Reads for Look {
     #[inline]
     fn las_seen(&self, seen: Option<u32>) -> bool {
         self.las.is_some() && self.las == seen
     }
 
-    /// `true` if the monitor releases the safety sensor at `address`.
     #[inline]
     fn releases(&self, address: u8) -> bool {
         self.released >> address & 1 == 1
@@ -61,7 +46,7 @@ impl Rig {
     /// and the monitor has dropped nothing: the watch is then left as it is (as
     /// [`LasWatch::update`] leaves it then).
     #[inline]
-    fn watch_bus_reads(&mut self, t: SimTime, reads: BusReads) {
+    fn watch_bus_reads(&mut self, t: SimTime, reads: Look) {
         if !reads.las_seen(self.judge.las_watch.seen()) {
             self.las_moved(t, reads.las);
         }
@@ -74,7 +59,7 @@ impl Rig {
 
     /// [`Rig::watch_bus_reads`] of the bus as it is, at `t` (the end of a run).
     pub(super) fn watch_bus(&mut self, t: SimTime) {
-        let reads = BusReads::of(self.lab.bus(), self.lab.monitor_id());
+        let reads = self.lab.bus().look(self.lab.monitor_id());
         self.watch_bus_reads(t, reads);
     }
 
@@ -131,19 +116,20 @@ impl Rig {
     /// The safety logic's scan at `t`, with the bus watch before it and the safe drive's scan
     /// and the attendant's watch after it.
     ///
-    /// Almost every scan is a quiet one (`LiftSafety::scan_if_quiet`), whose outputs are the
-    /// last scan's with no events: the rig already holds what they give it (EStopOut, the
-    /// diagnosis, K1), so nothing is handed on, where nothing else looks at them at this
-    /// scan: the safe drive's scan (it runs every scan) and the attendant's watch while it
-    /// counts (after a scan that found K1 open for a cause a round answers, see
-    /// [`People::attendant_idle`]).
+    /// Almost every scan is a quiet one (before the logic's deadline, `LiftSafety::poll_at`),
+    /// whose outputs are the last scan's with no events: the rig already holds what they
+    /// give it (EStopOut, the diagnosis, K1), so it leaves the scan out
+    /// (`LiftSafety::skip_through`) where nothing else looks at them at this scan: the safe
+    /// drive's scan (it runs every scan) and the attendant's watch while it counts (after a
+    /// scan that found K1 open for a cause a round answers, see [`People::attendant_idle`]).
     pub(super) fn safety_scan(&mut self, t: SimTime) {
-        let reads = BusReads::of(self.lab.bus(), self.lab.monitor_id());
+        let reads = self.lab.bus().look(self.lab.monitor_id());
         self.watch_bus_reads(t, reads);
         let inputs = self.safety_inputs(reads);
         if self.people.attendant_idle
             && self.safety.drive.is_none()
-            && self.safety.logic.scan_if_quiet(t, &inputs)
+            && t < self.safety.logic.poll_at(&inputs)
+            && self.safety.logic.skip_through(t)
         {
             #[cfg(test)]
             self.assert_quiet_scan_kept(t);
@@ -223,26 +209,26 @@ impl Rig {
         }
     }
 
-    /// Takes the safety scans from the rig's next moment `t` on together, where each would be
-    /// a quiet one that hands nothing on ([`Rig::safety_scan`]), and nothing else comes
-    /// before the stretch's end: the bus runs through the stretch's scan times in one call
-    /// ([`asi_bus::Bus::advance_grid`]), stopping where it brings the scan anything new, and
-    /// the scans it passed are taken after it, each as the quiet scan it would have been.
+    /// Leaves out the safety scans from the rig's next moment `t` on, where each would be a
+    /// quiet one that hands nothing on ([`Rig::safety_scan`]), and nothing else comes before
+    /// the stretch's end: the bus runs through the stretch's scan times in one call, watching
+    /// what the scan reads at each ([`asi_bus::Watch::look`]) and stopping where it brings
+    /// the scan anything new, and the logic is told of the scans left out
+    /// (`LiftSafety::skip_through`).
     ///
-    /// The stretch begins at a safety scan with the inputs of the last one, the logic at rest
-    /// ([`LiftSafety::quiet_before`]), the LAS the watch saw and no monitor drop, the
-    /// attendant idle and no safe drive. It ends before the next moment of anything else
+    /// The stretch begins at a safety scan with the inputs of the last one, before the
+    /// logic's deadline (`LiftSafety::poll_at`), the LAS the watch saw and no monitor drop,
+    /// the attendant idle and no safe drive. It ends before the next moment of anything else
     /// that a step handles (PLC scan, scenario event, timer, plant edge, the end), before the
-    /// logic's quiet ends, and not after the time through which new outputs pass the rig by
+    /// logic's deadline, and not after the time through which new outputs pass the rig by
     /// (`quiet`, [`Rig::outputs_pass_until`]: no dirty plant, no waves, not pulse-exact,
     /// and the invariant watch's quiet holds). Within it the rest of each step does nothing:
-    /// the plant has no edge (it is brought to each scan time all the same), the slaves' new
-    /// outputs pass (the bus stops at one that does not, and at a scan time by which the
-    /// drive count has moved), and the scan's inputs from the plant, the PLC and the
-    /// operator stay as they are. What it reads of the bus ([`BusReads`]) is looked at by
-    /// the bus at every scan time. The fast-path tests compare runs with the pulse-exact
-    /// path, which takes every step; the rig's tests compare runs with one call per moment
-    /// ([`Rig::advance`], which takes no stretch).
+    /// the plant has no edge, the invariant watch's check is skipped, the slaves' new outputs
+    /// pass (the bus stops at one that does not, and at a scan time by which the drive count
+    /// has moved), and the scan's inputs from the plant, the PLC and the operator stay as they
+    /// are. The fast-path tests compare runs with the pulse-exact path, which takes every
+    /// step; the rig's tests compare runs with one call per moment ([`Rig::advance`], which
+    /// takes no stretch).
     pub(super) fn quiet_scans(
         &mut self,
         t: SimTime,
@@ -259,20 +245,16 @@ impl Rig {
             return Stretch::None;
         }
         let monitor = self.lab.monitor_id();
-        let reads = BusReads::of(self.lab.bus(), monitor);
+        let reads = self.lab.bus().look(monitor);
         if !reads.las_seen(self.judge.las_watch.seen()) || reads.drops {
             return Stretch::None;
         }
         // What the slaves drive is read at a step when the drive count has moved: the bus
         // stops where it has.
-        let drives = self.lab.bus().drive_count();
-        if drives.is_none() || self.wiring.drives_seen != drives {
+        if reads.drives.is_none() || self.wiring.drives_seen != reads.drives {
             return Stretch::None;
         }
         let inputs = self.safety_inputs(reads);
-        let Some(logic_quiet) = self.safety.logic.quiet_before(&inputs) else {
-            return Stretch::None;
-        };
         let after = |at: SimTime| {
             at.checked_add(SimDuration::from_nanos(1))
                 .unwrap_or(SimTime::MAX)
@@ -280,7 +262,7 @@ impl Rig {
         let mut until = self
             .own_next_but_safety()
             .min(self.agenda.end)
-            .min(logic_quiet)
+            .min(self.safety.logic.poll_at(&inputs))
             .min(after(through))
             .min(after(limit));
         if let Some(e) = self.lift.next_event() {
@@ -289,47 +271,63 @@ impl Rig {
         if t >= until {
             return Stretch::None;
         }
-        let run = self
-            .lab
-            .bus_mut()
-            .advance_grid(t, SAFETY_SCAN_PERIOD, until, |bus| {
-                BusReads::of(bus, monitor) == reads && bus.drive_count() == drives
-            });
-        if run.passed > 0 {
-            // Each scan time's step: the plant brought to it, the invariant watch (whose
-            // quiet holds), and the quiet scans, taken together after it.
-            let mut g = t;
-            for _ in 0..run.passed {
-                self.agenda.now = g;
-                self.advance_plant(g);
-                self.check_invariants(g);
-                g += SAFETY_SCAN_PERIOD;
+        // The bus runs to the last scan time before `until`, and no further.
+        let periods = (until - t)
+            .as_nanos()
+            .div_ceil(SAFETY_SCAN_PERIOD.as_nanos());
+        let last = t + SimDuration::from_nanos((periods - 1) * SAFETY_SCAN_PERIOD.as_nanos());
+        let bus = self.lab.bus_mut();
+        let mut watch = bus.watching();
+        watch.look = Some(LookWatch {
+            monitor,
+            first: t,
+            period: SAFETY_SCAN_PERIOD,
+            seen: reads,
+        });
+        bus.watch(watch);
+        let stop = bus.advance_before(after(last));
+        watch.look = None;
+        bus.watch(watch);
+        // The first scan time the bus did not pass.
+        let next = match stop {
+            None => last + SAFETY_SCAN_PERIOD,
+            Some(Stop::Look(at)) => at,
+            Some(Stop::Output(at)) if at < t => t,
+            Some(Stop::Output(at)) => {
+                let passed = (at - t).as_nanos() / SAFETY_SCAN_PERIOD.as_nanos() + 1;
+                t + SimDuration::from_nanos(passed * SAFETY_SCAN_PERIOD.as_nanos())
             }
-            let kept = self
-                .safety
-                .logic
-                .scans_if_quiet(t, self.agenda.now, run.passed, &inputs);
+        };
+        if next > t {
+            // Each scan time's step: the plant brought to it (it has no edge before
+            // `until`), the invariant watch (whose quiet holds), and the quiet scans.
+            let passed = next - SAFETY_SCAN_PERIOD;
+            self.agenda.now = passed;
+            self.advance_plant(passed);
+            self.check_invariants(passed);
+            let kept = self.safety.logic.skip_through(passed);
             debug_assert!(kept, "the safety scans from {t} are not quiet ones");
             #[cfg(test)]
             {
-                self.probes.stretch_scans += u64::from(run.passed);
+                let n = (next - t).as_nanos() / SAFETY_SCAN_PERIOD.as_nanos();
+                self.probes.stretch_scans += n;
             }
-            self.agenda.next_safety = g;
+            self.agenda.next_safety = next;
             self.own_moments_changed();
         }
-        match run.stop {
+        match stop {
             None => Stretch::Went,
-            Some(GridStop::Output(at)) => {
+            Some(Stop::Output(at)) => {
                 self.output_taken(at);
                 Stretch::Went
             }
-            Some(GridStop::Point(at)) => Stretch::StepAt(at),
+            Some(Stop::Look(at)) => Stretch::StepAt(at),
         }
     }
 
     /// The safety logic's inputs, with what it reads of the bus (`reads`).
     #[inline]
-    fn safety_inputs(&self, reads: BusReads) -> LiftSafetyInputs {
+    fn safety_inputs(&self, reads: Look) -> LiftSafetyInputs {
         let [ch1, ch2] = self.lift.stop_channels();
         LiftSafetyInputs {
             stop_ch1: ch1,
