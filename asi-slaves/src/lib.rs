@@ -17,5 +17,5 @@ pub mod devices;
 pub mod monitor;
 pub mod slave;
 
-pub use monitor::{CodeTable, SafetyMonitor};
+pub use monitor::{CodeTable, Heard, SafetyMonitor};
 pub use slave::{Peripheral, Slave};

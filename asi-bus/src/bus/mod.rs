@@ -52,7 +52,7 @@ use asi_phy::{
     Address, BusTiming, Call, Checks, Expect, FaultInjector, FaultRates, Frame, Listener, Nibble,
     PulseFault, PulseTrain, Received, Request, Response, SimDuration, SimTime, Transmission,
 };
-use asi_slaves::monitor::SafetyMonitor;
+use asi_slaves::monitor::{Heard, SafetyMonitor};
 use asi_slaves::slave::{Peripheral, Slave};
 
 mod access;
@@ -399,7 +399,7 @@ impl Bus {
     }
 
     /// Processes every event up to and including `now`. A new output a watched slave took in
-    /// them ([`Bus::watch_outputs`]) is the caller's to hand on now: it does not end the next
+    /// them ([`Watch::outputs`]) is the caller's to hand on now: it does not end the next
     /// [`Bus::advance_before`] early.
     pub fn advance_to(&mut self, now: SimTime) {
         self.run_to(now);

@@ -176,7 +176,7 @@ impl Bus {
                 // asynchronous pause, and only with at most one monitor, in step.
                 let in_step = match self.monitors.as_slice() {
                     [] => true,
-                    [first] => self.monitor_in_step || first.listens_as(slaves),
+                    [first] => self.monitor_in_step || first.receiver() == slaves,
                     _ => false,
                 };
                 if !(in_step && slaves.is_synchronised() && self.master_rx.is_synchronised()) {
@@ -207,7 +207,7 @@ impl Bus {
         }
         if let Some(first) = self.monitors.first_mut() {
             self.monitor_in_step = true;
-            first.on_clean_request(t, q);
+            first.hear(t, Heard::Request(q));
         }
         debug_assert_eq!(f.raw, u32::from(q.bits()), "not the frame of {q:?}");
         true
@@ -243,7 +243,7 @@ impl Bus {
             }
         }
         if let Some(first) = self.monitors.first_mut() {
-            first.on_clean_response(t, a);
+            first.hear(t, Heard::Response(a));
         }
         debug_assert_eq!(f.raw, u32::from(a.bits()), "not the frame of {a:?}");
         true
@@ -259,7 +259,7 @@ impl Bus {
         let slaves = &mut self.groups[0].listener;
         slaves.took_valid(u.slaves_end, u.window_open);
         if let Some(first) = self.monitors.first_mut() {
-            first.listen_as(slaves);
+            first.receiver_mut().clone_from(slaves);
         }
         if let Some(end) = u.master_end {
             self.master_rx.took_valid(end, false);
@@ -313,8 +313,8 @@ pub(super) struct Unsettled {
 /// telegram. The first monitor's receiver hears what the slaves' does, so once the two are in
 /// the same state (`in_step`, compared again only after something may have changed the
 /// slaves' receivers: [`Bus::release_held`]) it takes the slaves' telegram and state
-/// ([`SafetyMonitor::on_frame_as`], which debug builds check against its own receiver)
-/// instead of checking every frame a second time. Inlined into the two events: a call of its
+/// ([`SafetyMonitor::hear`], which debug builds check against its own receiver) instead of
+/// checking every frame a second time. Inlined into the two events: a call of its
 /// own cost as much as the second check it saves.
 #[inline(always)]
 fn hear_in_step(
@@ -328,11 +328,19 @@ fn hear_in_step(
         return slaves.accept(f);
     };
     if !*in_step {
-        *in_step = first.listens_as(slaves);
+        *in_step = first.receiver() == slaves;
     }
     let r = slaves.accept(f);
     if *in_step {
-        first.on_frame_as(t, f, &r, slaves);
+        debug_assert!(
+            {
+                let mut own = first.receiver().clone();
+                own.accept(f) == r && own == *slaves
+            },
+            "the monitor's receiver is not in the state of the slaves' whose telegram it takes"
+        );
+        first.receiver_mut().clone_from(slaves);
+        first.hear(t, Heard::Received(&r));
     } else {
         first.on_frame(t, f);
     }

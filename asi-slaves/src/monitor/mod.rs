@@ -364,6 +364,17 @@ impl Channel {
     }
 }
 
+/// A telegram heard at a moment, as a receiver took it ([`SafetyMonitor::hear`]).
+#[derive(Clone, Copy, Debug)]
+pub enum Heard<'a> {
+    /// What a receiver made of a frame, valid or not.
+    Received(&'a Received),
+    /// The valid request: what a receiver makes of a clean frame of it, taken as a request.
+    Request(Request),
+    /// The valid response: what a receiver makes of a clean frame of it, taken as a response.
+    Response(Response),
+}
+
 /// A passive Safety-at-Work monitor on the bus (docs/asi.md §7).
 #[derive(Clone, Debug, PartialEq)]
 pub struct SafetyMonitor {
@@ -473,66 +484,43 @@ impl SafetyMonitor {
         self.judge(now, &r);
     }
 
-    /// `true` if the monitor's receiver is in the state of `other`: it would take every frame
-    /// as `other` does ([`SafetyMonitor::on_frame_as`]).
-    pub fn listens_as(&self, other: &Listener) -> bool {
-        self.listener == *other
-    }
-
-    /// [`SafetyMonitor::on_frame`] of a frame that a receiver in the state of the monitor's own
-    /// ([`SafetyMonitor::listens_as`]) took as `r`, ending in state `after`: the monitor takes
-    /// that telegram and state instead of checking the frame again (on the bus the slaves'
-    /// receiver and the monitor's hear the same frames). Debug builds, and so every test
-    /// that runs a bus, check that the monitor's own receiver would have done the same.
-    #[inline]
-    pub fn on_frame_as(&mut self, now: SimTime, frame: &Frame, r: &Received, after: &Listener) {
-        debug_assert!(
-            {
-                let mut own = self.listener.clone();
-                own.accept(frame) == *r && own == *after
-            },
-            "the monitor's receiver is not in the state of the one whose telegram it takes"
-        );
-        self.listener.clone_from(after);
-        self.judge(now, r);
-    }
-
-    /// [`SafetyMonitor::on_frame`] of telegram `r`, heard at `now` by a receiver in the state
-    /// of the monitor's own, without bringing the monitor's receiver on: its caller knows the
-    /// state the frames leave it in and sets it later ([`SafetyMonitor::listen_as`]), as the
-    /// bus does at the end of a run of clean quick transactions (whose telegrams it hands over
-    /// as the request or answer itself: [`SafetyMonitor::on_clean_request`],
-    /// [`SafetyMonitor::on_clean_response`]). Held to `on_frame` through those by the bus's
-    /// lockstep test against its pulse-exact path, which compares the monitors.
-    #[inline]
-    pub fn on_telegram(&mut self, now: SimTime, r: &Received) {
-        self.judge(now, r);
-    }
-
-    /// [`SafetyMonitor::on_telegram`] of the valid request `q` (a clean frame of it, taken as
-    /// a request), without a [`Received`] to build: what `judge` does with it, from the
-    /// request itself. Held to `on_telegram` by the property test
-    /// `clean_telegrams_are_judged_as_the_received_ones`.
-    #[inline]
-    pub fn on_clean_request(&mut self, now: SimTime, q: Request) {
-        self.asked = None;
-        if self.monitored >> q.address().get() & 1 != 0 {
-            self.heard_valid_request(now, q);
+    /// What the monitor notes of a telegram heard at `now` that a receiver in the state of
+    /// the monitor's own took ([`Heard`]), without bringing the monitor's receiver on: for a
+    /// caller that runs the receiver itself and keeps the monitor's
+    /// ([`SafetyMonitor::receiver_mut`]) in the state the frames leave it in. The bus does:
+    /// the monitor's receiver and the slaves' hear the same frames, so while the two are in
+    /// the same state it checks each frame once; its lockstep test against its pulse-exact
+    /// path compares the monitors.
+    // Always inlined: the bus hears a known kind at each place, and the match folds away.
+    #[inline(always)]
+    pub fn hear(&mut self, now: SimTime, heard: Heard<'_>) {
+        match heard {
+            Heard::Received(r) => self.judge(now, r),
+            // What `judge` does with a valid request, from the request itself.
+            Heard::Request(q) => {
+                self.asked = None;
+                if self.monitored >> q.address().get() & 1 != 0 {
+                    self.heard_valid_request(now, q);
+                }
+            }
+            Heard::Response(a) => {
+                if let Some(asked) = self.asked {
+                    self.asked = None;
+                    self.heard_code(now, asked, a.data().get());
+                }
+            }
         }
     }
 
-    /// [`SafetyMonitor::on_clean_request`] of the valid response `a`.
-    #[inline]
-    pub fn on_clean_response(&mut self, now: SimTime, a: Response) {
-        if let Some(asked) = self.asked {
-            self.asked = None;
-            self.heard_code(now, asked, a.data().get());
-        }
+    /// The monitor's receiver.
+    pub fn receiver(&self) -> &Listener {
+        &self.listener
     }
 
-    /// Puts the monitor's receiver in the state of `other`.
-    pub fn listen_as(&mut self, other: &Listener) {
-        self.listener.clone_from(other);
+    /// The monitor's receiver, for a caller that takes frames through a receiver of its own
+    /// in the same state ([`SafetyMonitor::hear`]).
+    pub fn receiver_mut(&mut self) -> &mut Listener {
+        &mut self.listener
     }
 
     /// What the monitor notes of telegram `r`, heard at `now`.

@@ -572,9 +572,9 @@ proptest::proptest! {
     #![proptest_config(proptest::test_runner::Config::with_cases(1_000))]
 
     /// A clean telegram handed over as the request or response itself
-    /// ([`SafetyMonitor::on_clean_request`], [`SafetyMonitor::on_clean_response`]) leaves the
+    /// ([`Heard::Request`], [`Heard::Response`]) leaves the
     /// monitor as the same telegram handed over as the valid [`Received`] a receiver makes of
-    /// it ([`SafetyMonitor::on_telegram`]): any request (often a Data_Exchange to a monitored
+    /// it ([`Heard::Received`]): any request (often a Data_Exchange to a monitored
     /// slave), answers with the codes in turn, wrong codes, no answer, at gaps around the
     /// tolerance, taught or teaching.
     #[test]
@@ -619,8 +619,11 @@ proptest::proptest! {
                 let a = Address::new((body >> 5 & 0x1F) as u8).expect("an address");
                 let q = Request::from_fields(body & 0x400 != 0, a, (body & 0x1F) as u8)
                     .expect("a request");
-                clean.on_clean_request(t, q);
-                received.on_telegram(t, &valid(TelegramKind::Request, u32::from(q.bits()), 14, t));
+                clean.hear(t, Heard::Request(q));
+                received.hear(
+                    t,
+                    Heard::Received(&valid(TelegramKind::Request, u32::from(q.bits()), 14, t)),
+                );
                 to = usize::from(a.get()).checked_sub(11).filter(|&i| i < 2);
             }
             let code = match (wrong, to) {
@@ -633,8 +636,11 @@ proptest::proptest! {
             };
             let r = Response::new(asi_phy::Nibble::from_low_bits(code));
             let t = at(now + 100_000);
-            clean.on_clean_response(t, r);
-            received.on_telegram(t, &valid(TelegramKind::Response, u32::from(r.bits()), 7, t));
+            clean.hear(t, Heard::Response(r));
+            received.hear(
+                t,
+                Heard::Received(&valid(TelegramKind::Response, u32::from(r.bits()), 7, t)),
+            );
             clean.poll(t);
             received.poll(t);
             proptest::prop_assert!(clean == received, "{:?}\n{:?}", clean, received);
@@ -686,7 +692,7 @@ proptest::proptest! {
             // A Data_Exchange to 11 or 12, or to an address not monitored.
             let a = Address::new([11, 12, 3][usize::from(to)]).expect("an address");
             let q = Request::data_exchange(a, asi_phy::Nibble::ZERO).expect("a request");
-            m.on_clean_request(t, q);
+            m.hear(t, Heard::Request(q));
             let code = match (wrong, usize::from(to)) {
                 (Some(c), _) => c,
                 (None, i) if i < 2 => {
@@ -696,7 +702,7 @@ proptest::proptest! {
                 _ => 0b0110,
             };
             let r = Response::new(asi_phy::Nibble::from_low_bits(code));
-            m.on_clean_response(at(now + 100_000), r);
+            m.hear(at(now + 100_000), Heard::Response(r));
             m.poll(at(now + 100_000));
             match other {
                 0..=4 => {
