@@ -2,7 +2,7 @@
 //! the whole rig and read its report.
 
 use controller::ProgramEventKind;
-use rig::report::{Actor, LogEvent, Report};
+use rig::report::{LogEvent, Report};
 use rig::rig::Rig;
 use rig::scenario::Scenario;
 use safety::LiftSafetyCause;
@@ -56,29 +56,6 @@ pub fn served(r: &Report) -> Vec<(u8, String)> {
         .iter()
         .map(|s| (s.floor, s.source.to_string()))
         .collect()
-}
-
-/// `true` if a log line of `who` contains `text`.
-pub fn logged(r: &Report, who: Actor, text: &str) -> bool {
-    r.log
-        .iter()
-        .any(|l| l.who == who && l.text().contains(text))
-}
-
-/// The first time a log line of `who` contains `text`.
-pub fn logged_at(r: &Report, who: Actor, text: &str) -> Option<f64> {
-    r.log
-        .iter()
-        .find(|l| l.who == who && l.text().contains(text))
-        .map(|l| l.at_s)
-}
-
-/// The first time after `after_s` a log line of `who` contains `text`.
-pub fn logged_after(r: &Report, who: Actor, text: &str, after_s: f64) -> Option<f64> {
-    r.log
-        .iter()
-        .find(|l| l.at_s > after_s && l.who == who && l.text().contains(text))
-        .map(|l| l.at_s)
 }
 
 /// The first time the log has an event `is` accepts.

@@ -7,6 +7,7 @@ use asi_phy::{Nibble, Request, Response, SimDuration};
 use asi_trace::capture::{decode_capture, DecodeOptions};
 use asi_trace::telegrams::TelegramRecord;
 use asi_trace::trace::TraceFormat;
+use rig::report::{LogEvent, RigNote};
 use rig::rig::Rig;
 use rig::scenario::Scenario;
 use rig::waves::WaveOutputs;
@@ -103,8 +104,8 @@ fn decode_returns_the_telegrams_of_the_trace() {
 }
 
 fn rig_errors(r: &rig::report::Report) -> Option<String> {
-    r.log
-        .iter()
-        .map(|l| l.text())
-        .find(|t| t.contains("could not be written"))
+    r.log.iter().find_map(|l| match &l.event {
+        LogEvent::Note(RigNote::TraceNotWritten(e)) => Some(e.clone()),
+        _ => None,
+    })
 }

@@ -6,9 +6,8 @@
 use asi_lift_tests::*;
 use controller::ProgramEventKind;
 use controller::{HaltReason, LostReason, ProgramEventKind as Ctl};
-use rig::report::{LogEvent, Report, TripCause};
+use rig::report::{LogEvent, Report, Rescue, TripCause};
 use rig::scenario::Action;
-use rig::Actor;
 use safety::lift::K1Cause;
 use safety::LiftSafetyCause as Cause;
 
@@ -120,9 +119,9 @@ crank_mm = 10.0
 "#,
     );
     assert_no_violations(&r);
-    assert!(logged(&r, Actor::Scenario, "hand crank +10.0 mm"));
+    assert!(has_event(&r, |e| *e == LogEvent::Action(Action::Crank { mm: 10.0 })));
     assert!(
-        !logged(&r, Actor::Scenario, "refused by the plant"),
+        !has_event(&r, |e| matches!(e, LogEvent::Refused(_))),
         "{}",
         r.to_text()
     );
@@ -319,7 +318,7 @@ press = "cabin:3"
         );
         assert_no_violations(&r);
         assert!(
-            !logged(&r, Actor::Scenario, "refused by the plant"),
+            !has_event(&r, |e| matches!(e, LogEvent::Refused(_))),
             "start {start}: {}",
             r.to_text()
         );
@@ -464,14 +463,17 @@ press = "cabin:4"
 "#,
     );
     assert_no_violations(&r);
-    let refused =
-        logged_at(&r, Actor::Scenario, "K1 is closed: no rescue by hand").expect("refused");
+    let refused = event_at(&r, |e| *e == LogEvent::Rescue(Rescue::K1Closed)).expect("refused");
     let tripped = event_at(
         &r,
         safety_event(|c| matches!(c, Cause::K1Opened(K1Cause::Overtravel { bottom: true, .. }))),
     )
     .expect("trip");
-    let cranked = logged_at(&r, Actor::Scenario, "hand crank +").expect("second rescue");
+    let cranked = event_at(
+        &r,
+        |e| matches!(e, LogEvent::Rescue(Rescue::Crank(mm)) if *mm > 0.0),
+    )
+    .expect("second rescue");
     assert!(refused < tripped && tripped < cranked, "{}", r.to_text());
     assert!(r.initialised_at_s.is_some_and(|t| t > 32.0));
     assert_arrivals_agree(&r);
@@ -550,13 +552,8 @@ fn an_attendant_answers_a_monitor_trip_from_line_noise_after_the_repairs() {
     let r = run(sc);
     assert_no_violations(&r);
     let (_, opened) = sensor_12_dropped_and_k1_opened(&r);
-    let round = logged_after(
-        &r,
-        Actor::Attendant,
-        "rescue, acknowledge and reset",
-        opened,
-    )
-    .expect("the attendant's round");
+    let round = event_after(&r, |e| matches!(e, LogEvent::AttendantRound { .. }), opened)
+        .expect("the attendant's round");
     assert!((round - opened - 2.0).abs() < 0.02, "{}", r.to_text());
     let reset = event_after(&r, safety_event(|c| *c == Cause::OvertravelReset), round)
         .expect("the attendant's reset");

@@ -134,8 +134,126 @@ pub enum LogEvent {
     },
     /// The safe drive ([`Actor::Drive`]).
     Drive(safety::drive::DriveEventKind),
-    /// Anything else, in words.
+    /// The scenario, the operator or the attendant does this (its actor tells who).
+    Action(crate::scenario::Action),
+    /// The plant refused the action just logged.
+    Refused(lift_model::PlantError),
+    /// What the operator's overtravel rescue found to do.
+    Rescue(Rescue),
+    /// The plant refused an input of the rig's own ([`Actor::Plant`]).
+    PlantError(lift_model::PlantError),
+    /// The invariant watch found a violation ([`Actor::Judge`]).
+    Violation {
+        /// What kind.
+        kind: super::ViolationKind,
+        /// Its details, in words.
+        detail: String,
+    },
+    /// The attendant begins a round: K1 has been open for the attendant's notice time, for
+    /// `cause` ([`Actor::Attendant`]).
+    AttendantRound {
+        /// How long K1 had been open.
+        after: asi_phy::SimDuration,
+        /// Why K1 is open, in the safety logic's or the safe drive's words.
+        cause: String,
+    },
+    /// A note of the rig's own.
+    Note(RigNote),
+    /// Anything else, in words: the gateway's clients and the teaching stand.
     Text(String),
+}
+
+/// What the operator's overtravel rescue does to the cabin as it stands.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[non_exhaustive]
+pub enum Rescue {
+    /// The cabin stands where initialisation finds floor 1 by itself.
+    NotNeeded,
+    /// K1 is closed: nobody cranks a drive that has power.
+    K1Closed,
+    /// Crank this far (mm, + up) to the nearer end floor's level.
+    Crank(f64),
+}
+
+impl std::fmt::Display for Rescue {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Rescue::NotNeeded => f.write_str("the cabin needs no rescue"),
+            Rescue::K1Closed => f.write_str("K1 is closed: no rescue by hand"),
+            Rescue::Crank(mm) => write!(f, "hand crank {mm:+.1} mm"),
+        }
+    }
+}
+
+/// The rig's own notes on a run.
+#[derive(Clone, Debug, PartialEq)]
+#[non_exhaustive]
+pub enum RigNote {
+    /// The caller stopped the run before its end.
+    StoppedEarly,
+    /// The bus trace could not be written, for this reason.
+    TraceNotWritten(String),
+    /// AS-i power is back after a power fail.
+    PowerBack,
+    /// The operator presses the safety reset after power-on.
+    ResetAfterPowerOn,
+    /// A scenario's fault names a slave address the lab bus does not have.
+    NoSlave(u8),
+    /// A scenario's encoder fault without the safe drive.
+    NoEncoder,
+    /// The cabin reached an overtravel sensor under power (`top` or the bottom one).
+    OvertravelReached {
+        /// The top sensor (`false`: the bottom one).
+        top: bool,
+        /// The cabin's position, mm.
+        position_mm: f64,
+    },
+    /// A source's lines left out of a long log: `left_out` of its `seen` lines, where the
+    /// log keeps its `first` and its `last` ones.
+    LeftOut {
+        /// Whose lines.
+        who: Actor,
+        /// How many were left out.
+        left_out: u64,
+        /// How many it logged.
+        seen: u64,
+        /// How many of its first lines are kept.
+        first: usize,
+        /// How many of its last lines are kept.
+        last: usize,
+    },
+}
+
+impl std::fmt::Display for RigNote {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            RigNote::StoppedEarly => f.write_str("the run was stopped early by its caller"),
+            RigNote::TraceNotWritten(e) => write!(f, "the bus trace could not be written: {e}"),
+            RigNote::PowerBack => f.write_str("AS-i power back"),
+            RigNote::ResetAfterPowerOn => {
+                f.write_str("operator presses the safety reset after power-on")
+            }
+            RigNote::NoSlave(a) => write!(f, "no slave at address {a} on the lab bus"),
+            RigNote::NoEncoder => {
+                f.write_str("no safe drive, so no encoder: the fault changes nothing")
+            }
+            RigNote::OvertravelReached { top, position_mm } => write!(
+                f,
+                "the cabin reached the {} overtravel sensor under power at {position_mm:.1} mm",
+                if *top { "top" } else { "bottom" }
+            ),
+            RigNote::LeftOut {
+                who,
+                left_out,
+                seen,
+                first,
+                last,
+            } => write!(
+                f,
+                "… {left_out} lines left out (of {seen} `{who}` lines the first {first} and the last {last} are kept)"
+            ),
+        }
+    }
 }
 
 /// What the plant did that the log tells.
@@ -225,6 +343,16 @@ impl std::fmt::Display for LogEvent {
             }
             LogEvent::Drive(DriveEventKind::TorqueOn) => f.write_str("torque on: K1 may close"),
             LogEvent::Drive(e) => e.fmt(f),
+            LogEvent::Action(a) => a.fmt(f),
+            LogEvent::Refused(e) => write!(f, "refused by the plant: {e}"),
+            LogEvent::Rescue(r) => r.fmt(f),
+            LogEvent::PlantError(e) => write!(f, "error: {e}"),
+            LogEvent::Violation { kind, detail } => write!(f, "VIOLATION {kind}: {detail}"),
+            LogEvent::AttendantRound { after, cause } => write!(
+                f,
+                "K1 open for {after} ({cause}): rescue, acknowledge and reset"
+            ),
+            LogEvent::Note(n) => n.fmt(f),
             LogEvent::Text(t) => f.write_str(t),
         }
     }

@@ -10,7 +10,7 @@ impl Rig {
 
     /// `who` (the scenario or the attendant) does `action` at `t`.
     pub(super) fn act(&mut self, t: SimTime, who: Actor, action: &Action) {
-        self.log(who, describe(action));
+        self.log(who, LogEvent::Action(action.clone()));
         let result = match action {
             Action::Press { button, hold } => {
                 self.people.passengers.press(t, *button);
@@ -44,7 +44,7 @@ impl Rig {
             }
         };
         if let Err(e) = result {
-            self.log(who, format!("refused by the plant: {e}"));
+            self.log(who, LogEvent::Refused(e));
         }
         self.wiring.plant_dirty = true;
     }
@@ -60,19 +60,10 @@ impl Rig {
                 .map_or(Rescue::NotNeeded, Rescue::Crank),
             r => r,
         };
+        self.log(who, LogEvent::Rescue(rescue));
         match rescue {
-            Rescue::NotNeeded => {
-                self.log(who, "the cabin needs no rescue".to_owned());
-                Ok(())
-            }
-            Rescue::K1Closed => {
-                self.log(who, "K1 is closed: no rescue by hand".to_owned());
-                Ok(())
-            }
-            Rescue::Crank(mm) => {
-                self.log(who, format!("hand crank {mm:+.1} mm"));
-                self.lift.crank(t, mm)
-            }
+            Rescue::NotNeeded | Rescue::K1Closed => Ok(()),
+            Rescue::Crank(mm) => self.lift.crank(t, mm),
         }
     }
 
@@ -80,10 +71,7 @@ impl Rig {
         match f {
             Fault::SlaveOffline { slave } | Fault::SlaveOnline { slave } => {
                 let Some(id) = self.lab.slave_id(slave) else {
-                    self.log(
-                        Actor::Scenario,
-                        format!("no slave at address {slave} on the lab bus"),
-                    );
+                    self.log(Actor::Scenario, LogEvent::Note(RigNote::NoSlave(slave)));
                     return;
                 };
                 if matches!(f, Fault::SlaveOffline { .. }) {
@@ -104,7 +92,7 @@ impl Rig {
             }
             Fault::Vane { sensor, fault } => {
                 if let Err(e) = self.lift.set_vane_fault(t, sensor, fault) {
-                    self.log(Actor::Plant, format!("error: {e}"));
+                    self.log(Actor::Plant, LogEvent::PlantError(e));
                 }
                 self.wiring.plant_dirty = true;
             }
@@ -114,7 +102,7 @@ impl Rig {
                     _ => None,
                 };
                 if let Err(e) = self.lift.set_converter_runaway(t, runaway) {
-                    self.log(Actor::Plant, format!("error: {e}"));
+                    self.log(Actor::Plant, LogEvent::PlantError(e));
                 }
                 self.wiring.plant_dirty = true;
             }
@@ -122,10 +110,7 @@ impl Rig {
                 // The scenario reader takes these only with the safe drive.
                 match self.safety.drive.as_mut() {
                     Some(d) => d.set_encoder_failed(matches!(f, Fault::EncoderFailed)),
-                    None => self.log(
-                        Actor::Scenario,
-                        "no safe drive, so no encoder: the fault changes nothing".to_owned(),
-                    ),
+                    None => self.log(Actor::Scenario, LogEvent::Note(RigNote::NoEncoder)),
                 }
             }
         }
@@ -150,10 +135,7 @@ impl Rig {
                 Timer::OperatorReset(on) => {
                     self.safety.operator_reset = on;
                     if on {
-                        self.log(
-                            Actor::Rig,
-                            "operator presses the safety reset after power-on".to_owned(),
-                        );
+                        self.log(Actor::Rig, LogEvent::Note(RigNote::ResetAfterPowerOn));
                         self.agenda
                             .timers
                             .push((t + OPERATOR_PULSE, Timer::OperatorReset(false)));
@@ -164,7 +146,7 @@ impl Rig {
                 Timer::Attendant(Round::Reset) => self.act(t, Actor::Attendant, &Action::Reset),
                 Timer::PowerBack => {
                     self.lab.bus_mut().set_supply_voltage(NOMINAL_VOLTS);
-                    self.log(Actor::Rig, "AS-i power back".to_owned());
+                    self.log(Actor::Rig, LogEvent::Note(RigNote::PowerBack));
                     self.wiring.plant_dirty = true;
                 }
             }

@@ -3,7 +3,7 @@
 //! how many between them were left out, so that a client that sends the same command
 //! millions of times costs the run a bounded amount of memory.
 
-use crate::report::{Actor, LogEvent, LogLine};
+use crate::report::{Actor, LogEvent, LogLine, RigNote};
 use std::collections::VecDeque;
 
 /// One bounded source.
@@ -80,10 +80,13 @@ impl LogBounds {
                 out.push(LogLine::new(
                     b.left_out_from,
                     b.who,
-                    LogEvent::Text(format!(
-                        "… {} lines left out (of {} `{}` lines the first {} and the last {} are kept)",
-                        b.left_out, b.seen, b.who, b.first, b.last
-                    )),
+                    LogEvent::Note(RigNote::LeftOut {
+                        who: b.who,
+                        left_out: b.left_out,
+                        seen: b.seen,
+                        first: b.first,
+                        last: b.last,
+                    }),
                 ));
                 b.left_out = 0;
             }

@@ -27,7 +27,7 @@ pub use outputs::TransactionObserver;
 
 use crate::report::{
     round3, Actor, Arrival, CabinAt, FinalState, LogEvent, LogLine, MonitorTrip, OvertravelReached,
-    PlantLog, Report, SlaveDropouts, Trip, TripCause, TripKind, Violation, ViolationKind,
+    PlantLog, Report, RigNote, SlaveDropouts, Trip, TripCause, TripKind, Violation, ViolationKind,
 };
 use crate::scenario::{Action, Fault, Scenario, ScenarioEvent};
 use crate::waves::{RigSample, WaveOutputs, Waves};
@@ -46,8 +46,7 @@ use lab::setpoint::STANDSTILL_UA;
 use las::LasWatch;
 use lift_model::{Lift, LiftConfig, LoadLevel, PlantEventKind as Plant};
 use operator::{
-    describe, Attendant, Rescue, ATTENDANT_ACK_AFTER, ATTENDANT_NOTICE, ATTENDANT_RESET_AFTER,
-    OPERATOR_PULSE,
+    Attendant, Rescue, ATTENDANT_ACK_AFTER, ATTENDANT_NOTICE, ATTENDANT_RESET_AFTER, OPERATOR_PULSE,
 };
 use outputs::Outputs;
 use passengers::Passengers;
@@ -494,10 +493,7 @@ impl Rig {
             if self.agenda.next_plc != scans {
                 scans = self.agenda.next_plc;
                 if progress(t, self.agenda.end).is_break() {
-                    self.log(
-                        Actor::Rig,
-                        "the run was stopped early by its caller".to_owned(),
-                    );
+                    self.log(Actor::Rig, LogEvent::Note(RigNote::StoppedEarly));
                     break;
                 }
             }
@@ -739,7 +735,11 @@ impl Rig {
     }
 
     fn violation(&mut self, t: SimTime, kind: ViolationKind, detail: String) {
-        self.log_at(t, Actor::Judge, format!("VIOLATION {kind}: {detail}"));
+        let e = LogEvent::Violation {
+            kind,
+            detail: detail.clone(),
+        };
+        self.log_at(t, Actor::Judge, e);
         self.report.violations.push(Violation {
             at_s: t.as_secs_f64(),
             kind,
@@ -756,13 +756,11 @@ impl Rig {
             "top"
         };
         let position_mm = self.lift.position_mm();
-        self.log_at(
-            t,
-            Actor::Rig,
-            format!(
-                "the cabin reached the {end} overtravel sensor under power at {position_mm:.1} mm"
-            ),
-        );
+        let note = RigNote::OvertravelReached {
+            top: end == "top",
+            position_mm,
+        };
+        self.log_at(t, Actor::Rig, LogEvent::Note(note));
         self.report
             .safety
             .overtravel_reached
@@ -790,8 +788,8 @@ impl Rig {
         self.flush_trace();
         self.outputs.finish(self.agenda.now);
         if let Some(e) = self.trace_error().map(str::to_owned) {
-            let text = format!("the bus trace could not be written: {e}");
-            self.log(Actor::Rig, text);
+            let note = RigNote::TraceNotWritten(e.clone());
+            self.log(Actor::Rig, LogEvent::Note(note));
             self.report.output_error = Some(e);
         }
         let now = self.agenda.now;

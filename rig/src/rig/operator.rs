@@ -9,7 +9,13 @@ use safety::lift::K1Cause;
 pub(super) const OPERATOR_PULSE: asi_phy::SimDuration = asi_phy::SimDuration::from_millis(100);
 
 /// A scenario action as the log tells it.
-pub(super) fn describe(a: &Action) -> String {
+impl std::fmt::Display for Action {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&describe(self))
+    }
+}
+
+fn describe(a: &Action) -> String {
     match a {
         Action::Press { button, hold } => format!("{button} pressed for {hold}"),
         Action::Load(l) => format!("load becomes {}", l.name()),
@@ -44,16 +50,7 @@ pub(super) fn describe(a: &Action) -> String {
     }
 }
 
-/// What the operator's overtravel rescue does to the cabin as it stands.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub(super) enum Rescue {
-    /// The cabin stands where initialisation finds floor 1 by itself.
-    NotNeeded,
-    /// K1 is closed: nobody cranks a drive that has power.
-    K1Closed,
-    /// Crank this far (mm, + up) to the nearer end floor's level.
-    Crank(f64),
-}
+pub(super) use crate::report::Rescue;
 
 /// The operator's overtravel rescue for a cabin that stands where initialisation cannot find
 /// floor 1 by itself (on or beyond an overtravel sensor, below floor 1's vane): a crank to the

@@ -19,7 +19,7 @@ impl Rig {
     #[cold]
     #[inline(never)]
     pub(super) fn plant_error(&mut self, e: lift_model::PlantError) {
-        self.log(Actor::Plant, format!("error: {e}"));
+        self.log(Actor::Plant, LogEvent::PlantError(e));
     }
 
     /// The plant's edges on its way to the moment it has reached (or why it could not go).
@@ -132,7 +132,7 @@ impl Rig {
             self.sc.floors,
         );
         if let Err(e) = result {
-            self.log(Actor::Plant, format!("error: {e}"));
+            self.log(Actor::Plant, LogEvent::PlantError(e));
         }
         // What the plant shows the slaves can change with what it is given.
         self.wiring.plant_dirty = true;

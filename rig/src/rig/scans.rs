@@ -183,13 +183,11 @@ impl Rig {
                     .as_ref()
                     .and_then(|d| d.torque_off_cause())
             });
-            self.log(
-                Actor::Attendant,
-                format!(
-                    "K1 open for {ATTENDANT_NOTICE} ({}): rescue, acknowledge and reset",
-                    cause.unwrap_or_default()
-                ),
-            );
+            let round = LogEvent::AttendantRound {
+                after: ATTENDANT_NOTICE,
+                cause: cause.unwrap_or_default(),
+            };
+            self.log(Actor::Attendant, round);
             self.report.safety.attendant_rounds += 1;
             self.act(t, Actor::Attendant, &Action::Rescue);
             let ack = t + ATTENDANT_ACK_AFTER;
@@ -203,7 +201,7 @@ impl Rig {
         if k1 != self.safety.k1 {
             self.safety.k1 = k1;
             if let Err(e) = self.lift.set_contactor(t, k1) {
-                self.log(Actor::Plant, format!("error: {e}"));
+                self.log(Actor::Plant, LogEvent::PlantError(e));
             }
             self.wiring.plant_dirty = true;
         }
