@@ -14,6 +14,7 @@ use fantoccini::{Client, ClientBuilder, Locator};
 use gateway::live::LiveConfig;
 use gateway::{Listen, Owner, Running, Speed};
 use hyper_util::client::legacy::connect::HttpConnector;
+use rig::report::{ClientLog, LogEvent};
 use rig::Actor;
 use rig::{Rig, Scenario};
 use serde_json::{json, Value};
@@ -296,9 +297,8 @@ async fn the_live_view_in_chromium() {
         .expect("the run ends");
     // The report is of the run since the restart.
     assert!(
-        r.log
-            .iter()
-            .any(|l| l.who == Actor::Web && l.text().starts_with("restarted by the page")),
+        r.log.iter().any(|l| l.who == Actor::Web
+            && matches!(l.event, LogEvent::Client(ClientLog::Restarted { .. }))),
         "{:?}",
         r.log
     );

@@ -13,7 +13,7 @@
 use crate::speed::{Speed, MAX_SPEED, MIN_SPEED};
 use asi_phy::fault::FaultRates;
 use asi_phy::PulseErrorRate;
-use rig::report::Actor;
+use rig::report::{Actor, ClientLog};
 use rig::scenario::Action;
 use rig::{Rig, Scenario};
 
@@ -196,7 +196,7 @@ pub fn apply(rig: &mut Rig, cmd: &Command, seed: u64) -> Result<(), String> {
                 _ => FaultRates::NONE,
             };
             rig.lab_mut().bus_mut().set_line_faults(seed, rates);
-            rig.log_now(Actor::Web, format!("line noise: pulse error rate {rate}"));
+            rig.log_now(Actor::Web, ClientLog::LineNoise(*rate));
             Ok(())
         }
         Command::Run(_) => Err(

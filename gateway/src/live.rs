@@ -24,7 +24,7 @@ use crate::ttk::Ttk;
 use crate::view::{self, Telegrams};
 use asi_phy::{SimDuration, SimTime};
 use crossbeam_channel::{Receiver, RecvTimeoutError, Sender, TryRecvError};
-use rig::report::{Actor, LiveReport, LogLine};
+use rig::report::{Actor, ClientLog, LiveReport, LogLine};
 use rig::{Report, Rig};
 use std::collections::VecDeque;
 use std::sync::{Arc, Mutex};
@@ -114,7 +114,7 @@ pub enum ToRig {
     /// A client connected.
     Connected,
     /// A line for the run's log from the servers (`who`, the text).
-    Log(Actor, String),
+    Log(Actor, ClientLog),
     /// End the run now (Ctrl-C).
     Stop,
 }
@@ -292,10 +292,7 @@ pub fn run_with_view(
         }
     }
     if stopped {
-        t.rig.log_now(
-            Actor::Live,
-            "stopped by the operator (Ctrl-C or a termination signal)".into(),
-        );
+        t.rig.log_now(Actor::Live, ClientLog::StoppedBySignal);
     }
     t.publish(true);
     t.send_status(status, true);
@@ -425,13 +422,11 @@ impl<'a> RigThread<'a> {
         self.max_lag = self.max_lag.max(lag);
         if !self.lag_warned && lag > Duration::from_millis(100) {
             self.lag_warned = true;
-            self.rig.log_now(
-                Actor::Live,
-                format!(
-                    "the machine cannot keep up at speed {x}: {:.0} ms behind the wall clock",
-                    lag.as_secs_f64() * 1e3
-                ),
-            );
+            let behind = ClientLog::Behind {
+                speed: x.to_string(),
+                lag_ms: lag.as_secs_f64() * 1e3,
+            };
+            self.rig.log_now(Actor::Live, behind);
         }
     }
 
@@ -558,9 +553,7 @@ impl<'a> RigThread<'a> {
                 if pause != self.paused {
                     self.paused = pause;
                     self.anchor();
-                    let what = if pause { "paused" } else { "resumed" };
-                    self.rig
-                        .log_now(Actor::Web, format!("run {what} by the page"));
+                    self.rig.log_now(Actor::Web, ClientLog::Paused(pause));
                 }
                 Ok(None)
             }
@@ -571,10 +564,11 @@ impl<'a> RigThread<'a> {
                     self.cfg.speed = speed;
                     self.anchor();
                     self.lag_warned = false;
-                    self.rig.log_now(
-                        Actor::Web,
-                        format!("speed {speed} (was {was}), set by the page"),
-                    );
+                    let set = ClientLog::Speed {
+                        speed: speed.to_string(),
+                        was: was.to_string(),
+                    };
+                    self.rig.log_now(Actor::Web, set);
                 }
                 Ok(match (self.cfg.owner, speed) {
                     (Owner::Builtin, _) => None,
@@ -605,13 +599,10 @@ impl<'a> RigThread<'a> {
         if let Some(v) = self.viewer.as_mut() {
             v.restart(&mut rig);
         }
-        rig.log_now(
-            Actor::Web,
-            format!(
-                "restarted by the page: the earlier run had reached {:.3} s; this report is of the run since the restart",
-                self.at.as_secs_f64()
-            ),
-        );
+        let restarted = ClientLog::Restarted {
+            reached_s: self.at.as_secs_f64(),
+        };
+        rig.log_now(Actor::Web, restarted);
         // The earlier rig goes here, with its outputs.
         self.rig = rig;
         self.gw = Gateway::new(self.cfg.owner, self.cfg.watchdog);

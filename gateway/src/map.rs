@@ -38,7 +38,7 @@ use controller::plc::ToSafety;
 use controller::Outside;
 use lab::address::LOAD_SENSOR;
 use lift_model::{Button, LoadLevel};
-use rig::report::Actor;
+use rig::report::{Actor, ClientLog};
 use rig::scenario::{Action, Fault, DEFAULT_HOLD};
 use rig::Rig;
 use tokio_modbus::{ExceptionCode, Request, Response};
@@ -509,10 +509,7 @@ impl Gateway {
         self.last_write = Some(now);
         if self.tripped {
             self.tripped = false;
-            rig.log_now(
-                Actor::Gateway,
-                "outputs written again: the watchdog is clear".into(),
-            );
+            rig.log_now(Actor::Gateway, ClientLog::WatchdogClear);
         }
         set_outside_signals(rig, self.signals);
     }
@@ -537,13 +534,10 @@ impl Gateway {
         }
         self.signals = WATCHDOG_SIGNALS;
         set_outside_signals(rig, self.signals);
-        rig.log_now(
-            Actor::Gateway,
-            format!(
-                "watchdog: no output write for {} ms: the output image is zero",
-                self.watchdog.as_nanos() / 1_000_000
-            ),
-        );
+        let expired = ClientLog::WatchdogExpired {
+            after_ms: self.watchdog.as_nanos() / 1_000_000,
+        };
+        rig.log_now(Actor::Gateway, expired);
     }
 }
 

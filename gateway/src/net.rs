@@ -11,7 +11,7 @@
 
 use crate::live::{Call, ToRig, TtkCall};
 use crossbeam_channel::Sender;
-use rig::report::Actor;
+use rig::report::{Actor, ClientLog};
 use std::future::Future;
 use std::io;
 use std::net::SocketAddr;
@@ -114,8 +114,7 @@ pub(crate) async fn accept_loop<A, H, F>(
         match listener.accept().await {
             Ok((stream, _)) => {
                 if failed > 0 {
-                    let text = format!("accepting connections again after {failed} failed tries");
-                    let _ = log.send(ToRig::Log(who, text));
+                    let _ = log.send(ToRig::Log(who, ClientLog::AcceptingAgain(failed)));
                     failed = 0;
                     backoff = wait.first;
                 }
@@ -132,11 +131,11 @@ pub(crate) async fn accept_loop<A, H, F>(
             Err(e) if connection_error(&e) => {}
             Err(e) => {
                 if failed == 0 {
-                    let text = format!(
-                        "cannot accept a connection: {e}; trying again, at most {} ms apart",
-                        wait.last.as_millis()
-                    );
-                    let _ = log.send(ToRig::Log(who, text));
+                    let cannot = ClientLog::CannotAccept {
+                        error: e.to_string(),
+                        retry_ms: wait.last.as_millis(),
+                    };
+                    let _ = log.send(ToRig::Log(who, cannot));
                 }
                 failed += 1;
                 tokio::time::sleep(backoff).await;

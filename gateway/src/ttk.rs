@@ -31,7 +31,7 @@ use lab::address::{CABIN_DISPLAY, CONVERTER, FLOOR_1, FLOOR_STATIONS, SPEED_SETP
 use lab::display::DisplayWord;
 use lab::setpoint::STANDSTILL_UA;
 use lift_model::Button;
-use rig::report::Actor;
+use rig::report::{Actor, ClientLog};
 use rig::Rig;
 use std::collections::BTreeMap;
 
@@ -193,19 +193,18 @@ impl Ttk {
         }
         if dir != self.motor {
             self.motor = dir;
-            let text = match dir {
-                1 => "motor up",
-                -1 => "motor down",
-                _ => "motor stop",
-            };
-            rig.log_now(Actor::Ttk4145, text.into());
+            rig.log_now(Actor::Ttk4145, ClientLog::Motor(dir.signum()));
         }
     }
 
     /// A lamp the lab lift lacks: logged when it changes.
     fn lamp(&mut self, rig: &mut Rig, name: String, value: u8) {
         if self.lamps.get(&name) != Some(&value) {
-            rig.log_now(Actor::Ttk4145, format!("{name}: {value}"));
+            let lamp = ClientLog::Lamp {
+                name: name.clone(),
+                value,
+            };
+            rig.log_now(Actor::Ttk4145, lamp);
             self.lamps.insert(name, value);
         }
     }

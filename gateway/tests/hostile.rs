@@ -13,7 +13,7 @@ use asi_phy::{SimDuration, SimTime};
 use gateway::live::LiveConfig;
 use gateway::map::{Gateway, Owner};
 use gateway::{Running, Speed};
-use rig::report::ViolationKind;
+use rig::report::{ClientLog, LogEvent, ViolationKind};
 use rig::Actor;
 use rig::{Report, Rig, Scenario};
 use std::collections::BTreeSet;
@@ -728,10 +728,8 @@ fn a_controller_that_goes_quiet_mid_travel_is_stopped_by_the_watchdog() {
     let x = r.final_state.position_mm;
     assert!((50.0..250.0).contains(&x), "stopped at {x} mm");
     assert!(r.safety.overtravel_reached.is_empty());
-    assert!(r
-        .log
-        .iter()
-        .any(|l| l.who == Actor::Gateway && l.text().contains("watchdog")));
+    assert!(r.log.iter().any(|l| l.who == Actor::Gateway
+        && matches!(l.event, LogEvent::Client(ClientLog::WatchdogExpired { .. }))));
 }
 
 #[test]

@@ -10,7 +10,7 @@ use controller::plc::{FromSafety, Plc};
 use controller::ControllerConfig;
 use gateway::live::LiveConfig;
 use gateway::{Owner, Running, Speed};
-use rig::report::{CallSource, ViolationKind};
+use rig::report::{CallSource, ClientLog, LogEvent, ViolationKind};
 use rig::Actor;
 use rig::{Report, Rig, Scenario};
 use std::io::{Read, Write};
@@ -271,10 +271,8 @@ async fn the_watchdog_zeroes_the_outputs_of_a_controller_that_went_quiet() {
         .expect("the run ends");
     assert_eq!(r.live.expect("live").watchdog_trips, 1);
     assert!(!r.final_state.moving);
-    assert!(r
-        .log
-        .iter()
-        .any(|l| l.who == Actor::Gateway && l.text().contains("watchdog")));
+    assert!(r.log.iter().any(|l| l.who == Actor::Gateway
+        && matches!(l.event, LogEvent::Client(ClientLog::WatchdogExpired { .. }))));
 }
 
 /// One Modbus TCP request as bytes (MBAP header, unit 1).
@@ -568,7 +566,7 @@ fn a_ttk4145_controller_drives_the_lab_lift_and_its_lamps_are_recorded() {
     assert!(r
         .log
         .iter()
-        .any(|l| l.who == Actor::Ttk4145 && l.text() == "motor up"));
+        .any(|l| l.who == Actor::Ttk4145 && l.event == LogEvent::Client(ClientLog::Motor(1))));
 }
 
 #[test]

@@ -4,7 +4,7 @@
 mod log;
 
 pub(crate) use log::monitor_drop;
-pub use log::{Actor, LogEvent, LogLine, PlantLog, Rescue, RigNote};
+pub use log::{Actor, ClientLog, LogEvent, LogLine, PlantLog, Rescue, RigNote};
 use serde::Serialize;
 use std::fmt::Write as _;
 

@@ -6,6 +6,7 @@ use asi_phy::{SimDuration, SimTime};
 use asi_trace::trace::TraceFormat;
 use gateway::live::{self, LiveConfig, Status, ToRig, ViewOut, WebAnswer, WebCall};
 use gateway::{Owner, Speed};
+use rig::report::{ClientLog, LogEvent};
 use rig::Actor;
 use rig::{Report, Rig, Scenario};
 use serde_json::{json, Value};
@@ -274,7 +275,7 @@ fn a_run_paused_and_resumed_is_the_same_run_as_one_that_was_not() {
         paused
             .log
             .iter()
-            .any(|l| l.who == Actor::Web && l.text() == "run paused by the page"),
+            .any(|l| l.who == Actor::Web && l.event == LogEvent::Client(ClientLog::Paused(true))),
         "the pause came after the run's end: {:?}",
         paused.log
     );
@@ -319,10 +320,8 @@ fn a_restart_runs_the_scenario_again_from_0_with_the_same_seed() {
     // The report is of the last run: its log starts again, without the earlier press.
     let lines: Vec<String> = restarted.log.iter().map(ToString::to_string).collect();
     assert!(
-        restarted
-            .log
-            .iter()
-            .any(|l| l.who == Actor::Web && l.text().starts_with("restarted by the page")),
+        restarted.log.iter().any(|l| l.who == Actor::Web
+            && matches!(l.event, LogEvent::Client(ClientLog::Restarted { .. }))),
         "{lines:?}"
     );
     assert!(
@@ -368,10 +367,12 @@ fn a_new_speed_takes_effect_at_once_and_a_bad_one_is_refused() {
     let (report, _) = live.end(true);
     assert_eq!(report.live.expect("the live figures").speed, "0.5");
     assert!(
-        report
-            .log
-            .iter()
-            .any(|l| l.who == Actor::Web && l.text() == "speed 10 (was 1), set by the page"),
+        report.log.iter().any(|l| l.who == Actor::Web
+            && l.event
+                == LogEvent::Client(ClientLog::Speed {
+                    speed: "10".into(),
+                    was: "1".into(),
+                })),
         "{:?}",
         report.log
     );

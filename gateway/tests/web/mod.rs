@@ -4,6 +4,9 @@
 use futures_util::{SinkExt, StreamExt};
 use gateway::live::LiveConfig;
 use gateway::{Listen, Owner, Running, Speed};
+use lift_model::Button;
+use rig::report::{ClientLog, LogEvent};
+use rig::scenario::Action;
 use rig::Actor;
 use rig::{Rig, Scenario};
 use serde_json::{json, Value};
@@ -232,9 +235,9 @@ async fn a_press_from_the_page_brings_the_cabin_to_floor_3() {
         .expect("the run ends");
     assert!(r.arrivals.iter().any(|a| a.floor == 3), "{:?}", r.arrivals);
     assert!(
-        r.log
-            .iter()
-            .any(|l| l.who == Actor::Web && l.text().contains("cabin button 3")),
+        r.log.iter().any(|l| l.who == Actor::Web
+            && matches!(&l.event, LogEvent::Action(Action::Press { button, .. })
+                    if *button == Button::Cabin(3))),
         "the log names the page's press"
     );
 }
@@ -554,5 +557,6 @@ async fn the_run_controls_work_over_the_socket() {
     assert!(r
         .log
         .iter()
-        .any(|l| l.who == Actor::Web && l.text().starts_with("restarted by the page")));
+        .any(|l| l.who == Actor::Web
+            && matches!(l.event, LogEvent::Client(ClientLog::Restarted { .. }))));
 }

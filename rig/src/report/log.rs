@@ -159,8 +159,110 @@ pub enum LogEvent {
     },
     /// A note of the rig's own.
     Note(RigNote),
-    /// Anything else, in words: the gateway's clients and the teaching stand.
+    /// What the gateway of `serve` or one of its clients did ([`Actor::Gateway`],
+    /// [`Actor::Web`], [`Actor::Ttk4145`], [`Actor::Live`], the listeners).
+    Client(ClientLog),
+    /// Anything else, in words.
     Text(String),
+}
+
+/// What the gateway of `serve` or one of its clients did, as the run's log tells it.
+#[derive(Clone, Debug, PartialEq)]
+#[non_exhaustive]
+pub enum ClientLog {
+    /// The page set the line noise's pulse error rate.
+    LineNoise(f64),
+    /// The gateway's watchdog: no output write for this long, so the output image is zero.
+    WatchdogExpired {
+        /// The watchdog's time, ms.
+        after_ms: u64,
+    },
+    /// Outputs are written again after the watchdog.
+    WatchdogClear,
+    /// The operator stopped the live run (Ctrl-C or a termination signal).
+    StoppedBySignal,
+    /// The machine cannot keep up at this speed: the run is this far behind the wall clock.
+    Behind {
+        /// The speed, as the page writes it.
+        speed: String,
+        /// How far behind, ms.
+        lag_ms: f64,
+    },
+    /// The page paused (`true`) or resumed the run.
+    Paused(bool),
+    /// The page set the speed.
+    Speed {
+        /// The new speed, as the page writes it.
+        speed: String,
+        /// The speed before.
+        was: String,
+    },
+    /// The page restarted the run; the earlier run had reached this time.
+    Restarted {
+        /// Seconds.
+        reached_s: f64,
+    },
+    /// A TTK4145 client's motor command: up (1), down (−1) or stop (0).
+    Motor(i8),
+    /// A lamp the lab lift lacks changed (a TTK4145 client).
+    Lamp {
+        /// Its name.
+        name: String,
+        /// Its value.
+        value: u8,
+    },
+    /// A listener accepts connections again after this many failed tries.
+    AcceptingAgain(u64),
+    /// A listener cannot accept a connection, for this reason; it tries again, at most
+    /// `retry_ms` apart.
+    CannotAccept {
+        /// Why.
+        error: String,
+        /// The longest wait between tries, ms.
+        retry_ms: u128,
+    },
+}
+
+impl std::fmt::Display for ClientLog {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            ClientLog::LineNoise(rate) => write!(f, "line noise: pulse error rate {rate}"),
+            ClientLog::WatchdogExpired { after_ms } => write!(
+                f,
+                "watchdog: no output write for {after_ms} ms: the output image is zero"
+            ),
+            ClientLog::WatchdogClear => {
+                f.write_str("outputs written again: the watchdog is clear")
+            }
+            ClientLog::StoppedBySignal => {
+                f.write_str("stopped by the operator (Ctrl-C or a termination signal)")
+            }
+            ClientLog::Behind { speed, lag_ms } => write!(
+                f,
+                "the machine cannot keep up at speed {speed}: {lag_ms:.0} ms behind the wall clock"
+            ),
+            ClientLog::Paused(true) => f.write_str("run paused by the page"),
+            ClientLog::Paused(false) => f.write_str("run resumed by the page"),
+            ClientLog::Speed { speed, was } => {
+                write!(f, "speed {speed} (was {was}), set by the page")
+            }
+            ClientLog::Restarted { reached_s } => write!(
+                f,
+                "restarted by the page: the earlier run had reached {reached_s:.3} s; this report is of the run since the restart"
+            ),
+            ClientLog::Motor(1) => f.write_str("motor up"),
+            ClientLog::Motor(-1) => f.write_str("motor down"),
+            ClientLog::Motor(_) => f.write_str("motor stop"),
+            ClientLog::Lamp { name, value } => write!(f, "{name}: {value}"),
+            ClientLog::AcceptingAgain(failed) => {
+                write!(f, "accepting connections again after {failed} failed tries")
+            }
+            ClientLog::CannotAccept { error, retry_ms } => write!(
+                f,
+                "cannot accept a connection: {error}; trying again, at most {retry_ms} ms apart"
+            ),
+        }
+    }
 }
 
 /// What the operator's overtravel rescue does to the cabin as it stands.
@@ -353,8 +455,15 @@ impl std::fmt::Display for LogEvent {
                 "K1 open for {after} ({cause}): rescue, acknowledge and reset"
             ),
             LogEvent::Note(n) => n.fmt(f),
+            LogEvent::Client(c) => c.fmt(f),
             LogEvent::Text(t) => f.write_str(t),
         }
+    }
+}
+
+impl From<ClientLog> for LogEvent {
+    fn from(c: ClientLog) -> LogEvent {
+        LogEvent::Client(c)
     }
 }
 

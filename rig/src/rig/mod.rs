@@ -930,8 +930,8 @@ impl Rig {
     }
 
     /// Adds a line to the run's log at the moment reached.
-    pub fn log_now(&mut self, who: Actor, text: String) {
-        self.log(who, text);
+    pub fn log_now(&mut self, who: Actor, event: impl Into<LogEvent>) {
+        self.log(who, event);
     }
 
     /// When the run ends (the scenario's duration, or the `until` of [`Rig::set_end`]).
