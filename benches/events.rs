@@ -12,9 +12,10 @@ use lift_model::{Lift, LiftConfig, PlantEventKind};
 
 /// A 24-floor lift running up from floor 1 at 68.8 mm/s.
 fn shuttle() -> Lift {
-    let config = LiftConfig {
-        floors: 24,
-        ..LiftConfig::default()
+    let config = {
+        let mut cfg = LiftConfig::default();
+        cfg.floors = 24;
+        cfg
     };
     let Ok(mut lift) = Lift::new(config) else {
         unreachable!("the default geometry with 24 floors is valid")

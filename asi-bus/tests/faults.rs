@@ -310,9 +310,10 @@ fn two_slaves_answering_at_once_corrupt_each_other() {
         Slave::new("two", addr(4), codes_b, Box::new(IoModule::new())),
         Slave::new("three", addr(5), codes_a, Box::new(IoModule::new())),
     ];
-    let cfg = MasterConfig {
-        mode: asi_master::Mode::Configuration,
-        ..MasterConfig::default()
+    let cfg = {
+        let mut cfg = MasterConfig::default();
+        cfg.mode = asi_master::Mode::Configuration;
+        cfg
     };
     let mut bus = Bus::new(cfg, p, slaves).expect("bus");
     bus.enable_trace(10_000);

@@ -110,9 +110,10 @@ fn f2_periphery_fault_comes_from_the_status_read() {
 
 #[test]
 fn f3_is_0_in_configuration_mode() {
-    let cfg = MasterConfig {
-        mode: asi_master::Mode::Configuration,
-        ..MasterConfig::default()
+    let cfg = {
+        let mut cfg = MasterConfig::default();
+        cfg.mode = asi_master::Mode::Configuration;
+        cfg
     };
     let slaves = vec![Slave::new("io", addr(4), AC2726, Box::new(IoModule::new()))];
     let mut bus = Bus::new(cfg, ProjectedConfig::default(), slaves).expect("bus");

@@ -162,6 +162,7 @@ impl ProjectedConfig {
 
 /// The master's settings. [`MasterConfig::check`] names the item at fault.
 #[derive(Clone, Debug, PartialEq)]
+#[non_exhaustive]
 pub struct MasterConfig {
     /// Bus timing (asi-phy).
     pub timing: BusTiming,

@@ -133,7 +133,11 @@ proptest! {
         period in prop_oneof![Just(100.0f64), 0.5f64..1000.0],
         nominal in 0.1f32..8.0,
     ) {
-        let cfg = DemodConfig { nominal_amplitude: nominal, ..DemodConfig::default() };
+        let cfg = {
+            let mut cfg = DemodConfig::default();
+            cfg.nominal_amplitude = nominal;
+            cfg
+        };
         let mut whole = Vec::new();
         let mut d = Demodulator::new(cfg, SimTime::ZERO, period).expect("valid settings");
         d.push(&samples, |p| whole.push(p));
@@ -142,7 +146,11 @@ proptest! {
 
         // The same samples in pieces: the baseline starts from the first piece only, so compare
         // with a fixed baseline.
-        let fixed = DemodConfig { baseline_tau: SimDuration::ZERO, ..cfg };
+        let fixed = {
+            let mut config = cfg;
+            config.baseline_tau = SimDuration::ZERO;
+            config
+        };
         let mut one = Vec::new();
         let mut d = Demodulator::new(fixed, SimTime::ZERO, period).expect("valid");
         d.push(&samples, |p| one.push(p));

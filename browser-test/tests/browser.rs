@@ -30,12 +30,11 @@ fn start(speed: f64) -> Running {
         "name = \"browser\"\nduration = \"30min\"\n[lift]\nstart_mm = 0.0\nload = \"loaded\"\n";
     let sc = Scenario::from_toml("browser.toml", toml).expect("a valid scenario");
     let make = move || Rig::new(sc.clone()).map_err(gateway::MakeRigError::from);
-    let cfg = LiveConfig {
-        speed: Speed::Factor(speed),
-        owner: Owner::Builtin,
-        watchdog: asi_phy::SimDuration::ZERO,
-        step: asi_phy::SimDuration::from_millis(1),
-    };
+    let mut cfg = LiveConfig::default();
+    cfg.speed = Speed::Factor(speed);
+    cfg.owner = Owner::Builtin;
+    cfg.watchdog = asi_phy::SimDuration::ZERO;
+    cfg.step = asi_phy::SimDuration::from_millis(1);
     let loopback: SocketAddr = "127.0.0.1:0".parse().expect("an address");
     let listen = Listen {
         modbus: loopback,

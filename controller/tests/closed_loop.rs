@@ -20,14 +20,16 @@ const SCAN: SimDuration = SimDuration::from_millis(10);
 
 impl Loop {
     fn new(start_mm: f64, algorithm: Algorithm) -> Loop {
-        let lift = Lift::new(LiftConfig {
-            initial_position_mm: start_mm,
-            ..LiftConfig::default()
+        let lift = Lift::new({
+            let mut cfg = LiftConfig::default();
+            cfg.initial_position_mm = start_mm;
+            cfg
         })
         .expect("lift");
-        let prog = Program::new(ControllerConfig {
-            algorithm,
-            ..ControllerConfig::default()
+        let prog = Program::new({
+            let mut cfg = ControllerConfig::default();
+            cfg.algorithm = algorithm;
+            cfg
         })
         .expect("program");
         let mut l = Loop {

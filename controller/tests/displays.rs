@@ -26,9 +26,10 @@ struct Loop {
 
 impl Loop {
     fn new(start_mm: f64) -> Loop {
-        let lift = Lift::new(LiftConfig {
-            initial_position_mm: start_mm,
-            ..LiftConfig::default()
+        let lift = Lift::new({
+            let mut cfg = LiftConfig::default();
+            cfg.initial_position_mm = start_mm;
+            cfg
         })
         .expect("lift");
         let prog = Program::new(ControllerConfig::default()).expect("program");

@@ -70,13 +70,12 @@ fn start(seconds: u64, owner: Owner, speed: Speed, exchanges: Option<Exchanges>)
             Owner::Builtin => rig,
         })
     };
-    let cfg = LiveConfig {
-        speed,
-        owner,
-        // The bench writes when it likes; the watchdog is not what is measured.
-        watchdog: SimDuration::ZERO,
-        step: SimDuration::from_millis(1),
-    };
+    let mut cfg = LiveConfig::default();
+    cfg.speed = speed;
+    cfg.owner = owner;
+    // The bench writes when it likes; the watchdog is not what is measured.
+    cfg.watchdog = SimDuration::ZERO;
+    cfg.step = SimDuration::from_millis(1);
     let loopback: SocketAddr = "127.0.0.1:0".parse().expect("an address");
     gateway::start(make, cfg, loopback, None).expect("the gateway starts")
 }

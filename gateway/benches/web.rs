@@ -30,11 +30,13 @@ fn start(http: bool) -> Running {
     let toml = "name = \"quiet\"\nduration = \"1h\"\n[lift]\nstart_mm = 0.0\n";
     let sc = Scenario::from_toml("quiet.toml", toml).expect("a valid scenario");
     let make = move || Rig::new(sc.clone()).map_err(gateway::MakeRigError::from);
-    let cfg = LiveConfig {
-        speed: Speed::Factor(1.0),
-        owner: Owner::Builtin,
-        watchdog: asi_phy::SimDuration::ZERO,
-        step: asi_phy::SimDuration::from_millis(1),
+    let cfg = {
+        let mut cfg = LiveConfig::default();
+        cfg.speed = Speed::Factor(1.0);
+        cfg.owner = Owner::Builtin;
+        cfg.watchdog = asi_phy::SimDuration::ZERO;
+        cfg.step = asi_phy::SimDuration::from_millis(1);
+        cfg
     };
     let loopback: SocketAddr = "127.0.0.1:0".parse().expect("an address");
     let listen = Listen {

@@ -33,6 +33,7 @@ use tokio_modbus::{ExceptionCode, Request, Response};
 
 /// How a live run goes.
 #[derive(Clone, Copy, Debug)]
+#[non_exhaustive]
 pub struct LiveConfig {
     /// How fast.
     pub speed: Speed,
@@ -42,6 +43,19 @@ pub struct LiveConfig {
     pub watchdog: SimDuration,
     /// At `max` with an outside controller: how far each request advances the simulation.
     pub step: SimDuration,
+}
+
+impl Default for LiveConfig {
+    /// What `asi-lift serve` runs without options: real time, the built-in program, a 1 s
+    /// watchdog, 1 ms per request at `max`.
+    fn default() -> Self {
+        LiveConfig {
+            speed: Speed::Factor(1.0),
+            owner: Owner::Builtin,
+            watchdog: SimDuration::from_secs(1),
+            step: SimDuration::from_millis(1),
+        }
+    }
 }
 
 /// A request from a client, with where its answer goes.

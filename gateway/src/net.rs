@@ -28,6 +28,7 @@ pub const LAST_BACKOFF: Duration = Duration::from_secs(1);
 
 /// What the servers allow their clients.
 #[derive(Clone, Debug, PartialEq, Eq)]
+#[non_exhaustive]
 pub struct Options {
     /// The most connections a listener serves at once; one more is closed at once.
     pub max_connections: usize,

@@ -29,11 +29,13 @@ mod referee;
 /// 1 ms; Modbus (and with `ttk` the TTK4145 front end) on loopback ports.
 fn start(toml: &str, ttk: bool) -> Running {
     let sc = Scenario::from_toml("hostile.toml", toml).expect("a valid scenario");
-    let cfg = LiveConfig {
-        speed: Speed::Max,
-        owner: Owner::External,
-        watchdog: SimDuration::from_millis(1000),
-        step: SimDuration::from_millis(1),
+    let cfg = {
+        let mut cfg = LiveConfig::default();
+        cfg.speed = Speed::Max;
+        cfg.owner = Owner::External;
+        cfg.watchdog = SimDuration::from_millis(1000);
+        cfg.step = SimDuration::from_millis(1);
+        cfg
     };
     let loopback: SocketAddr = "127.0.0.1:0".parse().expect("an address");
     let make = move || Ok(Rig::new(sc.clone())?.with_external_controller());

@@ -32,11 +32,13 @@ fn start_with(toml: &str, owner: Owner, speed: Speed, ttk: bool) -> Running {
             Owner::Builtin => rig,
         })
     };
-    let cfg = LiveConfig {
-        speed,
-        owner,
-        watchdog: SimDuration::from_millis(1000),
-        step: SimDuration::from_millis(1),
+    let cfg = {
+        let mut cfg = LiveConfig::default();
+        cfg.speed = speed;
+        cfg.owner = owner;
+        cfg.watchdog = SimDuration::from_millis(1000);
+        cfg.step = SimDuration::from_millis(1);
+        cfg
     };
     let loopback: SocketAddr = "127.0.0.1:0".parse().expect("an address");
     let ttk = ttk.then_some(loopback);
@@ -46,11 +48,13 @@ fn start_with(toml: &str, owner: Owner, speed: Speed, ttk: bool) -> Running {
 #[test]
 fn a_speed_factor_out_of_bounds_is_refused_at_the_start_not_a_panic_later() {
     let sc = Scenario::from_toml("test.toml", QUIET).expect("a valid scenario");
-    let cfg = LiveConfig {
-        speed: Speed::Factor(1e-30),
-        owner: Owner::Builtin,
-        watchdog: SimDuration::from_millis(1000),
-        step: SimDuration::from_millis(1),
+    let cfg = {
+        let mut cfg = LiveConfig::default();
+        cfg.speed = Speed::Factor(1e-30);
+        cfg.owner = Owner::Builtin;
+        cfg.watchdog = SimDuration::from_millis(1000);
+        cfg.step = SimDuration::from_millis(1);
+        cfg
     };
     let loopback: SocketAddr = "127.0.0.1:0".parse().expect("an address");
     match gateway::start(

@@ -26,6 +26,7 @@ pub const LEVEL_WINDOW_MM: f64 = 10.0;
 /// mechanical ends 80 mm beyond the trip points, the cabin starting level with floor 1.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
+#[non_exhaustive]
 pub struct LiftConfig {
     /// Number of floors, 2..=24.
     pub floors: u8,

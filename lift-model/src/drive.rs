@@ -45,6 +45,7 @@ pub fn converter_frequency_hz(setpoint_ua: u16) -> f64 {
 /// 50 Hz/s and brake deceleration 500 mm/s² (docs/lift-plant.md decisions).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
+#[non_exhaustive]
 pub struct DriveConfig {
     /// Pole pairs p of the motor (§6.4 of the lift thesis: the "4" in 1LA7063-4AB12 means 4 poles).
     pub pole_pairs: u8,

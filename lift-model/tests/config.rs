@@ -15,9 +15,10 @@ fn rejected(config: LiftConfig) -> (LiftConfigError, String) {
 }
 
 fn with_drive(drive: DriveConfig) -> LiftConfig {
-    LiftConfig {
-        drive,
-        ..LiftConfig::default()
+    {
+        let mut cfg = LiftConfig::default();
+        cfg.drive = drive;
+        cfg
     }
 }
 
@@ -51,17 +52,19 @@ fn the_defaults_are_the_lab_lift_and_valid() {
 #[test]
 fn zero_one_or_too_many_floors_are_rejected() {
     for floors in [0u8, 1, 25, 255] {
-        let (e, message) = rejected(LiftConfig {
-            floors,
-            ..LiftConfig::default()
+        let (e, message) = rejected({
+            let mut cfg = LiftConfig::default();
+            cfg.floors = floors;
+            cfg
         });
         assert_eq!(e, LiftConfigError::FloorCount { floors });
         assert!(message.starts_with(&format!("floors = {floors}: the lift needs 2 to 24 floors")));
     }
     for floors in [2u8, 24] {
-        let config = LiftConfig {
-            floors,
-            ..LiftConfig::default()
+        let config = {
+            let mut cfg = LiftConfig::default();
+            cfg.floors = floors;
+            cfg
         };
         assert!(Lift::new(config).is_ok(), "{floors}");
     }
@@ -70,9 +73,10 @@ fn zero_one_or_too_many_floors_are_rejected() {
 #[test]
 fn a_negative_or_zero_pitch_is_rejected() {
     for pitch in [-400.0, 0.0, -0.0] {
-        let (e, message) = rejected(LiftConfig {
-            floor_pitch_mm: pitch,
-            ..LiftConfig::default()
+        let (e, message) = rejected({
+            let mut cfg = LiftConfig::default();
+            cfg.floor_pitch_mm = pitch;
+            cfg
         });
         assert_eq!(
             e,
@@ -90,9 +94,10 @@ fn a_negative_or_zero_pitch_is_rejected() {
 
 #[test]
 fn a_number_that_is_not_finite_is_rejected() {
-    let (e, message) = rejected(LiftConfig {
-        long_track_half_mm: f64::NAN,
-        ..LiftConfig::default()
+    let (e, message) = rejected({
+        let mut cfg = LiftConfig::default();
+        cfg.long_track_half_mm = f64::NAN;
+        cfg
     });
     assert!(matches!(
         e,
@@ -102,14 +107,16 @@ fn a_number_that_is_not_finite_is_rejected() {
         }
     ));
     assert_eq!(message, "long_track_half_mm = NaN: not a finite number");
-    let (_, message) = rejected(LiftConfig {
-        initial_position_mm: f64::INFINITY,
-        ..LiftConfig::default()
+    let (_, message) = rejected({
+        let mut cfg = LiftConfig::default();
+        cfg.initial_position_mm = f64::INFINITY;
+        cfg
     });
     assert_eq!(message, "initial_position_mm = inf: not a finite number");
-    let (_, message) = rejected(with_drive(DriveConfig {
-        slip: f64::NAN,
-        ..DriveConfig::default()
+    let (_, message) = rejected(with_drive({
+        let mut cfg = DriveConfig::default();
+        cfg.slip = f64::NAN;
+        cfg
     }));
     assert_eq!(message, "drive.slip = NaN: not a finite number");
 }
@@ -150,9 +157,10 @@ fn every_length_speed_and_rate_must_be_positive() {
 
 #[test]
 fn an_absurdly_large_value_is_rejected() {
-    let (e, message) = rejected(LiftConfig {
-        floor_pitch_mm: 1e300,
-        ..LiftConfig::default()
+    let (e, message) = rejected({
+        let mut cfg = LiftConfig::default();
+        cfg.floor_pitch_mm = 1e300;
+        cfg
     });
     assert!(matches!(
         e,
@@ -170,9 +178,10 @@ fn an_absurdly_large_value_is_rejected() {
 #[test]
 fn a_slip_of_one_or_more_is_rejected() {
     for slip in [1.0, 1.5, -0.1] {
-        let (e, message) = rejected(with_drive(DriveConfig {
-            slip,
-            ..DriveConfig::default()
+        let (e, message) = rejected(with_drive({
+            let mut cfg = DriveConfig::default();
+            cfg.slip = slip;
+            cfg
         }));
         assert_eq!(e, LiftConfigError::Slip { slip });
         assert!(message.contains("slip of an induction motor is at least 0 and below 1"));
@@ -181,9 +190,10 @@ fn a_slip_of_one_or_more_is_rejected() {
 
 #[test]
 fn a_short_track_not_shorter_than_the_long_one_is_rejected() {
-    let (e, message) = rejected(LiftConfig {
-        short_track_half_mm: 40.0,
-        ..LiftConfig::default()
+    let (e, message) = rejected({
+        let mut cfg = LiftConfig::default();
+        cfg.short_track_half_mm = 40.0;
+        cfg
     });
     assert_eq!(
         e,
@@ -198,9 +208,10 @@ fn a_short_track_not_shorter_than_the_long_one_is_rejected() {
 #[test]
 fn overlapping_vanes_are_rejected() {
     // 80 mm pitch: floor 2's long right track (40..120) touches floor 3's (120..200).
-    let (e, message) = rejected(LiftConfig {
-        floor_pitch_mm: 80.0,
-        ..LiftConfig::default()
+    let (e, message) = rejected({
+        let mut cfg = LiftConfig::default();
+        cfg.floor_pitch_mm = 80.0;
+        cfg
     });
     assert_eq!(
         e,
@@ -217,11 +228,12 @@ fn overlapping_vanes_are_rejected() {
     ));
     // With two floors only floor 1's long left track meets floor 2's short one: 45 mm pitch
     // leaves 40 + 10 − 45 = 5 mm of overlap.
-    let (e, _) = rejected(LiftConfig {
-        floors: 2,
-        floor_pitch_mm: 45.0,
-        trip_beyond_floor_mm: 60.0,
-        ..LiftConfig::default()
+    let (e, _) = rejected({
+        let mut cfg = LiftConfig::default();
+        cfg.floors = 2;
+        cfg.floor_pitch_mm = 45.0;
+        cfg.trip_beyond_floor_mm = 60.0;
+        cfg
     });
     assert!(matches!(
         e,
@@ -233,18 +245,20 @@ fn overlapping_vanes_are_rejected() {
         }
     ));
     // 81 mm is just enough for four floors.
-    assert!(Lift::new(LiftConfig {
-        floor_pitch_mm: 81.0,
-        ..LiftConfig::default()
+    assert!(Lift::new({
+        let mut cfg = LiftConfig::default();
+        cfg.floor_pitch_mm = 81.0;
+        cfg
     })
     .is_ok());
 }
 
 #[test]
 fn trip_zones_overlapping_the_end_floors_are_rejected() {
-    let (e, message) = rejected(LiftConfig {
-        trip_beyond_floor_mm: 40.0,
-        ..LiftConfig::default()
+    let (e, message) = rejected({
+        let mut cfg = LiftConfig::default();
+        cfg.trip_beyond_floor_mm = 40.0;
+        cfg
     });
     assert_eq!(
         e,
@@ -262,9 +276,10 @@ fn trip_zones_overlapping_the_end_floors_are_rejected() {
 #[test]
 fn a_start_outside_the_mechanical_ends_is_rejected() {
     for position in [-140.5, 1340.5] {
-        let (e, message) = rejected(LiftConfig {
-            initial_position_mm: position,
-            ..LiftConfig::default()
+        let (e, message) = rejected({
+            let mut cfg = LiftConfig::default();
+            cfg.initial_position_mm = position;
+            cfg
         });
         assert_eq!(
             e,
@@ -278,9 +293,10 @@ fn a_start_outside_the_mechanical_ends_is_rejected() {
     }
     // On the ends themselves is allowed.
     for position in [-140.0, 1340.0] {
-        let config = LiftConfig {
-            initial_position_mm: position,
-            ..LiftConfig::default()
+        let config = {
+            let mut cfg = LiftConfig::default();
+            cfg.initial_position_mm = position;
+            cfg
         };
         assert!(Lift::new(config).is_ok());
     }

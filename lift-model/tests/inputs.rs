@@ -259,10 +259,18 @@ proptest! {
         start in 0.0..1.0f64,
         script in prop::collection::vec((0u64..5_000_000_000, action()), 1..40),
     ) {
-        let config = LiftConfig { floors, ..LiftConfig::default() };
+        let config = {
+            let mut cfg = LiftConfig::default();
+            cfg.floors = floors;
+            cfg
+        };
         let bottom = config.end_position_mm(lift_model::End::Bottom);
         let top = config.end_position_mm(lift_model::End::Top);
-        let config = LiftConfig { initial_position_mm: bottom + start * (top - bottom), ..config };
+        let config = {
+            let mut value = config;
+            value.initial_position_mm = bottom + start * (top - bottom);
+            value
+        };
         let mut lift = Lift::new(config).map_err(|e| TestCaseError::fail(e.to_string()))?;
         let mut now = SimTime::ZERO;
         let mut last_event = SimTime::ZERO;

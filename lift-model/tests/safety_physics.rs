@@ -25,12 +25,14 @@ fn running_up(setpoint: u16, config: LiftConfig) -> lift_model::Lift {
 #[test]
 fn k1_opening_stops_the_cabin_within_the_brake_distance() {
     for (setpoint, brake) in [(11_000u16, 500.0), (10_000, 500.0), (11_000, 250.0)] {
-        let config = LiftConfig {
-            drive: DriveConfig {
-                brake_decel_mm_s2: brake,
-                ..DriveConfig::default()
-            },
-            ..LiftConfig::default()
+        let config = {
+            let mut config = LiftConfig::default();
+            config.drive = {
+                let mut cfg = DriveConfig::default();
+                cfg.brake_decel_mm_s2 = brake;
+                cfg
+            };
+            config
         };
         let mut lift = running_up(setpoint, config);
         let t = lift.now() + SimDuration::from_millis(1234);
@@ -272,13 +274,15 @@ fn a_drive_into_the_bottom_end_is_a_recorded_crash_and_trips_the_converter() {
 fn braking_into_the_buffer_and_cranking_into_it_are_crashes_too() {
     // A weak brake (20 mm/s²) from 68.8 mm/s needs 118 mm: opening K1 at the trip point is
     // not enough. The impact speed is √(v² − 2·a·80 mm).
-    let config = LiftConfig {
-        initial_position_mm: 0.0,
-        drive: DriveConfig {
-            brake_decel_mm_s2: 20.0,
-            ..DriveConfig::default()
-        },
-        ..LiftConfig::default()
+    let config = {
+        let mut config = LiftConfig::default();
+        config.initial_position_mm = 0.0;
+        config.drive = {
+            let mut cfg = DriveConfig::default();
+            cfg.brake_decel_mm_s2 = 20.0;
+            cfg
+        };
+        config
     };
     let mut lift = driving_with(config, false, 11_000);
     run_to(&mut lift, |k| {

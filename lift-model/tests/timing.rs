@@ -55,15 +55,17 @@ fn at_steady_speed_every_edge_is_the_rounded_up_crossing_time() {
 /// A lift with a converter ramp of `ramp_hz_per_s`, at `position_mm`, driving up or down at
 /// Rychlost 10000; with the cabin acceleration of that ramp in mm/s².
 fn slow_ramp(ramp_hz_per_s: f64, position_mm: f64, up: bool) -> (Lift, f64) {
-    let drive = DriveConfig {
-        ramp_hz_per_s,
-        ..DriveConfig::default()
+    let drive = {
+        let mut cfg = DriveConfig::default();
+        cfg.ramp_hz_per_s = ramp_hz_per_s;
+        cfg
     };
     let a = drive.ramp_mm_s2();
-    let config = LiftConfig {
-        drive,
-        initial_position_mm: position_mm,
-        ..LiftConfig::default()
+    let config = {
+        let mut cfg = LiftConfig::default();
+        cfg.drive = drive;
+        cfg.initial_position_mm = position_mm;
+        cfg
     };
     (driving_with(config, up, 10_000), a)
 }

@@ -211,9 +211,10 @@ fn stopping_on_both_sensors_at_6000_ends_inside_the_level_zone() {
 #[test]
 fn any_number_of_floors_from_2_to_24_is_counted_the_same_way() {
     for floors in [2u8, 7, 24] {
-        let config = LiftConfig {
-            floors,
-            ..LiftConfig::default()
+        let config = {
+            let mut cfg = LiftConfig::default();
+            cfg.floors = floors;
+            cfg
         };
         let mut lift = driving_with(config, true, 11_000);
         let top = f64::from(floors - 1) * 400.0;

@@ -60,6 +60,7 @@ pub const SAFETY_SCAN_PERIOD: SimDuration = SimDuration::from_millis(1);
 /// rounded up to the next 100 ms: **9.1 s**. A plain "one pitch at travel speed plus braking"
 /// (6.85 s) would drop K1 before a creeping cabin reaches the floor.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[non_exhaustive]
 pub struct StopDelayModel {
     /// Floor pitch in mm.
     pub floor_pitch_mm: f64,
@@ -106,6 +107,7 @@ impl StopDelayModel {
 
 /// Parameters of the lift's safety project.
 #[derive(Clone, Debug, PartialEq, Eq)]
+#[non_exhaustive]
 pub struct LiftSafetyConfig {
     /// Delay of EStopDelOut: how long K1 stays closed after STOP (default: [`StopDelayModel`]).
     pub estop_delay: SimDuration,

@@ -39,6 +39,7 @@ pub const SLP_INSIDE_OVERTRAVEL_MM: f64 = 10.0;
 
 /// The lift's safe drive: its parameters and the encoder's scale.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[non_exhaustive]
 pub struct LiftDriveConfig {
     /// The safe drive's parameters, in motor revolutions.
     pub drive: DriveSafetyConfig,

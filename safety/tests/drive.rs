@@ -843,9 +843,10 @@ fn no_encoder_ss1_is_time_monitored_only() {
 /// SLP needs an absolute multi-turn encoder (the drive manual).
 #[test]
 fn slp_needs_a_multi_turn_encoder() {
-    let config = DriveSafetyConfig {
-        encoder: Encoder::SafeSingleTurn,
-        ..DriveSafetyConfig::demo()
+    let config = {
+        let mut cfg = DriveSafetyConfig::demo();
+        cfg.encoder = Encoder::SafeSingleTurn;
+        cfg
     };
     assert_eq!(
         SafeDrive::check_available(&config, Function::Slp),

@@ -17,17 +17,19 @@ fn estop() -> Estop {
     let mut inputs = [None; 8];
     inputs[0] = Some(Contact::Break);
     inputs[1] = Some(Contact::Break);
-    Estop::new(EstopConfig {
-        inputs,
-        discrepancy: [
+    Estop::new({
+        let mut cfg = EstopConfig::default();
+        cfg.inputs = inputs;
+        cfg.discrepancy = [
             SimDuration::from_millis(50),
             SimDuration::ZERO,
             SimDuration::ZERO,
             SimDuration::ZERO,
-        ],
-        edm1: true,
-        edm2: false,
-        delay: SimDuration::from_millis(500),
+        ];
+        cfg.edm1 = true;
+        cfg.edm2 = false;
+        cfg.delay = SimDuration::from_millis(500);
+        cfg
     })
 }
 
@@ -225,11 +227,12 @@ fn estop_is_stopped_with_its_group_and_starts_safe_again() {
 }
 
 fn overtravel_mon() -> Mon {
-    Mon::new(MonConfig {
-        inputs: [Some(Contact::Break), Some(Contact::Break), None, None],
-        manual_restart: true,
-        edm1: true,
-        ..Default::default()
+    Mon::new({
+        let mut cfg = MonConfig::default();
+        cfg.inputs = [Some(Contact::Break), Some(Contact::Break), None, None];
+        cfg.manual_restart = true;
+        cfg.edm1 = true;
+        cfg
     })
 }
 
@@ -285,10 +288,11 @@ fn mon_with_manual_restart_detects_a_welded_contactor() {
 
 #[test]
 fn mon_with_automatic_restart_stays_safe_without_error_on_a_bad_edm() {
-    let mut fb = Mon::new(MonConfig {
-        inputs: [Some(Contact::Break), None, None, None],
-        edm1: true,
-        ..Default::default()
+    let mut fb = Mon::new({
+        let mut cfg = MonConfig::default();
+        cfg.inputs = [Some(Contact::Break), None, None, None];
+        cfg.edm1 = true;
+        cfg
     });
     assert!(
         fb.scan(ms(0), true, &min(true, false, false, true)).mon_out,
@@ -309,10 +313,11 @@ fn mon_with_automatic_restart_stays_safe_without_error_on_a_bad_edm() {
 
 #[test]
 fn mon_secure_inputs_mute_the_demand() {
-    let mut fb = Mon::new(MonConfig {
-        inputs: [Some(Contact::Break), None, None, None],
-        secure: Some(Contact::Break),
-        ..Default::default()
+    let mut fb = Mon::new({
+        let mut cfg = MonConfig::default();
+        cfg.inputs = [Some(Contact::Break), None, None, None];
+        cfg.secure = Some(Contact::Break);
+        cfg
     });
     let muted = |door: bool, s1: bool, s2: bool| MonInputs {
         mon_in: [door, false, false, false],
@@ -332,11 +337,12 @@ fn mon_secure_inputs_mute_the_demand() {
 
 #[test]
 fn mon_function_test_requires_each_input_to_demand_once_after_start() {
-    let mut fb = Mon::new(MonConfig {
-        inputs: [Some(Contact::Break), Some(Contact::Break), None, None],
-        manual_restart: true,
-        function_test: true,
-        ..Default::default()
+    let mut fb = Mon::new({
+        let mut cfg = MonConfig::default();
+        cfg.inputs = [Some(Contact::Break), Some(Contact::Break), None, None];
+        cfg.manual_restart = true;
+        cfg.function_test = true;
+        cfg
     });
     let pulse = |fb: &mut Mon, t0: u64| {
         for (k, r) in [false, true, false].into_iter().enumerate() {
@@ -353,10 +359,11 @@ fn mon_function_test_requires_each_input_to_demand_once_after_start() {
 
 #[test]
 fn mon_pair_discrepancy_sets_diag_bit_0() {
-    let mut fb = Mon::new(MonConfig {
-        inputs: [Some(Contact::Break), Some(Contact::Break), None, None],
-        discrepancy: [SimDuration::from_millis(20), SimDuration::ZERO],
-        ..Default::default()
+    let mut fb = Mon::new({
+        let mut cfg = MonConfig::default();
+        cfg.inputs = [Some(Contact::Break), Some(Contact::Break), None, None];
+        cfg.discrepancy = [SimDuration::from_millis(20), SimDuration::ZERO];
+        cfg
     });
     for t in 0..=20 {
         assert!(!fb.scan(ms(t), true, &min(true, false, false, false)).error);
@@ -366,10 +373,12 @@ fn mon_pair_discrepancy_sets_diag_bit_0() {
 }
 
 fn opmode(restart: bool, discrepancy_ms: u64) -> OpMode {
-    OpMode::new(OpModeConfig {
-        inputs: [true, true, true, false, false, false, false, false],
-        restart,
-        discrepancy: SimDuration::from_millis(discrepancy_ms),
+    OpMode::new({
+        let mut cfg = OpModeConfig::default();
+        cfg.inputs = [true, true, true, false, false, false, false, false];
+        cfg.restart = restart;
+        cfg.discrepancy = SimDuration::from_millis(discrepancy_ms);
+        cfg
     })
 }
 

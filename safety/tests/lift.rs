@@ -107,10 +107,11 @@ fn the_scan_period_is_one_millisecond_and_the_default_delay_is_derived() {
         LiftSafetyConfig::default().estop_delay,
         SimDuration::from_millis(DELAY_MS)
     );
-    let flat = StopDelayModel {
-        approach_mm: 0.0,
-        margin: SimDuration::ZERO,
-        ..StopDelayModel::default()
+    let flat = {
+        let mut cfg = StopDelayModel::default();
+        cfg.approach_mm = 0.0;
+        cfg.margin = SimDuration::ZERO;
+        cfg
     };
     // 400 mm at 59.416 mm/s = 6.732 s, + 20.55/500 s braking = 6.773 s, rounded up
     assert_eq!(flat.delay(), SimDuration::from_millis(6_800));
@@ -530,9 +531,10 @@ proptest! {
     #[test]
     fn k1_invariants(trace in prop::collection::vec(scan_inputs(), 1..300)) {
         let delay = SimDuration::from_millis(200);
-        let mut safety = LiftSafety::new(LiftSafetyConfig {
-            estop_delay: delay,
-            ..LiftSafetyConfig::default()
+        let mut safety = LiftSafety::new({
+            let mut cfg = LiftSafetyConfig::default();
+            cfg.estop_delay = delay;
+            cfg
         }).expect("project");
         let mut k1 = false;
         let mut t = 0u64;

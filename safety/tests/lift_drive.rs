@@ -106,9 +106,10 @@ fn the_lab_parameters_in_the_lifts_units() {
     // Standstill 0.5 rev = 4.96 mm, 0.2 rev/s = 1.99 mm/s.
     assert!((c.drive.standstill_position_tolerance * MM_PER_REV - 4.964).abs() < 1e-3);
     assert!(LiftDriveSafety::new(c).is_ok());
-    let bad = LiftDriveConfig {
-        mm_per_rev: 0.0,
-        ..lab()
+    let bad = {
+        let mut cfg = lab();
+        cfg.mm_per_rev = 0.0;
+        cfg
     };
     let e = LiftDriveSafety::new(bad).expect_err("no scale");
     assert_eq!(e.field, "mm_per_rev");

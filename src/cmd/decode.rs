@@ -78,20 +78,22 @@ pub fn run(args: DecodeArgs) -> Result<u8, String> {
             Err(e) => return Err(format!("--sample-period: {e}")),
         },
     };
-    let opts = DecodeOptions {
-        format: match format {
+    let opts = {
+        let mut cfg = DecodeOptions::default();
+        cfg.format = match format {
             Some(InputFormat::Csv) => Some(CaptureFormat::Csv),
             Some(InputFormat::Vcd) => Some(CaptureFormat::Vcd),
             None => CaptureFormat::of_path(&file),
-        },
-        signal,
-        nominal,
-        expect: match expect {
+        };
+        cfg.signal = signal;
+        cfg.nominal = nominal;
+        cfg.expect = match expect {
             Listen::Requests => Expect::Requests,
             Listen::Responses => Expect::Responses,
             Listen::Both => Expect::Both,
-        },
-        sample_period,
+        };
+        cfg.sample_period = sample_period;
+        cfg
     };
     let (name, input) = open_input(&file)?;
     // Each telegram is printed as it is found; a reader that has gone ends the decode.

@@ -43,11 +43,12 @@ pub fn run(args: EncodeArgs) -> Result<u8, String> {
     match csv {
         None => print_out(&describe(t))?,
         Some(path) => {
-            let cfg = WaveformConfig {
-                amplitude,
-                noise_rms,
-                seed,
-                ..WaveformConfig::default()
+            let cfg = {
+                let mut cfg = WaveformConfig::default();
+                cfg.amplitude = amplitude;
+                cfg.noise_rms = noise_rms;
+                cfg.seed = seed;
+                cfg
             };
             super::output::clean_up_on_signals()?;
             let mut outs = Outputs::new(force);

@@ -233,20 +233,23 @@ pub fn run(args: ServeArgs) -> Result<u8, String> {
         }
         Ok(rig)
     };
-    let cfg = LiveConfig {
-        speed,
-        owner,
-        watchdog,
-        step,
+    let cfg = {
+        let mut cfg = LiveConfig::default();
+        cfg.speed = speed;
+        cfg.owner = owner;
+        cfg.watchdog = watchdog;
+        cfg.step = step;
+        cfg
     };
     let servers = gateway::Listen {
         modbus: listen,
         ttk,
         http,
     };
-    let options = gateway::Options {
-        allow_hosts,
-        ..gateway::Options::default()
+    let options = {
+        let mut cfg = gateway::Options::default();
+        cfg.allow_hosts = allow_hosts;
+        cfg
     };
     let running =
         gateway::start_with(make_rig, cfg, servers, options).map_err(|e| e.to_string())?;

@@ -132,11 +132,13 @@ fn timing_options(
     if samples > MAX_SAMPLES {
         return Err(format!("--samples: {samples}: at most {MAX_SAMPLES}"));
     }
-    Ok(TimingOptions {
-        bus,
-        pulse_error_rate: error_rate,
-        seed,
-        duration,
-        samples,
+    Ok({
+        let mut cfg = TimingOptions::default();
+        cfg.bus = bus;
+        cfg.pulse_error_rate = error_rate;
+        cfg.seed = seed;
+        cfg.duration = duration;
+        cfg.samples = samples;
+        cfg
     })
 }

@@ -27,11 +27,12 @@ fn run(mut rig: Rig) -> (rig::Report, Vec<u8>) {
 fn the_built_in_program_as_a_controller_is_the_rigs_own() {
     let name = "noise";
     let sc = shortened(name, 90);
-    let cfg = ControllerConfig {
-        floors: sc.floors,
-        algorithm: sc.algorithm,
-        scan: sc.plc_scan,
-        ..ControllerConfig::default()
+    let cfg = {
+        let mut cfg = ControllerConfig::default();
+        cfg.floors = sc.floors;
+        cfg.algorithm = sc.algorithm;
+        cfg.scan = sc.plc_scan;
+        cfg
     };
     let own = run(Rig::new(sc.clone()).expect("a rig"));
     let handed = run(Rig::new(sc)

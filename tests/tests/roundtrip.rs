@@ -54,13 +54,11 @@ fn decode_returns_the_telegrams_of_the_trace() {
     assert!(want.len() > 3000, "{}", want.len());
 
     // The whole run from the wire.
-    let wire = decode_capture(
-        vcd.bytes().as_slice(),
-        &DecodeOptions {
-            signal: Some("manchester".into()),
-            ..DecodeOptions::default()
-        },
-    )
+    let wire = decode_capture(vcd.bytes().as_slice(), &{
+        let mut cfg = DecodeOptions::default();
+        cfg.signal = Some("manchester".into());
+        cfg
+    })
     .expect("decode the wire");
     // The request in flight at the end is on the line but not yet in the trace.
     let last = want.last().map_or(0, |t| t.t_ns);
@@ -83,13 +81,11 @@ fn decode_returns_the_telegrams_of_the_trace() {
         .cloned()
         .collect();
     assert!(in_window.len() > 50, "{}", in_window.len());
-    let voltage = decode_capture(
-        vcd.bytes().as_slice(),
-        &DecodeOptions {
-            signal: Some("rig.bus.line_voltage".into()),
-            ..DecodeOptions::default()
-        },
-    )
+    let voltage = decode_capture(vcd.bytes().as_slice(), &{
+        let mut cfg = DecodeOptions::default();
+        cfg.signal = Some("rig.bus.line_voltage".into());
+        cfg
+    })
     .expect("decode the line voltage");
     let from_csv =
         decode_capture(csv.bytes().as_slice(), &DecodeOptions::default()).expect("decode the CSV");

@@ -6,6 +6,7 @@ use crate::time::{SimDuration, SimTime};
 
 /// Comparator settings (docs/physical-layer.md; docs/asi.md §1.1).
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[non_exhaustive]
 pub struct DemodConfig {
     /// Nominal pulse amplitude in volts (the 30 % ignore level is taken from it).
     pub nominal_amplitude: f32,

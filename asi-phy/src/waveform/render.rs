@@ -7,6 +7,7 @@ use rand_chacha::ChaCha8Rng;
 
 /// How pulses are rendered as voltage.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[non_exhaustive]
 pub struct WaveformConfig {
     /// Peak voltage of one pulse (default 2.5 V, i.e. 5 Vpp, inside the 3..8 Vpp the
     /// receivers accept).

@@ -119,6 +119,7 @@ pub enum NotReleased {
 
 /// The monitor's settings.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[non_exhaustive]
 pub struct MonitorConfig {
     /// Consecutive bad codes (wrong or frozen) that drop the release (default 1: the first).
     pub bad_codes_to_trip: u8,

@@ -59,6 +59,7 @@ impl CaptureFormat {
 
 /// How to decode a capture.
 #[derive(Clone, Debug, PartialEq)]
+#[non_exhaustive]
 pub struct DecodeOptions {
     /// The file format; `None` looks at the content ([`CaptureFormat::sniff`]).
     pub format: Option<CaptureFormat>,
@@ -843,9 +844,10 @@ impl Comparator {
             return Ok(());
         };
         self.nominal = Some(nominal_amplitude);
-        let cfg = DemodConfig {
-            nominal_amplitude,
-            ..DemodConfig::default()
+        let cfg = {
+            let mut cfg = DemodConfig::default();
+            cfg.nominal_amplitude = nominal_amplitude;
+            cfg
         };
         let mut d = Demodulator::new(cfg, self.start, self.period_ns)?;
         let mut buf = Vec::new();

@@ -237,9 +237,10 @@ fn a_real_vcd_rendered_from_the_pulses_decodes_the_same() {
 #[test]
 fn a_csv_with_a_header_and_comments_keeps_its_own_time() {
     // A scope on the 30 V supply whose record starts at 1 ms.
-    let cfg = WaveformConfig {
-        dc_offset: 30.0,
-        ..WaveformConfig::default()
+    let cfg = {
+        let mut cfg = WaveformConfig::default();
+        cfg.dc_offset = 30.0;
+        cfg
     };
     let wf = render(spec_line(), SimTime::ZERO, SimTime::from_micros(170), &cfg).expect("render");
     let mut s = String::from("# exported by a scope\ntime_s,voltage_v\n");

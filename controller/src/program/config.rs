@@ -7,6 +7,7 @@ use core::fmt;
 /// The program's settings. Defaults: the lift thesis' set-points (µA of the current loop) and
 /// timer, a 10 ms scan (docs/controller.md).
 #[derive(Clone, Debug, PartialEq)]
+#[non_exhaustive]
 pub struct ControllerConfig {
     /// Floors served, 2..=24.
     pub floors: u8,

@@ -56,11 +56,13 @@ struct Live {
 }
 
 fn config(owner: Owner, speed: Speed) -> LiveConfig {
-    LiveConfig {
-        speed,
-        owner,
-        watchdog: SimDuration::from_secs(1),
-        step: SimDuration::from_millis(1),
+    {
+        let mut cfg = LiveConfig::default();
+        cfg.speed = speed;
+        cfg.owner = owner;
+        cfg.watchdog = SimDuration::from_secs(1);
+        cfg.step = SimDuration::from_millis(1);
+        cfg
     }
 }
 

@@ -29,11 +29,13 @@ fn start_with(speed: Speed, options: gateway::Options) -> Running {
     let toml = "name = \"web\"\nduration = \"10min\"\n[lift]\nstart_mm = 0.0\n";
     let sc = Scenario::from_toml("web.toml", toml).expect("a valid scenario");
     let make = move || Rig::new(sc.clone()).map_err(gateway::MakeRigError::from);
-    let cfg = LiveConfig {
-        speed,
-        owner: Owner::Builtin,
-        watchdog: asi_phy::SimDuration::ZERO,
-        step: asi_phy::SimDuration::from_millis(1),
+    let cfg = {
+        let mut cfg = LiveConfig::default();
+        cfg.speed = speed;
+        cfg.owner = Owner::Builtin;
+        cfg.watchdog = asi_phy::SimDuration::ZERO;
+        cfg.step = asi_phy::SimDuration::from_millis(1);
+        cfg
     };
     let loopback: SocketAddr = "127.0.0.1:0".parse().expect("an address");
     let listen = Listen {
@@ -364,9 +366,10 @@ fn closed_within(s: &mut TcpStream, within: Duration) -> bool {
 
 #[test]
 fn a_client_that_never_finishes_its_request_head_is_closed_after_the_timeout() {
-    let options = gateway::Options {
-        header_timeout: Duration::from_millis(300),
-        ..gateway::Options::default()
+    let options = {
+        let mut cfg = gateway::Options::default();
+        cfg.header_timeout = Duration::from_millis(300);
+        cfg
     };
     let running = start_with(Speed::Factor(1.0), options);
     let addr = running.http_addr().expect("the live view's address");
@@ -397,9 +400,10 @@ fn a_client_that_never_finishes_its_request_head_is_closed_after_the_timeout() {
 
 #[test]
 fn connections_beyond_the_bound_are_closed_and_the_others_are_served() {
-    let options = gateway::Options {
-        max_connections: 3,
-        ..gateway::Options::default()
+    let options = {
+        let mut cfg = gateway::Options::default();
+        cfg.max_connections = 3;
+        cfg
     };
     let running = start_with(Speed::Factor(1.0), options);
     let addr = running.http_addr().expect("the live view's address");
@@ -431,9 +435,10 @@ fn connections_beyond_the_bound_are_closed_and_the_others_are_served() {
 
 #[test]
 fn a_foreign_host_name_is_refused_on_every_route_and_the_own_names_are_served() {
-    let options = gateway::Options {
-        allow_hosts: vec!["lab-pc.local".into()],
-        ..gateway::Options::default()
+    let options = {
+        let mut cfg = gateway::Options::default();
+        cfg.allow_hosts = vec!["lab-pc.local".into()];
+        cfg
     };
     let running = start_with(Speed::Factor(1.0), options);
     let addr = running.http_addr().expect("the live view's address");

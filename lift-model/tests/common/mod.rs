@@ -6,9 +6,10 @@ use lift_model::{Lift, LiftConfig, PlantEvent, PlantEventKind};
 
 /// A lift with the default (lab) configuration, the cabin at `position_mm`.
 pub fn lift_at(position_mm: f64) -> Lift {
-    lift_with(LiftConfig {
-        initial_position_mm: position_mm,
-        ..LiftConfig::default()
+    lift_with({
+        let mut cfg = LiftConfig::default();
+        cfg.initial_position_mm = position_mm;
+        cfg
     })
 }
 
@@ -90,9 +91,10 @@ pub fn vane_edges(trace: &[(PlantEvent, f64)]) -> Vec<(lift_model::VaneSensor, b
 /// `setpoint` µA from time zero.
 pub fn driving(position_mm: f64, up: bool, setpoint: u16) -> Lift {
     driving_with(
-        LiftConfig {
-            initial_position_mm: position_mm,
-            ..LiftConfig::default()
+        {
+            let mut cfg = LiftConfig::default();
+            cfg.initial_position_mm = position_mm;
+            cfg
         },
         up,
         setpoint,

@@ -306,9 +306,10 @@ pub fn generate(campaign_seed: u64, index: u64, profile: &Profile) -> Generated 
         rng.random_range(lo.as_nanos().div_ceil(1_000_000_000)..=hi.as_nanos() / 1_000_000_000);
     let duration = SimDuration::from_secs(duration_s);
     let range = start_range_mm(floors);
-    let shaft = LiftConfig {
-        floors,
-        ..LiftConfig::default()
+    let shaft = {
+        let mut cfg = LiftConfig::default();
+        cfg.floors = floors;
+        cfg
     };
     let start_mm = if rng.random_bool(profile.start_level_chance) {
         let floor = rng.random_range(1..=floors);

@@ -230,10 +230,11 @@ struct Probes {
 impl Rig {
     /// A rig at power-on for `sc`.
     pub fn new(sc: Scenario) -> Result<Rig, RigError> {
-        let lift = Lift::new(LiftConfig {
-            floors: sc.floors,
-            initial_position_mm: sc.start_mm,
-            ..LiftConfig::default()
+        let lift = Lift::new({
+            let mut cfg = LiftConfig::default();
+            cfg.floors = sc.floors;
+            cfg.initial_position_mm = sc.start_mm;
+            cfg
         })?;
         let mut lab = LabLift::with_extra(asi_master::MasterConfig::default(), sc.extra_slaves)?;
         lab.bus_mut().watch(asi_bus::Watch {
@@ -246,11 +247,12 @@ impl Rig {
             lab.bus_mut()
                 .set_line_faults(sc.seed, FaultRates::uniform(rate));
         }
-        let plc = Plc::new(ControllerConfig {
-            floors: sc.floors,
-            algorithm: sc.algorithm,
-            scan: sc.plc_scan,
-            ..ControllerConfig::default()
+        let plc = Plc::new({
+            let mut cfg = ControllerConfig::default();
+            cfg.floors = sc.floors;
+            cfg.algorithm = sc.algorithm;
+            cfg.scan = sc.plc_scan;
+            cfg
         })?;
         let safety_cfg = LiftSafetyConfig::default();
         let estop_delay = safety_cfg.estop_delay;

@@ -199,9 +199,10 @@ impl std::error::Error for ScenarioError {}
 /// (the book, "Scenario files"). The one place that says so: the scenario reader checks
 /// `start_mm` against it and the campaign generator draws start positions from it.
 pub fn start_range_mm(floors: u8) -> RangeInclusive<f64> {
-    let shaft = LiftConfig {
-        floors,
-        ..LiftConfig::default()
+    let shaft = {
+        let mut cfg = LiftConfig::default();
+        cfg.floors = floors;
+        cfg
     };
     shaft.end_position_mm(End::Bottom)..=shaft.end_position_mm(End::Top)
 }
@@ -211,9 +212,10 @@ pub fn start_range_mm(floors: u8) -> RangeInclusive<f64> {
 /// 1's vane up to the top overtravel sensor; below that (beyond the bottom sensor, or between
 /// it and the vane, where the run down ends on the sensor) and beyond the top sensor it does.
 pub fn needs_rescue(floors: u8, position_mm: f64) -> bool {
-    let shaft = LiftConfig {
-        floors,
-        ..LiftConfig::default()
+    let shaft = {
+        let mut cfg = LiftConfig::default();
+        cfg.floors = floors;
+        cfg
     };
     let vane_bottom = shaft
         .vane_track_mm(VaneSensor::Left, 1)

@@ -6,6 +6,7 @@ use serde::Serialize;
 
 /// How the error model was evaluated.
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
+#[non_exhaustive]
 pub struct ErrorModel {
     /// Probability that a pulse comes through untouched: (1 − p/4)⁴.
     pub pulse_clean: f64,

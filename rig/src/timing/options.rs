@@ -79,6 +79,7 @@ impl core::str::FromStr for BusChoice {
 
 /// What to analyse and how long.
 #[derive(Clone, Debug, PartialEq)]
+#[non_exhaustive]
 pub struct TimingOptions {
     /// The bus.
     pub bus: BusChoice,

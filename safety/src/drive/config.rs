@@ -89,6 +89,7 @@ pub struct SltLimit {
 /// The parameters of one safe axis. Speeds in rev/s, positions in rev (the SafeMOTION thesis'
 /// "units" are revolutions on its stand), times as [`SimDuration`].
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[non_exhaustive]
 pub struct DriveSafetyConfig {
     /// The safe position source.
     pub encoder: Encoder,

@@ -8,6 +8,7 @@ use crate::kl6904::signal::Contact;
 /// Parameters of an ESTOP module (the "Activated", contact, Delay-Time and discrepancy settings
 /// of §4.4.3 of the KL6904 manual).
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
+#[non_exhaustive]
 pub struct EstopConfig {
     /// EStopIn1..8: `None` = input not activated, else its contact type.
     pub inputs: [Option<Contact>; 8],

@@ -7,6 +7,7 @@ use crate::kl6904::signal::Contact;
 
 /// Parameters of a MON module (§4.5.3 of the KL6904 manual).
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
+#[non_exhaustive]
 pub struct MonConfig {
     /// MonIn1..4 (four inputs, docs/source-errors.md): `None` = not activated, else the contact
     /// type.

@@ -7,6 +7,7 @@ use super::base::{Core, FbError, FbEvent, FbState, PairMonitor};
 
 /// Parameters of an OPMODE module (§4.3.3 of the KL6904 manual).
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
+#[non_exhaustive]
 pub struct OpModeConfig {
     /// OpIn1..8 activated.
     pub inputs: [bool; 8],
