@@ -46,7 +46,8 @@
 
 use asi_master::config::{ConfigError, MasterConfig, ProjectedConfig};
 use asi_master::master::{Master, Outcome, Phase, Transmit};
-use asi_master::record::{BusStats, TraceRing, TransactionRecord};
+use asi_master::record::{TraceRing, TransactionRecord, TxKind};
+use asi_master::slave_stats::{SlaveTable, Tally};
 use asi_phy::line::{Line, Medium};
 use asi_phy::{
     Address, BusTiming, Call, Checks, Expect, FaultInjector, FaultRates, Frame, Listener, Nibble,
@@ -255,7 +256,9 @@ pub struct Bus {
     volts: f64,
     slaves_powered: bool,
     cur: Option<Current>,
-    stats: BusStats,
+    /// The statistics per slave, counted at every transaction; the bus-wide counts of
+    /// [`Bus::stats`] are their sums.
+    tally: SlaveTable,
     /// Addresses whose new output nibbles end [`Bus::advance_before`] early.
     watch: u32,
     /// The last output nibble each address took in a Data_Exchange.
@@ -323,7 +326,7 @@ impl Bus {
             volts: NOMINAL_VOLTS,
             slaves_powered: true,
             cur: None,
-            stats: BusStats::default(),
+            tally: SlaveTable::default(),
             watch: 0,
             last_out: [NO_OUTPUT; 32],
             output_taken: false,
@@ -633,15 +636,29 @@ impl Bus {
             _ => Checks::NONE,
         };
         let no_response = outcome == Outcome::NoResponse;
-        // What `BusStats::record` counts of the record, without the record.
-        self.stats.count(
-            cur.tx.repeat,
-            cur.request_failed,
-            response_failed,
-            no_response,
-            verdict.error,
-            verdict.repeat,
+        let response = match outcome {
+            Outcome::Response(r) => Some(r),
+            _ => None,
+        };
+        // What `SlaveTable::record` counts of the record, without the record.
+        self.tally.count(
+            cur.tx.request,
+            cur.tx.ab,
+            Tally {
+                repeat: cur.tx.repeat,
+                request_failed: cur.request_failed,
+                response_failed,
+                response,
+                no_response,
+                error: verdict.error,
+                will_repeat: verdict.repeat,
+            },
         );
+        // An answered Data_Exchange changes neither LAS nor the phase: only other calls,
+        // faults and the end of a light window need the master looked at.
+        if cur.tx.kind != TxKind::DataExchange || verdict.error || self.tally.window_due(t) {
+            self.note_master(t);
+        }
         // Most runs keep no record: no ring, no callback, no subscriber at TRACE. The record
         // is then only counted, and never stored for them. `tracing::trace!` itself checks
         // first that TRACE is within the static and the current maximum level (its
@@ -656,10 +673,7 @@ impl Bus {
                 kind: cur.tx.kind,
                 request: cur.tx.request,
                 request_failed: cur.request_failed,
-                response: match outcome {
-                    Outcome::Response(r) => Some(r),
-                    _ => None,
-                },
+                response,
                 response_failed,
                 no_response,
                 repeat: cur.tx.repeat,
@@ -668,6 +682,19 @@ impl Bus {
         }
         cur.line_error
             .then(|| cur.line_end + self.timing.async_pause())
+    }
+
+    /// The master's LAS and phase at `t` to the statistics per slave (drop-outs, time out of
+    /// LAS), and the lights of the windows ended by `t`.
+    #[inline(never)]
+    fn note_master(&mut self, t: SimTime) {
+        let las = self.master.las();
+        let normal = self.master.phase() == Phase::NormalOperation;
+        if self.tally.window_due(t) {
+            self.tally.roll(t, las, self.master.lps(), normal);
+        } else {
+            self.tally.note_las(t, las, normal);
+        }
     }
 
     /// Trace record `rec` to `tracing` (target `asi_master::trace`, level TRACE), to the ring
