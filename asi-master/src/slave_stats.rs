@@ -220,14 +220,10 @@ pub struct Tally {
 pub struct SlaveStats {
     /// Transactions addressed to it, repeats included (the analyser's master calls).
     pub calls: u64,
-    /// Calls that were no repeat and no fault.
-    pub first_try_ok: u64,
     /// Immediate repeats of a failed call.
     pub repeats: u64,
     /// Calls that still failed after their repeat (or were not repeated).
     pub failed_after_repeat: u64,
-    /// Errors between two calls that were no fault: the repeat put it right.
-    pub single_errors: u64,
     /// Errors that followed an error on the same slave (the repeat failed too, and so on).
     pub consecutive_errors: u64,
     /// The most errors in a row (the analyser's worst failure class).
@@ -238,8 +234,6 @@ pub struct SlaveStats {
     pub response_errors: [u64; 7],
     /// Calls that got no response where one was due.
     pub no_response: u64,
-    /// Calls answered with a valid response.
-    pub answers: u64,
     /// Times it left LAS while the master stayed in normal operation.
     pub dropouts: u32,
     /// Time out of LAS after those drop-outs, up to its return or the end of normal operation.
@@ -250,9 +244,20 @@ pub struct SlaveStats {
     pub worst_light: Option<Light>,
     /// The codes its answers showed.
     pub seen: SeenCodes,
+    /// Calls without a valid response (faults, and the silence of an empty address).
+    unanswered: u64,
+    /// Faults among the calls that were no repeat.
+    first_try_faults: u64,
+    /// Runs of errors begun (an error after a call that was no fault, or the first call),
+    /// and those of them that went on to a second error.
+    runs: u64,
+    long_runs: u64,
+    /// The length of the last run of errors, and the call (by `calls`) of its last error.
     error_run: u32,
-    window_calls: u32,
-    window_repeats: u32,
+    last_error: u64,
+    /// `calls` and `repeats` at the start of the light window.
+    calls_at: u64,
+    repeats_at: u64,
     out_since: Option<SimTime>,
     held_until: SimTime,
 }
@@ -263,10 +268,17 @@ impl SlaveStats {
         self.response_errors[check as usize] + self.request_errors[check as usize]
     }
 
-    /// Every call that was a fault: single, consecutive and an error still open (the last
-    /// call, if it failed alone so far).
+    /// Every call that was a fault: the first of each run of errors, and the consecutive.
     pub fn faults(&self) -> u64 {
-        self.single_errors + self.consecutive_errors + u64::from(self.error_run == 1)
+        self.runs + self.consecutive_errors
+    }
+
+    /// Errors whose next call to the slave was no fault and whose call before was none
+    /// either: the repeat put it right. An error that is the last call so far is not yet
+    /// counted.
+    pub fn single_errors(&self) -> u64 {
+        let open = self.last_error == self.calls && self.error_run == 1;
+        self.runs - self.long_runs - u64::from(open)
     }
 
     /// Repeats over calls, in per cent (0 without calls).
@@ -278,18 +290,28 @@ impl SlaveStats {
         }
     }
 
-    /// `true` if anything shows it takes part in the traffic: an answer or a fault counted.
-    /// An address whose only calls are unanswered probes is an empty address.
-    pub fn takes_part(&self) -> bool {
-        self.answers > 0
-            || self.faults() > 0
-            || self.request_errors != [0; 7]
-            || self.response_errors != [0; 7]
+    /// Calls that were no repeat and no fault.
+    pub fn first_try_ok(&self) -> u64 {
+        self.calls - self.repeats - self.first_try_faults
     }
 
-    /// Counts what does not happen on a clean transaction: faults and checks failed.
-    #[inline(never)]
-    fn fault(&mut self, x: &Tally) {
+    /// Calls answered with a valid response.
+    pub fn answers(&self) -> u64 {
+        self.calls - self.unanswered
+    }
+
+    /// `true` if it takes part in the traffic: it answered at least once. An address whose
+    /// calls are all unanswered (the probes of an empty address, however noise corrupts
+    /// them) is an empty address.
+    pub fn takes_part(&self) -> bool {
+        self.answers() > 0
+    }
+
+    /// Counts what a clean call (a valid response to a first try) does not change: repeats,
+    /// missing answers, checks failed, faults. `self.calls` counts the call already.
+    fn count_rest(&mut self, x: &Tally) {
+        self.repeats += u64::from(x.repeat);
+        self.unanswered += u64::from(x.response.is_none());
         if let Some(c) = x.request_failed.primary() {
             self.request_errors[c as usize] += 1;
         }
@@ -297,32 +319,29 @@ impl SlaveStats {
             self.response_errors[c as usize] += 1;
         }
         if !x.error {
-            self.first_try_ok += u64::from(!x.repeat);
-            self.recovered();
             return;
         }
+        self.first_try_faults += u64::from(!x.repeat);
         if x.no_response && x.request_failed.is_empty() {
             self.no_response += 1;
         }
         if !x.will_repeat {
             self.failed_after_repeat += 1;
         }
-        if self.error_run > 0 {
+        // Whether the call before was an error is told by its number: calls that were no
+        // fault need not end a run.
+        if self.last_error != 0 && self.last_error + 1 == self.calls {
             self.consecutive_errors += 1;
-        }
-        self.error_run += 1;
-        self.longest_error_run = self.longest_error_run.max(self.error_run);
-    }
-
-    /// A call that was no fault ends a run of errors.
-    #[inline(always)]
-    fn recovered(&mut self) {
-        if self.error_run != 0 {
-            if self.error_run == 1 {
-                self.single_errors += 1;
+            self.error_run += 1;
+            if self.error_run == 2 {
+                self.long_runs += 1;
             }
-            self.error_run = 0;
+        } else {
+            self.runs += 1;
+            self.error_run = 1;
         }
+        self.last_error = self.calls;
+        self.longest_error_run = self.longest_error_run.max(self.error_run);
     }
 }
 
@@ -385,40 +404,32 @@ impl SlaveTable {
         self.slaves.iter().enumerate().map(|(i, s)| (i as u8, s))
     }
 
-    /// Counts transaction `x` of `request` (to an A/B slave if `ab`, as
-    /// [`slave_of`] reads it).
-    #[inline(always)]
-    pub fn count(&mut self, request: Request, ab: bool, x: Tally) {
-        let (i, exchange) = match request.as_data_exchange() {
-            Some((a, data)) => (place(a.get(), ab && data.get() & 0x8 == 0), true),
-            None => (slave_of_call(request, ab), false),
-        };
-        let Some(s) = self.slaves.get_mut(i as usize) else {
+    /// Counts transaction `x` to the slave at list place `place` ([`slave_of`] its request).
+    pub fn count(&mut self, place: u8, x: Tally) {
+        let Some(s) = self.slaves.get_mut(place as usize) else {
             return;
         };
         s.calls += 1;
-        s.window_calls = s.window_calls.wrapping_add(1);
-        s.repeats += u64::from(x.repeat);
-        s.window_repeats += u32::from(x.repeat);
-        s.answers += u64::from(x.response.is_some());
-        if x.error || !x.request_failed.union(x.response_failed).is_empty() {
-            s.fault(&x);
-        } else {
-            s.first_try_ok += u64::from(!x.repeat);
-            s.recovered();
-        }
-        if !exchange {
-            if let Some(r) = x.response {
-                self.note_codes(i, request, r);
-            }
+        let clean = x.response.is_some() && !x.repeat && x.request_failed.is_empty();
+        if !clean {
+            s.count_rest(&x);
         }
     }
 
-    /// [`SlaveTable::count`] of a trace record.
+    /// [`SlaveTable::count`] of a clean call to list place `place` (a valid response to a
+    /// first try, no check failed): one call more.
+    #[inline(always)]
+    pub fn count_clean(&mut self, place: u8) {
+        if let Some(s) = self.slaves.get_mut(place as usize) {
+            s.calls += 1;
+        }
+    }
+
+    /// [`SlaveTable::count`] of a trace record, the codes its answer shows included.
     pub fn record(&mut self, r: &TransactionRecord, error: bool, will_repeat: bool) {
+        let place = slave_of(r.request, r.ab);
         self.count(
-            r.request,
-            r.ab,
+            place,
             Tally {
                 repeat: r.repeat,
                 request_failed: r.request_failed,
@@ -429,11 +440,17 @@ impl SlaveTable {
                 will_repeat,
             },
         );
+        if let Some(answer) = r.response {
+            self.note_codes(place, r.request, answer);
+        }
     }
 
-    /// A code read answered: the analyser's configuration from the traffic.
-    #[inline(never)]
-    fn note_codes(&mut self, i: u8, request: Request, r: Response) {
+    /// The answer `r` to `request`, a call to list place `i`: an answered code read is the
+    /// analyser's configuration from the traffic (any other call changes nothing).
+    pub fn note_codes(&mut self, i: u8, request: Request, r: Response) {
+        if request.as_data_exchange().is_some() {
+            return;
+        }
         let Some(s) = self.slaves.get_mut(i as usize) else {
             return;
         };
@@ -488,15 +505,15 @@ impl SlaveTable {
         let missing = expected & !las.bits();
         let rule = self.rule;
         for (i, s) in self.slaves.iter_mut().take(64).enumerate() {
-            let (calls, repeats) = (s.window_calls, s.window_repeats);
-            s.window_calls = 0;
-            s.window_repeats = 0;
+            let (calls, repeats) = (s.calls - s.calls_at, s.repeats - s.repeats_at);
+            s.calls_at = s.calls;
+            s.repeats_at = s.repeats;
             let colour = if missing >> i & 1 != 0 {
                 Light::Red
             } else if calls == 0 || !(s.takes_part() || expected >> i & 1 != 0) {
                 continue;
             } else {
-                rule.colour(u64::from(repeats), u64::from(calls))
+                rule.colour(repeats, calls)
             };
             match s.light {
                 Some(held) if held > colour && end < s.held_until => {}
@@ -689,13 +706,13 @@ mod tests {
             ok(),
         ];
         for x in seq {
-            t.count(q, false, x);
+            t.count(slave_of(q, false), x);
         }
         let s = t.get(5).expect("slave 5");
         assert_eq!(s.calls, 9);
         assert_eq!(s.repeats, 3);
-        assert_eq!(s.first_try_ok, 3);
-        assert_eq!(s.single_errors, 1);
+        assert_eq!(s.first_try_ok(), 3);
+        assert_eq!(s.single_errors(), 1);
         // The run of three: the second and the third follow an error.
         assert_eq!(s.consecutive_errors, 2);
         assert_eq!(s.longest_error_run, 3);
@@ -708,20 +725,19 @@ mod tests {
     #[test]
     fn a_lone_error_at_the_end_is_neither_single_nor_consecutive_yet() {
         let mut t = SlaveTable::default();
-        t.count(dexg(3), false, ok());
-        t.count(dexg(3), false, failed(false, true));
+        t.count(3, ok());
+        t.count(3, failed(false, true));
         let s = t.get(3).expect("slave 3");
-        assert_eq!((s.single_errors, s.consecutive_errors), (0, 0));
+        assert_eq!((s.single_errors(), s.consecutive_errors), (0, 0));
         assert_eq!(s.faults(), 1);
         t.count(
-            dexg(3),
-            false,
+            3,
             Tally {
                 repeat: true,
                 ..ok()
             },
         );
-        assert_eq!(t.get(3).expect("slave 3").single_errors, 1);
+        assert_eq!(t.get(3).expect("slave 3").single_errors(), 1);
     }
 
     #[test]
@@ -744,7 +760,7 @@ mod tests {
             ..ok()
         };
         for (n, x) in [(1, ok()), (2, corrupt), (2, lost), (7, ok()), (1, lost)] {
-            t.count(dexg(n), false, x);
+            t.count(slave_of(dexg(n), false), x);
             bus.count(
                 x.repeat,
                 x.request_failed,
@@ -811,7 +827,7 @@ mod tests {
                     lights.push(t.get(4).and_then(|x| x.light));
                 }
                 let repeat = s == 1 && k % 10 == 0;
-                t.count(q, false, Tally { repeat, ..ok() });
+                t.count(slave_of(q, false), Tally { repeat, ..ok() });
             }
         }
         let (g, r) = (Some(Light::Green), Some(Light::Red));

@@ -45,7 +45,7 @@
 //! at the end of every `advance_to` and `advance_before` call.
 
 use asi_master::config::{ConfigError, MasterConfig, ProjectedConfig};
-use asi_master::master::{Master, Outcome, Phase, Transmit};
+use asi_master::master::{Master, Outcome, Phase, Transmit, Verdict};
 use asi_master::record::{TraceRing, TransactionRecord, TxKind};
 use asi_master::slave_stats::{SlaveTable, Tally};
 use asi_phy::line::{Line, Medium};
@@ -640,24 +640,26 @@ impl Bus {
             Outcome::Response(r) => Some(r),
             _ => None,
         };
-        // What `SlaveTable::record` counts of the record, without the record.
-        self.tally.count(
-            cur.tx.request,
-            cur.tx.ab,
-            Tally {
-                repeat: cur.tx.repeat,
-                request_failed: cur.request_failed,
-                response_failed,
-                response,
-                no_response,
-                error: verdict.error,
-                will_repeat: verdict.repeat,
-            },
+        debug_assert_eq!(
+            cur.tx.slave,
+            asi_master::slave_stats::slave_of(cur.tx.request, cur.tx.ab),
+            "the master's slave of {:?}",
+            cur.tx
         );
-        // An answered Data_Exchange changes neither LAS nor the phase: only other calls,
-        // faults and the end of a light window need the master looked at.
-        if cur.tx.kind != TxKind::DataExchange || verdict.error || self.tally.window_due(t) {
-            self.note_master(t);
+        // What `SlaveTable::record` counts of the record, without the record. Almost every
+        // call is a clean, answered Data_Exchange or the cycle's Read_Status: one call more.
+        // Only other calls and faults can change LAS or the phase; the light windows are
+        // closed at the management call every cycle has, and at those.
+        let clean = response.is_some() && !cur.tx.repeat && cur.request_failed.is_empty();
+        match cur.tx.kind {
+            TxKind::DataExchange if clean => self.tally.count_clean(cur.tx.slave),
+            TxKind::Management if clean => {
+                self.tally.count_clean(cur.tx.slave);
+                if self.tally.window_due(t) {
+                    self.note_master(t);
+                }
+            }
+            _ => self.note_call(t, cur, outcome, verdict),
         }
         // Most runs keep no record: no ring, no callback, no subscriber at TRACE. The record
         // is then only counted, and never stored for them. `tracing::trace!` itself checks
@@ -682,6 +684,38 @@ impl Bus {
         }
         cur.line_error
             .then(|| cur.line_end + self.timing.async_pause())
+    }
+
+    /// Transaction `cur`, its `outcome` and the master's `verdict`, as the statistics per
+    /// slave count it when it is not a clean Data_Exchange or Read_Status: the call, the codes
+    /// an answer to a start-up, inclusion or host call shows, the master's LAS and phase after
+    /// it and the light windows ended ([`Bus::note_master`]).
+    #[inline(never)]
+    fn note_call(&mut self, t: SimTime, cur: &Current, outcome: Outcome, verdict: Verdict) {
+        let tx = cur.tx;
+        let response = match outcome {
+            Outcome::Response(r) => Some(r),
+            _ => None,
+        };
+        let tally = Tally {
+            repeat: tx.repeat,
+            request_failed: cur.request_failed,
+            response_failed: match outcome {
+                Outcome::Corrupt(c) => c,
+                _ => Checks::NONE,
+            },
+            response,
+            no_response: outcome == Outcome::NoResponse,
+            error: verdict.error,
+            will_repeat: verdict.repeat,
+        };
+        self.tally.count(tx.slave, tally);
+        if let Some(r) = response {
+            if !matches!(tx.kind, TxKind::DataExchange | TxKind::Management) {
+                self.tally.note_codes(tx.slave, tx.request, r);
+            }
+        }
+        self.note_master(t);
     }
 
     /// The master's LAS and phase at `t` to the statistics per slave (drop-outs, time out of
