@@ -259,6 +259,8 @@ pub struct SlaveStats {
     calls_at: u64,
     repeats_at: u64,
     out_since: Option<SimTime>,
+    /// It left LAS during the current light window.
+    left_in_window: bool,
     held_until: SimTime,
 }
 
@@ -508,7 +510,8 @@ impl SlaveTable {
             let (calls, repeats) = (s.calls - s.calls_at, s.repeats - s.repeats_at);
             s.calls_at = s.calls;
             s.repeats_at = s.repeats;
-            let colour = if missing >> i & 1 != 0 {
+            let left = core::mem::take(&mut s.left_in_window);
+            let colour = if missing >> i & 1 != 0 || left {
                 Light::Red
             } else if calls == 0 || !(s.takes_part() || expected >> i & 1 != 0) {
                 continue;
@@ -546,6 +549,7 @@ impl SlaveTable {
                 if left >> i & 1 != 0 {
                     s.dropouts += 1;
                     s.out_since = Some(t);
+                    s.left_in_window = true;
                 } else if let Some(since) = s.out_since.take() {
                     s.out_of_las += t.saturating_duration_since(since);
                 }
@@ -585,6 +589,34 @@ impl SlaveTable {
         b
     }
 
+    /// The counts since `earlier` (a copy of this table taken before): calls, repeats, errors,
+    /// drop-outs and time out of LAS are differences; the lights, the longest run of errors
+    /// and the codes seen are this table's.
+    pub fn since(&self, earlier: &SlaveTable) -> SlaveTable {
+        let mut t = self.clone();
+        for (s, e) in t.slaves.iter_mut().zip(earlier.slaves.iter()) {
+            let sub = |a: u64, b: u64| a.saturating_sub(b);
+            s.calls = sub(s.calls, e.calls);
+            s.repeats = sub(s.repeats, e.repeats);
+            s.failed_after_repeat = sub(s.failed_after_repeat, e.failed_after_repeat);
+            s.consecutive_errors = sub(s.consecutive_errors, e.consecutive_errors);
+            s.no_response = sub(s.no_response, e.no_response);
+            s.unanswered = sub(s.unanswered, e.unanswered);
+            s.first_try_faults = sub(s.first_try_faults, e.first_try_faults);
+            s.runs = sub(s.runs, e.runs);
+            s.long_runs = sub(s.long_runs, e.long_runs);
+            for c in 0..7 {
+                s.request_errors[c] = sub(s.request_errors[c], e.request_errors[c]);
+                s.response_errors[c] = sub(s.response_errors[c], e.response_errors[c]);
+            }
+            s.dropouts = s.dropouts.saturating_sub(e.dropouts);
+            s.out_of_las = s.out_of_las.saturating_sub(e.out_of_las);
+            // The call numbers start again: the last error keeps its place among them.
+            s.last_error = sub(s.last_error, e.calls);
+        }
+        t
+    }
+
     /// The table as it is at `now`: the windows ended by then evaluated, and the absences
     /// from LAS counted up to `now` (left open in the copy's `out_since` no more).
     pub fn at(&self, now: SimTime, las: SlaveList, lps: SlaveList, normal: bool) -> SlaveTable {
@@ -620,6 +652,11 @@ impl RecordTally {
             table: SlaveTable::new(rule),
             pending: None,
         }
+    }
+
+    /// The table so far (without the last record, whose verdict waits for the next).
+    pub fn table(&self) -> &SlaveTable {
+        &self.table
     }
 
     /// The next record, in the order of the transactions.

@@ -228,8 +228,10 @@ pub fn slave_reports(table: &SlaveTable, projected: Option<&ProjectedConfig>) ->
         .collect()
 }
 
-/// The slaves as a table, a row per slave under a header row, each line with its newline.
-pub fn slave_table_text(rows: &[SlaveReport]) -> String {
+/// The slaves as a table, a row per slave under a header row, each line with its newline;
+/// `las` says whether the drop-outs and the time out of LAS are known (a capture's listener
+/// does not see the master's LAS: `-`).
+pub fn slave_table_text(rows: &[SlaveReport], las: bool) -> String {
     let mut s = String::new();
     let _ = writeln!(
         s,
@@ -268,9 +270,14 @@ pub fn slave_table_text(rows: &[SlaveReport]) -> String {
             (None, Some(p), _) => format!("not read, projected {p}"),
             (None, None, _) => "not read".to_owned(),
         };
+        let (drops, out) = if las {
+            (r.dropouts.to_string(), format!("{:.3}", r.out_of_las_s))
+        } else {
+            ("-".to_owned(), "-".to_owned())
+        };
         let _ = writeln!(
             s,
-            "{:>5} {:>9} {:>9} {:>7} {:>8.3} {:>6} {:>6} {:>6} {:>7} {:>6} {:>5} {:>8.3}  {:<6} {:<6} {profile}",
+            "{:>5} {:>9} {:>9} {:>7} {:>8.3} {:>6} {:>6} {:>6} {:>7} {:>6} {:>5} {:>8}  {:<6} {:<6} {profile}",
             r.label(),
             r.calls,
             r.first_try_ok,
@@ -281,8 +288,8 @@ pub fn slave_table_text(rows: &[SlaveReport]) -> String {
             r.consecutive_errors,
             r.errors.no_response,
             r.errors.total(),
-            r.dropouts,
-            r.out_of_las_s,
+            drops,
+            out,
             r.light.unwrap_or("-"),
             r.worst_light.unwrap_or("-"),
         );
