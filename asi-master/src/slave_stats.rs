@@ -352,6 +352,13 @@ impl SlaveStats {
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct SlaveTable {
     slaves: [SlaveStats; PLACES],
+    /// Clean calls ([`SlaveTable::count_clean`]) and silent first tries
+    /// ([`SlaveTable::count_silent`]) per list place, not yet in `slaves`: one compact
+    /// counter per call instead of the slave's whole entry. Settled into `slaves` before
+    /// anything else of the slave is counted, at every light window and in every copy handed
+    /// out ([`SlaveTable::settle`]).
+    clean_calls: [u64; 64],
+    silent_calls: [u64; 64],
     rule: LightRule,
     /// The end of the current light window.
     window_end: SimTime,
@@ -376,6 +383,8 @@ impl SlaveTable {
     pub fn new(rule: LightRule) -> SlaveTable {
         SlaveTable {
             slaves: [SlaveStats::default(); PLACES],
+            clean_calls: [0; 64],
+            silent_calls: [0; 64],
             rule,
             window_end: SimTime::ZERO + rule.window,
             las: SlaveList::EMPTY,
@@ -396,7 +405,28 @@ impl SlaveTable {
         self.rule = rule;
     }
 
-    /// The statistics of list place `i` (0..=63, or [`NO_SLAVE`]).
+    /// The clean and silent calls counted apart, into the slaves' entries.
+    pub fn settle(&mut self) {
+        for i in 0..64 {
+            self.settle_place(i);
+        }
+    }
+
+    fn settle_place(&mut self, i: usize) {
+        let (Some(clean), Some(silent)) =
+            (self.clean_calls.get_mut(i), self.silent_calls.get_mut(i))
+        else {
+            return;
+        };
+        let (clean, silent) = (core::mem::take(clean), core::mem::take(silent));
+        let s = &mut self.slaves[i];
+        s.calls += clean + silent;
+        s.unanswered += silent;
+    }
+
+    /// The statistics of list place `i` (0..=63, or [`NO_SLAVE`]), of a settled table (a
+    /// bus's table counts its clean calls apart until the next light window; the bus hands
+    /// out settled copies, and [`SlaveTable::at`] and [`SlaveTable::since`] settle).
     pub fn get(&self, i: u8) -> Option<&SlaveStats> {
         self.slaves.get(i as usize)
     }
@@ -408,6 +438,8 @@ impl SlaveTable {
 
     /// Counts transaction `x` to the slave at list place `place` ([`slave_of`] its request).
     pub fn count(&mut self, place: u8, x: Tally) {
+        // The call numbers tell runs of errors apart: the calls counted apart come first.
+        self.settle_place(usize::from(place));
         let Some(s) = self.slaves.get_mut(place as usize) else {
             return;
         };
@@ -418,13 +450,19 @@ impl SlaveTable {
         }
     }
 
-    /// [`SlaveTable::count`] of a clean call to list place `place` (a valid response to a
-    /// first try, no check failed): one call more.
+    /// [`SlaveTable::count`] of a clean call to the slave at list place `place` (0..=63; a
+    /// valid response to a first try, no check failed): one call more.
     #[inline(always)]
     pub fn count_clean(&mut self, place: u8) {
-        if let Some(s) = self.slaves.get_mut(place as usize) {
-            s.calls += 1;
-        }
+        self.clean_calls[usize::from(place & 63)] += 1;
+    }
+
+    /// [`SlaveTable::count`] of a first try to the slave at list place `place` (0..=63) that
+    /// nothing answered and that was no fault (the probe of an empty address), no check
+    /// failed: one call more, without an answer.
+    #[inline(always)]
+    pub fn count_silent(&mut self, place: u8) {
+        self.silent_calls[usize::from(place & 63)] += 1;
     }
 
     /// [`SlaveTable::count`] of a trace record, the codes its answer shows included.
@@ -477,6 +515,7 @@ impl SlaveTable {
     #[inline(never)]
     pub fn roll(&mut self, t: SimTime, las: SlaveList, lps: SlaveList, normal: bool) {
         self.note_las(t, las, normal);
+        self.settle();
         let window = self.rule.window.max(SimDuration::from_nanos(1));
         let mut rounds = 0u32;
         while self.window_end <= t {
@@ -575,7 +614,10 @@ impl SlaveTable {
     /// The bus-wide counts as sums over the places: transactions, repeats, failed after repeat,
     /// errors by check class, no response (the cycle figures and drop-outs are the master's).
     pub fn totals(&self) -> BusStats {
-        let mut b = BusStats::default();
+        let mut b = BusStats {
+            transactions: self.clean_calls.iter().chain(&self.silent_calls).sum(),
+            ..BusStats::default()
+        };
         for s in &self.slaves {
             b.transactions += s.calls;
             b.repeats += s.repeats;
@@ -594,6 +636,9 @@ impl SlaveTable {
     /// and the codes seen are this table's.
     pub fn since(&self, earlier: &SlaveTable) -> SlaveTable {
         let mut t = self.clone();
+        t.settle();
+        let mut earlier = earlier.clone();
+        earlier.settle();
         for (s, e) in t.slaves.iter_mut().zip(earlier.slaves.iter()) {
             let sub = |a: u64, b: u64| a.saturating_sub(b);
             s.calls = sub(s.calls, e.calls);
@@ -622,6 +667,7 @@ impl SlaveTable {
     pub fn at(&self, now: SimTime, las: SlaveList, lps: SlaveList, normal: bool) -> SlaveTable {
         let mut t = self.clone();
         t.roll(now, las, lps, normal);
+        t.settle();
         t.close_absences(now);
         t
     }

@@ -647,10 +647,12 @@ impl Bus {
             cur.tx
         );
         // What `SlaveTable::record` counts of the record, without the record. Almost every
-        // call is a clean, answered Data_Exchange or the cycle's Read_Status: one call more.
+        // call is a clean, answered Data_Exchange, the cycle's Read_Status or its probe of
+        // an empty address: one call more.
         // Only other calls and faults can change LAS or the phase; the light windows are
         // closed at the management call every cycle has, and at those.
-        let clean = response.is_some() && !cur.tx.repeat && cur.request_failed.is_empty();
+        let first_try = !cur.tx.repeat && cur.request_failed.is_empty();
+        let clean = first_try && response.is_some();
         match cur.tx.kind {
             TxKind::DataExchange if clean => self.tally.count_clean(cur.tx.slave),
             TxKind::Management if clean => {
@@ -658,6 +660,11 @@ impl Bus {
                 if self.tally.window_due(t) {
                     self.note_master(t);
                 }
+            }
+            // The probe of an empty address, once a cycle: it changes neither LAS nor the
+            // phase.
+            TxKind::Inclusion if first_try && no_response && !verdict.error => {
+                self.tally.count_silent(cur.tx.slave)
             }
             _ => self.note_call(t, cur, outcome, verdict),
         }
