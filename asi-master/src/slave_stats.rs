@@ -1,5 +1,5 @@
-//! Statistics per slave, as an AS-i analyser shows them (docs/master.md, "Statistics per
-//! slave"; docs/decisions: the traffic light).
+//! Statistics per slave, as an AS-i analyser shows them (docs/master.md §2.7, with the
+//! decision on the traffic light).
 //!
 //! The AS-Interface Analyser of Bihl+Wiedemann (sold by Siemens as 3RK1 904-3AB01; its
 //! manual, "Online Statistics": Overview, Overview with Hold Time, Advanced Statistics,
@@ -14,8 +14,8 @@
 //! second give green below 1 %, yellow from 1 % to 5 %, red above 5 % (the thresholds of the
 //! Bihl+Wiedemann diagnostics as the EUCHNER AS-i Safety Monitor manual's table 11-7 gives
 //! them; the analyser's rate is per second of telegrams); a slave the master should have in LAS
-//! (projected, or once in LAS) and has not is red, as the analyser shows a missing slave and a
-//! master gone offline. The light shown holds its worst colour for the hold time after the
+//! (projected, or once in LAS) and has not at the end of a window, or that dropped out of LAS
+//! within it, is red, as the analyser shows a missing slave and a master gone offline. The light shown holds its worst colour for the hold time after the
 //! window that caused it (the analyser's "Overview with Hold Time", 1 s to infinite); the
 //! worst light of the whole run is kept apart (its "Overview").
 
