@@ -194,6 +194,72 @@ fn decode_prints_as_it_goes_and_a_reader_that_goes_ends_it_quietly() {
     }
 }
 
+/// `decode` of a capture ends with the statistics per slave worked out from the decoded
+/// transactions: for a slave unplugged and plugged back on a clean line, the same counts as
+/// the run's report, which the bus counted.
+#[test]
+fn decode_prints_the_statistics_per_slave_of_a_capture() {
+    let d = temp();
+    let scenario = d.path().join("unplugged.toml");
+    std::fs::write(
+        &scenario,
+        "name = \"slave 6 unplugged\"\nduration = \"3s\"\n\n\
+         [[event]]\nat = \"1s\"\nfault = { kind = \"slave-offline\", slave = 6 }\n\n\
+         [[event]]\nat = \"1.4s\"\nfault = { kind = \"slave-online\", slave = 6 }\n",
+    )
+    .expect("scenario");
+    let (vcd, report) = (d.path().join("run.vcd"), d.path().join("r.json"));
+    let run = asi_lift()
+        .arg("run")
+        .arg(&scenario)
+        .args(["--format", "json", "--report"])
+        .arg(&report)
+        .arg("--vcd")
+        .arg(&vcd)
+        .output()
+        .expect("asi-lift run");
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let out = asi_lift().arg("decode").arg(&vcd).output().expect("decode");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    let table = &text[text.find("per slave").expect("the per-slave table")..];
+    insta::assert_snapshot!(table);
+    // The rows against the report's `bus.slaves[]`: the capture holds the whole run but the
+    // request in flight at its end.
+    let r: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&report).expect("report")).expect("JSON");
+    let six = r["bus"]["slaves"]
+        .as_array()
+        .expect("bus.slaves")
+        .iter()
+        .find(|s| s["address"] == 6)
+        .expect("slave 6");
+    let row: Vec<&str> = table
+        .lines()
+        .find(|l| l.split_whitespace().next() == Some("6"))
+        .expect("row of slave 6")
+        .split_whitespace()
+        .collect();
+    for (column, key) in [
+        (3, "repeats"),
+        (5, "failed_after_repeat"),
+        (6, "single_errors"),
+        (7, "consecutive_errors"),
+    ] {
+        assert_eq!(row[column], six[key].to_string(), "{key}");
+    }
+    assert_eq!(six["dropouts"], 1);
+    assert_eq!(six["worst_light"], "red");
+}
+
 #[test]
 fn built_in_scenarios_are_listed_shown_and_run_by_name() {
     let out = asi_lift().arg("scenarios").output().expect("runs");

@@ -16,5 +16,6 @@ mod quick;
 mod robust;
 mod safety_noise;
 mod sampling;
+mod slave_stats;
 mod startup;
 mod tracing_out;

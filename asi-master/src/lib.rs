@@ -10,6 +10,7 @@
 //! Modules, one per concept: [`image`] (the word layout of table 4.1 of the lift thesis), [`lists`]
 //! (LDS, LAS, LPS, LCS, LPF, flags), [`config`] (projected configuration, settings), [`master`]
 //! (phases and cycle), [`mailbox`] (host jobs), [`record`] (transaction records and statistics),
+//! [`slave_stats`] (the statistics per slave an analyser shows),
 //! [`integrated_analog`] (the master's side of S-7.3), [`plc_handshake`] (the PLC side of
 //! tables 4.2–4.7).
 
@@ -21,9 +22,11 @@ pub mod mailbox;
 pub mod master;
 pub mod plc_handshake;
 pub mod record;
+pub mod slave_stats;
 
 pub use config::{ConfigError, MasterConfig, Mode, ProjectedConfig, ProjectedSlave};
 pub use image::{Image, ProcessImage};
 pub use lists::{EcFlags, HostFlags, SlaveList};
 pub use master::{Master, Outcome, Phase};
 pub use record::{BusStats, TraceRing, TransactionRecord, TxKind};
+pub use slave_stats::{Light, LightRule, SlaveStats, SlaveTable};

@@ -2,10 +2,14 @@
 //! end-to-end tests assert.
 
 mod log;
+mod slaves;
 
 pub(crate) use log::monitor_drop;
 pub use log::{Actor, ClientLog, LogEvent, LogLine, PlantLog, Rescue, RigNote};
 use serde::Serialize;
+pub use slaves::{
+    slave_reports, slave_summary, slave_table_text, CheckCounts, Configuration, SlaveReport,
+};
 use std::fmt::Write as _;
 
 /// Everything a run produced.
@@ -181,6 +185,10 @@ pub struct BusReport {
     /// Slaves that left LAS in normal operation (absent when none did), by address.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub dropouts: Vec<SlaveDropouts>,
+    /// Statistics per slave, as an AS-i analyser shows them: every address that took part in
+    /// the traffic or is projected (absent when none did).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub slaves: Vec<SlaveReport>,
 }
 
 /// A slave's absences from LAS in normal operation.
@@ -591,6 +599,7 @@ impl Report {
                     max: 0.0,
                 },
                 dropouts: Vec::new(),
+                slaves: Vec::new(),
             },
             safety: SafetyReport {
                 trips: Vec::new(),
@@ -742,6 +751,9 @@ impl Report {
             "  AS-i cycle         min {:.0} µs, mean {:.1} µs, max {:.0} µs",
             b.cycle_us.min, b.cycle_us.mean, b.cycle_us.max
         );
+        if !b.slaves.is_empty() {
+            s.push_str(&slave_summary(&b.slaves));
+        }
         for d in &b.dropouts {
             let _ = writeln!(
                 s,

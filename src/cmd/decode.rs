@@ -2,6 +2,7 @@
 
 use super::{open_input, print_out};
 use asi_phy::{Expect, SimDuration};
+use asi_trace::analyser::TrafficAnalyser;
 use asi_trace::capture::render::{json_line, stream_summary, text_header, text_line};
 use asi_trace::capture::{decode_stream, CaptureFormat, DecodeOptions};
 use clap::ValueEnum;
@@ -101,7 +102,9 @@ pub fn run(args: DecodeArgs) -> Result<u8, String> {
     let mut failed = None;
     let mut gone = false;
     let mut header = !json;
+    let mut analyser = TrafficAnalyser::default();
     let result = decode_stream(input, &opts, |t| {
+        analyser.push(&t);
         let line = if json {
             match json_line(&t) {
                 Ok(l) => l,
@@ -141,9 +144,30 @@ pub fn run(args: DecodeArgs) -> Result<u8, String> {
     if json {
         eprintln!("{}", stream_summary(&summary));
     } else {
-        print_out(&format!("{}\n", stream_summary(&summary)))?;
+        let mut text = format!("{}\n", stream_summary(&summary));
+        text.push_str(&slave_table(analyser));
+        print_out(&text)?;
     }
     Ok(0)
+}
+
+/// The statistics per slave of the decoded transactions, as an analyser shows them: a
+/// heading and a row per slave that answered (docs/master.md, "Statistics per slave"); empty
+/// without transactions.
+fn slave_table(analyser: TrafficAnalyser) -> String {
+    let transactions = analyser.transactions();
+    let table = analyser.finish();
+    let rule = table.rule();
+    let rows = rig::report::slave_reports(&table, None);
+    if transactions == 0 || rows.is_empty() {
+        return String::new();
+    }
+    format!(
+        "\nper slave, from {transactions} transactions (lights by repeat rate over {} s windows, held {} s):\n{}",
+        rule.window.as_secs_f64(),
+        rule.hold.as_secs_f64(),
+        rig::report::slave_table_text(&rows, false)
+    )
 }
 
 /// `--nominal`: a positive, finite amplitude in volts that a capture's samples (32-bit floats)

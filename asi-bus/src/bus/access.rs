@@ -3,6 +3,7 @@
 //! their devices, the monitors.
 
 use super::*;
+use asi_master::record::BusStats;
 
 impl Bus {
     /// Starts (`true`) or stops recording the line: every pulse as it is on the line (after
@@ -58,8 +59,22 @@ impl Bus {
             cycle_min: c.cycle_min,
             cycle_max: c.cycle_max,
             cycle_total: c.cycle_total,
-            ..self.stats
+            ..self.tally.totals()
         }
+    }
+
+    /// The statistics per slave as they are now (docs/master.md, "Statistics per slave"):
+    /// calls, repeats, errors, drop-outs and time out of LAS up to now, the lights of the
+    /// windows ended by now, and the codes seen in the traffic.
+    pub fn slave_stats(&self) -> SlaveTable {
+        let normal = self.master.phase() == Phase::NormalOperation;
+        self.tally
+            .at(self.now, self.master.las(), self.master.lps(), normal)
+    }
+
+    /// How the slaves' traffic lights are worked out, from the next light window on.
+    pub fn set_light_rule(&mut self, rule: asi_master::LightRule) {
+        self.tally.set_rule(rule);
     }
 
     /// Keeps the last `capacity` trace records for [`Bus::drain_trace`] (0 switches it off).

@@ -93,6 +93,8 @@ impl Bus {
         if self.state == State::Idle {
             self.reschedule_idle();
         }
+        // A power fail takes the master out of normal operation now, not at its next call.
+        self.note_master(now);
     }
 
     /// The AS-i supply voltage.

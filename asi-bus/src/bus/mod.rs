@@ -45,8 +45,9 @@
 //! at the end of every `advance_to` and `advance_before` call.
 
 use asi_master::config::{ConfigError, MasterConfig, ProjectedConfig};
-use asi_master::master::{Master, Outcome, Phase, Transmit};
-use asi_master::record::{BusStats, TraceRing, TransactionRecord};
+use asi_master::master::{Master, Outcome, Phase, Transmit, Verdict};
+use asi_master::record::{TraceRing, TransactionRecord, TxKind};
+use asi_master::slave_stats::{SlaveTable, Tally};
 use asi_phy::line::{Line, Medium};
 use asi_phy::{
     Address, BusTiming, Call, Checks, Expect, FaultInjector, FaultRates, Frame, Listener, Nibble,
@@ -255,7 +256,9 @@ pub struct Bus {
     volts: f64,
     slaves_powered: bool,
     cur: Option<Current>,
-    stats: BusStats,
+    /// The statistics per slave, counted at every transaction; the bus-wide counts of
+    /// [`Bus::stats`] are their sums.
+    tally: SlaveTable,
     /// What the application watches: where [`Bus::advance_before`] ends early.
     watch: Watch,
     /// The last output nibble each address took in a Data_Exchange.
@@ -320,7 +323,7 @@ impl Bus {
             volts: NOMINAL_VOLTS,
             slaves_powered: true,
             cur: None,
-            stats: BusStats::default(),
+            tally: SlaveTable::default(),
             watch: Watch::default(),
             last_out: [NO_OUTPUT; 32],
             output_taken: false,
@@ -632,15 +635,38 @@ impl Bus {
             _ => Checks::NONE,
         };
         let no_response = outcome == Outcome::NoResponse;
-        // What `BusStats::record` counts of the record, without the record.
-        self.stats.count(
-            cur.tx.repeat,
-            cur.request_failed,
-            response_failed,
-            no_response,
-            verdict.error,
-            verdict.repeat,
+        let response = match outcome {
+            Outcome::Response(r) => Some(r),
+            _ => None,
+        };
+        debug_assert_eq!(
+            cur.tx.slave,
+            asi_master::slave_stats::slave_of(cur.tx.request, cur.tx.ab),
+            "the master's slave of {:?}",
+            cur.tx
         );
+        // What `SlaveTable::record` counts of the record, without the record. Almost every
+        // call is a clean, answered Data_Exchange, the cycle's Read_Status or its probe of
+        // an empty address: one call more.
+        // Only other calls and faults can change LAS or the phase; the light windows are
+        // closed at the management call every cycle has, and at those.
+        let first_try = !cur.tx.repeat && cur.request_failed.is_empty();
+        let clean = first_try && response.is_some();
+        match cur.tx.kind {
+            TxKind::DataExchange if clean => self.tally.count_clean(cur.tx.slave),
+            TxKind::Management if clean => {
+                self.tally.count_clean(cur.tx.slave);
+                if self.tally.window_due(t) {
+                    self.note_master(t);
+                }
+            }
+            // The probe of an empty address, once a cycle: it changes neither LAS nor the
+            // phase.
+            TxKind::Inclusion if first_try && no_response && !verdict.error => {
+                self.tally.count_silent(cur.tx.slave)
+            }
+            _ => self.note_call(t, cur, outcome, verdict),
+        }
         // Most runs keep no record: no ring, no callback, no subscriber at TRACE. The record
         // is then only counted, and never stored for them. `tracing::trace!` itself checks
         // first that TRACE is within the static and the current maximum level (its
@@ -655,10 +681,7 @@ impl Bus {
                 kind: cur.tx.kind,
                 request: cur.tx.request,
                 request_failed: cur.request_failed,
-                response: match outcome {
-                    Outcome::Response(r) => Some(r),
-                    _ => None,
-                },
+                response,
                 response_failed,
                 no_response,
                 repeat: cur.tx.repeat,
@@ -667,6 +690,51 @@ impl Bus {
         }
         cur.line_error
             .then(|| cur.line_end + self.timing.async_pause())
+    }
+
+    /// Transaction `cur`, its `outcome` and the master's `verdict`, as the statistics per
+    /// slave count it when it is not a clean Data_Exchange or Read_Status: the call, the codes
+    /// an answer to a start-up, inclusion or host call shows, the master's LAS and phase after
+    /// it and the light windows ended ([`Bus::note_master`]).
+    #[inline(never)]
+    fn note_call(&mut self, t: SimTime, cur: &Current, outcome: Outcome, verdict: Verdict) {
+        let tx = cur.tx;
+        let response = match outcome {
+            Outcome::Response(r) => Some(r),
+            _ => None,
+        };
+        let tally = Tally {
+            repeat: tx.repeat,
+            request_failed: cur.request_failed,
+            response_failed: match outcome {
+                Outcome::Corrupt(c) => c,
+                _ => Checks::NONE,
+            },
+            response,
+            no_response: outcome == Outcome::NoResponse,
+            error: verdict.error,
+            will_repeat: verdict.repeat,
+        };
+        self.tally.count(tx.slave, tally);
+        if let Some(r) = response {
+            if !matches!(tx.kind, TxKind::DataExchange | TxKind::Management) {
+                self.tally.note_codes(tx.slave, tx.request, r);
+            }
+        }
+        self.note_master(t);
+    }
+
+    /// The master's LAS and phase at `t` to the statistics per slave (drop-outs, time out of
+    /// LAS), and the lights of the windows ended by `t`.
+    #[inline(never)]
+    fn note_master(&mut self, t: SimTime) {
+        let las = self.master.las();
+        let normal = self.master.phase() == Phase::NormalOperation;
+        if self.tally.window_due(t) {
+            self.tally.roll(t, las, self.master.lps(), normal);
+        } else {
+            self.tally.note_las(t, las, normal);
+        }
     }
 
     /// Trace record `rec` to `tracing` (target `asi_master::trace`, level TRACE), to the ring

@@ -71,6 +71,7 @@ impl Master {
             kind: TxKind::DataExchange,
             repeat: false,
             ab,
+            slave: index,
         })
     }
 
@@ -128,6 +129,7 @@ impl Master {
             kind: TxKind::Management,
             repeat: false,
             ab: false,
+            slave: i,
         })
     }
 
@@ -159,6 +161,7 @@ impl Master {
             kind: TxKind::Inclusion,
             repeat: false,
             ab: false,
+            slave: i,
         })
     }
 

@@ -95,6 +95,9 @@ pub struct Transmit {
     /// `true` if the request goes to an A/B slave (I3 of a Data_Exchange or Write_Parameter is
     /// then the select bit).
     pub ab: bool,
+    /// The list bit of the slave it is for (0..31 standard or A, 33..63 B; 0 for the calls to
+    /// address 0 of auto-addressing), as [`crate::slave_stats::slave_of`] reads the request.
+    pub slave: u8,
 }
 
 /// How the master judged an outcome.
@@ -154,6 +157,25 @@ impl Tx {
             Tx::Include(..) => TxKind::Inclusion,
             Tx::Job(_) => TxKind::HostJob,
             Tx::OfflineDefault(_) => TxKind::Offline,
+        }
+    }
+
+    /// The list bit of the slave the call goes to (the calls of auto-addressing go to the
+    /// slave at address 0).
+    fn slave(self) -> u8 {
+        match self {
+            Tx::Detect(a, _)
+            | Tx::ActivateParam(a)
+            | Tx::ActivateDexg(a)
+            | Tx::Exchange(a)
+            | Tx::Status(a)
+            | Tx::OfflineDefault(a)
+            | Tx::Include(a, InclStep::Read(_) | InclStep::Param | InclStep::Dexg)
+            | Tx::Job(JobStep::Param(a, _) | JobStep::Status(a) | JobStep::Delete(a, _)) => {
+                a.index()
+            }
+            Tx::Include(_, InclStep::AutoId1(..) | InclStep::AutoAssign(_))
+            | Tx::Job(JobStep::Assign(_)) => 0,
         }
     }
 
@@ -600,6 +622,7 @@ impl Master {
                 kind: f.tx.kind(),
                 repeat: true,
                 ab: self.is_ab_call(f.tx),
+                slave: f.tx.slave(),
             });
         }
         self.in_flight = None;
@@ -622,6 +645,7 @@ impl Master {
                         kind: tx.kind(),
                         repeat: false,
                         ab: self.is_ab_call(tx),
+                        slave: tx.slave(),
                     });
                 }
                 None => self.apply(tx, None),

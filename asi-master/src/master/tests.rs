@@ -432,6 +432,7 @@ impl Master {
                     kind: f.tx.kind(),
                     repeat: true,
                     ab: self.is_ab_call(f.tx),
+                    slave: f.tx.slave(),
                 });
             }
             self.in_flight = None;

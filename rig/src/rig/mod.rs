@@ -841,6 +841,7 @@ impl Rig {
             fifo_hall: calls.map(|c| c.hall),
         };
         self.report.bus = words::bus_report(stats, dropouts);
+        self.report.bus.slaves = words::slave_reports(self.lab.bus());
         self.report.passengers = self.people.passengers.report();
         if let Some(d) = self.safety.drive.as_mut() {
             self.report.safety.drive = Some(d.finish());

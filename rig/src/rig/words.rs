@@ -1,7 +1,8 @@
 //! The report's words and figures for the bus and the safety monitor: why the monitor did not
 //! release a sensor, why K1 is open, the bus's counts and cycle times.
 
-use crate::report::{round3, BusReport, CycleTimes, ErrorCounts, SlaveDropouts};
+use crate::report::{round3, BusReport, CycleTimes, ErrorCounts, SlaveDropouts, SlaveReport};
+use asi_bus::Bus;
 use asi_master::BusStats;
 use asi_phy::Check;
 use asi_slaves::monitor::{NotReleased, SafetyMonitor};
@@ -63,5 +64,12 @@ pub(super) fn bus_report(stats: BusStats, dropouts: Vec<SlaveDropouts>) -> BusRe
             max: round3(max),
         },
         dropouts,
+        slaves: Vec::new(),
     }
+}
+
+/// The bus's statistics per slave for the report, against the master's projected
+/// configuration.
+pub(super) fn slave_reports(bus: &Bus) -> Vec<SlaveReport> {
+    crate::report::slave_reports(&bus.slave_stats(), Some(bus.master().projected()))
 }

@@ -88,10 +88,15 @@ pub(super) fn run_plain(opts: &TimingOptions) -> Result<(Collector, BusWindow), 
     bus.advance_to(start);
     lock(&shared).start_window();
     let before = bus.stats();
+    let slaves_before = bus.slave_stats();
     let las_at_start = bus.master().las().len();
     bus.advance_to(start + opts.duration);
     lock(&shared).end_window();
     let after = bus.stats();
+    let slaves = crate::report::slave_reports(
+        &bus.slave_stats().since(&slaves_before),
+        Some(bus.master().projected()),
+    );
     bus.set_trace_callback(None);
     drop(bus);
     let collector = take(&shared);
@@ -100,6 +105,7 @@ pub(super) fn run_plain(opts: &TimingOptions) -> Result<(Collector, BusWindow), 
         BusWindow {
             failed_after_repeat: after.failed_after_repeat - before.failed_after_repeat,
             dropouts: after.dropouts - before.dropouts,
+            slaves,
             las_at_start,
         },
     ))

@@ -204,10 +204,12 @@ pub(super) fn take(shared: &Mutex<Collector>) -> Collector {
 }
 
 /// What the bus statistics say about the window.
-#[derive(Clone, Copy, Debug, Default)]
+#[derive(Clone, Debug, Default)]
 pub(super) struct BusWindow {
     pub(super) failed_after_repeat: u64,
     pub(super) dropouts: u64,
+    /// The statistics per slave over the window.
+    pub(super) slaves: Vec<crate::report::SlaveReport>,
     /// Slaves in LAS when the window began.
     pub(super) las_at_start: u32,
 }

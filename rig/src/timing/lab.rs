@@ -88,6 +88,7 @@ fn measure_window(
     let start = rig.now();
     lock(shared).start_window();
     let before = rig.lab().bus().stats();
+    let slaves_before = rig.lab().bus().slave_stats();
     let las_at_start = rig.lab().bus().master().las().len();
     let mut words = WordTimers::new();
     words.poll(rig);
@@ -96,9 +97,14 @@ fn measure_window(
     }
     lock(shared).end_window();
     let after = rig.lab().bus().stats();
+    let bus = rig.lab().bus();
     let window = BusWindow {
         failed_after_repeat: after.failed_after_repeat - before.failed_after_repeat,
         dropouts: after.dropouts - before.dropouts,
+        slaves: crate::report::slave_reports(
+            &bus.slave_stats().since(&slaves_before),
+            Some(bus.master().projected()),
+        ),
         las_at_start,
     };
     (words, window)

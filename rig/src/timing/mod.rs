@@ -111,6 +111,7 @@ pub fn analyse(opts: &TimingOptions) -> Result<TimingReport, AnalysisError> {
         error_model: (opts.pulse_error_rate > 0.0).then(|| error_model(&c)),
         lab: lab.map(|l| lab_analytic(l, &model, &expected)),
         model_note: expected.note,
+        per_slave: window.slaves,
     })
 }
 

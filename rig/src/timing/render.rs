@@ -18,6 +18,10 @@ impl TimingReport {
         out.push('\n');
         out.push_str(&table(&self.rows()));
         out.push_str(&self.notes());
+        if !self.per_slave.is_empty() {
+            let _ = writeln!(out, "\nper slave, over the {} s measured:", self.window_s);
+            out.push_str(&crate::report::slave_table_text(&self.per_slave, true));
+        }
         out
     }
 

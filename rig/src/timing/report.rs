@@ -135,4 +135,7 @@ pub struct TimingReport {
     /// not: then the cycle and what follows from it have no analytic value.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub model_note: Option<String>,
+    /// Statistics per slave over the measurement window, as the report's `bus.slaves[]`
+    /// (the lights as they are at its end).
+    pub per_slave: Vec<crate::report::SlaveReport>,
 }
