@@ -23,7 +23,7 @@ pub(super) enum OutputNote {
 
 impl Bus {
     /// A count that moves whenever what a counting slave device drives
-    /// ([`Peripheral::drive_changes`](asi_slaves::slave::Peripheral::drive_changes)) may have
+    /// ([`Peripheral::drive_changes`]) may have
     /// changed: at each call into the slaves in which one's count moved, and at each of the
     /// application's accesses that may change anything ([`Bus::slave_mut`], the fault hooks
     /// that reset slaves). `None` when no device counts.

@@ -145,7 +145,7 @@ pub enum LogEvent {
     /// The invariant watch found a violation ([`Actor::Judge`]).
     Violation {
         /// What kind.
-        kind: super::ViolationKind,
+        kind: super::violation::ViolationKind,
         /// Its details, in words.
         detail: String,
     },
