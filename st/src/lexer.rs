@@ -223,6 +223,20 @@ pub enum Size {
     Long,
 }
 
+impl Size {
+    /// The size its letter `c` names (`X`, `B`, `W`, `D`, `L`, any case).
+    fn of(c: u8) -> Option<Size> {
+        Some(match c.to_ascii_uppercase() {
+            b'X' => Size::Bit,
+            b'B' => Size::Byte,
+            b'W' => Size::Word,
+            b'D' => Size::Double,
+            b'L' => Size::Long,
+            _ => return None,
+        })
+    }
+}
+
 /// A direct variable: `%` area, size and the address's numbers (`%IX2.3`: input bit 3 of
 /// word 2).
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -579,14 +593,7 @@ impl Lexer<'_> {
     fn direct(&mut self, start: usize) {
         self.i += 1;
         // `%X3` (no area): a partial access, as in `w.%X3`.
-        let partial = match self.peek(0).to_ascii_uppercase() {
-            b'X' => Some(Size::Bit),
-            b'B' => Some(Size::Byte),
-            b'W' => Some(Size::Word),
-            b'D' => Some(Size::Double),
-            b'L' => Some(Size::Long),
-            _ => None,
-        };
+        let partial = Size::of(self.peek(0));
         if let (Some(size), true) = (partial, self.peek(1).is_ascii_digit()) {
             self.i += 1;
             return match self.digits(10).map(u32::try_from) {
@@ -601,14 +608,7 @@ impl Lexer<'_> {
             _ => return self.error(start, "a direct variable is %I…, %Q… or %M…"),
         };
         self.i += 1;
-        let size = match self.peek(0).to_ascii_uppercase() {
-            b'X' => Some(Size::Bit),
-            b'B' => Some(Size::Byte),
-            b'W' => Some(Size::Word),
-            b'D' => Some(Size::Double),
-            b'L' => Some(Size::Long),
-            _ => None,
-        };
+        let size = Size::of(self.peek(0));
         if size.is_some() {
             self.i += 1;
         }
