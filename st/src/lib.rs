@@ -26,3 +26,4 @@ pub mod ast;
 pub mod lexer;
 pub mod parser;
 pub mod source;
+pub mod types;
