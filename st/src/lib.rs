@@ -2,7 +2,8 @@
 //! simulated PLC against the bit-exact AS-i bus.
 //!
 //! This crate is the language's front end: the source and its diagnostics ([`source`]), the
-//! tokens ([`lexer`]), the syntax ([`ast`]) and the parser ([`parser`]). A program that does
+//! tokens ([`lexer`]), the syntax ([`ast`]), the parser ([`parser`]) and the elementary types
+//! ([`types`]). A program that does
 //! not parse is refused with every error at once, each as `file:line:column`, the source line
 //! with a caret under the place, and the cause:
 //!
