@@ -2,8 +2,8 @@
 //! simulated PLC against the bit-exact AS-i bus.
 //!
 //! This crate is the language's front end: the source and its diagnostics ([`source`]), the
-//! tokens ([`lexer`]), the syntax ([`ast`]), the parser ([`parser`]) and the elementary types
-//! ([`types`]). A program that does
+//! tokens ([`lexer`]), the syntax ([`ast`]), the parser ([`parser`]), the elementary types
+//! ([`types`]) and the declarations checked ([`check`]). A program that does
 //! not parse is refused with every error at once, each as `file:line:column`, the source line
 //! with a caret under the place, and the cause:
 //!
@@ -24,6 +24,7 @@
 //! an expression no place of its own (docs/dev/structured-text.md).
 
 pub mod ast;
+pub mod check;
 pub mod lexer;
 pub mod parser;
 pub mod source;
