@@ -45,6 +45,8 @@ impl Ty {
 /// Every error in the statements of `checked`'s blocks.
 pub fn typecheck(checked: &Checked) -> Vec<Diagnostic> {
     let mut errors = Vec::new();
+    // Who calls which function, and where.
+    let mut calls: Vec<(usize, usize, Span)> = Vec::new();
     for (index, pou) in checked.pous.iter().enumerate() {
         let mut t = Typer {
             c: checked,
@@ -56,12 +58,67 @@ pub fn typecheck(checked: &Checked) -> Vec<Diagnostic> {
                 .collect(),
             errors: Vec::new(),
             loops: 0,
+            calls: Vec::new(),
         };
+        for v in &pou.vars {
+            t.initial(v);
+        }
         t.stmts(&pou.body);
         errors.append(&mut t.errors);
+        calls.extend(t.calls.into_iter().map(|(to, at)| (index, to, at)));
     }
+    let mut t = Typer {
+        c: checked,
+        pou: usize::MAX,
+        locals: HashMap::new(),
+        errors: Vec::new(),
+        loops: 0,
+        calls: Vec::new(),
+    };
+    for v in &checked.globals {
+        t.initial(v);
+    }
+    errors.append(&mut t.errors);
+    errors.extend(recursion(checked, &calls));
     errors.sort_by_key(|d| d.span.start);
     errors
+}
+
+/// The calls through which a function calls itself: a PLC program has no recursion (its
+/// memory is fixed before it runs), so each such call is an error.
+fn recursion(c: &Checked, calls: &[(usize, usize, Span)]) -> Vec<Diagnostic> {
+    let mut out = Vec::new();
+    for &(from, to, at) in calls {
+        // Does `to` reach `from` again?
+        let mut seen = vec![false; c.pous.len()];
+        let mut stack = vec![to];
+        let mut back = false;
+        while let Some(f) = stack.pop() {
+            if f == from {
+                back = true;
+                break;
+            }
+            if std::mem::replace(&mut seen[f], true) {
+                continue;
+            }
+            stack.extend(calls.iter().filter(|c| c.0 == f).map(|c| c.1));
+        }
+        if back {
+            let (a, b) = (&c.pous[from].name, &c.pous[to].name);
+            let how = if from == to {
+                format!("`{a}` calls itself")
+            } else {
+                format!("`{a}` calls `{b}`, which calls `{a}` again")
+            };
+            out.push(Diagnostic::error(
+                at,
+                format!(
+                    "{how}: a PLC program has no recursion (its memory is fixed before it runs)"
+                ),
+            ));
+        }
+    }
+    out
 }
 
 struct Typer<'a> {
@@ -71,6 +128,8 @@ struct Typer<'a> {
     errors: Vec<Diagnostic>,
     /// How many loops the statement is in (for EXIT and CONTINUE).
     loops: u32,
+    /// The functions this block calls, and where.
+    calls: Vec<(usize, Span)>,
 }
 
 /// What a name is.
@@ -182,6 +241,71 @@ impl<'a> Typer<'a> {
         Found::Nothing
     }
 
+    /// `v`'s initial value against its type.
+    fn initial(&mut self, v: &Var) {
+        if let Some(init) = &v.init {
+            self.init_into(init, &v.ty);
+        }
+    }
+
+    fn init_into(&mut self, init: &crate::ast::Init, ty: &Type) {
+        use crate::ast::Init;
+        match (init, ty) {
+            (Init::Expr(e), _) => {
+                let t = self.expr(e);
+                self.expect_into(&t, &Ty::Known(ty.clone()), e.span);
+            }
+            (Init::Array(elems, span), Type::Array(a)) => {
+                let capacity =
+                    self.c.elements(&Type::Array(a.clone())) / self.c.elements(&a.elem).max(1);
+                let mut given: u64 = 0;
+                for (count, value) in elems {
+                    let n = match count {
+                        Some(e) => match self.expr(e) {
+                            Ty::IntLit(n) if n >= 0 => u64::try_from(n).unwrap_or(u64::MAX),
+                            _ => {
+                                self.error(
+                                    e.span,
+                                    "a repetition's count is a non-negative integer",
+                                );
+                                1
+                            }
+                        },
+                        None => 1,
+                    };
+                    given = given.saturating_add(n);
+                    self.init_into(value, &a.elem);
+                }
+                if given > capacity {
+                    self.error(
+                        *span,
+                        format!("{given} initial values for an array of {capacity} elements"),
+                    );
+                }
+            }
+            (Init::Struct(fields, _), Type::Struct(i)) => {
+                for (name, value) in fields {
+                    let field = self.c.structs[*i]
+                        .fields
+                        .iter()
+                        .find(|f| f.name.eq_ignore_ascii_case(&name.text))
+                        .map(|f| f.ty.clone());
+                    match field {
+                        Some(t) => self.init_into(value, &t),
+                        None => {
+                            let n = self.c.structs[*i].name.clone();
+                            self.error(name.span, format!("`{n}` has no field `{}`", name.text));
+                        }
+                    }
+                }
+            }
+            (Init::Array(_, span), _) => self.error(*span, "`[…]` initialises an array"),
+            (Init::Struct(_, span), _) => {
+                self.error(*span, "`(field := …)` initialises a structure")
+            }
+        }
+    }
+
     // ----- statements -----------------------------------------------------------------
 
     fn stmts(&mut self, stmts: &[Stmt]) {
@@ -228,17 +352,29 @@ impl<'a> Typer<'a> {
                         format!("CASE selects on an integer or an enumeration, not {n}"),
                     );
                 }
+                // The labels' values seen so far, as ranges, to find one given twice.
+                let mut seen: Vec<(i128, i128)> = Vec::new();
                 for (labels, body) in arms {
                     for l in labels {
                         let values: Vec<&Expr> = match l {
                             CaseLabel::Value(v) => vec![v],
                             CaseLabel::Range(a, b) => vec![a, b],
                         };
-                        for v in values {
+                        let mut bounds = Vec::new();
+                        for v in &values {
                             let t = self.expr(v);
                             if ok {
                                 self.expect_into(&t, &sel, v.span);
                             }
+                            bounds.push(self.label_value(v, &t));
+                        }
+                        let span = values[0].span.to(values[values.len() - 1].span);
+                        if let [Some(lo), Some(hi)] | [Some(lo @ hi)] = bounds.as_slice() {
+                            let (lo, hi) = (*lo, *hi);
+                            if seen.iter().any(|&(a, b)| lo <= b && a <= hi) {
+                                self.error(span, "this label's value is given above already");
+                            }
+                            seen.push((lo, hi));
                         }
                     }
                     self.stmts(body);
@@ -298,6 +434,25 @@ impl<'a> Typer<'a> {
                 }
             }
             StmtKind::Return | StmtKind::Empty => {}
+        }
+    }
+
+    /// The number of a CASE label of type `t` (an integer literal, a signed one, or an
+    /// enumeration's value), if it is a constant.
+    fn label_value(&self, e: &Expr, t: &Ty) -> Option<i128> {
+        match (&e.kind, t) {
+            (_, Ty::IntLit(n)) => Some(*n),
+            (ExprKind::Name(i), Ty::Known(Type::Enum(n))) => self.c.enums[*n]
+                .values
+                .iter()
+                .find(|(k, _)| *k == i.key())
+                .map(|&(_, v)| v),
+            (ExprKind::Lit(Lit::Enum(_, v)), Ty::Known(Type::Enum(n))) => self.c.enums[*n]
+                .values
+                .iter()
+                .find(|(k, _)| *k == v.key())
+                .map(|&(_, v)| v),
+            _ => None,
         }
     }
 
@@ -409,7 +564,12 @@ impl<'a> Typer<'a> {
                 }
             },
             ExprKind::Direct(d) => {
-                if self.c.pous[self.pou].kind != PouKind::Program {
+                if self
+                    .c
+                    .pous
+                    .get(self.pou)
+                    .is_none_or(|p| p.kind != PouKind::Program)
+                {
                     self.error(
                         e.span,
                         "the process image is read and written in the PROGRAM",
@@ -794,6 +954,7 @@ impl<'a> Typer<'a> {
         }
         match self.find(&key) {
             Found::Pou(p) if matches!(self.c.pous[p].kind, PouKind::Function(_)) => {
+                self.calls.push((p, span));
                 let f = &self.c.pous[p];
                 let inputs: Vec<&Var> =
                     f.vars.iter().filter(|v| v.kind == VarKind::Input).collect();

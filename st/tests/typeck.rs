@@ -102,6 +102,10 @@ fn wrong_statements_get_their_messages() {
             "calls",
             "FUNCTION_BLOCK B VAR_INPUT a : BOOL; END_VAR VAR_OUTPUT q : BOOL; END_VAR VAR inner : INT; END_VAR END_FUNCTION_BLOCK\nPROGRAM P\nVAR b : B; t : TON; x : BOOL; i : INT; END_VAR\n  b(a := TRUE, q => x, z := 1);\n  b(TRUE);\n  i := b.inner;\n  x := t(IN := TRUE);\n  t(IN := 1, PT := 5, Q := x);\n  i := SHL(i, 1);\n  i := MIN(i, TRUE);\n  nothing(1);\nEND_PROGRAM\n",
         ),
+        (
+            "recursion_initial_values_labels",
+            "TYPE S : STRUCT a : INT; END_STRUCT; Dir : (Up, Down); END_TYPE\nFUNCTION F : INT VAR_INPUT n : INT; END_VAR F := G(n); END_FUNCTION\nFUNCTION G : INT VAR_INPUT n : INT; END_VAR G := F(n); END_FUNCTION\nFUNCTION H : INT VAR_INPUT n : INT; END_VAR H := H(n - 1); END_FUNCTION\nPROGRAM P\nVAR\n  i : INT := 70000;\n  a : ARRAY [1..3] OF BOOL := [TRUE, 3(FALSE)];\n  s : S := (a := TRUE, b := 1);\n  d : Dir := Down;\n  x : INT := [1];\nEND_VAR\n  CASE i OF 1..5: ; 4: ; 6, 6: ; END_CASE;\n  CASE d OF Up: ; Dir#Up: ; END_CASE;\nEND_PROGRAM\n",
+        ),
     ];
     for (name, text) in corpus {
         insta::assert_snapshot!(*name, errors(text));
