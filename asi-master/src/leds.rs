@@ -106,7 +106,7 @@ impl PlcLink {
 /// | `sys` | green: connection to the PLC exists; none: no connection | green while a PLC is connected ([`PlcLink::connected`]), else off |
 /// | `asi` | green: AS-i is OK; red: configuration error | green with Config_OK = 1 and Periphery_OK = 1; red with Config_OK = 0; red flashing with Config_OK = 1 and Periphery_OK = 0 |
 /// | `asi_active` | green: active normal operation | green with Normal_Operation_Active = 1, else off |
-/// | `prg` | green: automatic addressing enabled | green with Auto_Address_Assign = 1; green flashing with Auto_Address_Available = 1 too (one projected slave missing: a new slave at address 0 will take its address); else off |
+/// | `prg` | green: automatic addressing enabled | green with Auto_Address_Assign = 1; green flashing with Auto_Address_Available = 1 in normal operation too (one projected slave missing: a new slave at address 0 will take its address); else off |
 /// | `prj` | yellow: the master is in configuration mode | yellow with Configuration_Active = 1, else off |
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub struct MasterLeds {
@@ -160,7 +160,12 @@ impl MasterLeds {
                 (true, true) => Led::Green,
             },
             asi_active: lit(flags.normal_operation_active(), Led::Green),
-            prg: match (flags.auto_address_assign(), flags.auto_address_available()) {
+            // Available shows only in normal operation, where the inclusion phase would
+            // readdress a slave: while detection fills LDS one slave is briefly "missing".
+            prg: match (
+                flags.auto_address_assign(),
+                flags.auto_address_available() && flags.normal_operation_active(),
+            ) {
                 (false, _) => Led::Off,
                 (true, false) => Led::Green,
                 (true, true) => Led::GreenFlashing,
@@ -230,7 +235,11 @@ impl LedWatch {
         }
         self.settle(now);
         if now > self.start {
-            for ((c, old), new) in self.changes.iter_mut().zip(self.shown.each()).zip(leds.each())
+            for ((c, old), new) in self
+                .changes
+                .iter_mut()
+                .zip(self.shown.each())
+                .zip(leds.each())
             {
                 *c += u32::from(old != new);
             }
@@ -337,6 +346,16 @@ mod tests {
         assert_eq!(
             with(EcFlags::AUTO_ADDRESS_AVAILABLE, 0, PlcLink::RUN).prg,
             Led::GreenFlashing
+        );
+        assert_eq!(
+            with(
+                EcFlags::AUTO_ADDRESS_AVAILABLE,
+                EcFlags::NORMAL_OPERATION_ACTIVE,
+                PlcLink::RUN
+            )
+            .prg,
+            Led::Green,
+            "start-up: not yet"
         );
         // prj: yellow in configuration mode.
         assert_eq!(

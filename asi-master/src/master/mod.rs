@@ -44,8 +44,8 @@ use crate::config::{ConfigError, MasterConfig, Mode, ProjectedConfig};
 use crate::image::{
     ProcessImage, F0_CONFIG_ERROR, F1_APF, F2_PERIPHERY_FAULT, F3_CONFIGURATION_NOT_ACTIVE,
 };
-use crate::leds::{LedWatch, MasterLeds, PlcLink};
 use crate::integrated_analog::{S73InputMaster, S73OutputMaster, OVERFLOW_VALUE};
+use crate::leds::{LedWatch, MasterLeds, PlcLink};
 use crate::lists::{EcFlags, HostFlags, SlaveList};
 use crate::mailbox::{address_from_byte, Command, JobResult, Mailbox, MailboxRequest};
 use crate::record::{BusStats, TxKind};
