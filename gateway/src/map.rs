@@ -655,6 +655,9 @@ fn list_words(list: SlaveList) -> [u16; 4] {
 }
 
 /// Word `k` of `words` 16-bit words of `v`, the high word first.
+/// One count of a slave's statistics.
+type Count = fn(&SlaveStats) -> u64;
+
 /// Input register `i` of the statistics per slave (from [`SLAVE_LIGHT_REGISTERS`] on), from
 /// the table `table` gives; `None` outside them.
 fn slave_register<'a>(i: u16, table: impl FnOnce() -> &'a SlaveTable) -> Option<u16> {
@@ -676,7 +679,7 @@ fn slave_register<'a>(i: u16, table: impl FnOnce() -> &'a SlaveTable) -> Option<
     if let Some(place) = single(SLAVE_DROPOUT_REGISTERS) {
         return Some(stats(place).dropouts.min(u32::from(u16::MAX)) as u16);
     }
-    let counters: [(u16, fn(&SlaveStats) -> u64); 3] = [
+    let counters: [(u16, Count); 3] = [
         (SLAVE_CALL_REGISTERS, |s| s.calls),
         (SLAVE_REPEAT_REGISTERS, |s| s.repeats),
         (SLAVE_FAILED_REGISTERS, |s| s.failed_after_repeat),
