@@ -10,6 +10,7 @@ mod handshake_pairs;
 mod handshake_props;
 mod handshakes;
 mod image;
+mod leds;
 mod line_capture;
 mod mailbox;
 mod quick;

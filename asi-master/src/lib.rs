@@ -11,12 +11,13 @@
 //! (LDS, LAS, LPS, LCS, LPF, flags), [`config`] (projected configuration, settings), [`master`]
 //! (phases and cycle), [`mailbox`] (host jobs), [`record`] (transaction records and statistics),
 //! [`slave_stats`] (the statistics per slave an analyser shows),
-//! [`integrated_analog`] (the master's side of S-7.3), [`plc_handshake`] (the PLC side of
+//! [`leds`] (the indicators of seed 003 table 3.2), [`integrated_analog`] (the master's side of S-7.3), [`plc_handshake`] (the PLC side of
 //! tables 4.2–4.7).
 
 pub mod config;
 pub mod image;
 pub mod integrated_analog;
+pub mod leds;
 pub mod lists;
 pub mod mailbox;
 pub mod master;
@@ -26,6 +27,7 @@ pub mod slave_stats;
 
 pub use config::{ConfigError, MasterConfig, Mode, ProjectedConfig, ProjectedSlave};
 pub use image::{Image, ProcessImage};
+pub use leds::{Led, LedWatch, MasterLeds, PlcLink};
 pub use lists::{EcFlags, HostFlags, SlaveList};
 pub use master::{Master, Outcome, Phase};
 pub use record::{BusStats, TraceRing, TransactionRecord, TxKind};

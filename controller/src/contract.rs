@@ -14,7 +14,7 @@
 
 use crate::plc::{FromSafety, Plc, ToSafety};
 use crate::program::{Event, State};
-use asi_master::ProcessImage;
+use asi_master::{PlcLink, ProcessImage};
 use asi_phy::{SimDuration, SimTime};
 use std::any::Any;
 
@@ -39,6 +39,12 @@ pub trait Controller: Send + 'static + ControllerClone {
     /// What the controller tells about itself now. Nothing by default.
     fn status(&self) -> Status {
         Status::default()
+    }
+
+    /// What the AS-i master sees of this PLC (its SYS and OK LEDs, seed 003 table 3.2):
+    /// connected and in run mode. A controller the rig scans is both, by default.
+    fn plc_link(&self) -> PlcLink {
+        PlcLink::RUN
     }
 
     /// The calls the controller holds (cabin, hall), if it tells them.
@@ -162,6 +168,7 @@ impl Controller for Plc {
 pub struct Outside {
     scan: SimDuration,
     signals: ToSafety,
+    link: PlcLink,
 }
 
 impl Outside {
@@ -170,7 +177,14 @@ impl Outside {
         Outside {
             scan,
             signals: ToSafety::default(),
+            link: PlcLink::NONE,
         }
+    }
+
+    /// Whether a client is connected and runs the lift (its owner tells; no PLC until then):
+    /// what the master's SYS and OK LEDs show.
+    pub fn set_link(&mut self, link: PlcLink) {
+        self.link = link;
     }
 
     /// The standard signals for the safety logic (the STOP circuit's restart, the overload),
@@ -187,6 +201,10 @@ impl Controller for Outside {
 
     fn scan(&mut self, _: SimTime, _: &mut ProcessImage, _: FromSafety) -> ToSafety {
         self.signals
+    }
+
+    fn plc_link(&self) -> PlcLink {
+        self.link
     }
 
     fn as_any(&self) -> &dyn Any {

@@ -24,6 +24,13 @@
 //! | input registers | 1050..1053 | simulated time, ms, 64-bit, high word first | read |
 //! | input registers | 1054 | safety bits: as discrete inputs 1000..1004 in bits 0..4 | read |
 //! | input registers | 1055 | the load sensor's level (slave 8, D1..D0: 0 empty .. 3 overloaded) | read |
+//! | input registers | 1060..1066 | the master's LEDs (seed 003 table 3.2): PWR, OK, SYS, AS-i, AS-i active, prg, prj; 0 off, 1 green, 2 green flashing, 3 red, 4 red flashing, 5 yellow | read |
+//! | input registers | 1070..1076 | how often each LED changed since the start, same order (at most 65535) | read |
+//! | input registers | 1100..1163 | each slave's traffic light as the analyser shows it, register 1100 + n for list place n (0..31 = 0/0A..31/31A, 33..63 = 1B..31B; 32 reads 0): 0 none, 1 green, 2 yellow, 3 red | read |
+//! | input registers | 1200..1327 | calls per slave, 32-bit, high word first: place n at 1200 + 2n | read |
+//! | input registers | 1400..1527 | repeats per slave, 32-bit, as calls | read |
+//! | input registers | 1600..1727 | calls failed after their repeat per slave, 32-bit, as calls | read |
+//! | input registers | 1800..1863 | drop-outs from LAS per slave, place n at 1800 + n (at most 65535) | read |
 //! | holding registers | 0..243 | the output data image (table 4.1): host flags and slaves, mailbox 32..49, analog outputs 68..155 (S-7.3 set-point: word 68) | read/write |
 //! | holding registers | 1000 | to the safety logic: bit 0 restart, bit 1 overloaded (as coils 1000, 1001) | read/write |
 //! | holding registers | 1008 | watchdog time, ms (0 = off): outputs not written for this long go to zero, and the signals to the safety logic to their safe values, restart 0 and overloaded 1, until the next write | read/write |
@@ -31,7 +38,8 @@
 //! | holding registers | 3000..3243 | the input data image again, for clients that read holding registers only | read |
 
 use asi_master::image::{F0_CONFIG_ERROR, IMAGE_WORDS};
-use asi_master::{EcFlags, SlaveList};
+use asi_master::leds::LED_COUNT;
+use asi_master::{EcFlags, Light, PlcLink, SlaveList, SlaveStats, SlaveTable};
 use asi_phy::{SimDuration, SimTime, SlaveAddr};
 use bitvec::prelude::*;
 use controller::plc::ToSafety;
@@ -79,6 +87,22 @@ pub const TIME_REGISTERS: u16 = 1050;
 pub const SAFETY_REGISTER: u16 = 1054;
 /// Input register of the load sensor's level (slave 8, D1..D0: 0 empty .. 3 overloaded).
 pub const LOAD_REGISTER: u16 = 1055;
+/// First input register of the master's LEDs (PWR, OK, SYS, AS-i, AS-i active, prg, prj).
+pub const LED_REGISTERS: u16 = 1060;
+/// First input register of the LEDs' change counts.
+pub const LED_CHANGE_REGISTERS: u16 = 1070;
+/// First input register of the slaves' traffic lights, one per list place 0..63.
+pub const SLAVE_LIGHT_REGISTERS: u16 = 1100;
+/// First input register of the calls per slave (two per list place).
+pub const SLAVE_CALL_REGISTERS: u16 = 1200;
+/// First input register of the repeats per slave (two per list place).
+pub const SLAVE_REPEAT_REGISTERS: u16 = 1400;
+/// First input register of the calls failed after their repeat per slave (two per place).
+pub const SLAVE_FAILED_REGISTERS: u16 = 1600;
+/// First input register of the drop-outs per slave (one per list place).
+pub const SLAVE_DROPOUT_REGISTERS: u16 = 1800;
+/// List places of the per-slave registers: 0A..31A, 0B..31B.
+const PLACES: u16 = 64;
 /// Holding register of the signals to the safety logic.
 pub const PLC_SIGNALS_REGISTER: u16 = 1000;
 /// Holding register of the watchdog time.
@@ -205,8 +229,10 @@ impl Gateway {
                 Ok(Response::ReadDiscreteInputs(bits))
             }
             Request::ReadInputRegisters(a, n) => {
+                // The statistics per slave are worked out once per request, if it asks any.
+                let table = std::cell::OnceCell::new();
                 let words = read(*a, *n, MAX_READ_REGISTERS, |i| {
-                    self.input_register(rig, now, i)
+                    self.input_register(rig, now, i, &table)
                 })?;
                 Ok(Response::ReadInputRegisters(words))
             }
@@ -292,9 +318,18 @@ impl Gateway {
             | u16::from(self.tripped) << 4
     }
 
-    fn input_register(&self, rig: &Rig, now: SimTime, i: u16) -> Option<u16> {
+    fn input_register(
+        &self,
+        rig: &Rig,
+        now: SimTime,
+        i: u16,
+        table: &std::cell::OnceCell<SlaveTable>,
+    ) -> Option<u16> {
         if i < IMAGE_REGISTERS {
             return Some(rig.lab().bus().image().input.word(usize::from(i)));
+        }
+        if i >= SLAVE_LIGHT_REGISTERS {
+            return slave_register(i, || table.get_or_init(|| rig.lab().bus().slave_stats()));
         }
         let master = rig.lab().bus().master();
         if (LIST_REGISTERS..FLAGS_REGISTER).contains(&i) {
@@ -351,6 +386,16 @@ impl Gateway {
         if (TIME_REGISTERS..TIME_REGISTERS + 4).contains(&i) {
             let ms = now.as_nanos() / 1_000_000;
             return Some(word_of(ms, 4, usize::from(i - TIME_REGISTERS)));
+        }
+        let leds = LED_COUNT as u16;
+        if (LED_REGISTERS..LED_REGISTERS + leds).contains(&i) {
+            let each = master.leds().each();
+            return Some(each[usize::from(i - LED_REGISTERS)].code());
+        }
+        if (LED_CHANGE_REGISTERS..LED_CHANGE_REGISTERS + leds).contains(&i) {
+            let changes = master.led_watch().changes();
+            let n = changes[usize::from(i - LED_CHANGE_REGISTERS)];
+            return Some(n.min(u32::from(u16::MAX)) as u16);
         }
         None
     }
@@ -512,6 +557,7 @@ impl Gateway {
             rig.log_now(Actor::Gateway, ClientLog::WatchdogClear);
         }
         set_outside_signals(rig, self.signals);
+        set_outside_link(rig, PlcLink::RUN);
     }
 
     /// Zeroes the output image and gives the safety logic [`WATCHDOG_SIGNALS`] if the outside
@@ -534,6 +580,14 @@ impl Gateway {
         }
         self.signals = WATCHDOG_SIGNALS;
         set_outside_signals(rig, self.signals);
+        // The client still holds its connection, but its program no longer runs the lift.
+        set_outside_link(
+            rig,
+            PlcLink {
+                connected: true,
+                run: false,
+            },
+        );
         let expired = ClientLog::WatchdogExpired {
             after_ms: self.watchdog.as_nanos() / 1_000_000,
         };
@@ -601,6 +655,44 @@ fn list_words(list: SlaveList) -> [u16; 4] {
 }
 
 /// Word `k` of `words` 16-bit words of `v`, the high word first.
+/// One count of a slave's statistics.
+type Count = fn(&SlaveStats) -> u64;
+
+/// Input register `i` of the statistics per slave (from [`SLAVE_LIGHT_REGISTERS`] on), from
+/// the table `table` gives; `None` outside them.
+fn slave_register<'a>(i: u16, table: impl FnOnce() -> &'a SlaveTable) -> Option<u16> {
+    let pair = |base: u16| {
+        (base..base + 2 * PLACES)
+            .contains(&i)
+            .then(|| ((i - base) / 2, usize::from((i - base) % 2)))
+    };
+    let single = |base: u16| (base..base + PLACES).contains(&i).then(|| i - base);
+    let stats = |place: u16| table().get(place as u8).cloned().unwrap_or_default();
+    if let Some(place) = single(SLAVE_LIGHT_REGISTERS) {
+        return Some(match stats(place).light {
+            None => 0,
+            Some(Light::Green) => 1,
+            Some(Light::Yellow) => 2,
+            Some(Light::Red) => 3,
+        });
+    }
+    if let Some(place) = single(SLAVE_DROPOUT_REGISTERS) {
+        return Some(stats(place).dropouts.min(u32::from(u16::MAX)) as u16);
+    }
+    let counters: [(u16, Count); 3] = [
+        (SLAVE_CALL_REGISTERS, |s| s.calls),
+        (SLAVE_REPEAT_REGISTERS, |s| s.repeats),
+        (SLAVE_FAILED_REGISTERS, |s| s.failed_after_repeat),
+    ];
+    for (base, count) in counters {
+        if let Some((place, k)) = pair(base) {
+            let v = count(&stats(place)).min(u64::from(u32::MAX));
+            return Some(word_of(v, 2, k));
+        }
+    }
+    None
+}
+
 fn word_of(v: u64, words: usize, k: usize) -> u16 {
     (v >> (16 * (words - 1 - k))) as u16
 }
@@ -655,6 +747,14 @@ pub fn button(v: u16) -> Option<Button> {
         4 if f == 0 => Some(Button::Stop),
         5 if f == 0 => Some(Button::Bell),
         _ => None,
+    }
+}
+
+/// Tells the rig's outside controller what the master sees of the client (its SYS and OK
+/// LEDs); nothing while the built-in program runs.
+fn set_outside_link(rig: &mut Rig, link: PlcLink) {
+    if let Some(outside) = rig.controller_mut::<Outside>() {
+        outside.set_link(link);
     }
 }
 

@@ -177,6 +177,9 @@ pub struct DisplayView {
 pub struct BusView {
     /// The master's phase.
     pub phase: &'static str,
+    /// The master's LEDs (seed 003 table 3.2): name and light (`off`, `green`,
+    /// `green_flashing`, `red`, `red_flashing`, `yellow`), PWR first.
+    pub master_leds: Vec<(&'static str, &'static str)>,
     /// The slaves in any list, by address.
     pub slaves: Vec<SlaveView>,
     /// The lab's slave addresses (for the page's offline/online choice).
@@ -219,6 +222,13 @@ pub struct SlaveView {
     pub input: String,
     /// The last output nibble (D3..D0).
     pub output: String,
+    /// Its traffic light as an analyser shows it (`green`, `yellow`, `red`; absent before
+    /// the master's first normal operation or for a slave without traffic).
+    pub light: Option<&'static str>,
+    /// Calls to it so far, repeats included.
+    pub calls: u64,
+    /// Repeats of its calls so far.
+    pub repeats: u64,
 }
 
 /// The safety logic now.
@@ -360,6 +370,7 @@ pub fn build(rig: &Rig, run: Run, telegrams: Option<&Telegrams>) -> View {
     let master = lab.bus().master();
     let (las, lds, lps, lpf) = (master.las(), master.lds(), master.lps(), master.lpf());
     let image = lab.bus().image();
+    let table = lab.bus().slave_stats();
     let slaves = (1..64u8)
         .filter_map(SlaveAddr::from_index)
         .filter(|a| lds.contains(*a) || las.contains(*a) || lps.contains(*a) || lpf.contains(*a))
@@ -373,6 +384,9 @@ pub fn build(rig: &Rig, run: Run, telegrams: Option<&Telegrams>) -> View {
             lpf: lpf.contains(a),
             input: nibble(image.input.nibble(a).get()),
             output: nibble(image.output.nibble(a).get()),
+            light: table.get(a.index()).and_then(|s| s.light).map(|l| l.name()),
+            calls: table.get(a.index()).map_or(0, |s| s.calls),
+            repeats: table.get(a.index()).map_or(0, |s| s.repeats),
         })
         .collect();
     let stats = lab.bus().stats();
@@ -394,6 +408,10 @@ pub fn build(rig: &Rig, run: Run, telegrams: Option<&Telegrams>) -> View {
             Phase::Activation => "activation",
             Phase::NormalOperation => "normal operation",
         },
+        master_leds: asi_master::MasterLeds::NAMES
+            .into_iter()
+            .zip(master.leds().each().map(|l| l.name()))
+            .collect(),
         slaves,
         lab_addresses: lab_addresses(rig),
         cycle_us: [us(mean), us(stats.cycle_min), us(stats.cycle_max)],

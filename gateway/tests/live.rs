@@ -461,6 +461,30 @@ fn a_watching_client_sees_the_lists_and_the_image_of_the_lab_bus() {
     let word1 = ask(&mut s, 4, &[0x04, 0, 1, 0, 1]);
     let ready = ask(&mut s, 5, &[0x02, 0, 28, 0, 1]);
     assert_eq!(word1[3] & 1, ready[2] & 1);
+    // The master's LEDs (input registers 1060..1066) and their changes (1070..1076): all
+    // green but prj after the start-up, which changed AS-i and AS-i active once.
+    let words = |r: Vec<u8>| -> Vec<u16> {
+        r[2..]
+            .chunks(2)
+            .map(|c| u16::from_be_bytes([c[0], c[1]]))
+            .collect()
+    };
+    let leds = words(ask(&mut s, 6, &[0x04, 0x04, 0x24, 0, 7]));
+    assert_eq!(leds, [1, 1, 1, 1, 1, 1, 0], "LEDs");
+    let changes = words(ask(&mut s, 11, &[0x04, 0x04, 0x2E, 0, 7]));
+    assert_eq!(changes, [0, 0, 0, 1, 1, 0, 0], "changes");
+    // Slave 1's light (1101), calls (1202..1203) and repeats (1402..1403); an empty place
+    // reads no light and no calls.
+    let light = ask(&mut s, 7, &[0x04, 0x04, 0x4D, 0, 2]);
+    assert_eq!((light[3], light[4]), (1, 0), "slave 1 green");
+    let calls = ask(&mut s, 8, &[0x04, 0x04, 0xB2, 0, 2]);
+    let calls = u32::from_be_bytes(calls[2..6].try_into().expect("4 bytes"));
+    assert!(calls > 1_000, "{calls} calls");
+    let empty = ask(&mut s, 9, &[0x04, 0x04, 0x4C + 30, 0, 1]);
+    assert_eq!(&empty[2..], [0, 0], "place 30 has no slave");
+    // Past the last per-slave register: an exception.
+    let past = ask(&mut s, 10, &[0x04, 0x07, 0x48, 0, 1]);
+    assert_eq!(past[0], 0x84, "input register 1864 does not exist");
     running.stop();
     let _ = running.wait();
 }

@@ -351,6 +351,28 @@ function render(v) {
   plot();
 }
 
+// The master's LEDs of seed 003 table 3.2, each a dot in its light (flashing where it flashes).
+function renderLeds(leds) {
+  const box = $("master-leds");
+  if (!box || !leds) return;
+  if (box.children.length !== leds.length) {
+    box.textContent = "";
+    for (const [name] of leds) {
+      const span = document.createElement("span");
+      span.id = `led-${name}`;
+      box.append(span);
+    }
+  }
+  const label = { pwr: "PWR", ok: "OK", sys: "SYS", asi: "AS-i", asi_active: "AS-i active", prg: "prg", prj: "prj mode" };
+  leds.forEach(([name, light], i) => {
+    const span = box.children[i];
+    const s = `● ${label[name] || name}`;
+    if (span.textContent !== s) span.textContent = s;
+    span.className = `led led-${light}`;
+    span.title = light.replace("_", " ");
+  });
+}
+
 function renderBus(b) {
   text("bus-phase", b.phase);
   text("cycle", `${b.cycle_us[0]} (${b.cycle_us[1]}–${b.cycle_us[2]})`);
@@ -361,13 +383,14 @@ function renderBus(b) {
   text("noise", b.line_noise);
   const tbody = $("slaves").tBodies[0];
   const known = new Set(b.slaves.map((s) => s.number));
-  const rows = b.slaves.map((s) => [s.addr, s.name, s.lds, s.las, s.lps, s.lpf, s.input, s.output, s.number]);
-  for (const n of b.lab_addresses) if (!known.has(n)) rows.push([`${n}`, "off line", false, false, false, false, "", "", n]);
+  renderLeds(b.master_leds);
+  const rows = b.slaves.map((s) => [s.addr, s.name, s.lds, s.las, s.lps, s.lpf, s.input, s.output, s.number, s.light, s.calls, s.repeats]);
+  for (const n of b.lab_addresses) if (!known.has(n)) rows.push([`${n}`, "off line", false, false, false, false, "", "", n, null, 0, 0]);
   rows.sort((a, b) => a[8] - b[8]);
   while (tbody.rows.length > rows.length) tbody.deleteRow(-1);
   while (tbody.rows.length < rows.length) {
     const r = tbody.insertRow();
-    for (let i = 0; i < 9; i++) r.insertCell();
+    for (let i = 0; i < 10; i++) r.insertCell();
   }
   rows.forEach((row, i) => {
     const tr = tbody.rows[i];
@@ -379,9 +402,15 @@ function renderBus(b) {
       if (cell.textContent !== s) cell.textContent = s;
       if (typeof val === "boolean") cell.className = val ? (k === 5 ? "bad" : "yes") : "no";
     }
+    // The analyser's traffic light, with the calls and repeats behind it.
+    const light = tr.cells[8];
+    const lit = row[9] ? "●" : "–";
+    if (light.textContent !== lit) light.textContent = lit;
+    light.className = row[9] ? `light-${row[9]}` : "no";
+    light.title = `${row[10]} calls, ${row[11]} repeats`;
     const n = row[8];
     const action = b.lab_addresses.includes(n) ? (row[3] || row[2] ? "offline" : "online") : "";
-    const cell = tr.cells[8];
+    const cell = tr.cells[9];
     if (cell.dataset.action !== action || cell.dataset.n !== `${n}`) {
       cell.dataset.action = action;
       cell.dataset.n = `${n}`;

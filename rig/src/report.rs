@@ -191,6 +191,66 @@ pub struct BusReport {
     /// the traffic or is projected (absent when none did).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub slaves: Vec<SlaveReport>,
+    /// The AS-i master's LEDs (seed 003 table 3.2; docs/master.md §2.8): each at the end of
+    /// the run, how often it changed and how long it was away from undisturbed operation.
+    pub master_leds: MasterLedsReport,
+}
+
+/// The master's LEDs over a run, one object per LED of seed 003 table 3.2.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+#[non_exhaustive]
+pub struct MasterLedsReport {
+    /// PWR: the master's power (AS-i power fail turns it off).
+    pub pwr: LedReport,
+    /// OK: the PLC in run mode.
+    pub ok: LedReport,
+    /// SYS: the connection to the PLC.
+    pub sys: LedReport,
+    /// AS-i: green AS-i OK, red configuration error, red flashing peripheral fault.
+    pub asi: LedReport,
+    /// AS-i: normal operation active.
+    pub asi_active: LedReport,
+    /// prg: automatic addressing enabled (flashing: a missing slave can be readdressed).
+    pub prg: LedReport,
+    /// prj mode: configuration mode (yellow).
+    pub prj: LedReport,
+}
+
+/// One LED over a run.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+#[non_exhaustive]
+pub struct LedReport {
+    /// Its light at the end: `off`, `green`, `green_flashing`, `red`, `red_flashing`,
+    /// `yellow`.
+    pub end: &'static str,
+    /// How often its light changed (not counting the start).
+    pub changes: u32,
+    /// Seconds it showed something else than in undisturbed operation in protected mode
+    /// (every LED green but prj, which is off), to the millisecond.
+    pub abnormal_s: f64,
+}
+
+impl MasterLedsReport {
+    /// The report of the master's LED watch up to `now`.
+    pub fn of(watch: &asi_master::LedWatch, now: asi_phy::SimTime) -> MasterLedsReport {
+        let end = watch.shown().each();
+        let changes = watch.changes();
+        let away = watch.away(now);
+        let led = |i: usize| LedReport {
+            end: end[i].name(),
+            changes: changes[i],
+            abnormal_s: round3(away[i].as_secs_f64()),
+        };
+        MasterLedsReport {
+            pwr: led(0),
+            ok: led(1),
+            sys: led(2),
+            asi: led(3),
+            asi_active: led(4),
+            prg: led(5),
+            prj: led(6),
+        }
+    }
 }
 
 /// A slave's absences from LAS in normal operation.
@@ -527,6 +587,7 @@ impl Report {
                 },
                 dropouts: Vec::new(),
                 slaves: Vec::new(),
+                master_leds: MasterLedsReport::default(),
             },
             safety: SafetyReport {
                 trips: Vec::new(),

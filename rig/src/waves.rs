@@ -127,6 +127,8 @@ pub struct RigSample {
     pub supply_v: f64,
     /// The safe drive's bits (with `[drive] safe = true`).
     pub drive: Option<DriveSample>,
+    /// The AS-i master's LEDs (seed 003 table 3.2).
+    pub master_leds: asi_master::MasterLeds,
 }
 
 /// The safe drive's bits at one moment (scope `rig.drive_safety`).
@@ -238,6 +240,8 @@ struct Ids {
     fb_err: VarId,
     com_err: VarId,
     out_err: VarId,
+    /// The master's LEDs, in the order of `MasterLeds::NAMES`.
+    leds: [VarId; asi_master::leds::LED_COUNT],
 }
 
 fn declare(w: &mut VcdWriter<Box<dyn Write>>) -> Ids {
@@ -245,6 +249,7 @@ fn declare(w: &mut VcdWriter<Box<dyn Write>>) -> Ids {
     const PLANT: &[&str] = &["rig", "plant"];
     const CTL: &[&str] = &["rig", "controller"];
     const SAFETY: &[&str] = &["rig", "safety"];
+    const LEDS: &[&str] = &["rig", "master_leds"];
     Ids {
         manchester: w.var_every_record(BUS, vcd::PULSE_WIRE, VarKind::Wire(1)),
         line_voltage: w.var(BUS, vcd::LINE_VOLTAGE, VarKind::Real),
@@ -278,6 +283,7 @@ fn declare(w: &mut VcdWriter<Box<dyn Write>>) -> Ids {
         fb_err: w.var(SAFETY, "fb_err", VarKind::Wire(1)),
         com_err: w.var(SAFETY, "com_err", VarKind::Wire(1)),
         out_err: w.var(SAFETY, "out_err", VarKind::Wire(1)),
+        leds: asi_master::MasterLeds::NAMES.map(|n| w.var(LEDS, n, VarKind::Text)),
     }
 }
 
@@ -295,6 +301,8 @@ pub struct Waves {
     wave: WaveformConfig,
     response_after: SimDuration,
     last_real: Option<(SimTime, f64, f64)>,
+    /// The master's LEDs last written.
+    last_leds: Option<asi_master::MasterLeds>,
     error: Option<String>,
 }
 
@@ -320,6 +328,7 @@ impl Waves {
             wave: WaveformConfig::default(),
             response_after: timing.request_span() + timing.master_pause(),
             last_real: None,
+            last_leds: None,
             error: None,
         }
     }
@@ -346,6 +355,7 @@ impl Waves {
             wave: self.wave,
             response_after: self.response_after,
             last_real: self.last_real,
+            last_leds: self.last_leds,
             error: None,
         }
     }
@@ -478,6 +488,13 @@ impl Waves {
         w.change(n, ids.state, Sample::Text(s.controller_state.into()));
         w.change(n, ids.group, Sample::Text(s.group_state.into()));
         w.change(n, ids.supply, Sample::Real(s.supply_v));
+        // They change seldom: only a change is handed to the writer.
+        if self.last_leds != Some(s.master_leds) {
+            for (id, led) in ids.leds.iter().zip(s.master_leds.each()) {
+                w.change(n, *id, Sample::Text(led.name().into()));
+            }
+            self.last_leds = Some(s.master_leds);
+        }
         if let (Some(d), Some(ds)) = (&self.drive, &s.drive) {
             for (i, f) in safety::drive::Function::ALL.iter().enumerate() {
                 w.change(n, d.control[i], (!ds.control.requested(*f)).into());

@@ -10,6 +10,7 @@ mod display_word;
 mod end_to_end;
 mod fast_path;
 mod line_noise;
+mod master_leds;
 mod referee;
 mod roundtrip;
 mod safe_drive;

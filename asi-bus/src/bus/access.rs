@@ -30,6 +30,12 @@ impl Bus {
         &self.master
     }
 
+    /// What the application tells the master about its PLC from now on (the SYS and OK LEDs
+    /// of seed 003 table 3.2, [`asi_master::leds`]); the bus's traffic does not depend on it.
+    pub fn set_plc_link(&mut self, plc: asi_master::PlcLink) {
+        self.master.set_plc_link(self.now, plc);
+    }
+
     /// The process image (what the PLC reads and writes).
     pub fn image(&self) -> &asi_master::image::ProcessImage {
         self.master.image()

@@ -195,7 +195,7 @@ impl Master {
                     self.lpf.set(a, fault);
                     self.touch_inputs();
                 }
-                self.inputs_after();
+                self.inputs_after(now);
                 quiet
             }
             (
@@ -218,7 +218,7 @@ impl Master {
                     self.incl = None;
                     self.incl_step = None;
                 }
-                self.inputs_after();
+                self.inputs_after(now);
                 quiet
             }
             _ => self.judge_outcome(now, outcome),

@@ -45,6 +45,7 @@ use crate::image::{
     ProcessImage, F0_CONFIG_ERROR, F1_APF, F2_PERIPHERY_FAULT, F3_CONFIGURATION_NOT_ACTIVE,
 };
 use crate::integrated_analog::{S73InputMaster, S73OutputMaster, OVERFLOW_VALUE};
+use crate::leds::{LedWatch, MasterLeds, PlcLink};
 use crate::lists::{EcFlags, HostFlags, SlaveList};
 use crate::mailbox::{address_from_byte, Command, JobResult, Mailbox, MailboxRequest};
 use crate::record::{BusStats, TxKind};
@@ -266,6 +267,10 @@ pub struct Master {
     /// one bit test instead of a look into the vector.
     analog_mask: u64,
     analog_out: [Nibble; 64],
+    /// What the application last told about its PLC (the SYS and OK LEDs).
+    plc: PlcLink,
+    /// The LEDs over the run.
+    led_watch: LedWatch,
     mailbox: Mailbox,
     job: Option<(MailboxRequest, JobStep)>,
     offline_cursor: u8,
@@ -327,6 +332,8 @@ impl Master {
             analog: vec![None; 64],
             analog_mask: 0,
             analog_out: [Nibble::ZERO; 64],
+            plc: PlcLink::NONE,
+            led_watch: LedWatch::new(SimTime::ZERO, MasterLeds::default()),
             mailbox: Mailbox::default(),
             job: None,
             offline_cursor: 0,
@@ -346,6 +353,7 @@ impl Master {
             inputs_touched: true,
         };
         m.update_flags();
+        m.leds_changed(SimTime::ZERO);
         Ok(m)
     }
 
@@ -421,6 +429,30 @@ impl Master {
         self.flags
     }
 
+    /// The LEDs as the master shows them now (seed 003 table 3.2; [`crate::leds`]).
+    pub fn leds(&self) -> MasterLeds {
+        MasterLeds::of(self.flags, self.plc)
+    }
+
+    /// The LEDs over the run: changes and time away from normal.
+    pub fn led_watch(&self) -> &LedWatch {
+        &self.led_watch
+    }
+
+    /// What the application tells about its PLC from `now` on: connected, in run mode (the
+    /// SYS and OK LEDs). Nothing of the master's work depends on it.
+    pub fn set_plc_link(&mut self, now: SimTime, plc: PlcLink) {
+        if plc != self.plc {
+            self.plc = plc;
+            self.leds_changed(now);
+        }
+    }
+
+    /// What the application last told about its PLC.
+    pub fn plc_link(&self) -> PlcLink {
+        self.plc
+    }
+
     fn signature(&self) -> Signature {
         (
             self.lds.bits(),
@@ -451,9 +483,9 @@ impl Master {
     /// Recomputes the flags if the signature differs from the one before the transaction.
     /// Only the check is inlined: most transactions touch nothing.
     #[inline(always)]
-    fn inputs_after(&mut self) {
+    fn inputs_after(&mut self, now: SimTime) {
         if self.inputs_touched {
-            self.inputs_changed();
+            self.inputs_changed(now);
         }
         debug_assert_eq!(
             self.inputs_seen,
@@ -464,13 +496,19 @@ impl Master {
 
     /// `inputs_after` when something was touched.
     #[inline(never)]
-    fn inputs_changed(&mut self) {
+    fn inputs_changed(&mut self, now: SimTime) {
         self.inputs_touched = false;
-        let now = self.signature();
-        if now != self.inputs_seen {
-            self.inputs_seen = now;
+        let seen = self.signature();
+        if seen != self.inputs_seen {
+            self.inputs_seen = seen;
             self.update_flags();
+            self.leds_changed(now);
         }
+    }
+
+    /// The LEDs may show something new from `now` (the flags or the PLC link changed).
+    fn leds_changed(&mut self, now: SimTime) {
+        self.led_watch.observe(now, self.leds());
     }
 
     /// Notes a write to something the flags depend on (see `inputs_touched`).
@@ -573,6 +611,7 @@ impl Master {
             self.lcs.set(ZERO_A, true);
         }
         self.update_flags();
+        self.leds_changed(now);
     }
 
     /// `true` while the supply is above the APF threshold.
@@ -606,7 +645,7 @@ impl Master {
             Some(t) => Some(t),
             None => self.next_cycle_call(now),
         };
-        self.inputs_after();
+        self.inputs_after(now);
         t
     }
 
@@ -722,7 +761,7 @@ impl Master {
         self.in_flight = None;
         self.inputs_before();
         self.apply(f.tx, resp);
-        self.inputs_after();
+        self.inputs_after(now);
         Verdict {
             repeat: false,
             error: failed,

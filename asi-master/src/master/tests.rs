@@ -440,7 +440,7 @@ impl Master {
         self.inputs_before();
         self.service_host(now);
         let t = self.next_transmit(now);
-        self.inputs_after();
+        self.inputs_after(now);
         t
     }
 

@@ -195,6 +195,19 @@ async fn the_socket_streams_at_least_20_snapshots_a_second_to_every_browser() {
     assert_eq!(v["shaft"]["floors"], 4);
     assert!(v["bus"]["slaves"].as_array().expect("slaves").len() >= 11);
     assert_eq!(v["bus"]["errors"].as_array().expect("errors").len(), 8);
+    // The master's LEDs, PWR first, and a light with its counts per slave.
+    let leds = v["bus"]["master_leds"].as_array().expect("master_leds");
+    assert_eq!(leds.len(), 7);
+    assert_eq!(leds[0], serde_json::json!(["pwr", "green"]));
+    assert_eq!(leds[6][0], "prj");
+    let slave = &v["bus"]["slaves"][0];
+    // Early in the run: the counts may still be 0.
+    assert!(slave["calls"].is_u64(), "{slave}");
+    assert!(slave["repeats"].is_u64());
+    assert!(
+        slave["light"].is_null() || slave["light"].is_string(),
+        "{slave}"
+    );
     running.stop();
     tokio::task::spawn_blocking(move || running.wait())
         .await

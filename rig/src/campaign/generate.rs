@@ -485,6 +485,7 @@ pub fn generate(campaign_seed: u64, index: u64, profile: &Profile) -> Generated 
             door_closed,
             pulse_error_rate,
             extra_slaves,
+            master_mode: asi_master::Mode::Protected,
             plc_scan,
             power_on_reset,
             safe_drive,

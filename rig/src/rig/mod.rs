@@ -236,7 +236,9 @@ impl Rig {
             cfg.initial_position_mm = sc.start_mm;
             cfg
         })?;
-        let mut lab = LabLift::with_extra(asi_master::MasterConfig::default(), sc.extra_slaves)?;
+        let mut master = asi_master::MasterConfig::default();
+        master.mode = sc.master_mode;
+        let mut lab = LabLift::with_extra(master, sc.extra_slaves)?;
         lab.bus_mut().watch(asi_bus::Watch {
             outputs: wiring::drives_plant(),
             ..asi_bus::Watch::default()
@@ -470,6 +472,7 @@ impl Rig {
             out_err: diag.is_some_and(|d| d.group.errors.out_err),
             supply_v: self.lab.bus().supply_voltage(),
             drive: self.safety.drive.as_ref().map(|d| d.sample()),
+            master_leds: self.lab.bus().master().leds(),
         }
     }
 
@@ -842,6 +845,10 @@ impl Rig {
         };
         self.report.bus = words::bus_report(stats, dropouts);
         self.report.bus.slaves = words::slave_reports(self.lab.bus());
+        self.report.bus.master_leds = crate::report::MasterLedsReport::of(
+            self.lab.bus().master().led_watch(),
+            self.lab.bus().now(),
+        );
         self.report.passengers = self.people.passengers.report();
         if let Some(d) = self.safety.drive.as_mut() {
             self.report.safety.drive = Some(d.finish());

@@ -382,6 +382,10 @@ impl Rig {
         self.safety.to = self
             .controller
             .scan(t, self.lab.bus_mut().image_mut(), self.safety.from);
+        let link = self.controller.plc_link();
+        if link != self.lab.bus().master().plc_link() {
+            self.lab.bus_mut().set_plc_link(link);
+        }
         let held = self.controller.status().bus_fault();
         match (self.judge.bus_fault_since, held) {
             (None, true) => {

@@ -65,6 +65,7 @@ pub(super) fn bus_report(stats: BusStats, dropouts: Vec<SlaveDropouts>) -> BusRe
         },
         dropouts,
         slaves: Vec::new(),
+        master_leds: Default::default(),
     }
 }
 

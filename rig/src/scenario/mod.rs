@@ -40,6 +40,9 @@ pub struct Scenario {
     /// Plain I/O modules added to the lab bus at its free addresses (0..=20): the lift on a
     /// fuller bus.
     pub extra_slaves: u8,
+    /// The AS-i master's mode from power-on (docs/master.md §2.3): protected (the lab's) or
+    /// configuration, where every detected slave is activated and the prj LED is yellow.
+    pub master_mode: asi_master::Mode,
     /// The PLC scan period.
     pub plc_scan: SimDuration,
     /// Whether the operator presses the safety reset once after power-on, as at the lab
@@ -237,6 +240,7 @@ impl Scenario {
             door_closed: true,
             pulse_error_rate: 0.0,
             extra_slaves: 0,
+            master_mode: asi_master::Mode::Protected,
             plc_scan: SimDuration::from_millis(10),
             power_on_reset: true,
             safe_drive: false,

@@ -43,6 +43,7 @@ struct RawLift {
 struct RawBus {
     pulse_error_rate: Option<Spanned<f64>>,
     extra_slaves: Option<Spanned<i64>>,
+    master_mode: Option<Spanned<String>>,
 }
 
 #[derive(Deserialize)]
@@ -592,7 +593,7 @@ fn read_lift(loc: &Locator<'_>, l: &RawLift, sc: &mut Scenario) -> Result<(), Sc
     Ok(())
 }
 
-/// `[bus]`: line noise and extra slaves.
+/// `[bus]`: line noise, extra slaves and the master's mode.
 fn read_bus(loc: &Locator<'_>, b: &RawBus, sc: &mut Scenario) -> Result<(), ScenarioError> {
     if let Some(r) = &b.pulse_error_rate {
         let rate = PulseErrorRate::new(*r.get_ref())
@@ -611,6 +612,19 @@ fn read_bus(loc: &Locator<'_>, b: &RawBus, sc: &mut Scenario) -> Result<(), Scen
                     format!("{v}: the lab bus has room for 0..=20 more slaves"),
                 )
             })?;
+    }
+    if let Some(m) = &b.master_mode {
+        sc.master_mode = match m.get_ref().as_str() {
+            "protected" => asi_master::Mode::Protected,
+            "configuration" => asi_master::Mode::Configuration,
+            other => {
+                return Err(loc.error(
+                    Some(m.span()),
+                    "bus.master_mode",
+                    format!("{other:?}: \"protected\" or \"configuration\""),
+                ))
+            }
+        };
     }
     Ok(())
 }

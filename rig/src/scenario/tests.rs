@@ -243,6 +243,7 @@ mod round_trip {
             scan in PLC_SCAN_RANGE.start().as_nanos()..=PLC_SCAN_RANGE.end().as_nanos(),
             power_on_reset in any::<bool>(),
             safe_drive in any::<bool>(),
+            configuration_mode in any::<bool>(),
         ) -> Scenario {
             Scenario {
                 name,
@@ -255,6 +256,11 @@ mod round_trip {
                 door_closed,
                 pulse_error_rate,
                 extra_slaves,
+                master_mode: if configuration_mode {
+                    asi_master::Mode::Configuration
+                } else {
+                    asi_master::Mode::Protected
+                },
                 plc_scan: SimDuration::from_nanos(scan),
                 power_on_reset,
                 safe_drive,

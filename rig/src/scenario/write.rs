@@ -39,6 +39,11 @@ impl Scenario {
             toml_float(self.pulse_error_rate)
         );
         let _ = writeln!(s, "extra_slaves = {}", self.extra_slaves);
+        // Written only when not the default, so that the files of scenarios without it stay
+        // as they were.
+        if self.master_mode == asi_master::Mode::Configuration {
+            let _ = writeln!(s, "master_mode = \"configuration\"");
+        }
         let _ = writeln!(
             s,
             "\n[controller]\nscan = \"{}\"",
