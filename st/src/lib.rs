@@ -3,8 +3,8 @@
 //!
 //! This crate is the language's front end: the source and its diagnostics ([`source`]), the
 //! tokens ([`lexer`]), the syntax ([`ast`]), the parser ([`parser`]), the elementary types
-//! ([`types`]), the declarations checked ([`check`]), the statements typed ([`typeck`]) and the
-//! standard function blocks ([`stdfb`]). A program that does
+//! ([`types`]), the declarations checked ([`check`]), the statements typed ([`typeck`]), the
+//! standard function blocks ([`stdfb`]) and the interpreter ([`run`]). A program that does
 //! not parse is refused with every error at once, each as `file:line:column`, the source line
 //! with a caret under the place, and the cause:
 //!
@@ -28,6 +28,7 @@ pub mod ast;
 pub mod check;
 pub mod lexer;
 pub mod parser;
+pub mod run;
 pub mod source;
 pub mod stdfb;
 pub mod typeck;

@@ -1,0 +1,1848 @@
+//! A checked program compiled to a flat form and run scan by scan, as a PLC runs it.
+//!
+//! Every variable has a fixed place in one memory (the program's, the globals', every
+//! function block instance's nested in its owner, and one frame per function: a PLC program
+//! has no recursion, [`crate::typeck`]), so nothing is allocated while the program runs. A scan
+//! is counted in operations (the PLC's watchdog, [`Budget`]): deterministic, whatever the
+//! machine. A division by zero, an index out of range or a scan past its budget stops the PLC
+//! ([`Fault`]) with the place in the source, as a real PLC goes to STOP.
+//!
+//! The process image is the caller's ([`Image`]): located variables read and write it at
+//! their words and bits (seed 003, table 4.1).
+
+use std::collections::HashMap;
+
+use crate::ast::{
+    self, BinOp, CaseLabel, Expr, ExprKind, Lit, PouKind, Stmt, StmtKind, UnOp, VarKind,
+};
+use crate::check::{Checked, Location, StdFb, Type, Var};
+use crate::lexer::{Area, Size};
+use crate::source::Span;
+use crate::stdfb;
+use crate::types::Elem;
+
+/// The process image a program reads and writes: words of 16 bits.
+pub trait Image {
+    /// Input word `w` (0 past the image).
+    fn input(&self, w: u32) -> u16;
+    /// Output word `w` as last written (0 past the image).
+    fn output(&self, w: u32) -> u16;
+    /// Writes output word `w` (nothing past the image).
+    fn set_output(&mut self, w: u32, value: u16);
+}
+
+/// How many operations a scan may take before the watchdog stops the PLC.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Budget(pub u64);
+
+impl Default for Budget {
+    /// A million operations: some thousand times what a lift program's scan takes.
+    fn default() -> Self {
+        Budget(1_000_000)
+    }
+}
+
+/// Why the PLC stopped.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Fault {
+    /// Where in the source.
+    pub span: Span,
+    /// What happened.
+    pub cause: FaultCause,
+}
+
+/// What stopped the PLC.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum FaultCause {
+    /// An integer division or MOD by zero.
+    DivisionByZero,
+    /// An array index outside its bounds.
+    IndexOutOfRange {
+        /// The index.
+        index: i64,
+        /// The least index.
+        lo: i64,
+        /// The greatest index.
+        hi: i64,
+    },
+    /// The scan took more operations than its budget.
+    Watchdog(u64),
+}
+
+impl std::fmt::Display for FaultCause {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            FaultCause::DivisionByZero => f.write_str("division by zero"),
+            FaultCause::IndexOutOfRange { index, lo, hi } => {
+                write!(f, "index {index} outside the array's {lo}..{hi}")
+            }
+            FaultCause::Watchdog(n) => {
+                write!(f, "the scan took more than {n} operations (the watchdog)")
+            }
+        }
+    }
+}
+
+/// A value in memory.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Value {
+    /// BOOL.
+    Bool(bool),
+    /// A signed integer, an enumeration, or TIME (nanoseconds).
+    Int(i64),
+    /// An unsigned integer or a bit string.
+    Uint(u64),
+    /// REAL or LREAL.
+    Real(f64),
+}
+
+impl Value {
+    fn int(self) -> i64 {
+        match self {
+            Value::Bool(b) => i64::from(b),
+            Value::Int(i) => i,
+            Value::Uint(u) => u as i64,
+            Value::Real(r) => r as i64,
+        }
+    }
+
+    fn uint(self) -> u64 {
+        match self {
+            Value::Bool(b) => u64::from(b),
+            Value::Int(i) => i as u64,
+            Value::Uint(u) => u,
+            Value::Real(r) => r as u64,
+        }
+    }
+
+    fn real(self) -> f64 {
+        match self {
+            Value::Bool(b) => f64::from(u8::from(b)),
+            Value::Int(i) => i as f64,
+            Value::Uint(u) => u as f64,
+            Value::Real(r) => r,
+        }
+    }
+
+    fn bool(self) -> bool {
+        match self {
+            Value::Bool(b) => b,
+            Value::Int(i) => i != 0,
+            Value::Uint(u) => u != 0,
+            Value::Real(r) => r != 0.0,
+        }
+    }
+}
+
+/// `v` as a value of `e`: integers wrap to its width, reals round to its precision.
+fn coerce(v: Value, e: Elem) -> Value {
+    match e {
+        Elem::Bool => Value::Bool(v.bool()),
+        Elem::Sint => Value::Int(i64::from(v.int() as i8)),
+        Elem::Int => Value::Int(i64::from(v.int() as i16)),
+        Elem::Dint => Value::Int(i64::from(v.int() as i32)),
+        Elem::Lint | Elem::Time | Elem::Ltime => Value::Int(v.int()),
+        Elem::Usint | Elem::Byte => Value::Uint(u64::from(v.uint() as u8)),
+        Elem::Uint | Elem::Word => Value::Uint(u64::from(v.uint() as u16)),
+        Elem::Udint | Elem::Dword => Value::Uint(u64::from(v.uint() as u32)),
+        Elem::Ulint | Elem::Lword => Value::Uint(v.uint()),
+        Elem::Real => Value::Real(f64::from(v.real() as f32)),
+        Elem::Lreal => Value::Real(v.real()),
+    }
+}
+
+/// A place in memory or in the image.
+#[derive(Clone, Debug)]
+enum Place {
+    /// An address within the running block's frame.
+    Mem(u32),
+    /// An absolute address (a global, a function's frame).
+    Abs(u32),
+    /// A fixed offset from a place (a field, a pin, an instance's variable).
+    Offset(Box<Place>, u32),
+    /// An element: `base` plus each index's offset, checked against its bounds.
+    Indexed {
+        base: Box<Place>,
+        terms: Vec<(Ix, i64, i64, u32)>,
+        span: Span,
+    },
+    /// Bit `n` of the bit string at the place.
+    Bit(Box<Place>, u32, Elem),
+    /// Input image bit.
+    InBit(u32, u32),
+    /// Input image word.
+    InWord(u32),
+    /// Output image bit.
+    OutBit(u32, u32),
+    /// Output image word.
+    OutWord(u32),
+}
+
+/// An index expression.
+type Ix = Box<IExpr>;
+
+/// An expression, compiled: each operation with the type it computes in.
+#[derive(Clone, Debug)]
+enum IExpr {
+    Const(Value),
+    Read(Place, Elem),
+    Neg(Box<IExpr>, Elem),
+    Not(Box<IExpr>, Elem),
+    Bin(BinOp, Elem, Box<IExpr>, Box<IExpr>, Span),
+    /// A comparison of two values of one type.
+    Cmp(BinOp, Elem, Box<IExpr>, Box<IExpr>),
+    Conv(Elem, Box<IExpr>),
+    /// A function's call: its frame (start, length) reset to its initial values, its inputs
+    /// (absolute addresses) written, its code run, its result read.
+    Call(usize, (u32, u32), Vec<(u32, Elem, IExpr)>, u32, Elem),
+    Std(StdFn, Elem, Vec<IExpr>),
+}
+
+#[derive(Clone, Copy, Debug)]
+enum StdFn {
+    Abs,
+    Sqrt,
+    Min,
+    Max,
+    Limit,
+    Sel,
+    Mux,
+    Shl,
+    Shr,
+    Rol,
+    Ror,
+}
+
+/// A CASE arm: its labels' ranges and its statements.
+type CaseArm = (Vec<(i64, i64)>, Vec<IStmt>);
+
+/// A statement, compiled.
+#[derive(Clone, Debug)]
+enum IStmt {
+    Assign(Place, Elem, IExpr),
+    /// A block instance's call: inputs written into its frame (at offsets), the body run on
+    /// it, outputs read from it.
+    CallFb {
+        fb: FbKind,
+        instance: Place,
+        inputs: Vec<(u32, Elem, IExpr)>,
+        outputs: Vec<(u32, Elem, Place)>,
+    },
+    /// An array's or a structure's copy: `n` values.
+    Copy(Place, Place, u32),
+    /// A function called for its effect, its result dropped.
+    Eval(IExpr),
+    If(Vec<(IExpr, Vec<IStmt>)>, Vec<IStmt>),
+    Case(IExpr, Vec<CaseArm>, Vec<IStmt>),
+    For {
+        var: Place,
+        elem: Elem,
+        from: IExpr,
+        to: IExpr,
+        by: IExpr,
+        body: Vec<IStmt>,
+    },
+    While(IExpr, Vec<IStmt>),
+    Repeat(Vec<IStmt>, IExpr),
+    Exit,
+    Continue,
+    Return,
+}
+
+#[derive(Clone, Copy, Debug)]
+enum FbKind {
+    /// A block of the program: its code's index.
+    User(usize),
+    /// A standard block: its frame holds its state's index, then its pins.
+    Std(StdFb),
+}
+
+/// A standard block's state.
+#[derive(Clone, Copy, Debug)]
+enum StdState {
+    Sr(stdfb::Sr),
+    Rs(stdfb::Rs),
+    RTrig(stdfb::RTrig),
+    FTrig(stdfb::FTrig),
+    Ctu(stdfb::Ctu),
+    Ctd(stdfb::Ctd),
+    Ctud(stdfb::Ctud),
+    Tp(stdfb::Tp),
+    Ton(stdfb::Ton),
+    Tof(stdfb::Tof),
+}
+
+/// How a statement list ended.
+enum Flow {
+    Next,
+    Exit,
+    Continue,
+    Return,
+}
+
+/// A program ready to run: its code, its memory, and the standard blocks' states.
+#[derive(Clone, Debug)]
+pub struct Plc {
+    /// The code of each block, compiled once per block (a function block's code is shared
+    /// by its instances, which run it on their own frames).
+    code: Vec<Vec<IStmt>>,
+    /// The program's block.
+    program: usize,
+    memory: Vec<Value>,
+    initial: Vec<Value>,
+    std: Vec<StdState>,
+    std_initial: Vec<StdState>,
+    /// The variables' names and places, for a watch list.
+    names: Vec<(String, u32, Elem)>,
+    budget: Budget,
+}
+
+/// The pins of a standard block in its frame, in order.
+fn std_pins(f: StdFb) -> &'static [(&'static str, Elem)] {
+    use Elem::{Bool, Int, Time};
+    match f {
+        StdFb::Ton | StdFb::Tof | StdFb::Tp => {
+            &[("IN", Bool), ("PT", Time), ("Q", Bool), ("ET", Time)]
+        }
+        StdFb::RTrig | StdFb::FTrig => &[("CLK", Bool), ("Q", Bool)],
+        StdFb::Sr => &[("S1", Bool), ("R", Bool), ("Q1", Bool)],
+        StdFb::Rs => &[("S", Bool), ("R1", Bool), ("Q1", Bool)],
+        StdFb::Ctu => &[
+            ("CU", Bool),
+            ("R", Bool),
+            ("PV", Int),
+            ("Q", Bool),
+            ("CV", Int),
+        ],
+        StdFb::Ctd => &[
+            ("CD", Bool),
+            ("LD", Bool),
+            ("PV", Int),
+            ("Q", Bool),
+            ("CV", Int),
+        ],
+        StdFb::Ctud => &[
+            ("CU", Bool),
+            ("CD", Bool),
+            ("R", Bool),
+            ("LD", Bool),
+            ("PV", Int),
+            ("QU", Bool),
+            ("QD", Bool),
+            ("CV", Int),
+        ],
+    }
+}
+
+impl Plc {
+    /// `checked` compiled (it has been type-checked without errors, [`crate::typeck`]).
+    pub fn new(checked: &Checked) -> Plc {
+        let mut c = Compiler::new(checked);
+        c.compile();
+        c.finish()
+    }
+
+    /// Sets the watchdog's budget per scan.
+    pub fn set_budget(&mut self, budget: Budget) {
+        self.budget = budget;
+    }
+
+    /// Back to the initial values, as a PLC's cold start.
+    pub fn reset(&mut self) {
+        self.memory.clone_from(&self.initial);
+        self.std.clone_from(&self.std_initial);
+    }
+
+    /// The program's and the globals' variables of elementary type and their values now.
+    pub fn watch(&self) -> Vec<(&str, Value)> {
+        self.names
+            .iter()
+            .map(|(n, a, _)| (n.as_str(), self.memory[*a as usize]))
+            .collect()
+    }
+
+    /// The value of the program's or a global variable `name`, if elementary.
+    pub fn get(&self, name: &str) -> Option<Value> {
+        self.names
+            .iter()
+            .find(|(n, _, _)| n.eq_ignore_ascii_case(name))
+            .map(|(_, a, _)| self.memory[*a as usize])
+    }
+
+    /// One scan at `now` (nanoseconds on the PLC's clock) over `image`.
+    pub fn scan(&mut self, now: i64, image: &mut dyn Image) -> Result<(), Fault> {
+        let code = std::mem::take(&mut self.code);
+        let mut m = Machine {
+            memory: &mut self.memory,
+            initial: &self.initial,
+            std: &mut self.std,
+            code: &code,
+            image,
+            now,
+            left: self.budget.0,
+            budget: self.budget.0,
+        };
+        let r = m.stmts(&code[self.program], 0).map(|_| ());
+        self.code = code;
+        r
+    }
+}
+
+struct Machine<'a> {
+    memory: &'a mut Vec<Value>,
+    initial: &'a [Value],
+    std: &'a mut Vec<StdState>,
+    code: &'a [Vec<IStmt>],
+    image: &'a mut dyn Image,
+    now: i64,
+    left: u64,
+    budget: u64,
+}
+
+impl Machine<'_> {
+    fn tick(&mut self, span: Span) -> Result<(), Fault> {
+        if self.left == 0 {
+            return Err(Fault {
+                span,
+                cause: FaultCause::Watchdog(self.budget),
+            });
+        }
+        self.left -= 1;
+        Ok(())
+    }
+
+    /// The address of `p` (a memory place), with `base` the frame's start.
+    fn addr(&mut self, p: &Place, base: u32) -> Result<u32, Fault> {
+        match p {
+            Place::Mem(a) => Ok(base.wrapping_add(*a)),
+            Place::Abs(a) => Ok(*a),
+            Place::Offset(p, k) => Ok(self.addr(p, base)? + k),
+            Place::Indexed {
+                base: b,
+                terms,
+                span,
+            } => {
+                let mut a = self.addr(b, base)?;
+                for (ix, lo, hi, stride) in terms {
+                    let i = self.eval(ix, base)?.int();
+                    if i < *lo || i > *hi {
+                        return Err(Fault {
+                            span: *span,
+                            cause: FaultCause::IndexOutOfRange {
+                                index: i,
+                                lo: *lo,
+                                hi: *hi,
+                            },
+                        });
+                    }
+                    a += (i - lo) as u32 * stride;
+                }
+                Ok(a)
+            }
+            _ => Ok(0),
+        }
+    }
+
+    fn read(&mut self, p: &Place, e: Elem, base: u32) -> Result<Value, Fault> {
+        Ok(match p {
+            Place::InBit(w, b) => Value::Bool(self.image.input(*w) >> b & 1 == 1),
+            Place::InWord(w) => coerce(Value::Uint(u64::from(self.image.input(*w))), e),
+            Place::OutBit(w, b) => Value::Bool(self.image.output(*w) >> b & 1 == 1),
+            Place::OutWord(w) => coerce(Value::Uint(u64::from(self.image.output(*w))), e),
+            Place::Bit(inner, n, of) => {
+                let v = self.read(inner, *of, base)?;
+                Value::Bool(v.uint() >> n & 1 == 1)
+            }
+            _ => {
+                let a = self.addr(p, base)?;
+                self.memory[a as usize]
+            }
+        })
+    }
+
+    fn write(&mut self, p: &Place, e: Elem, v: Value, base: u32) -> Result<(), Fault> {
+        let v = coerce(v, e);
+        match p {
+            Place::OutBit(w, b) => {
+                let old = self.image.output(*w);
+                let new = if v.bool() {
+                    old | 1 << b
+                } else {
+                    old & !(1 << b)
+                };
+                self.image.set_output(*w, new);
+            }
+            Place::OutWord(w) => self.image.set_output(*w, v.uint() as u16),
+            Place::InBit(..) | Place::InWord(_) => {}
+            Place::Bit(inner, n, of) => {
+                let old = self.read(inner, *of, base)?.uint();
+                let new = if v.bool() {
+                    old | 1 << n
+                } else {
+                    old & !(1 << n)
+                };
+                self.write(inner, *of, Value::Uint(new), base)?;
+            }
+            _ => {
+                let a = self.addr(p, base)?;
+                self.memory[a as usize] = v;
+            }
+        }
+        Ok(())
+    }
+
+    fn stmts(&mut self, ss: &[IStmt], base: u32) -> Result<Flow, Fault> {
+        for s in ss {
+            match self.stmt(s, base)? {
+                Flow::Next => {}
+                other => return Ok(other),
+            }
+        }
+        Ok(Flow::Next)
+    }
+
+    fn stmt(&mut self, s: &IStmt, base: u32) -> Result<Flow, Fault> {
+        self.tick(Span::default())?;
+        match s {
+            IStmt::Assign(p, e, x) => {
+                let v = self.eval(x, base)?;
+                self.write(p, *e, v, base)?;
+            }
+            IStmt::CallFb {
+                fb,
+                instance,
+                inputs,
+                outputs,
+            } => {
+                let frame = self.addr(instance, base)?;
+                for (offset, e, x) in inputs {
+                    let v = self.eval(x, base)?;
+                    self.memory[(frame + offset) as usize] = coerce(v, *e);
+                }
+                match fb {
+                    FbKind::User(block) => {
+                        // A RETURN in the block ends its call, not the caller's.
+                        let code = self.code;
+                        self.stmts(&code[*block], frame)?;
+                    }
+                    FbKind::Std(kind) => {
+                        let state = self.memory[frame as usize].uint() as usize;
+                        self.std_call(*kind, state, frame + 1);
+                    }
+                }
+                for (offset, e, dst) in outputs {
+                    let v = self.memory[(frame + offset) as usize];
+                    self.write(dst, *e, v, base)?;
+                }
+            }
+            IStmt::Eval(x) => {
+                self.eval(x, base)?;
+            }
+            IStmt::Copy(dst, src, n) => {
+                let (d, s) = (self.addr(dst, base)?, self.addr(src, base)?);
+                for k in 0..*n {
+                    self.memory[(d + k) as usize] = self.memory[(s + k) as usize];
+                }
+            }
+            IStmt::If(arms, otherwise) => {
+                for (c, body) in arms {
+                    if self.eval(c, base)?.bool() {
+                        return self.stmts(body, base);
+                    }
+                }
+                return self.stmts(otherwise, base);
+            }
+            IStmt::Case(sel, arms, otherwise) => {
+                let v = self.eval(sel, base)?.int();
+                for (labels, body) in arms {
+                    if labels.iter().any(|&(lo, hi)| lo <= v && v <= hi) {
+                        return self.stmts(body, base);
+                    }
+                }
+                return self.stmts(otherwise, base);
+            }
+            IStmt::For {
+                var,
+                elem,
+                from,
+                to,
+                by,
+                body,
+            } => {
+                let (from, to, by) = (
+                    self.eval(from, base)?.int(),
+                    self.eval(to, base)?.int(),
+                    self.eval(by, base)?.int(),
+                );
+                let mut i = from;
+                loop {
+                    if by >= 0 && i > to || by < 0 && i < to {
+                        break;
+                    }
+                    self.write(var, *elem, Value::Int(i), base)?;
+                    match self.stmts(body, base)? {
+                        Flow::Exit => break,
+                        Flow::Return => return Ok(Flow::Return),
+                        Flow::Next | Flow::Continue => {}
+                    }
+                    // The standard's loop: the variable as the body left it, plus the step.
+                    i = self.read(var, *elem, base)?.int().saturating_add(by);
+                    if by == 0 {
+                        self.tick(Span::default())?;
+                    }
+                }
+            }
+            IStmt::While(c, body) => {
+                while self.eval(c, base)?.bool() {
+                    match self.stmts(body, base)? {
+                        Flow::Exit => break,
+                        Flow::Return => return Ok(Flow::Return),
+                        _ => {}
+                    }
+                }
+            }
+            IStmt::Repeat(body, until) => loop {
+                match self.stmts(body, base)? {
+                    Flow::Exit => break,
+                    Flow::Return => return Ok(Flow::Return),
+                    _ => {}
+                }
+                if self.eval(until, base)?.bool() {
+                    break;
+                }
+            },
+            IStmt::Exit => return Ok(Flow::Exit),
+            IStmt::Continue => return Ok(Flow::Continue),
+            IStmt::Return => return Ok(Flow::Return),
+        }
+        Ok(Flow::Next)
+    }
+}
+
+impl Machine<'_> {
+    fn eval(&mut self, x: &IExpr, base: u32) -> Result<Value, Fault> {
+        self.tick(Span::default())?;
+        Ok(match x {
+            IExpr::Const(v) => *v,
+            IExpr::Read(p, e) => self.read(p, *e, base)?,
+            IExpr::Neg(a, e) => {
+                let v = self.eval(a, base)?;
+                match v {
+                    Value::Real(r) => coerce(Value::Real(-r), *e),
+                    v => coerce(Value::Int(v.int().wrapping_neg()), *e),
+                }
+            }
+            IExpr::Not(a, e) => {
+                let v = self.eval(a, base)?;
+                match e {
+                    Elem::Bool => Value::Bool(!v.bool()),
+                    _ => coerce(Value::Uint(!v.uint()), *e),
+                }
+            }
+            IExpr::Conv(to, a) => {
+                let v = self.eval(a, base)?;
+                // A real to an integer rounds to the nearest (IEC 61131-3, §6.6.1.6: REAL_TO_INT
+                // rounds); to BOOL, anything not zero is TRUE.
+                let v = match (v, to.is_int() || to.is_bits() && *to != Elem::Bool) {
+                    (Value::Real(r), true) => Value::Int(r.round() as i64),
+                    (v, _) => v,
+                };
+                coerce(v, *to)
+            }
+            IExpr::Cmp(op, e, a, b) => {
+                let (a, b) = (self.eval(a, base)?, self.eval(b, base)?);
+                let ord = if e.is_real() {
+                    a.real().partial_cmp(&b.real())
+                } else if matches!(a, Value::Uint(_)) || matches!(b, Value::Uint(_)) {
+                    Some(a.uint().cmp(&b.uint()))
+                } else {
+                    Some(a.int().cmp(&b.int()))
+                };
+                use std::cmp::Ordering::*;
+                Value::Bool(match (op, ord) {
+                    (_, None) => matches!(op, BinOp::Ne),
+                    (BinOp::Eq, Some(o)) => o == Equal,
+                    (BinOp::Ne, Some(o)) => o != Equal,
+                    (BinOp::Lt, Some(o)) => o == Less,
+                    (BinOp::Le, Some(o)) => o != Greater,
+                    (BinOp::Gt, Some(o)) => o == Greater,
+                    (BinOp::Ge, Some(o)) => o != Less,
+                    _ => false,
+                })
+            }
+            IExpr::Bin(op, e, a, b, span) => {
+                let (a, b) = (self.eval(a, base)?, self.eval(b, base)?);
+                self.binary(*op, *e, a, b, *span)?
+            }
+            IExpr::Call(block, (start, len), args, result, e) => {
+                let mut values = Vec::with_capacity(args.len());
+                for (_, pe, x) in args {
+                    values.push(coerce(self.eval(x, base)?, *pe));
+                }
+                let range = *start as usize..(*start + *len) as usize;
+                self.memory[range.clone()].copy_from_slice(&self.initial[range]);
+                for ((addr, _, _), v) in args.iter().zip(values) {
+                    self.memory[*addr as usize] = v;
+                }
+                let code = self.code;
+                self.stmts(&code[*block], 0)?;
+                coerce(self.memory[*result as usize], *e)
+            }
+            IExpr::Std(f, e, args) => {
+                let mut vs = Vec::with_capacity(args.len());
+                for a in args {
+                    vs.push(self.eval(a, base)?);
+                }
+                std_fn(*f, *e, &vs)
+            }
+        })
+    }
+
+    fn binary(
+        &mut self,
+        op: BinOp,
+        e: Elem,
+        a: Value,
+        b: Value,
+        span: Span,
+    ) -> Result<Value, Fault> {
+        use BinOp::*;
+        if e.is_real() {
+            let (x, y) = (a.real(), b.real());
+            return Ok(coerce(
+                Value::Real(match op {
+                    Add => x + y,
+                    Sub => x - y,
+                    Mul => x * y,
+                    Div => x / y,
+                    Power => x.powf(y),
+                    _ => 0.0,
+                }),
+                e,
+            ));
+        }
+        if e == Elem::Bool {
+            let (x, y) = (a.bool(), b.bool());
+            return Ok(Value::Bool(match op {
+                And => x && y,
+                Or => x || y,
+                Xor => x != y,
+                _ => false,
+            }));
+        }
+        if matches!(op, And | Or | Xor) {
+            let (x, y) = (a.uint(), b.uint());
+            return Ok(coerce(
+                Value::Uint(match op {
+                    And => x & y,
+                    Or => x | y,
+                    _ => x ^ y,
+                }),
+                e,
+            ));
+        }
+        if matches!(op, Div | Mod) && b.int() == 0 && b.uint() == 0 {
+            return Err(Fault {
+                span,
+                cause: FaultCause::DivisionByZero,
+            });
+        }
+        let unsigned = e.int_range().is_some_and(|(lo, _)| lo == 0) || e.is_bits();
+        let v = if unsigned {
+            let (x, y) = (a.uint(), b.uint());
+            Value::Uint(match op {
+                Add => x.wrapping_add(y),
+                Sub => x.wrapping_sub(y),
+                Mul => x.wrapping_mul(y),
+                Div => x / y,
+                Mod => x % y,
+                Power => x.wrapping_pow(u32::try_from(y).unwrap_or(u32::MAX)),
+                _ => 0,
+            })
+        } else {
+            let (x, y) = (a.int(), b.int());
+            Value::Int(match op {
+                Add => x.wrapping_add(y),
+                Sub => x.wrapping_sub(y),
+                Mul => x.wrapping_mul(y),
+                Div => x.wrapping_div(y),
+                Mod => x.wrapping_rem(y),
+                Power => x.wrapping_pow(u32::try_from(y).unwrap_or(0)),
+                _ => 0,
+            })
+        };
+        Ok(coerce(v, e))
+    }
+
+    fn std_call(&mut self, kind: StdFb, state: usize, pins: u32) {
+        let m = &mut *self.memory;
+        let at = |k: u32| pins as usize + k as usize;
+        let b = |m: &Vec<Value>, k: u32| m[at(k)].bool();
+        let i = |m: &Vec<Value>, k: u32| m[at(k)].int();
+        match (&mut self.std[state], kind) {
+            (StdState::Ton(t), _) => {
+                t.call(self.now, b(m, 0), i(m, 1));
+                (m[at(2)], m[at(3)]) = (Value::Bool(t.q), Value::Int(t.et));
+            }
+            (StdState::Tof(t), _) => {
+                t.call(self.now, b(m, 0), i(m, 1));
+                (m[at(2)], m[at(3)]) = (Value::Bool(t.q), Value::Int(t.et));
+            }
+            (StdState::Tp(t), _) => {
+                t.call(self.now, b(m, 0), i(m, 1));
+                (m[at(2)], m[at(3)]) = (Value::Bool(t.q), Value::Int(t.et));
+            }
+            (StdState::RTrig(t), _) => {
+                t.call(b(m, 0));
+                m[at(1)] = Value::Bool(t.q);
+            }
+            (StdState::FTrig(t), _) => {
+                t.call(b(m, 0));
+                m[at(1)] = Value::Bool(t.q);
+            }
+            (StdState::Sr(t), _) => {
+                t.call(b(m, 0), b(m, 1));
+                m[at(2)] = Value::Bool(t.q1);
+            }
+            (StdState::Rs(t), _) => {
+                t.call(b(m, 0), b(m, 1));
+                m[at(2)] = Value::Bool(t.q1);
+            }
+            (StdState::Ctu(t), _) => {
+                t.call(b(m, 0), b(m, 1), i(m, 2) as i16);
+                (m[at(3)], m[at(4)]) = (Value::Bool(t.q), Value::Int(t.cv.into()));
+            }
+            (StdState::Ctd(t), _) => {
+                t.call(b(m, 0), b(m, 1), i(m, 2) as i16);
+                (m[at(3)], m[at(4)]) = (Value::Bool(t.q), Value::Int(t.cv.into()));
+            }
+            (StdState::Ctud(t), _) => {
+                t.call(b(m, 0), b(m, 1), b(m, 2), b(m, 3), i(m, 4) as i16);
+                (m[at(5)], m[at(6)], m[at(7)]) = (
+                    Value::Bool(t.qu),
+                    Value::Bool(t.qd),
+                    Value::Int(t.cv.into()),
+                );
+            }
+        }
+    }
+}
+
+fn std_fn(f: StdFn, e: Elem, vs: &[Value]) -> Value {
+    let lt = |a: Value, b: Value| {
+        if e.is_real() {
+            a.real() < b.real()
+        } else if matches!(a, Value::Uint(_)) {
+            a.uint() < b.uint()
+        } else {
+            a.int() < b.int()
+        }
+    };
+    let v = match f {
+        StdFn::Abs => match vs[0] {
+            Value::Real(r) => Value::Real(r.abs()),
+            Value::Int(i) => Value::Int(i.wrapping_abs()),
+            v => v,
+        },
+        StdFn::Sqrt => Value::Real(vs[0].real().sqrt()),
+        StdFn::Min => vs
+            .iter()
+            .copied()
+            .reduce(|a, b| if lt(b, a) { b } else { a })
+            .unwrap_or(Value::Int(0)),
+        StdFn::Max => vs
+            .iter()
+            .copied()
+            .reduce(|a, b| if lt(a, b) { b } else { a })
+            .unwrap_or(Value::Int(0)),
+        StdFn::Limit => {
+            let (mn, x, mx) = (vs[0], vs[1], vs[2]);
+            if lt(x, mn) {
+                mn
+            } else if lt(mx, x) {
+                mx
+            } else {
+                x
+            }
+        }
+        StdFn::Sel => {
+            if vs[0].bool() {
+                vs[2]
+            } else {
+                vs[1]
+            }
+        }
+        StdFn::Mux => {
+            // An index past the inputs selects the last (the standard leaves it open).
+            let k = usize::try_from(vs[0].int()).unwrap_or(0).min(vs.len() - 2);
+            vs[1 + k]
+        }
+        StdFn::Shl | StdFn::Shr | StdFn::Rol | StdFn::Ror => {
+            let bits = e.bits().unwrap_or(64);
+            let x = vs[0].uint();
+            let n = u32::try_from(vs[1].int().max(0)).unwrap_or(u32::MAX);
+            let mask = if bits == 64 {
+                u64::MAX
+            } else {
+                (1u64 << bits) - 1
+            };
+            Value::Uint(match f {
+                StdFn::Shl => x.checked_shl(n).unwrap_or(0) & mask,
+                StdFn::Shr => x.checked_shr(n).unwrap_or(0),
+                StdFn::Rol => {
+                    let n = n % bits;
+                    ((x << n) | x.checked_shr(bits - n).unwrap_or(0)) & mask
+                }
+                _ => {
+                    let n = n % bits;
+                    (x >> n | x.checked_shl(bits - n).unwrap_or(0)) & mask
+                }
+            })
+        }
+    };
+    coerce(v, e)
+}
+
+/// A type's values in memory: how many, and where each field or pin is.
+fn zero(e: Elem) -> Value {
+    match e {
+        Elem::Bool => Value::Bool(false),
+        e if e.is_real() => Value::Real(0.0),
+        e if e.is_bits() || e.int_range().is_some_and(|(lo, _)| lo == 0) => Value::Uint(0),
+        _ => Value::Int(0),
+    }
+}
+
+/// What an expression computes, as the compiler sees it.
+#[derive(Clone, Debug, PartialEq)]
+enum CTy {
+    Known(Type),
+    IntLit(i128),
+    RealLit,
+}
+
+impl CTy {
+    fn elem(&self) -> Option<Elem> {
+        match self {
+            CTy::Known(Type::Elem(e)) | CTy::Known(Type::Subrange(e, _, _)) => Some(*e),
+            CTy::Known(Type::Enum(_)) => Some(Elem::Dint),
+            _ => None,
+        }
+    }
+}
+
+/// The scope of the block being compiled.
+struct Scope {
+    /// The block's index (`usize::MAX` for the globals' initial values).
+    pou: usize,
+    /// Its variables: offset in its frame (or absolute, for a function), type, location.
+    vars: HashMap<String, (u32, Type, Option<Location>)>,
+    /// `true` for a function: its variables are absolute addresses.
+    absolute: bool,
+}
+
+struct Compiler<'a> {
+    c: &'a Checked,
+    /// Per block: each variable's offset in its frame, and the frame's size.
+    frames: Vec<(HashMap<String, u32>, u32)>,
+    /// The globals' addresses.
+    globals: HashMap<String, (u32, Type, Option<Location>)>,
+    /// Each function's frame (start, length).
+    function_frames: HashMap<usize, (u32, u32)>,
+    memory: Vec<Value>,
+    std: Vec<StdState>,
+    code: Vec<Vec<IStmt>>,
+    names: Vec<(String, u32, Elem)>,
+    program_index: usize,
+}
+
+impl<'a> Compiler<'a> {
+    fn new(c: &'a Checked) -> Self {
+        Compiler {
+            c,
+            frames: Vec::new(),
+            globals: HashMap::new(),
+            function_frames: HashMap::new(),
+            memory: Vec::new(),
+            std: Vec::new(),
+            code: Vec::new(),
+            names: Vec::new(),
+            program_index: 0,
+        }
+    }
+
+    /// How many memory values a value of `t` takes.
+    fn size(&self, t: &Type) -> u32 {
+        let n = match t {
+            Type::Array(a) => {
+                let count: u64 = a
+                    .dims
+                    .iter()
+                    .map(|&(lo, hi)| (hi - lo + 1) as u64)
+                    .product();
+                count.saturating_mul(u64::from(self.size(&a.elem)))
+            }
+            Type::Struct(i) => self.c.structs[*i]
+                .fields
+                .iter()
+                .map(|f| u64::from(self.size(&f.ty)))
+                .sum(),
+            Type::StdFb(f) => 1 + std_pins(*f).len() as u64,
+            Type::Fb(i) => u64::from(self.frames.get(*i).map_or(0, |f| f.1)),
+            _ => 1,
+        };
+        u32::try_from(n).unwrap_or(u32::MAX)
+    }
+
+    /// Frames for every block, function blocks before the blocks that hold them.
+    fn layout(&mut self) {
+        self.frames = vec![(HashMap::new(), 0); self.c.pous.len()];
+        // A block's size needs its instances' sizes: repeat until none changes (the
+        // checker refused blocks that hold themselves, so this ends).
+        for _ in 0..=self.c.pous.len() {
+            let mut changed = false;
+            for (i, p) in self.c.pous.iter().enumerate() {
+                let mut offsets = HashMap::new();
+                let mut at = 0u32;
+                for v in &p.vars {
+                    if v.at.is_some() {
+                        continue;
+                    }
+                    offsets.insert(v.name.to_ascii_uppercase(), at);
+                    at = at.saturating_add(self.size(&v.ty));
+                }
+                if self.frames[i].1 != at {
+                    changed = true;
+                }
+                self.frames[i] = (offsets, at);
+            }
+            if !changed {
+                break;
+            }
+        }
+    }
+
+    fn compile(&mut self) {
+        self.layout();
+        let program = self
+            .c
+            .pous
+            .iter()
+            .position(|p| p.kind == PouKind::Program)
+            .unwrap_or(0);
+        // Memory: the program's frame at 0, then the globals, then each function's frame.
+        let program_size = self.frames.get(program).map_or(0, |f| f.1);
+        self.memory = vec![Value::Int(0); program_size as usize];
+        self.instantiate(program, 0);
+        for g in &self.c.globals {
+            let at = self.memory.len() as u32;
+            let size = self.size(&g.ty);
+            self.memory
+                .extend(std::iter::repeat_n(Value::Int(0), size as usize));
+            self.init_var(g, at);
+            self.globals
+                .insert(g.name.to_ascii_uppercase(), (at, g.ty.clone(), g.at));
+            if let Type::Elem(e) | Type::Subrange(e, _, _) = g.ty {
+                self.names.push((g.name.clone(), at, e));
+            }
+        }
+        for (i, p) in self.c.pous.iter().enumerate() {
+            if matches!(p.kind, PouKind::Function(_)) {
+                let start = self.memory.len() as u32;
+                let size = self.frames[i].1 + 1;
+                self.memory
+                    .extend(std::iter::repeat_n(Value::Int(0), size as usize));
+                self.instantiate(i, start);
+                if let Some(Type::Elem(e) | Type::Subrange(e, _, _)) = &p.result {
+                    self.memory[(start + size - 1) as usize] = zero(*e);
+                }
+                self.function_frames.insert(i, (start, size));
+            }
+        }
+        if let Some(p) = self.c.pous.get(program) {
+            for v in &p.vars {
+                if let (Some(&off), Type::Elem(e) | Type::Subrange(e, _, _)) = (
+                    self.frames[program].0.get(&v.name.to_ascii_uppercase()),
+                    &v.ty,
+                ) {
+                    self.names.push((v.name.clone(), off, *e));
+                }
+            }
+        }
+        self.code = (0..self.c.pous.len()).map(|i| self.block(i)).collect();
+        self.program_index = program;
+    }
+}
+
+impl Compiler<'_> {
+    fn finish(self) -> Plc {
+        Plc {
+            code: self.code,
+            program: self.program_index,
+            initial: self.memory.clone(),
+            memory: self.memory,
+            std_initial: self.std.clone(),
+            std: self.std,
+            names: self.names,
+            budget: Budget::default(),
+        }
+    }
+
+    /// Initial values of block `i`'s frame at `base`: zeros of each type, the declared
+    /// initial values, nested instances, standard blocks' states.
+    fn instantiate(&mut self, i: usize, base: u32) {
+        let vars: Vec<Var> = self.c.pous[i].vars.clone();
+        for v in &vars {
+            let Some(&off) = self.frames[i].0.get(&v.name.to_ascii_uppercase()) else {
+                continue;
+            };
+            self.init_var(v, base + off);
+        }
+    }
+
+    fn init_var(&mut self, v: &Var, at: u32) {
+        self.zero_into(&v.ty, at);
+        if let Some(init) = &v.init {
+            self.init_into(init, &v.ty, at);
+        }
+    }
+
+    /// The zero value of `t` at `at` (a subrange's least value where 0 is not in it, an
+    /// enumeration's first value).
+    fn zero_into(&mut self, t: &Type, at: u32) {
+        let at_us = at as usize;
+        match t {
+            Type::Elem(e) => self.memory[at_us] = zero(*e),
+            Type::Subrange(e, lo, hi) => {
+                let z = if (*lo..=*hi).contains(&0) { 0 } else { *lo };
+                self.memory[at_us] = coerce(Value::Int(z as i64), *e);
+            }
+            Type::Enum(i) => {
+                let first = self.c.enums[*i].values.first().map_or(0, |v| v.1);
+                self.memory[at_us] = Value::Int(first as i64);
+            }
+            Type::Array(a) => {
+                let n = self.size(t) / self.size(&a.elem).max(1);
+                let stride = self.size(&a.elem);
+                for k in 0..n {
+                    self.zero_into(&a.elem, at + k * stride);
+                }
+            }
+            Type::Struct(i) => {
+                let fields = self.c.structs[*i].fields.clone();
+                let mut off = 0;
+                for f in &fields {
+                    self.init_var(f, at + off);
+                    off += self.size(&f.ty);
+                }
+            }
+            Type::StdFb(f) => {
+                self.memory[at_us] = Value::Uint(self.std.len() as u64);
+                self.std.push(match f {
+                    StdFb::Ton => StdState::Ton(Default::default()),
+                    StdFb::Tof => StdState::Tof(Default::default()),
+                    StdFb::Tp => StdState::Tp(Default::default()),
+                    StdFb::RTrig => StdState::RTrig(Default::default()),
+                    StdFb::FTrig => StdState::FTrig(Default::default()),
+                    StdFb::Sr => StdState::Sr(Default::default()),
+                    StdFb::Rs => StdState::Rs(Default::default()),
+                    StdFb::Ctu => StdState::Ctu(Default::default()),
+                    StdFb::Ctd => StdState::Ctd(Default::default()),
+                    StdFb::Ctud => StdState::Ctud(Default::default()),
+                });
+                for (k, (_, e)) in std_pins(*f).iter().enumerate() {
+                    self.memory[at_us + 1 + k] = zero(*e);
+                }
+            }
+            Type::Fb(i) => self.instantiate(*i, at),
+        }
+    }
+
+    fn init_into(&mut self, init: &ast::Init, t: &Type, at: u32) {
+        match (init, t) {
+            (ast::Init::Expr(e), _) => {
+                if let (Some(v), Some(el)) = (self.const_value(e), elem_of(t)) {
+                    self.memory[at as usize] = coerce(v, el);
+                }
+            }
+            (ast::Init::Array(elems, _), Type::Array(a)) => {
+                let stride = self.size(&a.elem);
+                let capacity = self.size(t) / stride.max(1);
+                let mut k = 0u32;
+                for (count, value) in elems {
+                    let n = count
+                        .as_ref()
+                        .and_then(|c| self.const_value(c))
+                        .map_or(1, |v| u32::try_from(v.int()).unwrap_or(0));
+                    for _ in 0..n {
+                        if k < capacity {
+                            self.init_into(value, &a.elem, at + k * stride);
+                        }
+                        k += 1;
+                    }
+                }
+            }
+            (ast::Init::Struct(fields, _), Type::Struct(i)) => {
+                let defs = self.c.structs[*i].fields.clone();
+                for (name, value) in fields {
+                    let mut off = 0;
+                    for f in &defs {
+                        if f.name.eq_ignore_ascii_case(&name.text) {
+                            self.init_into(value, &f.ty, at + off);
+                        }
+                        off += self.size(&f.ty);
+                    }
+                }
+            }
+            _ => {}
+        }
+    }
+
+    /// A constant expression's value (initial values: literals, constants, enumeration
+    /// values, signs and arithmetic on them).
+    fn const_value(&self, e: &Expr) -> Option<Value> {
+        Some(match &e.kind {
+            ExprKind::Lit(Lit::Int(n, _)) => Value::Int(i64::try_from(*n).ok()?),
+            ExprKind::Lit(Lit::Real(r, _)) => Value::Real(*r),
+            ExprKind::Lit(Lit::Bool(b)) => Value::Bool(*b),
+            ExprKind::Lit(Lit::Time(t)) => Value::Int(*t),
+            ExprKind::Lit(Lit::Enum(ty, v)) => {
+                let en = self
+                    .c
+                    .enums
+                    .iter()
+                    .find(|en| en.name.eq_ignore_ascii_case(&ty.text))?;
+                Value::Int(en.values.iter().find(|(k, _)| *k == v.key())?.1 as i64)
+            }
+            ExprKind::Name(i) => {
+                let key = i.key();
+                if let Some(g) = self
+                    .c
+                    .globals
+                    .iter()
+                    .find(|g| g.name.eq_ignore_ascii_case(&key) && g.constant)
+                {
+                    return self.const_value(match &g.init {
+                        Some(ast::Init::Expr(x)) => x,
+                        _ => return None,
+                    });
+                }
+                let en = self
+                    .c
+                    .enums
+                    .iter()
+                    .find_map(|en| en.values.iter().find(|(k, _)| *k == key))?;
+                Value::Int(en.1 as i64)
+            }
+            ExprKind::Paren(x) => self.const_value(x)?,
+            ExprKind::Unary(UnOp::Neg, x) => match self.const_value(x)? {
+                Value::Real(r) => Value::Real(-r),
+                v => Value::Int(v.int().wrapping_neg()),
+            },
+            ExprKind::Binary(op, a, b) => {
+                let (a, b) = (self.const_value(a)?, self.const_value(b)?);
+                if matches!(a, Value::Real(_)) || matches!(b, Value::Real(_)) {
+                    let (x, y) = (a.real(), b.real());
+                    Value::Real(match op {
+                        BinOp::Add => x + y,
+                        BinOp::Sub => x - y,
+                        BinOp::Mul => x * y,
+                        BinOp::Div => x / y,
+                        _ => return None,
+                    })
+                } else {
+                    let (x, y) = (a.int(), b.int());
+                    Value::Int(match op {
+                        BinOp::Add => x.checked_add(y)?,
+                        BinOp::Sub => x.checked_sub(y)?,
+                        BinOp::Mul => x.checked_mul(y)?,
+                        BinOp::Div => x.checked_div(y)?,
+                        BinOp::Mod => x.checked_rem(y)?,
+                        _ => return None,
+                    })
+                }
+            }
+            _ => return None,
+        })
+    }
+}
+
+/// The elementary type a value of `t` is stored as.
+fn elem_of(t: &Type) -> Option<Elem> {
+    match t {
+        Type::Elem(e) | Type::Subrange(e, _, _) => Some(*e),
+        Type::Enum(_) => Some(Elem::Dint),
+        _ => None,
+    }
+}
+
+/// `p` moved on by `k` values.
+fn offset(p: Place, k: u32) -> Place {
+    match p {
+        Place::Mem(a) => Place::Mem(a + k),
+        Place::Abs(a) => Place::Abs(a + k),
+        Place::Offset(inner, j) => Place::Offset(inner, j + k),
+        other if k == 0 => other,
+        other => Place::Offset(Box::new(other), k),
+    }
+}
+
+impl Compiler<'_> {
+    fn scope(&self, i: usize) -> Scope {
+        let pou = &self.c.pous[i];
+        let absolute = matches!(pou.kind, PouKind::Function(_));
+        let start = self.function_frames.get(&i).map_or(0, |f| f.0);
+        let vars = pou
+            .vars
+            .iter()
+            .map(|v| {
+                let key = v.name.to_ascii_uppercase();
+                let off = self.frames[i].0.get(&key).copied().unwrap_or(0);
+                (
+                    key,
+                    (if absolute { start + off } else { off }, v.ty.clone(), v.at),
+                )
+            })
+            .collect();
+        Scope {
+            pou: i,
+            vars,
+            absolute,
+        }
+    }
+
+    fn block(&self, i: usize) -> Vec<IStmt> {
+        let sc = self.scope(i);
+        self.stmts(&sc, &self.c.pous[i].body)
+    }
+
+    fn stmts(&self, sc: &Scope, ss: &[Stmt]) -> Vec<IStmt> {
+        ss.iter().filter_map(|s| self.stmt(sc, s)).collect()
+    }
+
+    fn stmt(&self, sc: &Scope, s: &Stmt) -> Option<IStmt> {
+        Some(match &s.kind {
+            StmtKind::Assign { target, value } => {
+                let (place, ty) = self.place(sc, target)?;
+                match elem_of(&ty) {
+                    Some(e) => IStmt::Assign(place, e, self.expr_as(sc, value, e)),
+                    None => {
+                        let (src, _) = self.place(sc, value)?;
+                        IStmt::Copy(place, src, self.size(&ty))
+                    }
+                }
+            }
+            StmtKind::Call(e) => {
+                let ExprKind::Call(callee, args) = &e.kind else {
+                    return None;
+                };
+                match self.place(sc, callee) {
+                    Some((instance, Type::StdFb(f))) => {
+                        let pins = std_pins(f);
+                        let mut inputs = Vec::new();
+                        let mut outputs = Vec::new();
+                        for a in args {
+                            let name = a.name.as_ref()?.key();
+                            let k = pins.iter().position(|(n, _)| *n == name)?;
+                            let el = pins[k].1;
+                            if a.output {
+                                outputs.push((1 + k as u32, el, self.place(sc, &a.value)?.0));
+                            } else {
+                                inputs.push((1 + k as u32, el, self.expr_as(sc, &a.value, el)));
+                            }
+                        }
+                        IStmt::CallFb {
+                            fb: FbKind::Std(f),
+                            instance,
+                            inputs,
+                            outputs,
+                        }
+                    }
+                    Some((instance, Type::Fb(b))) => {
+                        let mut inputs = Vec::new();
+                        let mut outputs = Vec::new();
+                        for a in args {
+                            let name = a.name.as_ref()?.key();
+                            let v = self.c.pous[b]
+                                .vars
+                                .iter()
+                                .find(|v| v.name.eq_ignore_ascii_case(&name))?;
+                            let off = *self.frames[b].0.get(&name)?;
+                            let el = elem_of(&v.ty)?;
+                            if a.output {
+                                outputs.push((off, el, self.place(sc, &a.value)?.0));
+                            } else {
+                                inputs.push((off, el, self.expr_as(sc, &a.value, el)));
+                            }
+                        }
+                        IStmt::CallFb {
+                            fb: FbKind::User(b),
+                            instance,
+                            inputs,
+                            outputs,
+                        }
+                    }
+                    _ => IStmt::Eval(self.expr(sc, e).0),
+                }
+            }
+            StmtKind::If { arms, otherwise } => IStmt::If(
+                arms.iter()
+                    .map(|(c, body)| (self.expr_as(sc, c, Elem::Bool), self.stmts(sc, body)))
+                    .collect(),
+                self.stmts(sc, otherwise),
+            ),
+            StmtKind::Case {
+                selector,
+                arms,
+                otherwise,
+            } => {
+                let (sel, _) = self.expr(sc, selector);
+                let arms = arms
+                    .iter()
+                    .map(|(labels, body)| {
+                        let ranges = labels
+                            .iter()
+                            .filter_map(|l| match l {
+                                CaseLabel::Value(v) => {
+                                    let n = self.const_value(v)?.int();
+                                    Some((n, n))
+                                }
+                                CaseLabel::Range(a, b) => {
+                                    Some((self.const_value(a)?.int(), self.const_value(b)?.int()))
+                                }
+                            })
+                            .collect();
+                        (ranges, self.stmts(sc, body))
+                    })
+                    .collect();
+                IStmt::Case(sel, arms, self.stmts(sc, otherwise))
+            }
+            StmtKind::For {
+                var,
+                from,
+                to,
+                by,
+                body,
+            } => {
+                let name = ast::Ident {
+                    text: var.text.clone(),
+                    span: var.span,
+                };
+                let target = Expr {
+                    kind: ExprKind::Name(name),
+                    span: var.span,
+                };
+                let (place, ty) = self.place(sc, &target)?;
+                let elem = elem_of(&ty)?;
+                IStmt::For {
+                    var: place,
+                    elem,
+                    from: self.expr_as(sc, from, elem),
+                    to: self.expr_as(sc, to, elem),
+                    by: by
+                        .as_ref()
+                        .map_or(IExpr::Const(Value::Int(1)), |b| self.expr_as(sc, b, elem)),
+                    body: self.stmts(sc, body),
+                }
+            }
+            StmtKind::While { cond, body } => {
+                IStmt::While(self.expr_as(sc, cond, Elem::Bool), self.stmts(sc, body))
+            }
+            StmtKind::Repeat { body, until } => {
+                IStmt::Repeat(self.stmts(sc, body), self.expr_as(sc, until, Elem::Bool))
+            }
+            StmtKind::Exit => IStmt::Exit,
+            StmtKind::Continue => IStmt::Continue,
+            StmtKind::Return => IStmt::Return,
+            StmtKind::Empty => return None,
+        })
+    }
+
+    /// The place an expression names, and its type.
+    fn place(&self, sc: &Scope, e: &Expr) -> Option<(Place, Type)> {
+        match &e.kind {
+            ExprKind::Name(i) => {
+                let key = i.key();
+                let found = sc
+                    .vars
+                    .get(&key)
+                    .map(|v| (v, sc.absolute))
+                    .or_else(|| self.globals.get(&key).map(|v| (v, true)));
+                if let Some(((addr, ty, at), absolute)) = found {
+                    if let Some(loc) = at {
+                        return Some((image_place(*loc), ty.clone()));
+                    }
+                    let place = if absolute {
+                        Place::Abs(*addr)
+                    } else {
+                        Place::Mem(*addr)
+                    };
+                    return Some((place, ty.clone()));
+                }
+                // A function's result, under its name.
+                let p = self.c.pous.get(sc.pou)?;
+                if p.name.eq_ignore_ascii_case(&key) {
+                    let (start, size) = *self.function_frames.get(&sc.pou)?;
+                    return Some((Place::Abs(start + size - 1), p.result.clone()?));
+                }
+                None
+            }
+            ExprKind::Direct(d) => {
+                let place = match (d.area, d.size, d.path.as_slice()) {
+                    (Area::Input, Size::Bit, [w, b]) => Place::InBit(*w, *b),
+                    (Area::Input, Size::Word, [w]) => Place::InWord(*w),
+                    (Area::Output, Size::Bit, [w, b]) => Place::OutBit(*w, *b),
+                    (Area::Output, Size::Word, [w]) => Place::OutWord(*w),
+                    _ => return None,
+                };
+                let e = if d.size == Size::Bit {
+                    Elem::Bool
+                } else {
+                    Elem::Word
+                };
+                Some((place, Type::Elem(e)))
+            }
+            ExprKind::Paren(x) => self.place(sc, x),
+            ExprKind::Field(base, f) => {
+                let (p, t) = self.place(sc, base)?;
+                let key = f.key();
+                match t {
+                    Type::Struct(i) => {
+                        let mut off = 0;
+                        for fd in &self.c.structs[i].fields {
+                            if fd.name.eq_ignore_ascii_case(&key) {
+                                return Some((offset(p, off), fd.ty.clone()));
+                            }
+                            off += self.size(&fd.ty);
+                        }
+                        None
+                    }
+                    Type::StdFb(b) => {
+                        let k = std_pins(b).iter().position(|(n, _)| *n == key)?;
+                        Some((offset(p, 1 + k as u32), Type::Elem(std_pins(b)[k].1)))
+                    }
+                    Type::Fb(b) => {
+                        let v = self.c.pous[b]
+                            .vars
+                            .iter()
+                            .find(|v| v.name.eq_ignore_ascii_case(&key))?;
+                        Some((offset(p, *self.frames[b].0.get(&key)?), v.ty.clone()))
+                    }
+                    _ => None,
+                }
+            }
+            ExprKind::Index(base, idx) => {
+                let (p, t) = self.place(sc, base)?;
+                let Type::Array(a) = t else { return None };
+                let elem_size = self.size(&a.elem);
+                let mut strides = Vec::new();
+                let mut stride = elem_size;
+                for &(lo, hi) in a.dims.iter().rev() {
+                    strides.push(stride);
+                    stride = stride.saturating_mul(u32::try_from(hi - lo + 1).unwrap_or(u32::MAX));
+                }
+                strides.reverse();
+                let terms = idx
+                    .iter()
+                    .zip(&a.dims)
+                    .zip(strides)
+                    .map(|((x, &(lo, hi)), st)| {
+                        (
+                            Box::new(self.expr_as(sc, x, Elem::Lint)),
+                            lo as i64,
+                            hi as i64,
+                            st,
+                        )
+                    })
+                    .collect();
+                Some((
+                    Place::Indexed {
+                        base: Box::new(p),
+                        terms,
+                        span: e.span,
+                    },
+                    a.elem.clone(),
+                ))
+            }
+            ExprKind::Bit(base, n) => {
+                let (p, t) = self.place(sc, base)?;
+                let el = elem_of(&t)?;
+                Some((Place::Bit(Box::new(p), *n, el), Type::Elem(Elem::Bool)))
+            }
+            _ => None,
+        }
+    }
+
+    /// `e` as a value of `want` (a literal takes it; anything else computes in its own type).
+    fn expr_as(&self, sc: &Scope, e: &Expr, want: Elem) -> IExpr {
+        let (x, t) = self.expr(sc, e);
+        match (&x, t) {
+            (IExpr::Const(v), CTy::IntLit(_) | CTy::RealLit) => IExpr::Const(coerce(*v, want)),
+            _ => x,
+        }
+    }
+
+    /// The type two operands compute in.
+    fn operands(&self, a: &CTy, b: &CTy) -> Elem {
+        let least = |n: i128| {
+            [Elem::Dint, Elem::Lint, Elem::Ulint]
+                .into_iter()
+                .find(|e| e.holds(n))
+                .unwrap_or(Elem::Lint)
+        };
+        match (a, b) {
+            // Literals alone compute at full precision; their destination rounds them.
+            (CTy::RealLit | CTy::IntLit(_), CTy::RealLit | CTy::IntLit(_))
+                if matches!(a, CTy::RealLit) || matches!(b, CTy::RealLit) =>
+            {
+                Elem::Lreal
+            }
+            (CTy::RealLit, _) | (_, CTy::RealLit) => match (a.elem(), b.elem()) {
+                (Some(Elem::Lreal), _) | (_, Some(Elem::Lreal)) => Elem::Lreal,
+                _ => Elem::Real,
+            },
+            (CTy::IntLit(x), CTy::IntLit(y)) => least((*x).max(*y)).max(least((*x).min(*y))),
+            (CTy::IntLit(n), t) | (t, CTy::IntLit(n)) => match t.elem() {
+                Some(e) if e.holds(*n) || e.is_real() || e.is_duration() => e,
+                Some(e) => Elem::common(e, least(*n)).unwrap_or(Elem::Lint),
+                None => least(*n),
+            },
+            _ => match (a.elem(), b.elem()) {
+                (Some(x), Some(y)) => Elem::common(x, y).unwrap_or(x),
+                (Some(x), None) | (None, Some(x)) => x,
+                _ => Elem::Dint,
+            },
+        }
+    }
+
+    fn expr(&self, sc: &Scope, e: &Expr) -> (IExpr, CTy) {
+        let konst = |v, t| (IExpr::Const(v), t);
+        match &e.kind {
+            ExprKind::Lit(Lit::Int(n, None)) => {
+                konst(Value::Int(*n as i64), CTy::IntLit(i128::from(*n)))
+            }
+            ExprKind::Lit(Lit::Int(n, Some(t))) => {
+                let el = Elem::of(&t.key()).unwrap_or(Elem::Dint);
+                konst(coerce(Value::Uint(*n), el), CTy::Known(Type::Elem(el)))
+            }
+            ExprKind::Lit(Lit::Real(r, None)) => konst(Value::Real(*r), CTy::RealLit),
+            ExprKind::Lit(Lit::Real(r, Some(t))) => {
+                let el = Elem::of(&t.key()).unwrap_or(Elem::Real);
+                konst(coerce(Value::Real(*r), el), CTy::Known(Type::Elem(el)))
+            }
+            ExprKind::Lit(Lit::Bool(b)) => {
+                konst(Value::Bool(*b), CTy::Known(Type::Elem(Elem::Bool)))
+            }
+            ExprKind::Lit(Lit::Time(t)) => {
+                konst(Value::Int(*t), CTy::Known(Type::Elem(Elem::Time)))
+            }
+            ExprKind::Lit(Lit::Enum(..)) => konst(
+                self.const_value(e).unwrap_or(Value::Int(0)),
+                CTy::Known(Type::Elem(Elem::Dint)),
+            ),
+            ExprKind::Lit(Lit::Str(_)) => konst(Value::Int(0), CTy::IntLit(0)),
+            ExprKind::Paren(x) => self.expr(sc, x),
+            ExprKind::Name(i) if self.place(sc, e).is_none() => {
+                // An enumeration value.
+                let v = self.const_value(e).unwrap_or(Value::Int(0));
+                let _ = i;
+                konst(v, CTy::Known(Type::Elem(Elem::Dint)))
+            }
+            ExprKind::Name(_)
+            | ExprKind::Direct(_)
+            | ExprKind::Field(..)
+            | ExprKind::Index(..)
+            | ExprKind::Bit(..) => match self.place(sc, e) {
+                Some((p, t)) => {
+                    let el = elem_of(&t).unwrap_or(Elem::Dint);
+                    (IExpr::Read(p, el), CTy::Known(t))
+                }
+                None => konst(Value::Int(0), CTy::IntLit(0)),
+            },
+            ExprKind::Unary(op, x) => {
+                let (a, t) = self.expr(sc, x);
+                match (op, &t, &a) {
+                    (UnOp::Neg, CTy::IntLit(n), IExpr::Const(_)) => {
+                        konst(Value::Int(-(*n as i64)), CTy::IntLit(-n))
+                    }
+                    (UnOp::Neg, CTy::RealLit, IExpr::Const(v)) => {
+                        konst(Value::Real(-v.real()), CTy::RealLit)
+                    }
+                    (UnOp::Plus, ..) => (a, t),
+                    (UnOp::Neg, ..) => {
+                        let el = t.elem().unwrap_or(Elem::Dint);
+                        (IExpr::Neg(Box::new(a), el), t)
+                    }
+                    (UnOp::Not, ..) => {
+                        let el = t.elem().unwrap_or(Elem::Bool);
+                        (IExpr::Not(Box::new(a), el), t)
+                    }
+                }
+            }
+            ExprKind::Binary(op, x, y) => {
+                let ((a, ta), (b, tb)) = (self.expr(sc, x), self.expr(sc, y));
+                let el = self.operands(&ta, &tb);
+                let fix = |x: IExpr, t: &CTy| match (x, t) {
+                    (IExpr::Const(v), CTy::IntLit(_) | CTy::RealLit) => IExpr::Const(coerce(v, el)),
+                    (x, _) => x,
+                };
+                let (a, b) = (fix(a, &ta), fix(b, &tb));
+                use BinOp::*;
+                match op {
+                    Lt | Gt | Le | Ge | Eq | Ne => (
+                        IExpr::Cmp(*op, el, Box::new(a), Box::new(b)),
+                        CTy::Known(Type::Elem(Elem::Bool)),
+                    ),
+                    // A duration times or by a real computes in LREAL.
+                    Mul | Div
+                        if ta.elem().is_some_and(Elem::is_duration)
+                            && tb.elem().is_some_and(Elem::is_real)
+                            || matches!(tb, CTy::RealLit)
+                                && ta.elem().is_some_and(Elem::is_duration) =>
+                    {
+                        (
+                            IExpr::Conv(
+                                Elem::Time,
+                                Box::new(IExpr::Bin(
+                                    *op,
+                                    Elem::Lreal,
+                                    Box::new(a),
+                                    Box::new(b),
+                                    e.span,
+                                )),
+                            ),
+                            ta,
+                        )
+                    }
+                    Power if !el.is_real() => (
+                        IExpr::Bin(*op, Elem::Real, Box::new(a), Box::new(b), e.span),
+                        CTy::Known(Type::Elem(Elem::Real)),
+                    ),
+                    _ => {
+                        let t = if ta.elem().is_some_and(Elem::is_duration) {
+                            ta
+                        } else {
+                            CTy::Known(Type::Elem(el))
+                        };
+                        let el = t.elem().unwrap_or(el);
+                        (IExpr::Bin(*op, el, Box::new(a), Box::new(b), e.span), t)
+                    }
+                }
+            }
+            ExprKind::Call(callee, args) => self.call(sc, callee, args),
+        }
+    }
+
+    fn call(&self, sc: &Scope, callee: &Expr, args: &[ast::Arg]) -> (IExpr, CTy) {
+        let zero_out = (IExpr::Const(Value::Int(0)), CTy::IntLit(0));
+        let ExprKind::Name(name) = &callee.kind else {
+            return zero_out;
+        };
+        let key = name.key();
+        if let Some((_, to)) = Elem::conversion(&key) {
+            let Some(a) = args.first() else {
+                return zero_out;
+            };
+            let (x, _) = self.expr(sc, &a.value);
+            return (IExpr::Conv(to, Box::new(x)), CTy::Known(Type::Elem(to)));
+        }
+        let f = match key.as_str() {
+            "ABS" => Some(StdFn::Abs),
+            "SQRT" => Some(StdFn::Sqrt),
+            "MIN" => Some(StdFn::Min),
+            "MAX" => Some(StdFn::Max),
+            "LIMIT" => Some(StdFn::Limit),
+            "SEL" => Some(StdFn::Sel),
+            "MUX" => Some(StdFn::Mux),
+            "SHL" => Some(StdFn::Shl),
+            "SHR" => Some(StdFn::Shr),
+            "ROL" => Some(StdFn::Rol),
+            "ROR" => Some(StdFn::Ror),
+            "MOVE" => {
+                let Some(a) = args.first() else {
+                    return zero_out;
+                };
+                return self.expr(sc, &a.value);
+            }
+            _ => None,
+        };
+        if let Some(f) = f {
+            let compiled: Vec<(IExpr, CTy)> =
+                args.iter().map(|a| self.expr(sc, &a.value)).collect();
+            // The values chosen among (after SEL's and MUX's selector) set the type.
+            let skip = usize::from(matches!(f, StdFn::Sel | StdFn::Mux));
+            let values: Vec<&CTy> = compiled.iter().skip(skip).map(|(_, t)| t).collect();
+            let el = match f {
+                StdFn::Shl | StdFn::Shr | StdFn::Rol | StdFn::Ror => compiled
+                    .first()
+                    .and_then(|c| c.1.elem())
+                    .unwrap_or(Elem::Lword),
+                StdFn::Sqrt => Elem::Lreal,
+                _ => values
+                    .iter()
+                    .skip(1)
+                    .fold(
+                        values
+                            .first()
+                            .map(|t| (*t).clone())
+                            .unwrap_or(CTy::IntLit(0)),
+                        |acc, t| CTy::Known(Type::Elem(self.operands(&acc, t))),
+                    )
+                    .elem()
+                    .unwrap_or(Elem::Dint),
+            };
+            let xs = compiled
+                .into_iter()
+                .map(|(x, t)| match (x, t) {
+                    (IExpr::Const(v), CTy::IntLit(_) | CTy::RealLit) => IExpr::Const(coerce(v, el)),
+                    (x, _) => x,
+                })
+                .collect();
+            return (IExpr::Std(f, el, xs), CTy::Known(Type::Elem(el)));
+        }
+        // A function of the program.
+        let Some(p) = self.c.pous.iter().position(|p| {
+            p.name.eq_ignore_ascii_case(&key) && matches!(p.kind, PouKind::Function(_))
+        }) else {
+            return zero_out;
+        };
+        let Some(&(start, size)) = self.function_frames.get(&p) else {
+            return zero_out;
+        };
+        let pou = &self.c.pous[p];
+        let inputs: Vec<&Var> = pou
+            .vars
+            .iter()
+            .filter(|v| v.kind == VarKind::Input)
+            .collect();
+        let mut positional = inputs.iter();
+        let mut compiled = Vec::new();
+        for a in args {
+            let v = match &a.name {
+                Some(n) => inputs.iter().find(|v| v.name.eq_ignore_ascii_case(&n.text)),
+                None => positional.next(),
+            };
+            let Some(v) = v else { continue };
+            let Some(&off) = self.frames[p].0.get(&v.name.to_ascii_uppercase()) else {
+                continue;
+            };
+            let el = elem_of(&v.ty).unwrap_or(Elem::Dint);
+            compiled.push((start + off, el, self.expr_as(sc, &a.value, el)));
+        }
+        let result = pou.result.clone().unwrap_or(Type::Elem(Elem::Dint));
+        let el = elem_of(&result).unwrap_or(Elem::Dint);
+        (
+            IExpr::Call(p, (start, size), compiled, start + size - 1, el),
+            CTy::Known(result),
+        )
+    }
+}
+
+fn image_place(l: Location) -> Place {
+    match l {
+        Location::InputBit(w, b) => Place::InBit(w, b),
+        Location::InputWord(w) => Place::InWord(w),
+        Location::OutputBit(w, b) => Place::OutBit(w, b),
+        Location::OutputWord(w) => Place::OutWord(w),
+    }
+}
