@@ -2085,3 +2085,57 @@ fn no_error_message_points_into_the_repository() {
         }
     }
 }
+
+/// `run --controller FILE.st`: a program that does not compile is refused before the run
+/// with every error at its line and column, and nothing is written; one that compiles runs
+/// as the PLC, and the JSON report names it.
+#[test]
+fn run_takes_a_structured_text_program_as_the_plc() {
+    let d = temp();
+    let bad = d.path().join("bad.st");
+    std::fs::write(
+        &bad,
+        "PROGRAM Lift\nVAR run AT %QX7.0 : BOOL; n : INT; END_VAR\n  run := n + 1;\n  x := 3;\nEND_PROGRAM\n",
+    )
+    .expect("write");
+    let report = d.path().join("report.json");
+    let out = asi_lift()
+        .args(["run", "--until", "1s", "--controller"])
+        .arg(&bad)
+        .arg("--report")
+        .arg(&report)
+        .output()
+        .expect("asi-lift run");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(err.contains("the program is refused (2 errors)"), "{err}");
+    assert!(
+        err.contains("bad.st:3:10: error: a value of INT cannot be stored into BOOL"),
+        "{err}"
+    );
+    assert!(
+        err.contains("bad.st:4:3: error: no variable is named `x`"),
+        "{err}"
+    );
+    assert!(!report.exists(), "a refused program writes nothing");
+
+    let good = d.path().join("idle.st");
+    std::fs::write(
+        &good,
+        "PROGRAM Lift\nVAR Restart : BOOL; t : TON; END_VAR\n  t(IN := NOT t.Q, PT := T#500ms);\n  Restart := t.Q;\nEND_PROGRAM\n",
+    )
+    .expect("write");
+    let out = asi_lift()
+        .args(["run", "--until", "2s", "--format", "json", "--controller"])
+        .arg(&good)
+        .output()
+        .expect("asi-lift run");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    assert_eq!(json["controller"], good.display().to_string());
+    assert_eq!(json["violations"], serde_json::json!([]));
+}

@@ -59,6 +59,11 @@ pub trait Controller: Send + 'static + ControllerClone {
         false
     }
 
+    /// The name of the controller's program, for the report, where it is not the built-in
+    /// one (a Structured Text program's file). None by default.
+    fn program_name(&self) -> Option<&str> {
+        None
+    }
     /// The controller as [`Any`], for a caller that wants its own type back.
     fn as_any(&self) -> &dyn Any;
 

@@ -17,6 +17,7 @@ pub mod dispatch;
 pub mod fifo;
 pub mod plc;
 pub mod program;
+pub mod structured;
 
 pub use asi_master::ProcessImage;
 pub use contract::{Controller, ControllerClone, Outside, PendingCalls, Status};

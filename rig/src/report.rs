@@ -22,6 +22,10 @@ pub struct Report {
     pub scenario: String,
     /// Its seed.
     pub seed: u64,
+    /// The controller's program, where it is not the built-in one (a Structured Text
+    /// program's file, as given); absent for the built-in program and an outside controller.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub controller: Option<String>,
     /// Simulated time, seconds.
     pub simulated_s: f64,
     /// When the controller finished its initialisation (the first time), or null.
@@ -597,6 +601,7 @@ impl Report {
                 drive: None,
             },
             violations: Vec::new(),
+            controller: None,
             availability: Availability::default(),
             live: None,
             log: Vec::new(),
@@ -653,7 +658,11 @@ impl Report {
             }
             // Only the built-in program tells when it is initialised.
             None if self.final_state.state.is_none() => {
-                let _ = writeln!(s, "  initialised at     not known (an outside controller)");
+                let why = match &self.controller {
+                    Some(name) => format!("the program {name} does not tell"),
+                    None => "an outside controller".to_owned(),
+                };
+                let _ = writeln!(s, "  initialised at     not known ({why})");
             }
             None => {
                 let _ = writeln!(s, "  initialised at     never");
@@ -704,7 +713,10 @@ impl Report {
         let f = &self.final_state;
         let controller = match (f.state, f.floor) {
             (Some(state), Some(floor)) => format!("controller: {state}, floor count {floor}"),
-            _ => "controller: external".to_string(),
+            _ => match &self.controller {
+                Some(name) => format!("controller: {name}"),
+                None => "controller: external".to_string(),
+            },
         };
         let _ = writeln!(
             s,

@@ -24,6 +24,11 @@ pub struct RunArgs {
     /// Use this seed instead of the scenario's.
     #[arg(long)]
     pub seed: Option<u64>,
+    /// Run this IEC 61131-3 Structured Text program as the PLC instead of the built-in one
+    /// (the asi-lift guide, "Your PLC program in Structured Text"). A program that does not
+    /// compile is refused before the run with every error, each at its line and column.
+    #[arg(long, value_name = "FILE.st")]
+    pub controller: Option<PathBuf>,
     /// End the simulation at this time (e.g. 30s, 2min): earlier than the scenario's
     /// duration, it stops the run there; later, it extends the run to it.
     #[arg(long, value_name = "DURATION")]
@@ -122,6 +127,7 @@ pub fn run(args: RunArgs) -> Result<u8, String> {
         plot,
         force,
         pulse_exact,
+        controller,
     } = args;
     let until = match until {
         None => None,
@@ -190,7 +196,11 @@ pub fn run(args: RunArgs) -> Result<u8, String> {
             eprintln!("asi-lift: warning: {w}");
         }
     }
+    let program = controller.as_deref().map(load_program).transpose()?;
     let mut rig = Rig::new(sc).map_err(|e| e.to_string())?;
+    if let Some(p) = program {
+        rig = rig.with_controller(p);
+    }
     rig.set_pulse_exact(pulse_exact);
     if let (Some(path), Some(sink)) = (&trace, &trace_sink) {
         rig.trace_to(outs.writer(sink)?, trace_form(trace_format, path));
@@ -300,6 +310,20 @@ pub fn trace_form(form: Option<TraceForm>, path: &Path) -> TraceFormat {
         Some(TraceForm::Jsonl) => TraceFormat::Jsonl,
         None => TraceFormat::for_path(path),
     }
+}
+
+/// The Structured Text program in `path`, compiled; every error at once if it is refused.
+pub fn load_program(path: &Path) -> Result<controller::structured::StProgram, String> {
+    let text = read_input(path, super::MAX_TOML_BYTES)?;
+    let name = path.display().to_string();
+    controller::structured::StProgram::compile(&name, &text).map_err(|e| {
+        format!(
+            "--controller {name}: the program is refused ({} error{}):\n{}",
+            e.count,
+            if e.count == 1 { "" } else { "s" },
+            e.rendered
+        )
+    })
 }
 
 /// The scenario named on the command line: a file if there is one by that name (`-` for

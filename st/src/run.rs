@@ -43,7 +43,7 @@ impl Default for Budget {
 }
 
 /// Why the PLC stopped.
-#[derive(Clone, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Fault {
     /// Where in the source.
     pub span: Span,
@@ -52,7 +52,7 @@ pub struct Fault {
 }
 
 /// What stopped the PLC.
-#[derive(Clone, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum FaultCause {
     /// An integer division or MOD by zero.
     DivisionByZero,
@@ -367,6 +367,22 @@ impl Plc {
             .iter()
             .find(|(n, _, _)| n.eq_ignore_ascii_case(name))
             .map(|(_, a, _)| self.memory[*a as usize])
+    }
+
+    /// Sets the program's or a global variable `name` (elementary) to `value`, converted to
+    /// its type; `false` if there is no such variable.
+    pub fn set(&mut self, name: &str, value: Value) -> bool {
+        match self
+            .names
+            .iter()
+            .find(|(n, _, _)| n.eq_ignore_ascii_case(name))
+        {
+            Some(&(_, a, e)) => {
+                self.memory[a as usize] = coerce(value, e);
+                true
+            }
+            None => false,
+        }
     }
 
     /// One scan at `now` (nanoseconds on the PLC's clock) over `image`.

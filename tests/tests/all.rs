@@ -16,4 +16,5 @@ mod roundtrip;
 mod safe_drive;
 mod safety_regressions;
 mod snapshots;
+mod structured_text;
 mod traces;

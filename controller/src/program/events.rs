@@ -81,6 +81,16 @@ pub enum ProgramEventKind {
         /// The floor.
         floor: u8,
     },
+    /// The Structured Text program faulted at `line`:`column` of its source and the PLC went
+    /// to STOP (its outputs zeroed).
+    PlcStopped {
+        /// The source line.
+        line: u32,
+        /// The column.
+        column: u32,
+        /// What happened.
+        cause: st::run::FaultCause,
+    },
     /// The cabin stopped level at a floor.
     Arrived {
         /// The floor.
@@ -196,6 +206,14 @@ impl fmt::Display for ProgramEventKind {
                 }
             ),
             ProgramEventKind::Initialised => f.write_str("initialised at floor 1"),
+            ProgramEventKind::PlcStopped {
+                line,
+                column,
+                cause,
+            } => write!(
+                f,
+                "PLC in STOP: {cause} at line {line}, column {column}; outputs zeroed"
+            ),
             ProgramEventKind::CallStored { floor, source } => {
                 write!(f, "{} call to floor {floor} stored", src(source))
             }

@@ -892,6 +892,7 @@ impl Rig {
     /// [`Controller::scan_period`] from the moment reached. Bus, slaves, plant, safety logic
     /// and invariant watch run as before.
     pub fn with_controller(mut self, controller: impl Controller) -> Rig {
+        self.report.controller = controller.program_name().map(str::to_owned);
         self.controller = Box::new(controller);
         self.agenda.next_plc = self.agenda.next_plc.max(self.agenda.now);
         self.own_moments_changed();

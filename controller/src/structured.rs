@@ -1,0 +1,208 @@
+//! A PLC programmer's own lift program in IEC 61131-3 Structured Text as the controller
+//! ([`StProgram`]): the program reads and writes the master's process image through its
+//! located variables (`%IX<word>.<bit>`, `%IW<word>`, `%QX<word>.<bit>`, `%QW<word>`, seed 003
+//! table 4.1) and exchanges the standard signals with the safety logic through variables of
+//! agreed names ([`ESTOP_OUT`], [`RESTART`], [`OVERLOADED`]).
+//!
+//! A fault at run time (a division by zero, an index out of range, a scan past its budget)
+//! puts the PLC into STOP as a real one goes: the output image is zeroed, the fault is
+//! reported with its place, and the signals to the safety logic take their safe values (no
+//! restart, overloaded), so the safety logic holds the lift.
+
+use crate::contract::{Controller, Status};
+use crate::plc::{FromSafety, ToSafety};
+use crate::program::{Event, ProgramEventKind};
+use asi_master::image::IMAGE_WORDS;
+use asi_master::{PlcLink, ProcessImage};
+use asi_phy::{SimDuration, SimTime};
+use st::run::{Fault, Image, Plc, Value};
+use st::source::Source;
+use std::any::Any;
+
+/// The variable the controller sets to the safety logic's EStopOut before each scan (`TRUE`:
+/// no STOP demand), if the program declares it (a BOOL in the PROGRAM or VAR_GLOBAL).
+pub const ESTOP_OUT: &str = "EStopOut";
+/// The variable the controller reads after each scan as the restart of the STOP circuit.
+pub const RESTART: &str = "Restart";
+/// The variable the controller reads after each scan as the load's overload signal.
+pub const OVERLOADED: &str = "Overloaded";
+
+/// The PLC's scan period when the program does not say otherwise (§6.2 of the lift thesis:
+/// the built-in program scans every 10 ms).
+pub const SCAN: SimDuration = SimDuration::from_millis(10);
+
+/// A Structured Text program refused before the run: every error, rendered.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("{rendered}")]
+pub struct ProgramError {
+    /// The errors as `file:line:column: error: cause`, the line and a caret, one after
+    /// another.
+    pub rendered: String,
+    /// How many.
+    pub count: usize,
+}
+
+/// A Structured Text program as the lab's PLC.
+#[derive(Clone, Debug)]
+pub struct StProgram {
+    name: String,
+    source: Source,
+    plc: Plc,
+    stopped: Option<Fault>,
+    events: Vec<Event>,
+}
+
+impl StProgram {
+    /// The program in `text` (named `name` in messages), parsed and checked; every error at
+    /// once if it is refused.
+    pub fn compile(name: &str, text: &str) -> Result<StProgram, ProgramError> {
+        let source = Source::new(name, text);
+        let refuse = |errors: Vec<st::source::Diagnostic>, source: &Source| ProgramError {
+            rendered: source.render_all(&errors),
+            count: errors.len(),
+        };
+        let (unit, errors) = st::parser::parse(&source);
+        if !errors.is_empty() {
+            return Err(refuse(errors, &source));
+        }
+        let (checked, errors) = st::check::check(&unit);
+        if !errors.is_empty() {
+            return Err(refuse(errors, &source));
+        }
+        let errors = st::typeck::typecheck(&checked);
+        if !errors.is_empty() {
+            return Err(refuse(errors, &source));
+        }
+        Ok(StProgram {
+            name: name.to_owned(),
+            plc: Plc::new(&checked),
+            source,
+            stopped: None,
+            events: Vec::new(),
+        })
+    }
+
+    /// The program's name (its file's, as given).
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
+    /// Why the PLC is in STOP, with the place as `file:line:column`, if it is.
+    pub fn stopped(&self) -> Option<String> {
+        self.stopped.map(|f| {
+            let (line, column, _) = self.source.locate(f.span.start);
+            format!("{}:{line}:{column}: {}", self.name, f.cause)
+        })
+    }
+
+    /// The program's variables of elementary type and their values (a PLC's watch list).
+    pub fn watch(&self) -> Vec<(&str, Value)> {
+        self.plc.watch()
+    }
+}
+
+/// The master's process image as the program sees it.
+struct Words<'a>(&'a mut ProcessImage);
+
+impl Image for Words<'_> {
+    fn input(&self, w: u32) -> u16 {
+        let w = w as usize;
+        if w < IMAGE_WORDS {
+            self.0.input.word(w)
+        } else {
+            0
+        }
+    }
+
+    fn output(&self, w: u32) -> u16 {
+        let w = w as usize;
+        if w < IMAGE_WORDS {
+            self.0.output.word(w)
+        } else {
+            0
+        }
+    }
+
+    fn set_output(&mut self, w: u32, value: u16) {
+        let w = w as usize;
+        if w < IMAGE_WORDS {
+            self.0.output.set_word(w, value);
+        }
+    }
+}
+
+/// What the safety logic gets from a PLC in STOP: no restart, and overloaded (the unsafe
+/// value), so that K1 stays open.
+const SAFE: ToSafety = ToSafety {
+    restart: false,
+    overloaded: true,
+};
+
+impl Controller for StProgram {
+    fn scan_period(&self) -> SimDuration {
+        SCAN
+    }
+
+    fn scan(&mut self, now: SimTime, image: &mut ProcessImage, safety: FromSafety) -> ToSafety {
+        if self.stopped.is_some() {
+            for w in 0..IMAGE_WORDS {
+                image.output.set_word(w, 0);
+            }
+            return SAFE;
+        }
+        self.plc.set(ESTOP_OUT, Value::Bool(safety.estop_out));
+        let now_ns = i64::try_from(now.as_nanos()).unwrap_or(i64::MAX);
+        match self.plc.scan(now_ns, &mut Words(image)) {
+            Ok(()) => {
+                let read = |n: &str| matches!(self.plc.get(n), Some(Value::Bool(true)));
+                ToSafety {
+                    restart: read(RESTART),
+                    overloaded: read(OVERLOADED),
+                }
+            }
+            Err(fault) => {
+                for w in 0..IMAGE_WORDS {
+                    image.output.set_word(w, 0);
+                }
+                let (line, column, _) = self.source.locate(fault.span.start);
+                self.events.push(Event {
+                    at: now,
+                    kind: ProgramEventKind::PlcStopped {
+                        line: u32::try_from(line).unwrap_or(u32::MAX),
+                        column: u32::try_from(column).unwrap_or(u32::MAX),
+                        cause: fault.cause,
+                    },
+                });
+                self.stopped = Some(fault);
+                SAFE
+            }
+        }
+    }
+
+    fn drain_events(&mut self) -> Vec<Event> {
+        std::mem::take(&mut self.events)
+    }
+
+    fn status(&self) -> Status {
+        Status::default()
+    }
+
+    fn plc_link(&self) -> PlcLink {
+        PlcLink {
+            connected: true,
+            run: self.stopped.is_none(),
+        }
+    }
+
+    fn program_name(&self) -> Option<&str> {
+        Some(&self.name)
+    }
+
+    fn as_any(&self) -> &dyn Any {
+        self
+    }
+
+    fn as_any_mut(&mut self) -> &mut dyn Any {
+        self
+    }
+}
