@@ -241,9 +241,10 @@ enum IStmt {
         to: IExpr,
         by: IExpr,
         body: Vec<IStmt>,
+        span: Span,
     },
-    While(IExpr, Vec<IStmt>),
-    Repeat(Vec<IStmt>, IExpr),
+    While(IExpr, Vec<IStmt>, Span),
+    Repeat(Vec<IStmt>, IExpr, Span),
     Exit,
     Continue,
     Return,
@@ -397,6 +398,7 @@ impl Plc {
             now,
             left: self.budget.0,
             budget: self.budget.0,
+            at: Span::default(),
         };
         let r = m.stmts(&code[self.program], 0).map(|_| ());
         self.code = code;
@@ -413,11 +415,19 @@ struct Machine<'a> {
     now: i64,
     left: u64,
     budget: u64,
+    /// The loop running, the watchdog's place.
+    at: Span,
 }
 
 impl Machine<'_> {
     fn tick(&mut self, span: Span) -> Result<(), Fault> {
         if self.left == 0 {
+            // Where nothing finer is known, the loop that ran out of the budget.
+            let span = if span == Span::default() {
+                self.at
+            } else {
+                span
+            };
             return Err(Fault {
                 span,
                 cause: FaultCause::Watchdog(self.budget),
@@ -584,7 +594,9 @@ impl Machine<'_> {
                 to,
                 by,
                 body,
+                span,
             } => {
+                let outer = std::mem::replace(&mut self.at, *span);
                 let (from, to, by) = (
                     self.eval(from, base)?.int(),
                     self.eval(to, base)?.int(),
@@ -607,8 +619,10 @@ impl Machine<'_> {
                         self.tick(Span::default())?;
                     }
                 }
+                self.at = outer;
             }
-            IStmt::While(c, body) => {
+            IStmt::While(c, body, span) => {
+                let outer = std::mem::replace(&mut self.at, *span);
                 while self.eval(c, base)?.bool() {
                     match self.stmts(body, base)? {
                         Flow::Exit => break,
@@ -616,17 +630,22 @@ impl Machine<'_> {
                         _ => {}
                     }
                 }
+                self.at = outer;
             }
-            IStmt::Repeat(body, until) => loop {
-                match self.stmts(body, base)? {
-                    Flow::Exit => break,
-                    Flow::Return => return Ok(Flow::Return),
-                    _ => {}
+            IStmt::Repeat(body, until, span) => {
+                let outer = std::mem::replace(&mut self.at, *span);
+                loop {
+                    match self.stmts(body, base)? {
+                        Flow::Exit => break,
+                        Flow::Return => return Ok(Flow::Return),
+                        _ => {}
+                    }
+                    if self.eval(until, base)?.bool() {
+                        break;
+                    }
                 }
-                if self.eval(until, base)?.bool() {
-                    break;
-                }
-            },
+                self.at = outer;
+            }
             IStmt::Exit => return Ok(Flow::Exit),
             IStmt::Continue => return Ok(Flow::Continue),
             IStmt::Return => return Ok(Flow::Return),
@@ -1459,14 +1478,19 @@ impl Compiler<'_> {
                         .as_ref()
                         .map_or(IExpr::Const(Value::Int(1)), |b| self.expr_as(sc, b, elem)),
                     body: self.stmts(sc, body),
+                    span: s.span,
                 }
             }
-            StmtKind::While { cond, body } => {
-                IStmt::While(self.expr_as(sc, cond, Elem::Bool), self.stmts(sc, body))
-            }
-            StmtKind::Repeat { body, until } => {
-                IStmt::Repeat(self.stmts(sc, body), self.expr_as(sc, until, Elem::Bool))
-            }
+            StmtKind::While { cond, body } => IStmt::While(
+                self.expr_as(sc, cond, Elem::Bool),
+                self.stmts(sc, body),
+                s.span,
+            ),
+            StmtKind::Repeat { body, until } => IStmt::Repeat(
+                self.stmts(sc, body),
+                self.expr_as(sc, until, Elem::Bool),
+                s.span,
+            ),
             StmtKind::Exit => IStmt::Exit,
             StmtKind::Continue => IStmt::Continue,
             StmtKind::Return => IStmt::Return,

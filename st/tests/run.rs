@@ -210,11 +210,16 @@ END_PROGRAM");
     );
     assert_eq!(src.locate(f.span.start).0, 3);
 
-    let (mut p, _) = plc("PROGRAM P
+    let (mut p, src) = plc("PROGRAM P
 VAR i : INT; END_VAR
   WHILE TRUE DO i := i + 1; END_WHILE;
 END_PROGRAM");
     p.set_budget(Budget(10_000));
     let f = p.scan(0, &mut words()).expect_err("the watchdog");
     assert_eq!(f.cause, FaultCause::Watchdog(10_000));
+    assert_eq!(
+        src.locate(f.span.start).0,
+        3,
+        "the watchdog's place: the loop"
+    );
 }
