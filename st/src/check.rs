@@ -435,6 +435,14 @@ impl<'a> Checker<'a> {
     fn vars(&mut self, blocks: &[ast::VarBlock], located: bool) -> Vec<Var> {
         let mut out: Vec<Var> = Vec::new();
         for b in blocks {
+            if b.kind == VarKind::InOut {
+                // Refused rather than run as a copy, which would not write back.
+                self.error(
+                    b.span,
+                    "VAR_IN_OUT is not run by asi-lift yet: pass the value as a VAR_INPUT and read it back from a VAR_OUTPUT",
+                );
+                continue;
+            }
             for d in &b.decls {
                 let ty = self.resolve(&d.ty);
                 let at = d.at.as_ref().and_then(|(direct, span)| {

@@ -115,6 +115,10 @@ fn wrong_declarations_get_their_messages() {
             "PROGRAM A END_PROGRAM\nPROGRAM B END_PROGRAM\n",
         ),
         ("no_program", "FUNCTION_BLOCK B END_FUNCTION_BLOCK\n"),
+        (
+            "in_out",
+            "FUNCTION_BLOCK B VAR_IN_OUT x : INT; END_VAR END_FUNCTION_BLOCK\nPROGRAM P END_PROGRAM\n",
+        ),
     ];
     for (name, text) in corpus {
         let (_, errors) = checked(text);
