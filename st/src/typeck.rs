@@ -59,6 +59,7 @@ pub fn typecheck(checked: &Checked) -> Vec<Diagnostic> {
             errors: Vec::new(),
             loops: 0,
             calls: Vec::new(),
+            counting: Vec::new(),
         };
         for v in &pou.vars {
             t.initial(v);
@@ -74,6 +75,7 @@ pub fn typecheck(checked: &Checked) -> Vec<Diagnostic> {
         errors: Vec::new(),
         loops: 0,
         calls: Vec::new(),
+        counting: Vec::new(),
     };
     for v in &checked.globals {
         t.initial(v);
@@ -130,6 +132,8 @@ struct Typer<'a> {
     loops: u32,
     /// The functions this block calls, and where.
     calls: Vec<(usize, Span)>,
+    /// The control variables of the FOR loops the statement is in.
+    counting: Vec<String>,
 }
 
 /// What a name is.
@@ -317,6 +321,14 @@ impl<'a> Typer<'a> {
     fn stmt(&mut self, s: &Stmt) {
         match &s.kind {
             StmtKind::Assign { target, value } => {
+                if let ExprKind::Name(i) = &target.kind {
+                    if self.counting.contains(&i.key()) {
+                        self.error(
+                            i.span,
+                            format!("`{}` counts the FOR loop around: its body does not assign it (use WHILE to step freely)", i.text),
+                        );
+                    }
+                }
                 let to = self.place(target);
                 let from = self.expr(value);
                 self.expect_into(&from, &to, value.span);
@@ -410,7 +422,9 @@ impl<'a> Typer<'a> {
                     self.expect_into(&t, &control, e.span);
                 }
                 self.loops += 1;
+                self.counting.push(key);
                 self.stmts(body);
+                self.counting.pop();
                 self.loops -= 1;
             }
             StmtKind::While { cond, body } => {

@@ -223,3 +223,43 @@ END_PROGRAM");
         "the watchdog's place: the loop"
     );
 }
+
+/// Each standard function in the interpreter, against values worked by hand.
+#[test]
+fn the_standard_functions() {
+    let (mut p, _) = plc("PROGRAM P
+VAR
+  a, b, c, d, e, f, g : INT;
+  r : REAL;
+  w1, w2, w3, w4 : WORD;
+  x : DINT;
+  s : BOOL;
+END_VAR
+  a := ABS(-7);
+  b := MIN(4, -2, 9);
+  c := MAX(4, -2, 9);
+  d := LIMIT(0, 120, 100);
+  e := SEL(TRUE, 1, 2);
+  f := MUX(2, 10, 20, 30);
+  g := MOVE(5);
+  r := SQRT(16.0);
+  w1 := SHL(WORD#16#8001, 1);
+  w2 := SHR(WORD#16#8001, 1);
+  w3 := ROL(WORD#16#8001, 1);
+  w4 := ROR(WORD#16#8001, 1);
+  x := INT_TO_DINT(-3) * 100000;
+  s := INT_TO_BOOL(2);
+END_PROGRAM");
+    p.scan(0, &mut words()).expect("a scan");
+    let got: Vec<i64> = [
+        "a", "b", "c", "d", "e", "f", "g", "w1", "w2", "w3", "w4", "x", "s",
+    ]
+    .iter()
+    .map(|n| int(&p, n))
+    .collect();
+    assert_eq!(
+        got,
+        [7, -2, 9, 100, 2, 30, 5, 0x0002, 0x4000, 0x0003, 0xC000, -300_000, 1]
+    );
+    assert_eq!(real(&p, "r"), 4.0);
+}

@@ -96,7 +96,7 @@ fn wrong_statements_get_their_messages() {
         ),
         (
             "control",
-            "TYPE Dir : (Up, Down); END_TYPE\nPROGRAM P\nVAR i : INT; r : REAL; d : Dir; END_VAR\n  IF i THEN i := 1; END_IF;\n  WHILE r DO EXIT; END_WHILE;\n  EXIT;\n  FOR r := 1 TO 3 DO END_FOR;\n  CASE r OF 1: i := 2; END_CASE;\n  CASE d OF Up: i := 1; 3: i := 2; END_CASE;\nEND_PROGRAM\n",
+            "TYPE Dir : (Up, Down); END_TYPE\nPROGRAM P\nVAR i : INT; r : REAL; d : Dir; END_VAR\n  IF i THEN i := 1; END_IF;\n  WHILE r DO EXIT; END_WHILE;\n  EXIT;\n  FOR r := 1 TO 3 DO END_FOR;\n  FOR i := 1 TO 3 DO i := i + 1; END_FOR;\n  CASE r OF 1: i := 2; END_CASE;\n  CASE d OF Up: i := 1; 3: i := 2; END_CASE;\nEND_PROGRAM\n",
         ),
         (
             "calls",
