@@ -48,6 +48,7 @@ pub struct StProgram {
     name: String,
     source: Source,
     plc: Plc,
+    scan: SimDuration,
     stopped: Option<Fault>,
     events: Vec<Event>,
 }
@@ -76,10 +77,18 @@ impl StProgram {
         Ok(StProgram {
             name: name.to_owned(),
             plc: Plc::new(&checked),
+            scan: SCAN,
             source,
             stopped: None,
             events: Vec::new(),
         })
+    }
+
+    /// The program scanned every `scan` (a scenario's `[controller] scan`) instead of every
+    /// [`SCAN`].
+    pub fn with_scan(mut self, scan: SimDuration) -> StProgram {
+        self.scan = scan;
+        self
     }
 
     /// The program's name (its file's, as given).
@@ -140,7 +149,7 @@ const SAFE: ToSafety = ToSafety {
 
 impl Controller for StProgram {
     fn scan_period(&self) -> SimDuration {
-        SCAN
+        self.scan
     }
 
     fn scan(&mut self, now: SimTime, image: &mut ProcessImage, safety: FromSafety) -> ToSafety {

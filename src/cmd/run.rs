@@ -196,7 +196,11 @@ pub fn run(args: RunArgs) -> Result<u8, String> {
             eprintln!("asi-lift: warning: {w}");
         }
     }
-    let program = controller.as_deref().map(load_program).transpose()?;
+    let program = controller
+        .as_deref()
+        .map(load_program)
+        .transpose()?
+        .map(|p| p.with_scan(sc.plc_scan));
     let mut rig = Rig::new(sc).map_err(|e| e.to_string())?;
     if let Some(p) = program {
         rig = rig.with_controller(p);
