@@ -96,3 +96,36 @@ PROGRAM P VAR x : INT; END_VAR x := F(0); END_PROGRAM",
     .expect_err("refused");
     assert!(deep.rendered.contains("no recursion"), "{deep}");
 }
+
+/// A program that drives the converter through the image: run and up (slave 7, `%QX1.0`,
+/// `%QX1.1`) with the travel set-point on slave 10 (`%QW68`) from 3 s to 4 s, then the
+/// standstill set-point and no run: the cabin rises from where it stood, comes to rest, and no
+/// invariant breaks.
+#[test]
+fn a_program_moves_the_cabin_through_the_image() {
+    let r = run(
+        "PROGRAM Lift
+VAR
+  EStopOut : BOOL;
+  Restart : BOOL;
+  run AT %QX1.0 : BOOL;
+  up AT %QX1.1 : BOOL;
+  speed AT %QW68 : WORD;
+  pulse, start, travel : TON;
+END_VAR
+  pulse(IN := NOT pulse.Q, PT := T#1s);
+  Restart := pulse.Q AND NOT EStopOut;
+  start(IN := TRUE, PT := T#3s);
+  travel(IN := start.Q, PT := T#1s);
+  run := start.Q AND NOT travel.Q;
+  up := run;
+  IF run THEN speed := 10000; ELSE speed := 4000; END_IF;
+END_PROGRAM",
+        8,
+    );
+    assert_no_violations(&r);
+    assert_eq!(stopped(&r), None);
+    let moved = r.final_state.position_mm - 650.0;
+    assert!(moved > 20.0, "the cabin rose {moved} mm");
+    assert!(!r.final_state.moving, "and came to rest");
+}
