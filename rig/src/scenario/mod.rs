@@ -8,6 +8,7 @@ pub mod builtin;
 pub(crate) mod read;
 #[cfg(test)]
 mod tests;
+pub mod traffic;
 mod write;
 
 use asi_phy::{SimDuration, SimTime};
@@ -51,6 +52,9 @@ pub struct Scenario {
     pub safe_drive: bool,
     /// The events, in time order.
     pub events: Vec<ScenarioEvent>,
+    /// The traffic templates (`[[traffic]]`): passengers generated from a seed, each a hall
+    /// call at their origin and, once aboard, a cabin call to their destination.
+    pub traffic: Vec<traffic::Traffic>,
 }
 
 /// One scheduled action.
@@ -241,6 +245,7 @@ impl Scenario {
             power_on_reset: true,
             safe_drive: false,
             events: Vec::new(),
+            traffic: Vec::new(),
         }
     }
 
