@@ -59,7 +59,7 @@ impl Riders {
             })
             .max();
         Riders {
-            trips: traffic::trips(&sc.traffic, sc.floors, end),
+            trips: traffic::trips(&sc.traffic, sc.seed, sc.floors, end),
             on: !sc.traffic.is_empty(),
             span: (start.unwrap_or(end), last.unwrap_or(end)),
             ..Riders::default()

@@ -783,7 +783,6 @@ fn read_traffic(
             ),
         ));
     }
-    let seed = raw.seed.unwrap_or(sc.seed);
     let start = match &raw.start {
         Some(s) => duration(loc, &field("start"), s)?,
         None => SimDuration::ZERO,
@@ -817,7 +816,7 @@ fn read_traffic(
     Ok(Traffic {
         pattern,
         per_minute,
-        seed,
+        seed: raw.seed,
         start,
         duration: length,
         line,

@@ -72,8 +72,9 @@ pub struct Traffic {
     pub pattern: Pattern,
     /// Mean arrivals per minute, in (0, [`MAX_PER_MINUTE`]].
     pub per_minute: f64,
-    /// The seed of its arrivals and floors.
-    pub seed: u64,
+    /// The seed of its arrivals and floors; `None`: drawn from the scenario's ([`Traffic::seed`]),
+    /// so that `run --seed` varies the traffic too.
+    pub seed: Option<u64>,
     /// When its first passenger may come, from the start of the run.
     pub start: SimDuration,
     /// How long passengers come; `None`: until the end of the run.
@@ -101,10 +102,18 @@ impl Trip {
 }
 
 impl Traffic {
+    /// The seed of the `n`-th template (0-based) of a scenario with seed `scenario`: its own,
+    /// else the scenario's moved by `n`, so that two templates without a seed of their own do
+    /// not bring their passengers at the same moments.
+    pub fn seed(&self, scenario: u64, n: usize) -> u64 {
+        self.seed.unwrap_or_else(|| scenario.wrapping_add(n as u64))
+    }
+
     /// The template's passengers on a lift of `floors` floors, in time order, before `end`
-    /// (the run's end; the template's own end if earlier). Times are whole nanoseconds.
-    pub fn trips(&self, floors: u8, end: SimTime) -> Vec<Trip> {
-        let mut rng = ChaCha8Rng::seed_from_u64(self.seed);
+    /// (the run's end; the template's own end if earlier), drawn from `seed`
+    /// ([`Traffic::seed`]). Times are whole nanoseconds.
+    pub fn trips(&self, seed: u64, floors: u8, end: SimTime) -> Vec<Trip> {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
         let start = SimTime::ZERO + self.start;
         let end = match self.duration {
             Some(d) => end.min(start + d),
@@ -132,12 +141,13 @@ impl Traffic {
     }
 }
 
-/// Every passenger of `templates` on a lift of `floors` floors before `end`, in time order
-/// (stable: at the same time, the earlier template's first).
-pub fn trips(templates: &[Traffic], floors: u8, end: SimTime) -> Vec<Trip> {
+/// Every passenger of `templates` of a scenario with seed `seed` on a lift of `floors` floors
+/// before `end`, in time order (stable: at the same time, the earlier template's first).
+pub fn trips(templates: &[Traffic], seed: u64, floors: u8, end: SimTime) -> Vec<Trip> {
     let mut all: Vec<Trip> = templates
         .iter()
-        .flat_map(|t| t.trips(floors, end))
+        .enumerate()
+        .flat_map(|(n, t)| t.trips(t.seed(seed, n), floors, end))
         .collect();
     all.sort_by_key(|t| t.at);
     all
@@ -151,11 +161,16 @@ mod tests {
         Traffic {
             pattern,
             per_minute,
-            seed,
+            seed: Some(seed),
             start: SimDuration::ZERO,
             duration: None,
             line: 0,
         }
+    }
+
+    /// The passengers of `t` (its own seed) before `end`.
+    fn of(t: &Traffic, floors: u8, end: SimTime) -> Vec<Trip> {
+        t.trips(t.seed(0, 0), floors, end)
     }
 
     fn hours(h: u64) -> SimTime {
@@ -165,10 +180,18 @@ mod tests {
     #[test]
     fn the_same_seed_gives_the_same_passengers() {
         let t = template(Pattern::Interfloor, 2.0, 7);
-        let a = t.trips(4, hours(1));
-        assert_eq!(a, t.trips(4, hours(1)));
+        let a = of(&t, 4, hours(1));
+        assert_eq!(a, of(&t, 4, hours(1)));
         assert!(!a.is_empty());
-        let other = template(Pattern::Interfloor, 2.0, 8).trips(4, hours(1));
+        // Without seeds of their own, two templates of a scenario draw different passengers.
+        let mut own = t.clone();
+        own.seed = None;
+        assert_ne!(
+            own.trips(own.seed(7, 0), 4, hours(1)),
+            own.trips(own.seed(7, 1), 4, hours(1))
+        );
+        assert_eq!(own.trips(own.seed(7, 0), 4, hours(1)), a);
+        let other = of(&template(Pattern::Interfloor, 2.0, 8), 4, hours(1));
         assert_ne!(a, other, "another seed, other passengers");
     }
 
@@ -177,7 +200,7 @@ mod tests {
         // 100 hours at 2 a minute: 12,000 expected. A Poisson count's standard deviation is
         // √12000 ≈ 110, so 3 % (about 3.3 σ) holds for any seed; the gaps' mean likewise.
         let t = template(Pattern::Interfloor, 2.0, 11);
-        let trips = t.trips(4, hours(100));
+        let trips = of(&t, 4, hours(100));
         let n = trips.len() as f64;
         assert!((n - 12_000.0).abs() < 360.0, "{n} arrivals in 100 h");
         let mean_gap = trips.last().unwrap().at.as_secs_f64() / n;
@@ -204,14 +227,13 @@ mod tests {
         let mut t = template(Pattern::UpPeak, 6.0, 3);
         t.start = SimDuration::from_secs(60);
         t.duration = Some(SimDuration::from_secs(120));
-        let trips = t.trips(4, hours(1));
+        let trips = of(&t, 4, hours(1));
         assert!(!trips.is_empty());
         assert!(trips.iter().all(|tr| {
             let s = tr.at.as_secs_f64();
             (60.0..180.0).contains(&s)
         }));
-        assert!(t
-            .trips(4, SimTime::ZERO + SimDuration::from_secs(100))
+        assert!(of(&t, 4, SimTime::ZERO + SimDuration::from_secs(100))
             .iter()
             .all(|tr| tr.at.as_secs_f64() < 100.0));
     }
@@ -227,7 +249,7 @@ mod tests {
 
     #[test]
     fn up_peak_goes_from_floor_1_to_every_other_floor_alike() {
-        let trips = template(Pattern::UpPeak, 10.0, 5).trips(4, hours(10));
+        let trips = of(&template(Pattern::UpPeak, 10.0, 5), 4, hours(10));
         let c = od(&trips);
         let n = trips.len() as f64;
         assert!(trips.iter().all(|t| t.origin == 1 && t.destination > 1));
@@ -239,7 +261,7 @@ mod tests {
 
     #[test]
     fn down_peak_goes_to_floor_1_from_every_other_floor_alike() {
-        let trips = template(Pattern::DownPeak, 10.0, 5).trips(4, hours(10));
+        let trips = of(&template(Pattern::DownPeak, 10.0, 5), 4, hours(10));
         let c = od(&trips);
         let n = trips.len() as f64;
         assert!(trips.iter().all(|t| t.destination == 1 && t.origin > 1));
@@ -251,7 +273,7 @@ mod tests {
 
     #[test]
     fn interfloor_is_uniform_over_pairs_of_different_floors() {
-        let trips = template(Pattern::Interfloor, 10.0, 5).trips(4, hours(20));
+        let trips = of(&template(Pattern::Interfloor, 10.0, 5), 4, hours(20));
         let c = od(&trips);
         let n = trips.len() as f64;
         for (o, row) in c.iter().enumerate().skip(1) {
@@ -267,10 +289,10 @@ mod tests {
     fn templates_merge_in_time_order() {
         let a = template(Pattern::UpPeak, 2.0, 1);
         let b = template(Pattern::DownPeak, 2.0, 2);
-        let all = trips(&[a.clone(), b.clone()], 4, hours(1));
+        let all = trips(&[a.clone(), b.clone()], 0, 4, hours(1));
         assert_eq!(
             all.len(),
-            a.trips(4, hours(1)).len() + b.trips(4, hours(1)).len()
+            of(&a, 4, hours(1)).len() + of(&b, 4, hours(1)).len()
         );
         assert!(all.windows(2).all(|w| w[0].at <= w[1].at));
     }

@@ -77,7 +77,9 @@ impl Scenario {
         for t in &self.traffic {
             let _ = writeln!(s, "\n[[traffic]]\npattern = \"{}\"", t.pattern.name());
             let _ = writeln!(s, "per_minute = {}", toml_float(t.per_minute));
-            let _ = writeln!(s, "seed = {}", t.seed);
+            if let Some(seed) = t.seed {
+                let _ = writeln!(s, "seed = {seed}");
+            }
             let _ = writeln!(s, "start = \"{}\"", exact_duration(t.start));
             if let Some(d) = t.duration {
                 let _ = writeln!(s, "duration = \"{}\"", exact_duration(d));
