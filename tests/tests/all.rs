@@ -16,3 +16,4 @@ mod safe_drive;
 mod safety_regressions;
 mod snapshots;
 mod traces;
+mod traffic;
