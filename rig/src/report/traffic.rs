@@ -4,9 +4,14 @@
 //! five minutes (the ELEVATE manual, "Passenger Demand": persons per five minutes; Barney and
 //! Al-Sharif, "Elevator Traffic Handbook").
 
-use super::round3;
 use serde::Serialize;
 use std::fmt::Write as _;
+
+/// `x` rounded to the millisecond, the precision of the report's times (as `report::round3`;
+/// not named here, so that this module depends on nothing of its parent).
+fn round3(x: f64) -> f64 {
+    (x * 1000.0).round() / 1000.0
+}
 
 /// What the passengers of the traffic templates met.
 #[derive(Clone, Debug, PartialEq, Serialize)]
