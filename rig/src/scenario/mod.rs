@@ -22,7 +22,8 @@ use std::ops::RangeInclusive;
 pub struct Scenario {
     /// Its name, for the report.
     pub name: String,
-    /// The seed of every random choice (line noise).
+    /// The seed of every random choice (line noise; the traffic templates without a seed of
+    /// their own).
     pub seed: u64,
     /// How long to simulate.
     pub duration: SimDuration,
