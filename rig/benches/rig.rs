@@ -9,8 +9,13 @@
 //! Each path runs three times (`runs=N` for another count) and the median wall time is the
 //! figure, with the range beside it: a single run on a shared machine can be a fifth off.
 //!
+//! A fourth rig, `busy`, is the lab lift under the busy traffic of a traffic template: Poisson
+//! arrivals with a mean gap of 30 s, origin and destination uniform over the floors
+//! (interfloor), each passenger a hall call and then a cabin call (the book, "Traffic as
+//! planners measure it").
+//!
 //! `cargo bench -p asi-lift-rig --bench rig` (arguments after `--`: simulated seconds, default 3600;
-//! `lab`, `full` or `noise` to run only that rig; `fast` to skip the pulse-exact runs;
+//! `lab`, `full`, `noise` or `busy` to run only that rig; `fast` to skip the pulse-exact runs;
 //! `runs=N`).
 
 use asi_phy::{SimDuration, SimTime};
@@ -18,6 +23,7 @@ use lift_model::Button;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rig::rig::Rig;
+use rig::scenario::traffic::{Pattern, Traffic};
 use rig::scenario::{Action, Scenario, ScenarioEvent};
 use std::time::Instant;
 
@@ -50,6 +56,25 @@ fn traffic(seconds: u64, extra_slaves: u8, pulse_error_rate: f64) -> Scenario {
         extra_slaves,
         pulse_error_rate,
         events,
+        ..Scenario::defaults()
+    }
+}
+
+/// A busy hour of passengers from a traffic template: Poisson arrivals, a mean gap of 30 s,
+/// interfloor (random origin and destination), a hall call and then a cabin call each.
+fn busy(seconds: u64) -> Scenario {
+    Scenario {
+        name: "busy traffic".into(),
+        duration: SimDuration::from_secs(seconds),
+        traffic: vec![Traffic {
+            pattern: Pattern::Interfloor,
+            per_minute: 2.0,
+            seed: Some(2026),
+            // After the controller's initialisation.
+            start: SimDuration::from_secs(15),
+            duration: None,
+            line: 0,
+        }],
         ..Scenario::defaults()
     }
 }
@@ -101,7 +126,7 @@ fn main() {
     let seconds: u64 = args.iter().find_map(|a| a.parse().ok()).unwrap_or(3600);
     let only = args
         .iter()
-        .find(|a| matches!(a.as_str(), "lab" | "full" | "noise"));
+        .find(|a| matches!(a.as_str(), "lab" | "full" | "noise" | "busy"));
     let fast_only = args.iter().any(|a| a == "fast");
     let runs: usize = match args.iter().find_map(|a| a.strip_prefix("runs=")) {
         None => 3,
@@ -113,13 +138,23 @@ fn main() {
             }
         },
     };
-    for (name, extra, noise) in [("lab", 0u8, 0.0), ("full", 20, 0.0), ("noise", 0, 1e-3)] {
+    for (name, extra, noise) in [
+        ("lab", 0u8, 0.0),
+        ("full", 20, 0.0),
+        ("noise", 0, 1e-3),
+        ("busy", 0, 0.0),
+    ] {
         if only.is_some_and(|o| o != name) {
             continue;
         }
-        let sc = traffic(seconds, extra, noise);
-        let presses = sc.events.len();
+        let sc = if name == "busy" {
+            busy(seconds)
+        } else {
+            traffic(seconds, extra, noise)
+        };
         let ((secs, fastest, slowest), report) = timed_runs(&sc, false, runs);
+        // The traffic template's passengers press twice each, the hand-written ones once.
+        let presses = report.passengers.len();
         println!(
             "{name:>5}: {seconds} s simulated ({} slaves, line noise {noise}, {presses} presses, {} served, {} transactions) in {secs:.2} s wall (median of {runs}: {fastest:.2}–{slowest:.2} s) = {:.0}x real time ({:.0}–{:.0}x), {:.1} ns per transaction",
             11 + extra as usize,

@@ -3,6 +3,7 @@
 
 mod log;
 mod slaves;
+pub mod traffic;
 mod violation;
 
 pub(crate) use log::monitor_drop;
@@ -38,6 +39,10 @@ pub struct Report {
     /// measure for comparing control algorithms (a press on a call already pending waits
     /// with it).
     pub passengers: Vec<Passenger>,
+    /// The passengers of the scenario's traffic templates, measured as lift planners do
+    /// (absent in a scenario without `[[traffic]]`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub traffic: Option<traffic::TrafficReport>,
     /// The state at the end.
     #[serde(rename = "final")]
     pub final_state: FinalState,
@@ -568,6 +573,7 @@ impl Report {
             arrivals: Vec::new(),
             served: Vec::new(),
             passengers: Vec::new(),
+            traffic: None,
             final_state: FinalState {
                 floor: Some(1),
                 position_mm: start_mm,
@@ -709,6 +715,9 @@ impl Report {
                 count(presses - w.unserved as u64, "press", "presses"),
                 w.unserved
             );
+        }
+        if let Some(t) = &self.traffic {
+            s.push_str(&t.summary());
         }
         let f = &self.final_state;
         let controller = match (f.state, f.floor) {

@@ -7,7 +7,10 @@
 //! 3. with the safe drive (`[drive] safe = true`), each of its functions the run requested:
 //!    when its control bit was FALSE (requested), when its status was TRUE (safe state
 //!    reached), and its trips;
-//! 4. the bus's repeats per transaction, in windows of one second.
+//! 4. the bus's repeats per transaction, in windows of one second;
+//! 5. with traffic templates (`[[traffic]]`), the distribution of the passengers' waiting and
+//!    journey times: the share of them (cumulative, %) done within each time, hall call
+//!    waits, cabin call waits and journeys, with the 95 % line the 95th percentile meets.
 //!
 //! The series are sampled by stepping the rig through its public [`Rig::step_until`] at a
 //! fixed simulated step ([`sample_step`]) and reading the plant and the bus between moments;
@@ -217,6 +220,9 @@ const PRESSED: RGBColor = RGBColor(150, 0, 150);
 const WAIT: RGBColor = RGBColor(220, 170, 220);
 const SERVED: RGBColor = RGBColor(0, 150, 150);
 const BUS: RGBColor = RGBColor(100, 60, 20);
+const HALL_WAIT: RGBColor = RGBColor(150, 0, 150);
+const CABIN_WAIT: RGBColor = RGBColor(0, 150, 150);
+const JOURNEY: RGBColor = RGBColor(20, 60, 160);
 
 /// The whole picture, on either backend: the title, the panels and their legends.
 fn draw_on<DB: DrawingBackend>(root: &Area<DB>, s: &Samples, rep: &Report) -> DrawResult
@@ -237,18 +243,40 @@ where
         .map_or(rep.simulated_s, |l| l.t_s)
         .max(1e-3);
     let legend_x = w - i32::try_from(LEGEND_W)?;
-    if s.samples.iter().any(|p| p.drive.is_some()) {
-        let rows = [h * 36 / 100, h * 60 / 100, h * 82 / 100];
-        let areas = root.split_by_breakpoints([legend_x], rows);
-        position_panel(&areas[0], &areas[1], s, rep, t_end)?;
-        velocity_panel(&areas[2], &areas[3], s, rep, t_end)?;
-        drive_panel(&areas[4], &areas[5], s, rep, t_end)?;
-        bus_panel(&areas[6], &areas[7], s, rep, t_end)?;
-    } else {
-        let areas = root.split_by_breakpoints([legend_x], [h * 46 / 100, h * 77 / 100]);
-        position_panel(&areas[0], &areas[1], s, rep, t_end)?;
-        velocity_panel(&areas[2], &areas[3], s, rep, t_end)?;
-        bus_panel(&areas[4], &areas[5], s, rep, t_end)?;
+    let traffic = rep.traffic.as_ref().filter(|t| !t.trips.is_empty());
+    let drive = s.samples.iter().any(|p| p.drive.is_some());
+    match (drive, traffic) {
+        (true, None) => {
+            let rows = [h * 36 / 100, h * 60 / 100, h * 82 / 100];
+            let areas = root.split_by_breakpoints([legend_x], rows);
+            position_panel(&areas[0], &areas[1], s, rep, t_end)?;
+            velocity_panel(&areas[2], &areas[3], s, rep, t_end)?;
+            drive_panel(&areas[4], &areas[5], s, rep, t_end)?;
+            bus_panel(&areas[6], &areas[7], s, rep, t_end)?;
+        }
+        (false, None) => {
+            let areas = root.split_by_breakpoints([legend_x], [h * 46 / 100, h * 77 / 100]);
+            position_panel(&areas[0], &areas[1], s, rep, t_end)?;
+            velocity_panel(&areas[2], &areas[3], s, rep, t_end)?;
+            bus_panel(&areas[4], &areas[5], s, rep, t_end)?;
+        }
+        (true, Some(t)) => {
+            let rows = [h * 30 / 100, h * 48 / 100, h * 64 / 100, h * 78 / 100];
+            let areas = root.split_by_breakpoints([legend_x], rows);
+            position_panel(&areas[0], &areas[1], s, rep, t_end)?;
+            velocity_panel(&areas[2], &areas[3], s, rep, t_end)?;
+            drive_panel(&areas[4], &areas[5], s, rep, t_end)?;
+            bus_panel(&areas[6], &areas[7], s, rep, t_end)?;
+            traffic_panel(&areas[8], &areas[9], t)?;
+        }
+        (false, Some(t)) => {
+            let rows = [h * 38 / 100, h * 60 / 100, h * 76 / 100];
+            let areas = root.split_by_breakpoints([legend_x], rows);
+            position_panel(&areas[0], &areas[1], s, rep, t_end)?;
+            velocity_panel(&areas[2], &areas[3], s, rep, t_end)?;
+            bus_panel(&areas[4], &areas[5], s, rep, t_end)?;
+            traffic_panel(&areas[6], &areas[7], t)?;
+        }
     }
     Ok(())
 }
@@ -605,4 +633,107 @@ where
             ),
         ],
     )
+}
+
+/// Panel 5: the distribution of the traffic passengers' waiting and journey times, as the
+/// share done within each time (an empirical CDF: a step of 1/n at each answered time).
+fn traffic_panel<DB: DrawingBackend>(
+    area: &Area<DB>,
+    key: &Area<DB>,
+    t: &rig::report::traffic::TrafficReport,
+) -> DrawResult
+where
+    DB::ErrorType: 'static,
+{
+    let since = |from: f64, to: Option<f64>| to.map(|to| to - from);
+    let series: [(&str, RGBColor, &rig::report::traffic::Times, Vec<f64>); 3] = [
+        (
+            "hall call waits",
+            HALL_WAIT,
+            &t.waiting.hall,
+            t.trips
+                .iter()
+                .filter_map(|p| since(p.hall_pressed_s, p.hall_answered_s))
+                .collect(),
+        ),
+        (
+            "cabin call waits",
+            CABIN_WAIT,
+            &t.waiting.cabin,
+            t.trips
+                .iter()
+                .filter_map(|p| since(p.cabin_pressed_s?, p.delivered_s))
+                .collect(),
+        ),
+        (
+            "journeys",
+            JOURNEY,
+            &t.journey,
+            t.trips
+                .iter()
+                .filter_map(|p| since(p.hall_pressed_s, p.delivered_s))
+                .collect(),
+        ),
+    ];
+    let xmax = series
+        .iter()
+        .flat_map(|(_, _, _, v)| v.iter().copied())
+        .fold(0.0_f64, f64::max)
+        .max(1.0)
+        * 1.05;
+    let mut chart = panel(
+        area,
+        "traffic: passengers done within a time (cumulative, % of those answered)",
+    )
+    .build_cartesian_2d(0.0..xmax, 0.0..102.0)?;
+    chart
+        .configure_mesh()
+        .x_desc("waiting or journey time (s)")
+        .x_label_formatter(&tick)
+        .y_desc("passengers (%)")
+        .y_label_formatter(&tick)
+        .y_labels(5)
+        .label_style(("sans-serif", 13))
+        .draw()?;
+    chart.draw_series(DashedLineSeries::new(
+        [(0.0, 95.0), (xmax, 95.0)],
+        6,
+        4,
+        FLOOR.stroke_width(1),
+    ))?;
+    let mut entries = Vec::new();
+    for (name, colour, times, mut v) in series {
+        v.sort_by(f64::total_cmp);
+        let n = v.len() as f64;
+        let mut steps = vec![(0.0, 0.0)];
+        for (i, &x) in v.iter().enumerate() {
+            steps.push((x, 100.0 * i as f64 / n));
+            steps.push((x, 100.0 * (i + 1) as f64 / n));
+        }
+        chart.draw_series(LineSeries::new(steps, colour.stroke_width(2)))?;
+        let f = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.1}"));
+        entries.push((Swatch::Line(colour, 2), format!("{name} ({})", times.count)));
+        entries.push((
+            Swatch::None,
+            format!(
+                "  mean {}, p95 {}, max {} s",
+                f(times.mean_s),
+                f(times.p95_s),
+                f(times.max_s)
+            ),
+        ));
+    }
+    entries.push((Swatch::Dashed(FLOOR), "95 %: the 95th percentile".into()));
+    entries.push((
+        Swatch::None,
+        format!("{} passengers, {} delivered", t.passengers, t.delivered),
+    ));
+    entries.push((
+        Swatch::None,
+        format!(
+            "handling capacity {:.1} per 5 min",
+            t.handling_capacity.mean_per_5min
+        ),
+    ));
+    legend(key, &entries)
 }

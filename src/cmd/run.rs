@@ -67,7 +67,8 @@ pub struct RunArgs {
     pub pulse_window: Option<String>,
     /// Draw the run: cabin position and velocity over time with the floors, vanes and
     /// overtravel trip points, the calls pressed and served, K1, the safety trips and the
-    /// bus's repeats per transaction. SVG for a `.svg` file, PNG (1400 × 1000 pixels) for a
+    /// bus's repeats per transaction; with traffic templates, the distribution of the
+    /// passengers' waiting and journey times. SVG for a `.svg` file, PNG (1400 × 1000 pixels) for a
     /// `.png` one; another extension is refused, and a name without one (`/dev/null`, `-`)
     /// gets SVG.
     #[arg(long, value_name = "FILE.svg|FILE.png")]

@@ -18,3 +18,4 @@ mod safety_regressions;
 mod snapshots;
 mod structured_text;
 mod traces;
+mod traffic;

@@ -154,6 +154,18 @@ fn every_scenario_file_whole_agrees() {
 }
 
 #[test]
+fn traffic_templates_give_the_same_outputs_on_both_paths() {
+    // The passengers' presses come at the rig's own moments, and a cabin press at a moment
+    // its hall call's stop set: both paths must take them alike.
+    let sc = Scenario::from_toml(
+        "traffic.toml",
+        "duration = \"150s\"\n[[traffic]]\npattern = \"interfloor\"\nper_minute = 6.0\nseed = 2\n",
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    agree("interfloor traffic", &sc, None, false);
+}
+
+#[test]
 fn the_demo_gives_the_same_vcd_on_both_paths() {
     agree(
         "demo with VCD",

@@ -490,6 +490,8 @@ pub fn generate(campaign_seed: u64, index: u64, profile: &Profile) -> Generated 
             power_on_reset,
             safe_drive,
             events,
+            // The campaign's passengers are its own presses.
+            traffic: Vec::new(),
         },
         tail: is_tail,
         probe: Some(Probe {

@@ -19,6 +19,7 @@ mod operator;
 mod outputs;
 mod passengers;
 mod plant;
+mod riders;
 mod scans;
 mod wiring;
 mod words;
@@ -50,6 +51,7 @@ use operator::{
 };
 use outputs::Outputs;
 use passengers::Passengers;
+use riders::Riders;
 use safety::lift::LiftEventKind;
 use safety::{LiftSafety, LiftSafetyConfig, LiftSafetyInputs, SafeLink, SAFETY_SCAN_PERIOD};
 use wiring::Applied;
@@ -195,6 +197,8 @@ struct People {
     /// Every press of a call button, for the passengers' waits and the served calls'
     /// requests.
     passengers: Passengers,
+    /// The passengers of the scenario's traffic templates.
+    riders: Riders,
     /// The lift attendant, once a scenario's `attend` has started it.
     attendant: Attendant,
     /// The last safety scan left the attendant's watch with nothing to count (K1 closed, or
@@ -301,6 +305,7 @@ impl Rig {
             },
             people: People {
                 passengers: Passengers::default(),
+                riders: Riders::of(&sc),
                 attendant: Attendant::default(),
                 attendant_idle: false,
             },
@@ -542,6 +547,9 @@ impl Rig {
         if let Some((at, _)) = self.agenda.timers.iter().min_by_key(|(at, _)| *at) {
             t = t.min(*at);
         }
+        if let Some(at) = self.people.riders.next_at() {
+            t = t.min(at);
+        }
         t
     }
 
@@ -646,6 +654,7 @@ impl Rig {
             self.agenda.next_event += 1;
             self.apply(t, &ev);
         }
+        self.riders_due(t);
         self.fire_timers(t);
         if self.wiring.plant_dirty {
             self.plant_to_slaves();
@@ -850,6 +859,7 @@ impl Rig {
             self.lab.bus().now(),
         );
         self.report.passengers = self.people.passengers.report();
+        self.report.traffic = self.traffic_report();
         if let Some(d) = self.safety.drive.as_mut() {
             self.report.safety.drive = Some(d.finish());
         }

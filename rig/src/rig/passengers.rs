@@ -24,6 +24,21 @@ pub(super) struct Passengers {
 }
 
 impl Passengers {
+    /// How many presses so far (the index of the next).
+    pub(super) fn len(&self) -> usize {
+        self.presses.len()
+    }
+
+    /// When press `i` was made.
+    pub(super) fn pressed_at(&self, i: usize) -> SimTime {
+        self.presses[i].at
+    }
+
+    /// When a stop answered press `i`, if one did.
+    pub(super) fn served_at(&self, i: usize) -> Option<SimTime> {
+        self.presses.get(i).and_then(|p| p.served)
+    }
+
     /// A press of `button` at `t`; the bell and STOP are no calls.
     pub(super) fn press(&mut self, t: SimTime, button: Button) {
         if button.floor().is_some() {

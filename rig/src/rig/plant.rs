@@ -84,6 +84,7 @@ impl Rig {
             // call waiting there.
             let served = self.people.passengers.arrived(floor, at);
             self.report.served.extend(served);
+            self.riders_answered();
         }
     }
 

@@ -409,6 +409,7 @@ impl Rig {
                 Ctl::Served(s) => {
                     let served = self.people.passengers.served(&s, e.at);
                     self.report.served.push(served);
+                    self.riders_answered();
                 }
                 _ => {}
             }

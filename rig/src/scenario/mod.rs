@@ -8,6 +8,7 @@ pub mod builtin;
 pub(crate) mod read;
 #[cfg(test)]
 mod tests;
+pub mod traffic;
 mod write;
 
 use asi_phy::{SimDuration, SimTime};
@@ -21,7 +22,8 @@ use std::ops::RangeInclusive;
 pub struct Scenario {
     /// Its name, for the report.
     pub name: String,
-    /// The seed of every random choice (line noise).
+    /// The seed of every random choice (line noise; the traffic templates without a seed of
+    /// their own).
     pub seed: u64,
     /// How long to simulate.
     pub duration: SimDuration,
@@ -54,6 +56,9 @@ pub struct Scenario {
     pub safe_drive: bool,
     /// The events, in time order.
     pub events: Vec<ScenarioEvent>,
+    /// The traffic templates (`[[traffic]]`): passengers generated from a seed, each a hall
+    /// call at their origin and, once aboard, a cabin call to their destination.
+    pub traffic: Vec<traffic::Traffic>,
 }
 
 /// One scheduled action.
@@ -245,6 +250,7 @@ impl Scenario {
             power_on_reset: true,
             safe_drive: false,
             events: Vec::new(),
+            traffic: Vec::new(),
         }
     }
 

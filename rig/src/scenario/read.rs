@@ -1,6 +1,7 @@
 //! Reading a scenario file: the TOML's shape (serde, with spans), then each section checked
 //! in its own step, every error named by file, line and field.
 
+use super::traffic::{Pattern, Traffic, MAX_PER_MINUTE};
 use super::{
     start_range_mm, Action, Fault, Scenario, ScenarioError, ScenarioEvent, DEFAULT_HOLD,
     PLC_SCAN_RANGE,
@@ -27,6 +28,18 @@ struct RawScenario {
     drive: Option<RawDrive>,
     #[serde(default)]
     event: Vec<Spanned<RawEvent>>,
+    #[serde(default)]
+    traffic: Vec<Spanned<RawTraffic>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawTraffic {
+    pattern: Option<Spanned<String>>,
+    per_minute: Option<Spanned<f64>>,
+    seed: Option<u64>,
+    start: Option<Spanned<String>>,
+    duration: Option<Spanned<String>>,
 }
 
 #[derive(Deserialize)]
@@ -181,13 +194,22 @@ impl<'a> Locator<'a> {
             _ => return String::new(),
         };
         // The table it is in: the nearest header above it.
-        let mut events = 0;
-        let mut table = None;
+        // An array of tables (`[[event]]`, `[[traffic]]`) is named with its index: the count
+        // of its headers up to here.
+        let mut count = 0;
+        let mut table: Option<&str> = None;
         for n in (1..line_no).rev() {
             let l = line_text(n).trim_start();
-            if l.starts_with("[[event]]") {
-                events += 1;
-                table.get_or_insert("event");
+            if let Some(h) = l.strip_prefix("[[") {
+                let name = h.split("]]").next().unwrap_or("").trim();
+                match table {
+                    None => {
+                        table = Some(name);
+                        count = 1;
+                    }
+                    Some(t) if t == name => count += 1,
+                    Some(_) => {}
+                }
             } else if let Some(h) = l.strip_prefix('[') {
                 if table.is_none() {
                     let name = h.split(']').next().unwrap_or("").trim();
@@ -196,7 +218,7 @@ impl<'a> Locator<'a> {
             }
         }
         match table {
-            Some(_) => format!("event[{events}].{key}"),
+            Some(t) => format!("{t}[{count}].{key}"),
             None => key,
         }
     }
@@ -494,6 +516,10 @@ impl Scenario {
         }
         // Stable: events at the same time keep the file's order.
         sc.events.sort_by_key(|e| e.at);
+        for (i, t) in raw.traffic.iter().enumerate() {
+            let template = read_traffic(&loc, i + 1, t, &sc)?;
+            sc.traffic.push(template);
+        }
         Ok(sc)
     }
 }
@@ -724,4 +750,89 @@ fn read_event(
     )?;
     let (line, _) = loc.position(span.start);
     Ok(ScenarioEvent { at, action, line })
+}
+
+/// The `n`-th `[[traffic]]` (1-based): a template of passengers (`scenario::traffic`).
+fn read_traffic(
+    loc: &Locator<'_>,
+    n: usize,
+    t: &Spanned<RawTraffic>,
+    sc: &Scenario,
+) -> Result<Traffic, ScenarioError> {
+    let field = |name: &str| format!("traffic[{n}].{name}");
+    let span = t.span();
+    let raw = t.get_ref();
+    let p = raw.pattern.as_ref().ok_or_else(|| {
+        loc.error(
+            Some(span.clone()),
+            field("pattern"),
+            "a traffic template needs `pattern = \"up-peak\"`, `\"down-peak\"` or `\"interfloor\"`",
+        )
+    })?;
+    let pattern = Pattern::from_name(p.get_ref()).ok_or_else(|| {
+        loc.error(
+            Some(p.span()),
+            field("pattern"),
+            format!(
+                "unknown pattern `{}`: use up-peak, down-peak or interfloor",
+                p.get_ref()
+            ),
+        )
+    })?;
+    let r = raw.per_minute.as_ref().ok_or_else(|| {
+        loc.error(
+            Some(span.clone()),
+            field("per_minute"),
+            "a traffic template needs `per_minute = …`, its mean arrivals per minute",
+        )
+    })?;
+    let per_minute = *r.get_ref();
+    if !(per_minute.is_finite() && per_minute > 0.0 && per_minute <= MAX_PER_MINUTE) {
+        return Err(loc.error(
+            Some(r.span()),
+            field("per_minute"),
+            format!(
+                "{}: the mean arrivals per minute lie above 0 and up to {MAX_PER_MINUTE}",
+                asi_phy::short_number(per_minute)
+            ),
+        ));
+    }
+    let start = match &raw.start {
+        Some(s) => duration(loc, &field("start"), s)?,
+        None => SimDuration::ZERO,
+    };
+    if start >= sc.duration {
+        let s = raw.start.as_ref().map(|s| s.span());
+        return Err(loc.error(
+            s,
+            field("start"),
+            format!(
+                "{start}: the traffic starts at or after the scenario's end ({})",
+                sc.duration
+            ),
+        ));
+    }
+    let length = match &raw.duration {
+        Some(d) => {
+            let v = duration(loc, &field("duration"), d)?;
+            if v.is_zero() {
+                return Err(loc.error(
+                    Some(d.span()),
+                    field("duration"),
+                    "must be longer than zero",
+                ));
+            }
+            Some(v)
+        }
+        None => None,
+    };
+    let (line, _) = loc.position(span.start);
+    Ok(Traffic {
+        pattern,
+        per_minute,
+        seed: raw.seed,
+        start,
+        duration: length,
+        line,
+    })
 }

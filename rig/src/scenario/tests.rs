@@ -129,6 +129,87 @@ fn events_after_the_end_are_found_for_a_warning() {
 }
 
 #[test]
+fn reads_traffic_templates() {
+    let sc = Scenario::from_toml(
+        "t.toml",
+        "seed = 9\nduration = \"1h\"\n[[traffic]]\npattern = \"up-peak\"\nper_minute = 2.5\n\n\
+         [[traffic]]\npattern = \"interfloor\"\nper_minute = 1.0\nseed = 4\nstart = \"10min\"\n\
+         duration = \"20min\"\n",
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    use traffic::{Pattern, Traffic};
+    assert_eq!(
+        sc.traffic,
+        [
+            Traffic {
+                pattern: Pattern::UpPeak,
+                per_minute: 2.5,
+                // The scenario's (moved by the template's place) unless it has its own.
+                seed: None,
+                start: SimDuration::ZERO,
+                duration: None,
+                line: 3,
+            },
+            Traffic {
+                pattern: Pattern::Interfloor,
+                per_minute: 1.0,
+                seed: Some(4),
+                start: SimDuration::from_secs(600),
+                duration: Some(SimDuration::from_secs(1200)),
+                line: 7,
+            },
+        ]
+    );
+}
+
+#[test]
+fn traffic_errors_name_the_template_and_the_key() {
+    let t = |body: &str| {
+        err(&format!("duration = \"1h\"\n[[traffic]]\npattern = \"up-peak\"\nper_minute = 1.0\n[[traffic]]\n{body}"))
+    };
+    assert_eq!(
+        t("pattern = \"lunch\"\nper_minute = 1.0\n"),
+        "t.toml:6:11: traffic[2].pattern: unknown pattern `lunch`: use up-peak, down-peak or interfloor"
+    );
+    assert_eq!(
+        t("pattern = \"interfloor\"\nper_minute = 0.0\n"),
+        "t.toml:7:14: traffic[2].per_minute: 0: the mean arrivals per minute lie above 0 and up to 60"
+    );
+    assert!(
+        t("pattern = \"interfloor\"\nper_minute = -3.0\n").contains("traffic[2].per_minute: -3:")
+    );
+    assert_eq!(
+        t("per_minute = 2.0\n"),
+        "t.toml:5:1: traffic[2].pattern: a traffic template needs `pattern = \"up-peak\"`, `\"down-peak\"` or `\"interfloor\"`"
+    );
+    assert!(t("pattern = \"interfloor\"\n").starts_with(
+        "t.toml:5:1: traffic[2].per_minute: a traffic template needs `per_minute = …`"
+    ));
+    assert_eq!(
+        t("pattern = \"interfloor\"\nper_minute = 1.0\nstart = \"2h\"\n"),
+        "t.toml:8:9: traffic[2].start: 7200 s: the traffic starts at or after the scenario's end (3600 s)"
+    );
+    assert!(
+        t("pattern = \"interfloor\"\nper_minute = 1.0\nduration = \"0s\"\n")
+            .starts_with("t.toml:8:12: traffic[2].duration: must be longer than zero")
+    );
+    assert!(
+        t("pattern = \"interfloor\"\nper_minute = 1.0\nduration = \"soon\"\n")
+            .starts_with("t.toml:8:12: traffic[2].duration: ")
+    );
+    // The TOML reader's errors are named with the template too.
+    let e = t("pattern = \"interfloor\"\nper_minute = \"many\"\n");
+    assert!(e.starts_with("t.toml:7:14: traffic[2].per_minute: "), "{e}");
+    let e = t("pattern = \"interfloor\"\nper_minute = 1.0\nseed = -1\n");
+    assert!(e.starts_with("t.toml:8:8: traffic[2].seed: "), "{e}");
+    let e = t("pattern = \"interfloor\"\nrate = 1.0\n");
+    assert!(
+        e.starts_with("t.toml:7:1: traffic[2].rate: unknown field `rate`"),
+        "{e}"
+    );
+}
+
+#[test]
 fn unknown_keys_are_errors() {
     let e = err("name = \"x\"\n[lift]\nfloor = 4\n");
     assert!(
@@ -146,6 +227,7 @@ fn unknown_keys_are_errors() {
 
 mod round_trip {
     use super::*;
+    use crate::scenario::traffic::{Pattern, Traffic, MAX_PER_MINUTE};
     use proptest::prelude::*;
 
     fn duration_ns(max: u64) -> impl Strategy<Value = SimDuration> {
@@ -244,6 +326,16 @@ mod round_trip {
             power_on_reset in any::<bool>(),
             safe_drive in any::<bool>(),
             configuration_mode in any::<bool>(),
+            traffic in proptest::collection::vec(
+                (
+                    0..3usize,
+                    prop_oneof![Just(MAX_PER_MINUTE), 1e-9..=MAX_PER_MINUTE],
+                    proptest::option::of(any::<u64>()),
+                    any::<u64>(),
+                    proptest::option::of(duration_ns(36_000_000_000_000)),
+                ),
+                0..3,
+            ),
         ) -> Scenario {
             Scenario {
                 name,
@@ -275,6 +367,18 @@ mod round_trip {
                             )
                     })
                     .collect(),
+                traffic: traffic
+                    .into_iter()
+                    .map(|(p, per_minute, seed, start, length)| Traffic {
+                        pattern: [Pattern::UpPeak, Pattern::DownPeak, Pattern::Interfloor][p],
+                        per_minute,
+                        seed,
+                        // Within the scenario, as the reader wants.
+                        start: SimDuration::from_nanos(start % duration.as_nanos()),
+                        duration: length,
+                        line: 0,
+                    })
+                    .collect(),
             }
         }
     }
@@ -288,6 +392,7 @@ mod round_trip {
                 Err(e) => return Err(TestCaseError::fail(format!("{e}\n{text}"))),
             };
             back.events.iter_mut().for_each(|e| e.line = 0);
+            back.traffic.iter_mut().for_each(|t| t.line = 0);
             let mut expected = sc;
             expected.events.sort_by_key(|e| e.at);
             prop_assert_eq!(back, expected, "{}", text);

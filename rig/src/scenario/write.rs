@@ -79,6 +79,17 @@ impl Scenario {
                 Action::Fault(f) => writeln!(s, "fault = {}", fault_text(f)),
             };
         }
+        for t in &self.traffic {
+            let _ = writeln!(s, "\n[[traffic]]\npattern = \"{}\"", t.pattern.name());
+            let _ = writeln!(s, "per_minute = {}", toml_float(t.per_minute));
+            if let Some(seed) = t.seed {
+                let _ = writeln!(s, "seed = {seed}");
+            }
+            let _ = writeln!(s, "start = \"{}\"", exact_duration(t.start));
+            if let Some(d) = t.duration {
+                let _ = writeln!(s, "duration = \"{}\"", exact_duration(d));
+            }
+        }
         s
     }
 }
