@@ -38,6 +38,47 @@ pub enum StdFb {
 }
 
 impl StdFb {
+    /// Its inputs and outputs, in order (IEC 61131-3, 3rd edition, §6.6.3.5): name, type,
+    /// and whether it is an output. A standard block's frame holds them in this order.
+    pub fn pins(self) -> &'static [(&'static str, Elem, bool)] {
+        use Elem::{Bool, Int, Time};
+        match self {
+            StdFb::Ton | StdFb::Tof | StdFb::Tp => &[
+                ("IN", Bool, false),
+                ("PT", Time, false),
+                ("Q", Bool, true),
+                ("ET", Time, true),
+            ],
+            StdFb::RTrig | StdFb::FTrig => &[("CLK", Bool, false), ("Q", Bool, true)],
+            StdFb::Sr => &[("S1", Bool, false), ("R", Bool, false), ("Q1", Bool, true)],
+            StdFb::Rs => &[("S", Bool, false), ("R1", Bool, false), ("Q1", Bool, true)],
+            StdFb::Ctu => &[
+                ("CU", Bool, false),
+                ("R", Bool, false),
+                ("PV", Int, false),
+                ("Q", Bool, true),
+                ("CV", Int, true),
+            ],
+            StdFb::Ctd => &[
+                ("CD", Bool, false),
+                ("LD", Bool, false),
+                ("PV", Int, false),
+                ("Q", Bool, true),
+                ("CV", Int, true),
+            ],
+            StdFb::Ctud => &[
+                ("CU", Bool, false),
+                ("CD", Bool, false),
+                ("R", Bool, false),
+                ("LD", Bool, false),
+                ("PV", Int, false),
+                ("QU", Bool, true),
+                ("QD", Bool, true),
+                ("CV", Int, true),
+            ],
+        }
+    }
+
     /// The block named `name` (any case).
     pub fn of(name: &str) -> Option<StdFb> {
         Some(match name.to_ascii_uppercase().as_str() {

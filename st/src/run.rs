@@ -298,43 +298,6 @@ pub struct Plc {
     budget: Budget,
 }
 
-/// The pins of a standard block in its frame, in order.
-fn std_pins(f: StdFb) -> &'static [(&'static str, Elem)] {
-    use Elem::{Bool, Int, Time};
-    match f {
-        StdFb::Ton | StdFb::Tof | StdFb::Tp => {
-            &[("IN", Bool), ("PT", Time), ("Q", Bool), ("ET", Time)]
-        }
-        StdFb::RTrig | StdFb::FTrig => &[("CLK", Bool), ("Q", Bool)],
-        StdFb::Sr => &[("S1", Bool), ("R", Bool), ("Q1", Bool)],
-        StdFb::Rs => &[("S", Bool), ("R1", Bool), ("Q1", Bool)],
-        StdFb::Ctu => &[
-            ("CU", Bool),
-            ("R", Bool),
-            ("PV", Int),
-            ("Q", Bool),
-            ("CV", Int),
-        ],
-        StdFb::Ctd => &[
-            ("CD", Bool),
-            ("LD", Bool),
-            ("PV", Int),
-            ("Q", Bool),
-            ("CV", Int),
-        ],
-        StdFb::Ctud => &[
-            ("CU", Bool),
-            ("CD", Bool),
-            ("R", Bool),
-            ("LD", Bool),
-            ("PV", Int),
-            ("QU", Bool),
-            ("QD", Bool),
-            ("CV", Int),
-        ],
-    }
-}
-
 impl Plc {
     /// `checked` compiled (it has been type-checked without errors, [`crate::typeck`]).
     pub fn new(checked: &Checked) -> Plc {
@@ -1022,7 +985,7 @@ impl<'a> Compiler<'a> {
                 .iter()
                 .map(|f| u64::from(self.size(&f.ty)))
                 .sum(),
-            Type::StdFb(f) => 1 + std_pins(*f).len() as u64,
+            Type::StdFb(f) => 1 + f.pins().len() as u64,
             Type::Fb(i) => u64::from(self.frames.get(*i).map_or(0, |f| f.1)),
             _ => 1,
         };
@@ -1185,7 +1148,7 @@ impl Compiler<'_> {
                     StdFb::Ctd => StdState::Ctd(Default::default()),
                     StdFb::Ctud => StdState::Ctud(Default::default()),
                 });
-                for (k, (_, e)) in std_pins(*f).iter().enumerate() {
+                for (k, (_, e, _)) in f.pins().iter().enumerate() {
                     self.memory[at_us + 1 + k] = zero(*e);
                 }
             }
@@ -1373,12 +1336,12 @@ impl Compiler<'_> {
                 };
                 match self.place(sc, callee) {
                     Some((instance, Type::StdFb(f))) => {
-                        let pins = std_pins(f);
+                        let pins = f.pins();
                         let mut inputs = Vec::new();
                         let mut outputs = Vec::new();
                         for a in args {
                             let name = a.name.as_ref()?.key();
-                            let k = pins.iter().position(|(n, _)| *n == name)?;
+                            let k = pins.iter().position(|(n, _, _)| *n == name)?;
                             let el = pins[k].1;
                             if a.output {
                                 outputs.push((1 + k as u32, el, self.place(sc, &a.value)?.0));
@@ -1558,8 +1521,8 @@ impl Compiler<'_> {
                         None
                     }
                     Type::StdFb(b) => {
-                        let k = std_pins(b).iter().position(|(n, _)| *n == key)?;
-                        Some((offset(p, 1 + k as u32), Type::Elem(std_pins(b)[k].1)))
+                        let k = b.pins().iter().position(|(n, _, _)| *n == key)?;
+                        Some((offset(p, 1 + k as u32), Type::Elem(b.pins()[k].1)))
                     }
                     Type::Fb(b) => {
                         let v = self.c.pous[b]

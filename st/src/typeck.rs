@@ -10,7 +10,7 @@ use std::collections::HashMap;
 use crate::ast::{
     Arg, BinOp, CaseLabel, Expr, ExprKind, Lit, PouKind, Stmt, StmtKind, UnOp, VarKind,
 };
-use crate::check::{Checked, Location, StdFb, Type, Var};
+use crate::check::{Checked, Location, Type, Var};
 use crate::lexer::{Area, Size};
 use crate::source::{Diagnostic, Span};
 use crate::types::Elem;
@@ -156,46 +156,6 @@ fn type_name(c: &Checked, t: &Type) -> String {
         Type::Array(a) => format!("ARRAY OF {}", type_name(c, &a.elem)),
         Type::StdFb(f) => format!("{f:?}").to_ascii_uppercase(),
         Type::Fb(i) => c.pous.get(*i).map_or("?".into(), |p| p.name.clone()),
-    }
-}
-
-/// The inputs and outputs of a standard block: name, type, output.
-fn std_fb_pins(f: StdFb) -> &'static [(&'static str, Elem, bool)] {
-    use Elem::{Bool, Int, Time};
-    match f {
-        StdFb::Ton | StdFb::Tof | StdFb::Tp => &[
-            ("IN", Bool, false),
-            ("PT", Time, false),
-            ("Q", Bool, true),
-            ("ET", Time, true),
-        ],
-        StdFb::RTrig | StdFb::FTrig => &[("CLK", Bool, false), ("Q", Bool, true)],
-        StdFb::Sr => &[("S1", Bool, false), ("R", Bool, false), ("Q1", Bool, true)],
-        StdFb::Rs => &[("S", Bool, false), ("R1", Bool, false), ("Q1", Bool, true)],
-        StdFb::Ctu => &[
-            ("CU", Bool, false),
-            ("R", Bool, false),
-            ("PV", Int, false),
-            ("Q", Bool, true),
-            ("CV", Int, true),
-        ],
-        StdFb::Ctd => &[
-            ("CD", Bool, false),
-            ("LD", Bool, false),
-            ("PV", Int, false),
-            ("Q", Bool, true),
-            ("CV", Int, true),
-        ],
-        StdFb::Ctud => &[
-            ("CU", Bool, false),
-            ("CD", Bool, false),
-            ("R", Bool, false),
-            ("LD", Bool, false),
-            ("PV", Int, false),
-            ("QU", Bool, true),
-            ("QD", Bool, true),
-            ("CV", Int, true),
-        ],
     }
 }
 
@@ -776,7 +736,7 @@ impl<'a> Typer<'a> {
                     Ty::Wrong
                 }
             },
-            Ty::Known(Type::StdFb(b)) => match std_fb_pins(*b).iter().find(|(n, _, _)| *n == key) {
+            Ty::Known(Type::StdFb(b)) => match b.pins().iter().find(|(n, _, _)| *n == key) {
                 Some((_, e, _)) => Ty::elem(*e),
                 None => {
                     self.error(
@@ -1008,7 +968,8 @@ impl<'a> Typer<'a> {
 
     fn instance_call(&mut self, t: &Ty, args: &[Arg], span: Span, statement: bool) -> Ty {
         let pins: Vec<(String, Ty, bool)> = match t {
-            Ty::Known(Type::StdFb(b)) => std_fb_pins(*b)
+            Ty::Known(Type::StdFb(b)) => b
+                .pins()
                 .iter()
                 .map(|(n, e, out)| ((*n).to_owned(), Ty::elem(*e), *out))
                 .collect(),
