@@ -2139,3 +2139,206 @@ fn run_takes_a_structured_text_program_as_the_plc() {
     assert_eq!(json["controller"], good.display().to_string());
     assert_eq!(json["violations"], serde_json::json!([]));
 }
+
+/// A scenario's `[controller] program` names a Structured Text file relative to the
+/// scenario's own directory; `--controller` takes its place; a program that does not
+/// compile is refused at the key's line; the program's file is an input no output may
+/// overwrite.
+#[test]
+fn a_scenario_names_its_program_relative_to_itself() {
+    let d = temp();
+    let dir = d.path().join("lab");
+    std::fs::create_dir(&dir).expect("mkdir");
+    std::fs::write(
+        dir.join("idle.st"),
+        "PROGRAM Lift\nVAR Restart : BOOL; t : TON; END_VAR\n  t(IN := NOT t.Q, PT := T#500ms);\n  Restart := t.Q;\nEND_PROGRAM\n",
+    )
+    .expect("write");
+    std::fs::write(dir.join("bad.st"), "PROGRAM Lift\n  x := 1;\nEND_PROGRAM\n").expect("write");
+    let scenario = dir.join("sc.toml");
+    std::fs::write(
+        &scenario,
+        "name = \"own program\"\nduration = \"2s\"\n\n[controller]\nprogram = \"idle.st\"\n",
+    )
+    .expect("write");
+    // Run from elsewhere: the path is the scenario's, not the working directory's.
+    let out = asi_lift()
+        .current_dir(d.path())
+        .args(["run", "--format", "json", "lab/sc.toml"])
+        .output()
+        .expect("asi-lift run");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    assert_eq!(json["controller"], "lab/idle.st");
+
+    // `--controller` takes the key's place.
+    let out = asi_lift()
+        .current_dir(d.path())
+        .args([
+            "run",
+            "--format",
+            "json",
+            "lab/sc.toml",
+            "--controller",
+            "lab/bad.st",
+        ])
+        .output()
+        .expect("asi-lift run");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("--controller lab/bad.st: the program is refused (1 error)"),
+        "{err}"
+    );
+
+    // A wrong program named by the key: the key's place, then the program's errors.
+    std::fs::write(
+        &scenario,
+        "name = \"own program\"\nduration = \"2s\"\n\n[controller]\nprogram = \"bad.st\"\n",
+    )
+    .expect("write");
+    let err = fails(
+        asi_lift()
+            .current_dir(d.path())
+            .args(["run", "lab/sc.toml"]),
+    );
+    assert!(
+        err.contains(
+            "lab/sc.toml:5:11: controller.program: lab/bad.st: the program is refused (1 error):"
+        ),
+        "{err}"
+    );
+    assert!(
+        err.contains("lab/bad.st:2:3: error: no variable is named `x`"),
+        "{err}"
+    );
+
+    // The program is an input: `--force` does not make it a report.
+    let err = fails(asi_lift().current_dir(d.path()).args([
+        "run",
+        "--controller",
+        "lab/idle.st",
+        "--report",
+        "lab/idle.st",
+        "--force",
+    ]));
+    assert!(err.contains("the program"), "{err}");
+    assert!(
+        std::fs::read_to_string(dir.join("idle.st"))
+            .expect("read")
+            .starts_with("PROGRAM Lift"),
+        "the program is kept"
+    );
+}
+
+/// `campaign --controller FILE.st` runs every scenario with the program; a failing run's
+/// reproducer names the program and, run again, fails the same way.
+#[test]
+fn a_campaign_runs_a_structured_text_program_and_its_reproducers_name_it() {
+    let d = temp();
+    // Keeps the safety logic's signals and moves nothing: every judged probe is unserved.
+    let idle = d.path().join("idle.st");
+    std::fs::write(
+        &idle,
+        "PROGRAM Lift\nVAR EStopOut : BOOL; Restart : BOOL; t : TON; END_VAR\n  t(IN := NOT t.Q, PT := T#1s);\n  Restart := t.Q AND NOT EStopOut;\nEND_PROGRAM\n",
+    )
+    .expect("write");
+    let failures = d.path().join("failures");
+    let out = asi_lift()
+        .args([
+            "campaign",
+            "--runs",
+            "2",
+            "--profile",
+            "smoke",
+            "--shrink-budget",
+            "0",
+        ])
+        .arg("--controller")
+        .arg(&idle)
+        .arg("--failures")
+        .arg(&failures)
+        .output()
+        .expect("asi-lift campaign");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("out-of-service"), "{err}");
+    let files = files_in(&failures);
+    assert!(!files.is_empty(), "{err}");
+    let reproducer = failures.join(&files[0]);
+    let text = std::fs::read_to_string(&reproducer).expect("read");
+    assert!(
+        text.contains("the controller does not tell its state"),
+        "{text}"
+    );
+    let absolute = std::path::absolute(&idle).expect("a path");
+    assert!(
+        text.contains(&format!("program = \"{}\"", absolute.display())),
+        "{text}"
+    );
+    let out = asi_lift()
+        .args(["run", "--format", "json"])
+        .arg(&reproducer)
+        .output()
+        .expect("asi-lift run");
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    assert_eq!(json["controller"], absolute.display().to_string());
+
+    let err = fails(
+        asi_lift()
+            .args(["campaign", "--runs", "1", "--controller"])
+            .arg(d.path().join("missing.st")),
+    );
+    assert!(
+        err.contains("--controller") && err.contains("missing.st"),
+        "{err}"
+    );
+}
+
+/// `serve --controller FILE.st` runs the program as the PLC; a TTK4145 client cannot run
+/// beside it.
+#[test]
+fn serve_takes_a_structured_text_program_as_the_plc() {
+    let d = temp();
+    let idle = d.path().join("idle.st");
+    std::fs::write(
+        &idle,
+        "PROGRAM Lift\nVAR Restart : BOOL; t : TON; END_VAR\n  t(IN := NOT t.Q, PT := T#500ms);\n  Restart := t.Q;\nEND_PROGRAM\n",
+    )
+    .expect("write");
+    let err = fails(
+        asi_lift()
+            .args(["serve", "--ttk4145", "--controller"])
+            .arg(&idle),
+    );
+    assert!(err.contains("cannot run beside --controller"), "{err}");
+    let out = asi_lift()
+        .args([
+            "serve",
+            "--listen",
+            "127.0.0.1:0",
+            "--speed",
+            "max",
+            "--until",
+            "2s",
+        ])
+        .args(["--format", "json", "-q", "--controller"])
+        .arg(&idle)
+        .output()
+        .expect("asi-lift serve");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains(&format!("controller {}", idle.display())),
+        "{err}"
+    );
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    assert_eq!(json["controller"], idle.display().to_string());
+    assert_eq!(json["live"]["controller"], "program");
+}

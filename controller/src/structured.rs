@@ -108,6 +108,12 @@ impl StProgram {
     pub fn watch(&self) -> Vec<(&str, Value)> {
         self.plc.watch()
     }
+
+    /// As [`StProgram::watch`], each value written as a literal of its type (`TRUE`,
+    /// `16#00FF`, `T#1s200ms`), as a PLC's online mode shows it.
+    pub fn watch_text(&self) -> Vec<(&str, String)> {
+        self.plc.watch_text()
+    }
 }
 
 /// The master's process image as the program sees it.

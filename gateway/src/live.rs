@@ -23,6 +23,7 @@ pub use crate::speed::{Speed, MAX_SPEED, MIN_SPEED};
 use crate::ttk::Ttk;
 use crate::view::{self, Telegrams};
 use asi_phy::{SimDuration, SimTime};
+use controller::structured::StProgram;
 use crossbeam_channel::{Receiver, RecvTimeoutError, Sender, TryRecvError};
 use rig::report::{Actor, ClientLog, LiveReport, LogLine};
 use rig::{Report, Rig};
@@ -322,12 +323,10 @@ pub fn run_with_view(
     } = t;
     // The moment at the end itself, as `asi-lift run` has it, then the report.
     rig.set_end(at);
+    let controller = owner_name(&rig, cfg.owner).into();
     let mut report = rig.run(None);
     report.live = Some(LiveReport {
-        controller: match cfg.owner {
-            Owner::Builtin => "builtin".into(),
-            Owner::External => "external".into(),
-        },
+        controller,
         speed: cfg.speed.to_string(),
         requests: gw.requests,
         exceptions: gw.exceptions,
@@ -337,6 +336,17 @@ pub fn run_with_view(
         lamps: ttk.lamps().clone(),
     });
     report
+}
+
+/// Who runs the lift, for the page and the report: `builtin` (the built-in program),
+/// `program` (a Structured Text program in the rig's PLC; the report names its file) or
+/// `external` (a client).
+fn owner_name(rig: &Rig, owner: Owner) -> &'static str {
+    match owner {
+        Owner::External => "external",
+        Owner::Builtin if rig.controller::<StProgram>().is_some() => "program",
+        Owner::Builtin => "builtin",
+    }
 }
 
 /// What the rig thread owns: the rig, everything that serves its clients, and the pacing.
@@ -488,10 +498,7 @@ impl<'a> RigThread<'a> {
         let run = view::Run {
             speed: self.cfg.speed.to_string(),
             lag_ms: (self.lag_ms(ended) * 10.0).round() / 10.0,
-            controller: match self.cfg.owner {
-                Owner::Builtin => "builtin",
-                Owner::External => "external",
-            },
+            controller: owner_name(&self.rig, self.cfg.owner),
             requests: self.gw.requests,
             paused: self.paused,
             ended,

@@ -6,7 +6,8 @@ use asi_master::record::TransactionRecord;
 use asi_master::Phase;
 use asi_phy::{Check, SimDuration, SlaveAddr};
 use asi_trace::telegrams::check_key;
-use controller::Algorithm;
+use controller::structured::StProgram;
+use controller::{Algorithm, Outside};
 use lab::address;
 use lift_model::{Button, DisplayId, DisplayState, End, VaneSensor};
 use rig::Rig;
@@ -20,6 +21,9 @@ use std::rc::Rc;
 pub const TELEGRAMS: usize = 16;
 /// How many of the run's last log lines a snapshot lists.
 pub const LOG_LINES: usize = 12;
+/// How many of a Structured Text program's variables a snapshot lists (a program may declare
+/// thousands; the page shows a PLC's watch list, not a memory dump).
+pub const WATCH: usize = 256;
 
 /// The last bus transactions, kept by the rig's transaction observer on the rig thread.
 pub type Telegrams = Rc<RefCell<VecDeque<TransactionRecord>>>;
@@ -46,7 +50,8 @@ pub struct Run {
     pub speed: String,
     /// How far the simulation is behind the wall clock, ms.
     pub lag_ms: f64,
-    /// The built-in program or an outside controller.
+    /// Who runs the lift: `builtin` (the built-in program), `program` (a Structured Text
+    /// program) or `external` (a client).
     pub controller: &'static str,
     /// Requests served over Modbus TCP and TTK4145.
     pub requests: u64,
@@ -277,6 +282,15 @@ pub struct ControllerView {
     pub fifo_cabin: Option<Vec<u8>>,
     /// The hall request memory, oldest first.
     pub fifo_hall: Option<Vec<u8>>,
+    /// The Structured Text program the PLC runs, if not the built-in one (its file).
+    pub program: Option<String>,
+    /// Why that PLC is in STOP (`file:line:column: cause`), if it is.
+    pub stopped: Option<String>,
+    /// That program's variables of elementary type, each with its value as a literal of its
+    /// type, as a PLC's online mode shows them: the first [`WATCH`] in declaration order.
+    pub watch: Option<Vec<(String, String)>>,
+    /// How many more variables the program has than the watch list shows.
+    pub watch_left_out: usize,
 }
 
 /// The lab's name for a slave address.
@@ -448,8 +462,10 @@ pub fn build(rig: &Rig, run: Run, telegrams: Option<&Telegrams>) -> View {
     };
 
     let p = rig.plc().map(|plc| plc.program());
+    let st = rig.controller::<StProgram>();
+    let watch = st.map(StProgram::watch_text).unwrap_or_default();
     let controller = ControllerView {
-        external: p.is_none(),
+        external: rig.controller::<Outside>().is_some(),
         algorithm: p.map(|p| match p.config().algorithm {
             Algorithm::Fifo => "FIFO",
             Algorithm::Collective => "collective",
@@ -460,6 +476,16 @@ pub fn build(rig: &Rig, run: Run, telegrams: Option<&Telegrams>) -> View {
         target: p.map(|p| p.target()),
         fifo_cabin: p.map(|p| p.fifo_cabin()),
         fifo_hall: p.map(|p| p.fifo_hall()),
+        program: st.map(|p| p.name().to_owned()),
+        stopped: st.and_then(StProgram::stopped),
+        watch_left_out: watch.len().saturating_sub(WATCH),
+        watch: st.map(|_| {
+            watch
+                .into_iter()
+                .take(WATCH)
+                .map(|(n, v)| (n.to_owned(), v))
+                .collect()
+        }),
     };
 
     let violations = rig.violations();

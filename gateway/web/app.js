@@ -327,9 +327,15 @@ function render(v) {
   text("stop-link", s.stop_link.length ? s.stop_link.join(", ") : "ok");
 
   const c = v.controller;
+  document.getElementById("watch-panel").hidden = !c.program;
   if (c.external) {
     text("ctl-state", "outside controller");
     for (const id of ["ctl-init", "ctl-floor", "ctl-target", "fifo-cabin", "fifo-hall", "ctl-algo"]) text(id, "–");
+  } else if (c.program) {
+    text("ctl-state", c.stopped ? "PLC in STOP: " + c.stopped : "PLC in RUN");
+    for (const id of ["ctl-init", "ctl-floor", "ctl-target", "fifo-cabin", "fifo-hall", "ctl-algo"]) text(id, "–");
+    text("st-program", c.program);
+    renderWatch(c.watch || [], c.watch_left_out);
   } else {
     text("ctl-state", c.state);
     text("ctl-init", c.initialised ? "yes" : "no");
@@ -492,3 +498,19 @@ function plot() {
 window.addEventListener("resize", plot);
 wireControls();
 connect();
+
+// A Structured Text program's watch list: a row per variable, its value as a literal of its
+// type. Rows are made once per variable and then only their text changes.
+function renderWatch(watch, leftOut) {
+  const body = document.getElementById("watch");
+  while (body.rows.length > watch.length) body.deleteRow(-1);
+  watch.forEach(([name, value], i) => {
+    const row = body.rows[i] || body.insertRow();
+    if (row.cells.length === 0) { row.insertCell(); row.insertCell(); }
+    if (row.cells[0].textContent !== name) row.cells[0].textContent = name;
+    if (row.cells[1].textContent !== value) row.cells[1].textContent = value;
+  });
+  const more = document.getElementById("watch-more");
+  more.hidden = !leftOut;
+  more.textContent = leftOut ? `and ${leftOut} more variables` : "";
+}

@@ -25,6 +25,7 @@ fn main() {
         shrink_budget: 0,
         referee: false,
         failures: "failures".into(),
+        program: None,
     };
     let mut first: Option<Vec<String>> = None;
     let mut rates = Vec::new();

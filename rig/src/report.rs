@@ -72,7 +72,8 @@ pub struct Report {
 /// gateway and the wall clock fared.
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct LiveReport {
-    /// `builtin` or `external`.
+    /// `builtin`, `program` (a Structured Text program, named by the report's `controller`)
+    /// or `external`.
     pub controller: String,
     /// Simulated seconds per wall second asked for, or `max`: at the end of the run (the
     /// live view's page may change it; the log says when).

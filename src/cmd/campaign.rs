@@ -72,6 +72,11 @@ pub struct CampaignArgs {
     /// invariant watch did not name fails the run as a `disagreement` (a little slower).
     #[arg(long)]
     pub referee: bool,
+    /// Run every scenario with this IEC 61131-3 Structured Text program as the PLC instead of
+    /// the built-in one; the reproducers name it. A program that does not compile is refused
+    /// before the first run.
+    #[arg(long, value_name = "FILE.st")]
+    pub controller: Option<PathBuf>,
     /// Overwrite the --out file if it exists.
     #[arg(long)]
     pub force: bool,
@@ -88,6 +93,11 @@ pub fn run(args: CampaignArgs) -> Result<u8, String> {
         None => std::thread::available_parallelism().map_or(1, |n| n.get()),
     };
     let profile = Profile::resolve(&args.profile).map_err(|e| e.to_string())?;
+    let program = args
+        .controller
+        .as_deref()
+        .map(super::run::load_program)
+        .transpose()?;
     let plan = Plan {
         seed: args.seed,
         runs: args.runs,
@@ -96,6 +106,7 @@ pub fn run(args: CampaignArgs) -> Result<u8, String> {
         shrink_budget: args.shrink_budget,
         referee: args.referee,
         failures: args.failures.clone(),
+        program,
     };
     let count = plan.count();
     if count == 0 {
@@ -117,6 +128,10 @@ pub fn run(args: CampaignArgs) -> Result<u8, String> {
     let profile_file = Path::new(&args.profile);
     if Profile::built_in(&args.profile).is_none() && profile_file.exists() {
         super::output::refuse_inputs("--out", &out_path, &[("--profile", profile_file)])?;
+    }
+    // So is the program.
+    if let Some(p) = &args.controller {
+        super::output::refuse_inputs("--out", &out_path, &[("--controller", p)])?;
     }
     let mut out = open_output(&out_path, args.force)?;
     let out_name = if out_path == Path::new("-") {

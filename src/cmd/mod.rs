@@ -17,7 +17,7 @@ pub mod stand;
 mod stand_plot;
 pub mod timing;
 
-use std::io::{BufRead, Read, Write};
+use std::io::{BufRead, Write};
 use std::path::Path;
 
 /// Exit code of a run that found safety violations.
@@ -62,38 +62,13 @@ pub const MAX_RESULTS_BYTES: u64 = 1 << 30;
 /// refused, having read no more than that. Text that is not UTF-8 is refused at the line and
 /// column of its first bad byte.
 pub fn read_input(path: &Path, max: u64) -> Result<String, String> {
-    let (name, mut input): (String, Box<dyn Read>) = if path == Path::new("-") {
-        (
-            "standard input".to_owned(),
-            Box::new(std::io::stdin().lock()),
-        )
+    if path == Path::new("-") {
+        rig::scenario::program::read_text("standard input", std::io::stdin().lock(), max)
     } else {
         let name = path.display().to_string();
         let f = std::fs::File::open(path).map_err(|e| format!("{name}: {e}"))?;
-        (name, Box::new(f))
-    };
-    let mut bytes = Vec::new();
-    input
-        .by_ref()
-        .take(max + 1)
-        .read_to_end(&mut bytes)
-        .map_err(|e| format!("{name}: {e}"))?;
-    if bytes.len() as u64 > max {
-        return Err(format!(
-            "{name}: larger than {} MiB, which is more than such a file holds: is it the right file?",
-            max >> 20
-        ));
+        rig::scenario::program::read_text(&name, f, max)
     }
-    String::from_utf8(bytes).map_err(|e| {
-        let good = &e.as_bytes()[..e.utf8_error().valid_up_to()];
-        let line = good.iter().filter(|b| **b == b'\n').count() + 1;
-        let line_start = good.iter().rposition(|b| *b == b'\n').map_or(0, |i| i + 1);
-        let column = String::from_utf8_lossy(&good[line_start..]).chars().count() + 1;
-        let byte = e.as_bytes()[good.len()];
-        format!(
-            "{name}:{line}:{column}: not UTF-8 text (byte 0x{byte:02X}); the file must be UTF-8"
-        )
-    })
 }
 
 /// Opens `path` for writing (`-` = standard output), never replacing a file the user has

@@ -158,6 +158,7 @@ pub fn run(args: RunArgs) -> Result<u8, String> {
     if let Some(path) = file {
         outs.input("the scenario", path)?;
     }
+    set_program(&mut sc, controller.as_deref(), &mut outs)?;
     // Standard output is a stream: when the trace or the plot takes it and no --report is
     // given, the report is only its summary, on standard error.
     let stdout = Some(Path::new("-"));
@@ -197,15 +198,7 @@ pub fn run(args: RunArgs) -> Result<u8, String> {
             eprintln!("asi-lift: warning: {w}");
         }
     }
-    let program = controller
-        .as_deref()
-        .map(load_program)
-        .transpose()?
-        .map(|p| p.with_scan(sc.plc_scan));
     let mut rig = Rig::new(sc).map_err(|e| e.to_string())?;
-    if let Some(p) = program {
-        rig = rig.with_controller(p);
-    }
     rig.set_pulse_exact(pulse_exact);
     if let (Some(path), Some(sink)) = (&trace, &trace_sink) {
         rig.trace_to(outs.writer(sink)?, trace_form(trace_format, path));
@@ -317,18 +310,26 @@ pub fn trace_form(form: Option<TraceForm>, path: &Path) -> TraceFormat {
     }
 }
 
-/// The Structured Text program in `path`, compiled; every error at once if it is refused.
-pub fn load_program(path: &Path) -> Result<controller::structured::StProgram, String> {
-    let text = read_input(path, super::MAX_TOML_BYTES)?;
-    let name = path.display().to_string();
-    controller::structured::StProgram::compile(&name, &text).map_err(|e| {
-        format!(
-            "--controller {name}: the program is refused ({} error{}):\n{}",
-            e.count,
-            if e.count == 1 { "" } else { "s" },
-            e.rendered
-        )
-    })
+/// The Structured Text program of `--controller FILE.st`, read and compiled; every error at
+/// once if it is refused.
+pub fn load_program(path: &Path) -> Result<rig::scenario::program::ProgramFile, String> {
+    rig::scenario::program::ProgramFile::read(path).map_err(|e| format!("--controller {e}"))
+}
+
+/// `--controller FILE.st` in the place of the scenario's program, if given; the program's
+/// file is an input the outputs must not overwrite.
+pub fn set_program(
+    sc: &mut Scenario,
+    controller: Option<&Path>,
+    outs: &mut Outputs,
+) -> Result<(), String> {
+    if let Some(path) = controller {
+        sc.program = Some(load_program(path)?);
+    }
+    if let Some(p) = &sc.program {
+        outs.input("the program", p.path())?;
+    }
+    Ok(())
 }
 
 /// The scenario named on the command line: a file if there is one by that name (`-` for

@@ -2,10 +2,9 @@
 //! an outside controller or a client that watches the built-in one (the asi-lift guide, chapter "Live mode and your own controller").
 
 use super::output::Outputs;
-use super::run::{load_scenario, report_body, trace_form, Format, TraceForm};
+use super::run::{load_scenario, report_body, set_program, trace_form, Format, TraceForm};
 use super::{print_out, EXIT_VIOLATIONS};
 use asi_phy::SimDuration;
-use clap::ValueEnum;
 use gateway::live::LiveConfig;
 use gateway::{Owner, Speed};
 use rig::Rig;
@@ -33,10 +32,12 @@ pub struct ServeArgs {
     /// the run goes on.
     #[arg(long, value_name = "X|max", default_value = "1")]
     pub speed: String,
-    /// Who runs the lift: the built-in PLC program (clients may watch), or the Modbus client
-    /// (the built-in program is off; the client writes the output image) [default: builtin;
-    /// external with `--ttk4145`].
-    #[arg(long, value_enum)]
+    /// Who runs the lift: `builtin`, the built-in PLC program (clients may watch); a
+    /// Structured Text program `FILE.st` as the PLC (clients may watch; the live view shows
+    /// its variables); or `external`, the Modbus client (the built-in program is off; the
+    /// client writes the output image) [default: builtin, or the scenario's
+    /// `[controller] program`; external with `--ttk4145`].
+    #[arg(long, value_name = "builtin|external|FILE.st", value_parser = parse_controller)]
     pub controller: Option<ControllerArg>,
     /// Also serve the TTK4145 lab elevator protocol (4-byte messages) on this address, for
     /// the course's elevator controllers (the asi-lift guide, chapter "The TTK4145 front
@@ -94,12 +95,24 @@ pub struct ServeArgs {
 }
 
 /// Who runs the lift in a live run.
-#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+#[derive(Clone, Debug, PartialEq, Eq)]
 pub enum ControllerArg {
     /// The built-in PLC program; the gateway's outputs are read-only.
     Builtin,
+    /// A Structured Text program in the PLC; the gateway's outputs are read-only.
+    Program(PathBuf),
     /// The Modbus client is the PLC.
     External,
+}
+
+/// `--controller`: `builtin`, `external`, or a program's file.
+fn parse_controller(s: &str) -> Result<ControllerArg, String> {
+    Ok(match s {
+        "builtin" => ControllerArg::Builtin,
+        "external" => ControllerArg::External,
+        "" => return Err("give builtin, external or a Structured Text file".into()),
+        file => ControllerArg::Program(PathBuf::from(file)),
+    })
 }
 
 /// How long a live run lasts without `--until`: until Ctrl-C, in practice.
@@ -149,13 +162,18 @@ pub fn run(args: ServeArgs) -> Result<u8, String> {
     let http = http
         .map(|a| address("--http", &a, "127.0.0.1:8080"))
         .transpose()?;
+    // Without --controller: the scenario's program, else the built-in one (`None` here).
     let controller = match (controller, ttk) {
-        (Some(ControllerArg::Builtin), Some(_)) => {
-            return Err("--ttk4145: a TTK4145 client is the controller; it cannot run beside --controller builtin".into());
+        (Some(c @ (ControllerArg::Builtin | ControllerArg::Program(_))), Some(_)) => {
+            let which = match c {
+                ControllerArg::Program(p) => p.display().to_string(),
+                _ => "builtin".into(),
+            };
+            return Err(format!("--ttk4145: a TTK4145 client is the controller; it cannot run beside --controller {which}"));
         }
-        (Some(c), _) => c,
-        (None, Some(_)) => ControllerArg::External,
-        (None, None) => ControllerArg::Builtin,
+        (Some(c), _) => Some(c),
+        (None, Some(_)) => Some(ControllerArg::External),
+        (None, None) => None,
     };
     if !allow_hosts.is_empty() && http.is_none() {
         return Err("--allow-host: names the live view's hosts; give --http too".into());
@@ -185,8 +203,16 @@ pub fn run(args: ServeArgs) -> Result<u8, String> {
     }
     sc.duration = until.unwrap_or(OPEN_END);
     let owner = match controller {
-        ControllerArg::Builtin => Owner::Builtin,
-        ControllerArg::External => Owner::External,
+        Some(ControllerArg::External) => Owner::External,
+        _ => Owner::Builtin,
+    };
+    let program = match controller {
+        Some(ControllerArg::Program(p)) => Some(p),
+        Some(ControllerArg::Builtin | ControllerArg::External) => {
+            sc.program = None;
+            None
+        }
+        None => None,
     };
     if owner == Owner::External {
         if let Some(w) = speed.outside_controller_warning() {
@@ -205,6 +231,7 @@ pub fn run(args: ServeArgs) -> Result<u8, String> {
     if let Some(path) = file {
         outs.input("the scenario", path)?;
     }
+    set_program(&mut sc, program.as_deref(), &mut outs)?;
     let report_sink = outs.add("--report", &report)?;
     if trace.as_deref() == Some(Path::new("-")) {
         return Err("--trace: a live run's trace goes to a file, not to standard output".into());
@@ -221,6 +248,11 @@ pub fn run(args: ServeArgs) -> Result<u8, String> {
         _ => None,
     };
 
+    let who = match (owner, &sc.program) {
+        (Owner::External, _) => "external controller".to_owned(),
+        (Owner::Builtin, Some(p)) => format!("controller {}", p.path().display()),
+        (Owner::Builtin, None) => "built-in controller".to_owned(),
+    };
     // Called again for each restart from the live view's page: the same scenario and seed,
     // the same controller, and the trace started again.
     let make_rig = move || {
@@ -272,11 +304,8 @@ pub fn run(args: ServeArgs) -> Result<u8, String> {
         eprintln!("asi-lift: live view on http://{a}/");
     }
     eprintln!(
-        "asi-lift: Modbus TCP gateway on {addr}, {} controller, speed {speed}{}; Ctrl-C ends the run",
-        match owner {
-            Owner::Builtin => "built-in",
-            Owner::External => "external",
-        },
+        "asi-lift: Modbus TCP gateway on {addr}, {}, speed {speed}{}; Ctrl-C ends the run",
+        who,
         until.map_or(String::new(), |u| format!(", until {u}"))
     );
     let terminal = std::io::stderr().is_terminal();

@@ -263,3 +263,52 @@ END_PROGRAM");
     );
     assert_eq!(real(&p, "r"), 4.0);
 }
+
+/// The watch list writes each value as a literal of its type, as a PLC's online mode shows it.
+#[test]
+fn the_watch_list_writes_each_value_as_a_literal_of_its_type() {
+    let (mut p, _) = plc("PROGRAM w
+VAR
+  b : BOOL;
+  w : WORD;
+  bt : BYTE;
+  i : INT;
+  u : UDINT;
+  r : REAL;
+  t : TIME;
+  z : TIME;
+  n : TIME;
+END_VAR
+  b := TRUE;
+  w := 16#BEEF;
+  bt := 10;
+  i := -12;
+  u := 4000000000;
+  r := 1.5;
+  t := T#1d2h3m4s5ms;
+  n := T#-1m30s;
+END_PROGRAM");
+    p.scan(0, &mut words()).expect("a scan");
+    let shown: Vec<(String, String)> = p
+        .watch_text()
+        .into_iter()
+        .map(|(n, v)| (n.to_owned(), v))
+        .collect();
+    let expect = [
+        ("b", "TRUE"),
+        ("w", "16#BEEF"),
+        ("bt", "16#0A"),
+        ("i", "-12"),
+        ("u", "4000000000"),
+        ("r", "1.5"),
+        ("t", "T#1d2h3m4s5ms"),
+        ("z", "T#0s"),
+        ("n", "T#-1m30s"),
+    ];
+    for (name, text) in expect {
+        assert!(
+            shown.iter().any(|(n, v)| n == name && v == text),
+            "{name} = {text} in {shown:?}"
+        );
+    }
+}

@@ -42,6 +42,7 @@ fn plan(runs: u64, shard: Shard) -> Plan {
         shrink_budget: 3,
         referee: false,
         failures: "failures".into(),
+        program: None,
     }
 }
 
@@ -159,6 +160,7 @@ fn a_ci_campaign_of_300_runs_has_no_failure() {
         shrink_budget: 0,
         referee: false,
         failures: "failures".into(),
+        program: None,
     };
     let jobs = std::thread::available_parallelism().map_or(1, |n| n.get());
     let wall = std::time::Instant::now();

@@ -578,3 +578,80 @@ async fn the_run_controls_work_over_the_socket() {
         .any(|l| l.who == Actor::Web
             && matches!(l.event, LogEvent::Client(ClientLog::Restarted { .. }))));
 }
+
+/// A Structured Text program in the PLC: the view names it, lists its variables with their
+/// values as literals (a PLC's online watch list) and, once it faults, says where the PLC
+/// went to STOP.
+#[tokio::test(flavor = "multi_thread", worker_threads = 1)]
+async fn the_view_watches_a_structured_text_programs_variables() {
+    let program = "PROGRAM count
+VAR
+  n : INT;
+  zero : INT;
+  q : INT;
+  elapsed : TIME;
+END_VAR
+  n := n + 1;
+  elapsed := elapsed + T#10ms;
+  IF n >= 30 THEN
+    q := n / zero;
+  END_IF;
+END_PROGRAM
+";
+    let toml = "name = \"web\"\nduration = \"10min\"\n[lift]\nstart_mm = 0.0\n";
+    let mut sc = Scenario::from_toml("web.toml", toml).expect("a valid scenario");
+    sc.program = Some(
+        rig::scenario::program::ProgramFile::from_text(std::path::Path::new("count.st"), program)
+            .expect("the program compiles"),
+    );
+    let make = move || Rig::new(sc.clone()).map_err(gateway::MakeRigError::from);
+    let cfg = {
+        let mut cfg = LiveConfig::default();
+        cfg.speed = Speed::Factor(1.0);
+        cfg.owner = Owner::Builtin;
+        cfg
+    };
+    let loopback: SocketAddr = "127.0.0.1:0".parse().expect("an address");
+    let listen = Listen {
+        modbus: loopback,
+        ttk: None,
+        http: Some(loopback),
+    };
+    let running = gateway::start_with(make, cfg, listen, gateway::Options::default())
+        .expect("the gateway starts");
+    let mut ws = connect(running.http_addr().expect("the live view's address")).await;
+    let value = |v: &Value, name: &str| -> String {
+        v["controller"]["watch"]
+            .as_array()
+            .and_then(|w| w.iter().find(|e| e[0] == name))
+            .map(|e| e[1].as_str().unwrap_or_default().to_owned())
+            .unwrap_or_else(|| panic!("{name} in the watch list: {v}"))
+    };
+    let first = next_of(&mut ws, "view").await;
+    assert_eq!(first["run"]["controller"], "program");
+    assert_eq!(first["controller"]["program"], "count.st");
+    assert_eq!(first["controller"]["external"], false);
+    assert_eq!(first["controller"]["watch_left_out"], 0);
+    let t0 = Instant::now();
+    let stopped = loop {
+        let v = next_of(&mut ws, "view").await;
+        // Each scan counts once and adds 10 ms: the two move together.
+        let n: i64 = value(&v, "n").parse().expect("an INT literal");
+        let elapsed = value(&v, "elapsed");
+        if n < 30 {
+            assert_eq!(elapsed, format!("T#{}ms", n * 10).replace("T#0ms", "T#0s"));
+            assert!(v["controller"]["stopped"].is_null(), "{v}");
+        }
+        if let Some(s) = v["controller"]["stopped"].as_str() {
+            break s.to_owned();
+        }
+        assert!(t0.elapsed() < Duration::from_secs(20), "no STOP: {v}");
+    };
+    assert_eq!(stopped, "count.st:11:10: division by zero");
+    running.stop();
+    let r = tokio::task::spawn_blocking(move || running.wait())
+        .await
+        .expect("the run ends");
+    assert_eq!(r.controller.as_deref(), Some("count.st"));
+    assert!(r.violations.is_empty(), "{:?}", r.violations);
+}

@@ -487,6 +487,8 @@ pub fn generate(campaign_seed: u64, index: u64, profile: &Profile) -> Generated 
             extra_slaves,
             master_mode: asi_master::Mode::Protected,
             plc_scan,
+            // The campaign's own program, if it has one, is put in by its runner.
+            program: None,
             power_on_reset,
             safe_drive,
             events,

@@ -194,15 +194,15 @@ pub fn judge(exec: &Execution, probe: Option<&Probe>) -> RunVerdict {
             first_violation: None,
         },
         Execution::Report(r) => {
-            // In service: the program ends in a normal service state, and the probe was
+            // In service: the program ends in a normal service state (if it tells its state:
+            // a controller that does not is judged by the lift alone), and the probe was
             // served or the lift is still working through the calls queued before it (it
             // served one after the probe was pressed, or the automat is moving the cabin).
             let in_service = probe.filter(|p| p.judged).map(|p| {
                 let state = r.final_state.state;
                 let working = r.served.iter().any(|s| s.served_at_s >= p.at.as_secs_f64())
                     || (r.final_state.moving && state != Some(State::AtFloor));
-                (probe_served(r, p) || working)
-                    && state.is_some_and(|s| SERVICE_STATES.contains(&s))
+                (probe_served(r, p) || working) && state.is_none_or(|s| SERVICE_STATES.contains(&s))
             });
             let first_violation = r.violations.first().map(|v| v.kind);
             let outcome = if first_violation.is_some() {

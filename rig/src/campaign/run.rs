@@ -6,6 +6,7 @@ use super::generate::{generate, Generated};
 use super::profile::Profile;
 use super::shrink::{shrink, Case, Shrunk};
 use super::{digest, execute, execute_refereed, judge, line, LineContext, RunLine, RunOutcome};
+use crate::scenario::Scenario;
 use crossbeam_channel::unbounded;
 use std::collections::BTreeMap;
 use std::fmt;
@@ -86,6 +87,9 @@ pub struct Plan {
     /// The directory the reproducers go to, as the user named it: each one's header prints
     /// the command that runs it from where the campaign was started.
     pub failures: std::path::PathBuf,
+    /// The PLC program every run gets (`campaign --controller FILE.st`), if not the built-in
+    /// one; the reproducers name its file.
+    pub program: Option<crate::scenario::program::ProgramFile>,
 }
 
 impl Plan {
@@ -137,6 +141,10 @@ pub fn run_one(plan: &Plan, index: u64) -> Finished {
         tail,
         probe,
     } = generate(plan.seed, index, &plan.profile);
+    let scenario = Scenario {
+        program: plan.program.clone(),
+        ..scenario
+    };
     let text = scenario.to_toml();
     let dig = digest(&text);
     let (exec, disagreements) = if plan.referee {
@@ -209,13 +217,10 @@ fn reproducer_text(
     );
     let what = match &shrunk.execution {
         super::Execution::Report(r) => match r.violations.first() {
-            Some(v) => format!(
-                "violation {} at {:.3} s: {}",
-                v.kind, v.at_s, v.detail
-            ),
+            Some(v) => format!("violation {} at {:.3} s: {}", v.kind, v.at_s, v.detail),
             None => match &shrunk.case.probe {
                 Some(p) => format!(
-                    "out of service: the probe, cabin:{} pressed at {} s, {}; the controller ends in state `{}`",
+                    "out of service: the probe, cabin:{} pressed at {} s, {}; {}",
                     p.floor,
                     p.at.as_secs_f64(),
                     if super::probe_served(r, p) {
@@ -223,9 +228,10 @@ fn reproducer_text(
                     } else {
                         "is never served"
                     },
-                    r.final_state
-                        .state
-                        .map_or_else(|| "external".to_string(), |s| s.to_string())
+                    r.final_state.state.map_or_else(
+                        || "the controller does not tell its state".to_string(),
+                        |s| format!("the controller ends in state `{s}`")
+                    )
                 ),
                 None => "out of service".into(),
             },
@@ -404,6 +410,7 @@ mod tests {
             shrink_budget: 0,
             referee: false,
             failures: "failures".into(),
+            program: None,
         };
         // The last of 10^12 shards of a campaign of 10^12 runs: found by walking the indices,
         // its one run would take hours to reach.

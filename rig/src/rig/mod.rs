@@ -232,7 +232,8 @@ struct Probes {
 }
 
 impl Rig {
-    /// A rig at power-on for `sc`.
+    /// A rig at power-on for `sc`: its PLC runs the scenario's Structured Text program
+    /// ([`Scenario::program`]) if it has one, else the built-in program.
     pub fn new(sc: Scenario) -> Result<Rig, RigError> {
         let lift = Lift::new({
             let mut cfg = LiftConfig::default();
@@ -346,6 +347,10 @@ impl Rig {
                 Actor::Rig,
                 "safe drive: encoder on the motor, drive safety monitor (SS1, SOS, SLS, SDI, SLP; STO through K1)".to_owned(),
             );
+        }
+        if let Some(p) = &rig.sc.program {
+            let program = p.controller(rig.sc.plc_scan);
+            rig = rig.with_controller(program);
         }
         Ok(rig)
     }

@@ -5,6 +5,7 @@
 //! silently ignored), `write` writes one back.
 
 pub mod builtin;
+pub mod program;
 pub(crate) mod read;
 #[cfg(test)]
 mod tests;
@@ -47,6 +48,9 @@ pub struct Scenario {
     pub master_mode: asi_master::Mode,
     /// The PLC scan period.
     pub plc_scan: SimDuration,
+    /// The lift's PLC program, if not the built-in one: a Structured Text program
+    /// (`[controller] program`, or `--controller` on the command line).
+    pub program: Option<program::ProgramFile>,
     /// Whether the operator presses the safety reset once after power-on, as at the lab
     /// (the overtravel monitor needs a manual reset before K1 can close).
     pub power_on_reset: bool,
@@ -247,6 +251,7 @@ impl Scenario {
             extra_slaves: 0,
             master_mode: asi_master::Mode::Protected,
             plc_scan: SimDuration::from_millis(10),
+            program: None,
             power_on_reset: true,
             safe_drive: false,
             events: Vec::new(),

@@ -12,6 +12,7 @@ use lift_model::config::{MAX_FLOORS, MIN_FLOORS};
 use lift_model::{Button, LoadLevel, SensorFault, VaneSensor};
 use serde::Deserialize;
 use std::ops::Range;
+use std::path::Path;
 use toml::Spanned;
 
 #[derive(Deserialize)]
@@ -63,6 +64,7 @@ struct RawBus {
 #[serde(deny_unknown_fields)]
 struct RawController {
     scan: Option<Spanned<String>>,
+    program: Option<Spanned<String>>,
 }
 
 #[derive(Deserialize)]
@@ -655,7 +657,9 @@ fn read_bus(loc: &Locator<'_>, b: &RawBus, sc: &mut Scenario) -> Result<(), Scen
     Ok(())
 }
 
-/// `[controller]`: the PLC scan.
+/// `[controller]`: the PLC scan, and the program if not the built-in one (a Structured Text
+/// file, its path relative to the scenario file's directory), read and compiled here so that
+/// a program that cannot run is refused with the scenario.
 fn read_controller(
     loc: &Locator<'_>,
     c: &RawController,
@@ -672,6 +676,23 @@ fn read_controller(
                  unseen",
             ));
         }
+    }
+    if let Some(p) = &c.program {
+        let dir = Path::new(loc.file).parent().unwrap_or(Path::new(""));
+        let path = dir.join(p.get_ref());
+        let (line, column) = loc.position(p.span().start);
+        // Not through `Locator::error`: the program's own messages quote its source lines,
+        // which must be shown whole.
+        sc.program =
+            Some(
+                super::program::ProgramFile::read(&path).map_err(|message| ScenarioError {
+                    file: loc.file.to_owned(),
+                    line,
+                    column,
+                    field: "controller.program".into(),
+                    message,
+                })?,
+            );
     }
     Ok(())
 }

@@ -8,6 +8,72 @@ fn err(text: &str) -> String {
         .to_string()
 }
 
+/// `[controller] program`: the file relative to the scenario's directory, read and compiled
+/// with the scenario; written back as an absolute path, which reads back to the same program;
+/// a missing file or a wrong program refused at the key.
+#[test]
+fn a_program_is_read_relative_to_the_scenario_and_written_back_absolute() {
+    let dir = std::env::temp_dir().join(format!("asi-lift-program-key-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("a directory");
+    std::fs::write(
+        dir.join("idle.st"),
+        "PROGRAM Lift\nVAR Restart : BOOL; END_VAR\n  Restart := FALSE;\nEND_PROGRAM\n",
+    )
+    .expect("write");
+    std::fs::write(dir.join("bad.st"), "PROGRAM Lift\n  x := 1;\nEND_PROGRAM\n").expect("write");
+    let file = dir.join("sc.toml");
+    let name = file.display().to_string();
+    let sc = Scenario::from_toml(&name, "[controller]\nprogram = \"idle.st\"\n").expect("read");
+    let p = sc.program.as_ref().expect("a program");
+    assert_eq!(p.path(), dir.join("idle.st"));
+    let text = sc.to_toml();
+    let absolute = std::path::absolute(dir.join("idle.st")).expect("absolute");
+    assert!(
+        text.contains(&format!("program = \"{}\"", absolute.display())),
+        "{text}"
+    );
+    // Read back from anywhere: the same program.
+    let again = Scenario::from_toml("elsewhere/x.toml", &text).expect("read back");
+    assert_eq!(
+        again.program.as_ref().map(|p| p.path()),
+        Some(absolute.as_path())
+    );
+    assert_eq!(
+        Scenario {
+            program: None,
+            name: sc.name.clone(),
+            ..again
+        },
+        Scenario {
+            program: None,
+            ..sc
+        }
+    );
+
+    let missing = Scenario::from_toml(&name, "[controller]\nprogram = \"gone.st\"\n")
+        .expect_err("no such file")
+        .to_string();
+    assert!(
+        missing.starts_with(&format!(
+            "{name}:2:11: controller.program: {}",
+            dir.join("gone.st").display()
+        )),
+        "{missing}"
+    );
+    let wrong = Scenario::from_toml(&name, "[controller]\nprogram = \"bad.st\"\n")
+        .expect_err("a wrong program")
+        .to_string();
+    assert!(
+        wrong.contains("the program is refused (1 error)"),
+        "{wrong}"
+    );
+    assert!(
+        wrong.contains("bad.st:2:3: error: no variable is named `x`"),
+        "{wrong}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 #[test]
 fn reads_the_example_of_the_issue() {
     let s = Scenario::from_toml(
@@ -354,6 +420,7 @@ mod round_trip {
                     asi_master::Mode::Protected
                 },
                 plc_scan: SimDuration::from_nanos(scan),
+                program: None,
                 power_on_reset,
                 safe_drive,
                 // Only the safe drive has an encoder to fail.

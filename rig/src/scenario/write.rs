@@ -49,6 +49,12 @@ impl Scenario {
             "\n[controller]\nscan = \"{}\"",
             exact_duration(self.plc_scan)
         );
+        if let Some(p) = &self.program {
+            // Absolute, so that the file written (a campaign's reproducer) finds the program
+            // wherever it is put.
+            let path = std::path::absolute(p.path()).unwrap_or_else(|_| p.path().to_owned());
+            let _ = writeln!(s, "program = {}", toml_string(&path.to_string_lossy()));
+        }
         let _ = writeln!(s, "\n[safety]\npower_on_reset = {}", self.power_on_reset);
         // Written only when on, so that the files of scenarios without it stay as they were.
         if self.safe_drive {

@@ -325,6 +325,15 @@ impl Plc {
             .collect()
     }
 
+    /// As [`Plc::watch`], each value written as a literal of its type, as a PLC's online mode
+    /// shows it: `TRUE`, `-12`, `16#00FF` for bit strings, `1.5`, `T#1s200ms`.
+    pub fn watch_text(&self) -> Vec<(&str, String)> {
+        self.names
+            .iter()
+            .map(|(n, a, e)| (n.as_str(), literal(self.memory[*a as usize], *e)))
+            .collect()
+    }
+
     /// The value of the program's or a global variable `name`, if elementary.
     pub fn get(&self, name: &str) -> Option<Value> {
         self.names
@@ -903,3 +912,60 @@ fn std_fn(f: StdFn, e: Elem, vs: &[Value]) -> Value {
 
 mod compile;
 use compile::Compiler;
+
+/// `v` written as a literal of type `e` (IEC 61131-3 §6.3.3: bit strings in base 16 with
+/// their width's digits, durations as `T#` with their units from days down to nanoseconds).
+fn literal(v: Value, e: Elem) -> String {
+    let hex = |digits: usize| format!("16#{:0digits$X}", v.int() as u64 & mask(digits * 4));
+    match e {
+        Elem::Bool => if v.int() != 0 { "TRUE" } else { "FALSE" }.to_owned(),
+        Elem::Byte => hex(2),
+        Elem::Word => hex(4),
+        Elem::Dword => hex(8),
+        Elem::Lword => hex(16),
+        Elem::Usint | Elem::Uint | Elem::Udint | Elem::Ulint => match v {
+            Value::Uint(u) => u.to_string(),
+            other => (other.int() as u64).to_string(),
+        },
+        Elem::Sint | Elem::Int | Elem::Dint | Elem::Lint => v.int().to_string(),
+        Elem::Real | Elem::Lreal => match v {
+            Value::Real(r) => format!("{r:?}"),
+            other => format!("{:?}", other.int() as f64),
+        },
+        Elem::Time | Elem::Ltime => duration_literal(v.int()),
+    }
+}
+
+/// The mask of the low `bits` bits.
+fn mask(bits: usize) -> u64 {
+    if bits >= 64 {
+        u64::MAX
+    } else {
+        (1u64 << bits) - 1
+    }
+}
+
+/// Nanoseconds as a `T#` literal: `T#0s`, `T#1s200ms`, `T#-2m`, `T#1d2h3m4s5ms6us7ns`.
+fn duration_literal(ns: i64) -> String {
+    const UNITS: [(&str, u128); 7] = [
+        ("d", 86_400_000_000_000),
+        ("h", 3_600_000_000_000),
+        ("m", 60_000_000_000),
+        ("s", 1_000_000_000),
+        ("ms", 1_000_000),
+        ("us", 1_000),
+        ("ns", 1),
+    ];
+    if ns == 0 {
+        return "T#0s".into();
+    }
+    let mut out = String::from(if ns < 0 { "T#-" } else { "T#" });
+    let mut rest = u128::from(ns.unsigned_abs());
+    for (unit, size) in UNITS {
+        if rest >= size {
+            out.push_str(&format!("{}{unit}", rest / size));
+            rest %= size;
+        }
+    }
+    out
+}
