@@ -297,20 +297,10 @@ impl Availability {
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
 #[non_exhaustive]
 pub struct ErrorCounts {
-    /// Start bit.
-    pub start_bit: u64,
-    /// Alternation.
-    pub alternation: u64,
-    /// Pause.
-    pub pause: u64,
-    /// Information.
-    pub information: u64,
-    /// Parity.
-    pub parity: u64,
-    /// End bit.
-    pub end_bit: u64,
-    /// Length.
-    pub length: u64,
+    /// Telegrams that failed each of the seven checks (in the JSON, each check's count
+    /// stands beside `no_response`).
+    #[serde(flatten)]
+    pub checks: CheckCounts,
     /// A response was due and none came.
     pub no_response: u64,
 }
@@ -754,7 +744,7 @@ impl Report {
         let _ = writeln!(
             s,
             "  bus                {} transactions, {} repeats; errors: start {} alt {} pause {} info {} parity {} end {} length {}, no response {}",
-            b.transactions, b.repeats, e.start_bit, e.alternation, e.pause, e.information, e.parity, e.end_bit, e.length, e.no_response
+            b.transactions, b.repeats, e.checks.start_bit, e.checks.alternation, e.checks.pause, e.checks.information, e.checks.parity, e.checks.end_bit, e.checks.length, e.no_response
         );
         let _ = writeln!(
             s,

@@ -355,7 +355,11 @@ fn traffic_on_a_noisy_line_is_served_correctly_with_repeats() {
     assert!(r.bus.repeats > 10_000, "{:?}", r.bus);
     let e = &r.bus.errors;
     assert!(
-        e.alternation > 0 && e.start_bit > 0 && e.pause > 0 && e.information > 0 && e.parity > 0
+        e.checks.alternation > 0
+            && e.checks.start_bit > 0
+            && e.checks.pause > 0
+            && e.checks.information > 0
+            && e.checks.parity > 0
     );
     assert_eq!(
         served(&r),

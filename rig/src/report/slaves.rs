@@ -33,7 +33,11 @@ pub struct CheckCounts {
 impl CheckCounts {
     /// Counts by check, index = [`Check`] as u8.
     pub fn of(counts: &[u64; 7]) -> CheckCounts {
-        let c = |k: Check| counts[k as usize];
+        CheckCounts::from_fn(|k| counts[k as usize])
+    }
+
+    /// Each check's count as `c` gives it.
+    pub fn from_fn(c: impl Fn(Check) -> u64) -> CheckCounts {
         CheckCounts {
             start_bit: c(Check::StartBit),
             alternation: c(Check::Alternation),
@@ -54,13 +58,14 @@ impl CheckCounts {
 impl ErrorCounts {
     /// Every count together: telegrams that failed a check and missing responses.
     pub fn total(&self) -> u64 {
-        self.start_bit
-            + self.alternation
-            + self.pause
-            + self.information
-            + self.parity
-            + self.end_bit
-            + self.length
+        let c = &self.checks;
+        c.start_bit
+            + c.alternation
+            + c.pause
+            + c.information
+            + c.parity
+            + c.end_bit
+            + c.length
             + self.no_response
     }
 }
@@ -174,13 +179,7 @@ impl SlaveReport {
             consecutive_errors: s.consecutive_errors,
             longest_error_run: s.longest_error_run,
             errors: ErrorCounts {
-                start_bit: s.errors(Check::StartBit),
-                alternation: s.errors(Check::Alternation),
-                pause: s.errors(Check::Pause),
-                information: s.errors(Check::Information),
-                parity: s.errors(Check::Parity),
-                end_bit: s.errors(Check::EndBit),
-                length: s.errors(Check::Length),
+                checks: CheckCounts::from_fn(|k| s.errors(k)),
                 no_response: s.no_response,
             },
             request_errors: CheckCounts::of(&s.request_errors),

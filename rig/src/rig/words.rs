@@ -1,10 +1,11 @@
 //! The report's words and figures for the bus and the safety monitor: why the monitor did not
 //! release a sensor, why K1 is open, the bus's counts and cycle times.
 
-use crate::report::{round3, BusReport, CycleTimes, ErrorCounts, SlaveDropouts, SlaveReport};
+use crate::report::{
+    round3, BusReport, CheckCounts, CycleTimes, ErrorCounts, SlaveDropouts, SlaveReport,
+};
 use asi_bus::Bus;
 use asi_master::BusStats;
-use asi_phy::Check;
 use asi_slaves::monitor::{NotReleased, SafetyMonitor};
 use lab::address::{SAFETY_BOTTOM, SAFETY_TOP};
 use safety::lift::K1Cause;
@@ -49,13 +50,7 @@ pub(super) fn bus_report(stats: BusStats, dropouts: Vec<SlaveDropouts>) -> BusRe
         transactions: stats.transactions,
         repeats: stats.repeats,
         errors: ErrorCounts {
-            start_bit: stats.errors(Check::StartBit),
-            alternation: stats.errors(Check::Alternation),
-            pause: stats.errors(Check::Pause),
-            information: stats.errors(Check::Information),
-            parity: stats.errors(Check::Parity),
-            end_bit: stats.errors(Check::EndBit),
-            length: stats.errors(Check::Length),
+            checks: CheckCounts::from_fn(|k| stats.errors(k)),
             no_response: stats.no_response,
         },
         cycle_us: CycleTimes {
