@@ -111,3 +111,217 @@ fn wrong_statements_get_their_messages() {
         insta::assert_snapshot!(*name, errors(text));
     }
 }
+
+/// Hostile programs through the whole front end and the machine: the every-construct
+/// program with its words deleted, doubled, swapped or replaced by other words of the
+/// language. Each is refused with messages that name a place inside the source, or compiles
+/// and runs 20 scans on a random image without a panic, each scan ending or faulting within
+/// the watchdog's budget.
+mod hostile {
+    use super::GOOD;
+    use proptest::prelude::*;
+    use st::check::check;
+    use st::parser::parse;
+    use st::run::{Image, Plc};
+    use st::source::Source;
+    use st::typeck::typecheck;
+
+    /// Words that reach the checker, the typer and the compiler in unusual places.
+    const POOL: &[&str] = &[
+        "INT",
+        "DINT",
+        "REAL",
+        "BOOL",
+        "WORD",
+        "TIME",
+        "Dir",
+        "Station",
+        "Debounce",
+        "TON",
+        "i",
+        "r",
+        "w",
+        "t",
+        "big",
+        "here",
+        "calls",
+        "st",
+        "deb",
+        "FLOORS",
+        "Clamp",
+        "0",
+        "1",
+        "-1",
+        "32767",
+        "16#FFFF",
+        "T#-5s",
+        "1.0E38",
+        "(",
+        ")",
+        "[",
+        "]",
+        ":=",
+        "=>",
+        ";",
+        ",",
+        ".",
+        "..",
+        "+",
+        "-",
+        "*",
+        "/",
+        "MOD",
+        "**",
+        "AND",
+        "NOT",
+        "IF",
+        "THEN",
+        "END_IF",
+        "FOR",
+        "TO",
+        "BY",
+        "DO",
+        "END_FOR",
+        "WHILE",
+        "END_WHILE",
+        "CASE",
+        "OF",
+        "END_CASE",
+        "EXIT",
+        "RETURN",
+        "ARRAY",
+        "[1..100000]",
+        "VAR",
+        "END_VAR",
+        "AT",
+        "%IW3",
+        "%QX7.15",
+        "%IW999",
+        "Dir#Up",
+        "RETURN;",
+        "Lift",
+        "FUNCTION",
+        "PROGRAM",
+    ];
+
+    /// An edit of the program: lines (statements and declarations) deleted, doubled or
+    /// swapped, or a name or literal replaced by another word (most such programs still
+    /// parse, so the checker, the typer and the machine see them).
+    #[derive(Clone, Debug)]
+    enum Edit {
+        Delete(usize),
+        Double(usize),
+        Swap(usize, usize),
+        Replace(usize, usize),
+    }
+
+    fn edit() -> impl Strategy<Value = Edit> {
+        prop_oneof![
+            any::<usize>().prop_map(Edit::Delete),
+            any::<usize>().prop_map(Edit::Double),
+            (any::<usize>(), any::<usize>()).prop_map(|(a, b)| Edit::Swap(a, b)),
+            (any::<usize>(), any::<usize>()).prop_map(|(a, b)| Edit::Replace(a, b)),
+            (any::<usize>(), any::<usize>()).prop_map(|(a, b)| Edit::Replace(a, b)),
+        ]
+    }
+
+    fn mutated(edits: &[Edit]) -> String {
+        let mut lines: Vec<String> = GOOD.lines().map(str::to_owned).collect();
+        for e in edits {
+            let n = lines.len();
+            if n == 0 {
+                break;
+            }
+            match *e {
+                Edit::Delete(i) => {
+                    lines.remove(i % n);
+                }
+                Edit::Double(i) => lines.insert(i % n, lines[i % n].clone()),
+                Edit::Swap(a, b) => lines.swap(a % n, b % n),
+                Edit::Replace(at, w) => {
+                    // The `at`-th name or number of the program, counted over all lines.
+                    let words: Vec<(usize, usize, usize)> = lines
+                        .iter()
+                        .enumerate()
+                        .flat_map(|(l, line)| {
+                            let mut out = Vec::new();
+                            let mut start = None;
+                            for (k, ch) in line.char_indices().chain([(line.len(), ' ')]) {
+                                let word = ch.is_ascii_alphanumeric() || ch == '_' || ch == '#';
+                                match (start, word) {
+                                    (None, true) => start = Some(k),
+                                    (Some(s), false) => {
+                                        out.push((l, s, k));
+                                        start = None;
+                                    }
+                                    _ => {}
+                                }
+                            }
+                            out
+                        })
+                        .collect();
+                    if let Some(&(l, a, b)) = words.get(at % words.len().max(1)) {
+                        lines[l].replace_range(a..b, POOL[w % POOL.len()]);
+                    }
+                }
+            }
+        }
+        lines.join("\n")
+    }
+
+    struct Noise(Vec<u16>, Vec<u16>);
+
+    impl Image for Noise {
+        fn input(&self, w: u32) -> u16 {
+            self.0[w as usize % self.0.len()]
+        }
+        fn output(&self, w: u32) -> u16 {
+            self.1[w as usize % self.1.len()]
+        }
+        fn set_output(&mut self, w: u32, value: u16) {
+            let n = self.1.len();
+            self.1[w as usize % n] = value;
+        }
+    }
+
+    proptest! {
+        // 256 cases, or PROPTEST_CASES.
+        #![proptest_config(ProptestConfig::default())]
+
+        #[test]
+        fn mutated_programs_are_refused_at_a_place_or_run_within_the_watchdog(
+            edits in proptest::collection::vec(edit(), 1..6),
+            image in proptest::collection::vec(any::<u16>(), 244),
+        ) {
+            let text = mutated(&edits);
+            let src = Source::new("hostile.st", &text);
+            let (unit, errors) = parse(&src);
+            let errors = if errors.is_empty() {
+                let (c, errors) = check(&unit);
+                if errors.is_empty() {
+                    let errors = typecheck(&c);
+                    if errors.is_empty() {
+                        let mut plc = Plc::new(&c);
+                        let mut io = Noise(image, vec![0; 244]);
+                        for k in 0..20i64 {
+                            // A fault is an answer (the PLC goes to STOP); a panic or a hang is not.
+                            if plc.scan(k * 10_000_000, &mut io).is_err() {
+                                break;
+                            }
+                        }
+                    }
+                    errors
+                } else {
+                    errors
+                }
+            } else {
+                errors
+            };
+            for e in &errors {
+                prop_assert!(e.span.start as usize <= text.len() && e.span.end as usize <= text.len(), "{e:?} outside {} bytes", text.len());
+            }
+            let shown = src.render_all(&errors);
+            prop_assert!(errors.is_empty() || shown.contains("hostile.st:"), "{shown}");
+        }
+    }
+}
