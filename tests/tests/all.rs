@@ -16,6 +16,7 @@ mod roundtrip;
 mod safe_drive;
 mod safety_regressions;
 mod snapshots;
+mod st_library;
 mod structured_text;
 mod traces;
 mod traffic;
