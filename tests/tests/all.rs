@@ -17,6 +17,7 @@ mod safe_drive;
 mod safety_regressions;
 mod snapshots;
 mod st_library;
+mod st_reference;
 mod structured_text;
 mod traces;
 mod traffic;
