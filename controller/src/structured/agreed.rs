@@ -564,3 +564,128 @@ fn event(b: &Buffer, field: &dyn Fn(usize) -> i64) -> Option<Option<ProgramEvent
         _ => return None,
     }))
 }
+
+#[cfg(test)]
+mod tests {
+    use crate::structured::StProgram;
+
+    const TYPES: &str = "TYPE
+  LiftState : (AtFloor, MovingUp);
+  LiftEventKind : (Departed, Served, None);
+  CallSource : (Cabin, HallUp, HallDown);
+  LiftReason : (NoReason, DoorOpen);
+  LiftEvent : STRUCT Kind : LiftEventKind; Floor : INT; Other : INT; Source : CallSource;
+    Reason : LiftReason; StoredAt : TIME; END_STRUCT;
+END_TYPE
+";
+
+    fn refused(program: &str) -> String {
+        match StProgram::compile("p.st", &format!("{TYPES}{program}")) {
+            Err(e) => e.rendered,
+            Ok(_) => panic!("accepted: {program}"),
+        }
+    }
+
+    /// The agreed names declared with the agreed types are taken; with others, refused at
+    /// the declaration with the type they must have.
+    #[test]
+    fn the_agreed_variables_are_type_checked_at_compile_time() {
+        let ok = "PROGRAM P
+VAR State : LiftState; Floor, Target : INT; Now : TIME;
+  Events : ARRAY [1..8] OF LiftEvent; EventCount : INT;
+  CabinCalls, HallCalls : ARRAY [1..4] OF INT; CabinCallCount, HallCallCount : INT;
+END_VAR
+END_PROGRAM";
+        let p =
+            StProgram::compile("p.st", &format!("{TYPES}{ok}")).unwrap_or_else(|e| panic!("{e}"));
+        assert!(p.agreed.names_served_calls());
+        let r =
+            refused("PROGRAM P VAR Floor : REAL; Now : INT; Restart : INT; END_VAR END_PROGRAM");
+        assert!(r.contains("p.st:9:15: error: `Floor` is a variable the rig reads or sets (the agreed interface): it must be of an integer type"), "{r}");
+        assert!(r.contains("`Now` is a variable the rig reads or sets (the agreed interface): it must be a TIME or an LTIME"), "{r}");
+        assert!(r.contains("`Restart` is a variable the rig reads or sets (the agreed interface): it must be a BOOL"), "{r}");
+        let r = refused(
+            "TYPE Mood : (Happy); END_TYPE PROGRAM P VAR State : Mood; END_VAR END_PROGRAM",
+        );
+        assert!(
+            r.contains("its enumeration has the value HAPPY, which is not one of WaitingForInputs"),
+            "{r}"
+        );
+        let r = refused(
+            "PROGRAM P VAR Events : ARRAY [1..8] OF INT; EventCount : INT; END_VAR END_PROGRAM",
+        );
+        assert!(r.contains("`Events` is a variable the rig reads or sets (the agreed interface): it must be a one-dimensional ARRAY OF a structure"), "{r}");
+        let r = refused("PROGRAM P VAR Events : ARRAY [1..8] OF LiftEvent; END_VAR END_PROGRAM");
+        assert!(r.contains("needs `EventCount` beside it"), "{r}");
+        let r = refused("PROGRAM P VAR CabinCallCount : INT; END_VAR END_PROGRAM");
+        assert!(r.contains("needs `CabinCalls` beside it"), "{r}");
+    }
+
+    /// A program without the agreed variables runs, and tells nothing (the rig counts its
+    /// stops as serving calls).
+    #[test]
+    fn a_program_without_the_interface_tells_nothing() {
+        let p = StProgram::compile("p.st", "PROGRAM P VAR x : INT; END_VAR x := 1; END_PROGRAM")
+            .unwrap_or_else(|e| panic!("{e}"));
+        assert!(!p.agreed.names_served_calls());
+        assert!(p.agreed.calls(&p.plc).is_none());
+        assert_eq!(p.agreed.state(&p.plc), None);
+    }
+
+    /// The buffer is read after each scan and emptied; an entry that says what no event can
+    /// puts the PLC into STOP at the buffer's declaration.
+    #[test]
+    fn events_are_drained_after_each_scan_and_a_wrong_one_stops_the_plc() {
+        use crate::contract::Controller;
+        use crate::dispatch::{HallDir, ServedCall, Source};
+        use crate::plc::FromSafety;
+        use crate::program::ProgramEventKind as K;
+        use asi_phy::SimTime;
+        let prog = "PROGRAM P
+VAR Now : TIME; Events : ARRAY [1..8] OF LiftEvent; EventCount : INT; n : INT; END_VAR
+  n := n + 1;
+  IF n = 1 THEN
+    EventCount := 1; Events[1].Kind := Departed; Events[1].Floor := 1; Events[1].Other := 3;
+  ELSIF n = 2 THEN
+    EventCount := 1; Events[1].Kind := Served; Events[1].Floor := 3;
+    Events[1].Source := HallDown; Events[1].StoredAt := Now - T#10ms;
+  ELSE
+    EventCount := 1; Events[1].Kind := Departed; Events[1].Floor := 300;
+  END_IF;
+END_PROGRAM";
+        let mut p =
+            StProgram::compile("p.st", &format!("{TYPES}{prog}")).unwrap_or_else(|e| panic!("{e}"));
+        let mut image = asi_master::ProcessImage::default();
+        let safety = FromSafety { estop_out: true };
+        let kinds = |p: &mut StProgram| -> Vec<K> {
+            p.drain_events().into_iter().map(|e| e.kind).collect()
+        };
+        p.scan(SimTime::from_millis(10), &mut image, safety);
+        assert_eq!(kinds(&mut p), [K::Departed { from: 1, to: 3 }]);
+        assert_eq!(p.value("EventCount"), Some(st::run::Value::Int(0)));
+        p.scan(SimTime::from_millis(20), &mut image, safety);
+        assert_eq!(
+            kinds(&mut p),
+            [K::Served(ServedCall {
+                floor: 3,
+                source: Source::Hall,
+                hall: Some(HallDir::Down),
+                stored_at: SimTime::from_millis(10),
+            })]
+        );
+        p.scan(SimTime::from_millis(30), &mut image, safety);
+        let k = kinds(&mut p);
+        assert!(
+            matches!(
+                k[..],
+                [K::PlcStopped {
+                    line: 10,
+                    cause: st::run::FaultCause::BadEvent(1),
+                    ..
+                }]
+            ),
+            "{k:?}"
+        );
+        assert!(p.stopped().is_some_and(|s| s.starts_with("p.st:10:")));
+    }
+}
