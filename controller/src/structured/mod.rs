@@ -245,11 +245,11 @@ impl Controller for StProgram {
     }
 
     fn status(&self) -> Status {
-        let mut s = Status::default();
-        s.state = self.agreed.state(&self.plc);
-        s.floor = self.agreed.floor(&self.plc);
-        s.target = self.agreed.target(&self.plc);
-        s
+        Status {
+            state: self.agreed.state(&self.plc),
+            floor: self.agreed.floor(&self.plc),
+            target: self.agreed.target(&self.plc),
+        }
     }
 
     fn pending_calls(&self) -> Option<PendingCalls> {
