@@ -24,16 +24,32 @@ pub fn parse(src: &Source) -> (Unit, Vec<Diagnostic>) {
         );
         return (Unit::default(), vec![d]);
     }
-    let (toks, errors) = lex(src.text());
-    let mut p = Parser {
-        src,
-        toks,
-        pos: 0,
-        errors,
-        depth: 0,
-    };
-    let unit = p.unit();
-    let mut errors = p.errors;
+    // Each file on its own (a comment or a block left open in one does not run into the
+    // next), its places shifted to where it lies in the whole text.
+    let mut unit = Unit::default();
+    let mut errors = Vec::new();
+    for (_, range) in src.file_ranges() {
+        let base = range.start;
+        let (mut toks, lex_errors) = lex(&src.text()[range]);
+        let shift = |s: &mut Span| {
+            *s = Span::new(s.start as usize + base, s.end as usize + base);
+        };
+        for t in &mut toks {
+            shift(&mut t.span);
+        }
+        let mut p = Parser {
+            src,
+            toks,
+            pos: 0,
+            errors: lex_errors,
+            depth: 0,
+        };
+        for d in &mut p.errors {
+            shift(&mut d.span);
+        }
+        unit.items.extend(p.unit().items);
+        errors.append(&mut p.errors);
+    }
     errors.sort_by_key(|d| d.span.start);
     if errors.len() > MAX_ERRORS {
         let more = errors.len() - MAX_ERRORS;

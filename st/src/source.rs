@@ -43,19 +43,49 @@ impl Span {
     }
 }
 
-/// A source file: its name (as the user gave it) and its text.
+/// A program's source: one file, or several compiled together (a program with the libraries
+/// it uses), each with its name (as the user gave it) and its text. The files' texts follow
+/// one another in one text, so that a place ([`Span`]) names its file too.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Source {
     name: String,
     text: String,
     /// The byte offset of each line's start.
     lines: Vec<usize>,
+    /// Each file's name and the byte offset of its start in `text`, in order.
+    files: Vec<(String, usize)>,
 }
 
 impl Source {
     /// The source `text`, named `name` in messages.
     pub fn new(name: impl Into<String>, text: impl Into<String>) -> Source {
-        let text = text.into();
+        let name = name.into();
+        Source::with_text(name.clone(), text.into(), vec![(name, 0)])
+    }
+
+    /// Several files compiled as one program, in the order given (libraries first, say): a
+    /// place in any of them is rendered with its own file's name, line and column. The
+    /// first file names the whole.
+    pub fn files<N: Into<String>, T: AsRef<str>>(
+        files: impl IntoIterator<Item = (N, T)>,
+    ) -> Source {
+        let mut text = String::new();
+        let mut starts = Vec::new();
+        for (name, t) in files {
+            if !starts.is_empty() {
+                // A line break between two files: no line is shared.
+                text.push('\n');
+            }
+            starts.push((name.into(), text.len()));
+            text.push_str(t.as_ref());
+        }
+        if starts.is_empty() {
+            starts.push((String::new(), 0));
+        }
+        Source::with_text(starts[0].0.clone(), text, starts)
+    }
+
+    fn with_text(name: String, text: String, files: Vec<(String, usize)>) -> Source {
         let mut lines = vec![0];
         lines.extend(
             text.bytes()
@@ -64,15 +94,43 @@ impl Source {
                 .map(|(i, _)| i + 1),
         );
         Source {
-            name: name.into(),
+            name,
             text,
             lines,
+            files,
         }
     }
 
-    /// The name.
+    /// The name (the first file's).
     pub fn name(&self) -> &str {
         &self.name
+    }
+
+    /// Each file's name and its byte range in [`Source::text`], in order.
+    pub fn file_ranges(&self) -> impl Iterator<Item = (&str, std::ops::Range<usize>)> + '_ {
+        self.files.iter().enumerate().map(|(i, (n, start))| {
+            let end = self
+                .files
+                .get(i + 1)
+                .map_or(self.text.len(), |(_, next)| next - 1);
+            (n.as_str(), *start..end)
+        })
+    }
+
+    /// The name of the file that holds byte `offset`.
+    pub fn file_at(&self, offset: u32) -> &str {
+        let i = self
+            .files
+            .partition_point(|(_, s)| *s <= offset as usize)
+            .max(1);
+        &self.files[i - 1].0
+    }
+
+    /// The line within its file of the text's line `line` (both 1-based).
+    fn file_line(&self, offset: usize, line: usize) -> usize {
+        let i = self.files.partition_point(|(_, s)| *s <= offset).max(1);
+        let start = self.files[i - 1].1;
+        line - self.lines.partition_point(|&s| s < start)
     }
 
     /// The text.
@@ -80,11 +138,12 @@ impl Source {
         &self.text
     }
 
-    /// The line (1-based), the column (1-based, in characters) and the text of the line at
-    /// byte `offset`.
+    /// The line (1-based, within its file), the column (1-based, in characters) and the
+    /// text of the line at byte `offset`.
     pub fn locate(&self, offset: u32) -> (usize, usize, &str) {
         let offset = (offset as usize).min(self.text.len());
         let line = self.lines.partition_point(|&s| s <= offset).max(1);
+        let file_line = self.file_line(offset, line);
         let start = self.lines[line - 1];
         let end = self.text[start..]
             .find('\n')
@@ -95,7 +154,7 @@ impl Source {
             .text
             .get(start..offset)
             .map_or(1, |s| s.chars().count() + 1);
-        (line, column, line_text)
+        (file_line, column, line_text)
     }
 
     /// `diagnostic` as a PLC programmer's tools print it (see [`Diagnostic`]). A line longer
@@ -134,7 +193,7 @@ impl Source {
         let width = width.min(to.saturating_sub(column - 1).max(1));
         format!(
             "{}:{line}:{column}: {}: {}\n{head}{shown}{tail}\n{lead}{}",
-            self.name,
+            self.file_at(d.span.start),
             d.severity,
             d.message,
             "^".repeat(width)
@@ -222,6 +281,32 @@ mod tests {
         let caret = r.lines().nth(2).expect("the caret");
         let at = shown.chars().position(|c| c == '?').expect("the place");
         assert_eq!(caret.chars().position(|c| c == '^'), Some(at));
+    }
+
+    #[test]
+    fn a_place_in_one_of_several_files_names_that_file_and_its_own_line() {
+        let s = Source::files([
+            ("lab.st", "FUNCTION_BLOCK A\nEND_FUNCTION_BLOCK\n"),
+            ("lift.st", "PROGRAM P\n  x := 1 +;\nEND_PROGRAM"),
+        ]);
+        let at = s.text().find('+').expect("plus");
+        let d = Diagnostic::error(Span::new(at, at + 1), "an operand is missing after `+`");
+        assert_eq!(
+            s.render(&d),
+            "lift.st:2:10: error: an operand is missing after `+`\n  x := 1 +;\n         ^"
+        );
+        let a = s.text().find('A').expect("A");
+        assert_eq!(s.file_at(a as u32), "lab.st");
+        assert_eq!(s.locate(a as u32).0, 1);
+        let ranges: Vec<_> = s.file_ranges().collect();
+        assert_eq!(
+            &s.text()[ranges[1].1.clone()],
+            "PROGRAM P\n  x := 1 +;\nEND_PROGRAM"
+        );
+        assert_eq!(
+            &s.text()[ranges[0].1.clone()],
+            "FUNCTION_BLOCK A\nEND_FUNCTION_BLOCK\n"
+        );
     }
 
     #[test]

@@ -16,6 +16,8 @@ mod roundtrip;
 mod safe_drive;
 mod safety_regressions;
 mod snapshots;
+mod st_library;
+mod st_reference;
 mod structured_text;
 mod traces;
 mod traffic;

@@ -53,6 +53,8 @@ pub(super) struct Compiler<'a> {
     std: Vec<StdState>,
     code: Vec<Vec<IStmt>>,
     names: Vec<(String, u32, Elem)>,
+    /// Every variable of the program and every global (not located), elementary or not.
+    places: Vec<(String, u32)>,
     program_index: usize,
 }
 
@@ -67,6 +69,7 @@ impl<'a> Compiler<'a> {
             std: Vec::new(),
             code: Vec::new(),
             names: Vec::new(),
+            places: Vec::new(),
             program_index: 0,
         }
     }
@@ -142,6 +145,9 @@ impl<'a> Compiler<'a> {
             self.init_var(g, at);
             self.globals
                 .insert(g.name.to_ascii_uppercase(), (at, g.ty.clone(), g.at));
+            if g.at.is_none() {
+                self.places.push((g.name.clone(), at));
+            }
             if let Type::Elem(e) | Type::Subrange(e, _, _) = g.ty {
                 self.names.push((g.name.clone(), at, e));
             }
@@ -161,6 +167,9 @@ impl<'a> Compiler<'a> {
         }
         if let Some(p) = self.c.pous.get(program) {
             for v in &p.vars {
+                if let Some(&off) = self.frames[program].0.get(&v.name.to_ascii_uppercase()) {
+                    self.places.push((v.name.clone(), off));
+                }
                 if let (Some(&off), Type::Elem(e) | Type::Subrange(e, _, _)) = (
                     self.frames[program].0.get(&v.name.to_ascii_uppercase()),
                     &v.ty,
@@ -184,6 +193,7 @@ impl Compiler<'_> {
             std_initial: self.std.clone(),
             std: self.std,
             names: self.names,
+            places: self.places,
             budget: Budget::default(),
         }
     }

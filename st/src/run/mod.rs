@@ -67,6 +67,9 @@ pub enum FaultCause {
     },
     /// The scan took more operations than its budget.
     Watchdog(u64),
+    /// An entry of the agreed event buffer (1-based) holds what no event can (a floor past
+    /// 255, a reason that is not its kind's): found by the controller that reads the buffer.
+    BadEvent(i64),
 }
 
 impl std::fmt::Display for FaultCause {
@@ -79,6 +82,11 @@ impl std::fmt::Display for FaultCause {
             FaultCause::Watchdog(n) => {
                 write!(f, "the scan took more than {n} operations (the watchdog)")
             }
+            FaultCause::BadEvent(k) => write!(
+                f,
+                "entry {k} of the event buffer holds no event (a floor past 255, or a reason \
+                 not its kind's)"
+            ),
         }
     }
 }
@@ -295,6 +303,8 @@ pub struct Plc {
     std_initial: Vec<StdState>,
     /// The variables' names and places, for a watch list.
     names: Vec<(String, u32, Elem)>,
+    /// Every variable of the program and every global (not located) and its address.
+    places: Vec<(String, u32)>,
     budget: Budget,
 }
 
@@ -355,6 +365,29 @@ impl Plc {
                 true
             }
             None => false,
+        }
+    }
+
+    /// The address in memory of the program's or a global variable `name` (not located),
+    /// elementary or not: an array's elements follow one another from it, a structure's
+    /// fields in their order, each as many values as its type holds.
+    pub fn address(&self, name: &str) -> Option<u32> {
+        self.places
+            .iter()
+            .find(|(n, _)| n.eq_ignore_ascii_case(name))
+            .map(|&(_, a)| a)
+    }
+
+    /// The value at `address` (see [`Plc::address`]); `None` past the memory.
+    pub fn read(&self, address: u32) -> Option<Value> {
+        self.memory.get(address as usize).copied()
+    }
+
+    /// Writes `value` at `address`, converted to `elem` (the type of the variable there);
+    /// nothing past the memory.
+    pub fn write(&mut self, address: u32, value: Value, elem: Elem) {
+        if let Some(m) = self.memory.get_mut(address as usize) {
+            *m = coerce(value, elem);
         }
     }
 

@@ -9,23 +9,24 @@
 //! reported with its place, and the signals to the safety logic take their safe values (no
 //! restart, overloaded), so the safety logic holds the lift.
 
-use crate::contract::{Controller, Status};
+mod agreed;
+
+pub use agreed::{
+    CABIN_CALLS, CABIN_CALL_COUNT, EVENTS, EVENT_COUNT, FLOOR, HALL_CALLS, HALL_CALL_COUNT,
+    KIND_VALUES, NOW, REASON_VALUES, SOURCE_VALUES, STATE, STATE_VALUES, TARGET,
+};
+pub use agreed::{ESTOP_OUT, OVERLOADED, RESTART};
+
+use crate::contract::{Controller, PendingCalls, Status};
 use crate::plc::{FromSafety, ToSafety};
 use crate::program::{Event, ProgramEventKind};
+use agreed::Agreed;
 use asi_master::image::IMAGE_WORDS;
 use asi_master::{PlcLink, ProcessImage};
 use asi_phy::{SimDuration, SimTime};
-use st::run::{Fault, Image, Plc, Value};
+use st::run::{Fault, FaultCause, Image, Plc, Value};
 use st::source::Source;
 use std::any::Any;
-
-/// The variable the controller sets to the safety logic's EStopOut before each scan (`TRUE`:
-/// no STOP demand), if the program declares it (a BOOL in the PROGRAM or VAR_GLOBAL).
-pub const ESTOP_OUT: &str = "EStopOut";
-/// The variable the controller reads after each scan as the restart of the STOP circuit.
-pub const RESTART: &str = "Restart";
-/// The variable the controller reads after each scan as the load's overload signal.
-pub const OVERLOADED: &str = "Overloaded";
 
 /// The PLC's scan period when the program does not say otherwise (§6.2 of the lift thesis:
 /// the built-in program scans every 10 ms).
@@ -51,13 +52,25 @@ pub struct StProgram {
     scan: SimDuration,
     stopped: Option<Fault>,
     events: Vec<Event>,
+    agreed: Agreed,
 }
 
 impl StProgram {
     /// The program in `text` (named `name` in messages), parsed and checked; every error at
     /// once if it is refused.
     pub fn compile(name: &str, text: &str) -> Result<StProgram, ProgramError> {
-        let source = Source::new(name, text);
+        StProgram::compile_with(&[], name, text)
+    }
+
+    /// The program in `text` (named `name`) compiled together with the libraries
+    /// `libraries` (each a file's name and text: function blocks, types and globals the
+    /// program uses), as one program; every error at once, each naming its own file.
+    pub fn compile_with(
+        libraries: &[(&str, &str)],
+        name: &str,
+        text: &str,
+    ) -> Result<StProgram, ProgramError> {
+        let source = Source::files(libraries.iter().copied().chain([(name, text)]));
         let refuse = |errors: Vec<st::source::Diagnostic>, source: &Source| ProgramError {
             rendered: source.render_all(&errors),
             count: errors.len(),
@@ -74,9 +87,12 @@ impl StProgram {
         if !errors.is_empty() {
             return Err(refuse(errors, &source));
         }
+        let plc = Plc::new(&checked);
+        let agreed = Agreed::find(&checked, &plc).map_err(|e| refuse(e, &source))?;
         Ok(StProgram {
+            agreed,
             name: name.to_owned(),
-            plc: Plc::new(&checked),
+            plc,
             scan: SCAN,
             source,
             stopped: None,
@@ -100,8 +116,23 @@ impl StProgram {
     pub fn stopped(&self) -> Option<String> {
         self.stopped.map(|f| {
             let (line, column, _) = self.source.locate(f.span.start);
-            format!("{}:{line}:{column}: {}", self.name, f.cause)
+            let file = self.source.file_at(f.span.start);
+            format!("{file}:{line}:{column}: {}", f.cause)
         })
+    }
+
+    /// The value of the program's or a global variable `name` of elementary type (or an
+    /// enumeration's number) now.
+    pub fn value(&self, name: &str) -> Option<Value> {
+        self.plc.address(name).and_then(|a| self.plc.read(a))
+    }
+
+    /// The value `offset` places after the start of the program's or a global variable
+    /// `name` (an array's element `offset` from its first, for an array of elementary type).
+    pub fn element(&self, name: &str, offset: u32) -> Option<Value> {
+        self.plc
+            .address(name)
+            .and_then(|a| self.plc.read(a.checked_add(offset)?))
     }
 
     /// The program's variables of elementary type and their values (a PLC's watch list).
@@ -113,6 +144,26 @@ impl StProgram {
     /// `16#00FF`, `T#1s200ms`), as a PLC's online mode shows it.
     pub fn watch_text(&self) -> Vec<(&str, String)> {
         self.plc.watch_text()
+    }
+}
+
+impl StProgram {
+    /// STOP for `fault`: the output image zeroed, the place reported, the safe signals.
+    fn stop(&mut self, now: SimTime, image: &mut ProcessImage, fault: Fault) -> ToSafety {
+        for w in 0..IMAGE_WORDS {
+            image.output.set_word(w, 0);
+        }
+        let (line, column, _) = self.source.locate(fault.span.start);
+        self.events.push(Event {
+            at: now,
+            kind: ProgramEventKind::PlcStopped {
+                line: u32::try_from(line).unwrap_or(u32::MAX),
+                column: u32::try_from(column).unwrap_or(u32::MAX),
+                cause: fault.cause,
+            },
+        });
+        self.stopped = Some(fault);
+        SAFE
     }
 }
 
@@ -165,32 +216,33 @@ impl Controller for StProgram {
             }
             return SAFE;
         }
-        self.plc.set(ESTOP_OUT, Value::Bool(safety.estop_out));
+        if let Some(at) = self.agreed.estop_out {
+            self.plc
+                .write(at, Value::Bool(safety.estop_out), st::types::Elem::Bool);
+        }
         let now_ns = i64::try_from(now.as_nanos()).unwrap_or(i64::MAX);
-        match self.plc.scan(now_ns, &mut Words(image)) {
+        if let Some((at, e)) = self.agreed.now {
+            self.plc.write(at, Value::Int(now_ns), e);
+        }
+        let ran = self.plc.scan(now_ns, &mut Words(image));
+        let ran = ran.and_then(|()| {
+            self.agreed
+                .drain(&mut self.plc, now, &mut self.events)
+                .map_err(|bad| Fault {
+                    span: bad.span,
+                    cause: FaultCause::BadEvent(bad.entry),
+                })
+        });
+        match ran {
             Ok(()) => {
-                let read = |n: &str| matches!(self.plc.get(n), Some(Value::Bool(true)));
+                let read =
+                    |a: Option<u32>| a.and_then(|a| self.plc.read(a)) == Some(Value::Bool(true));
                 ToSafety {
-                    restart: read(RESTART),
-                    overloaded: read(OVERLOADED),
+                    restart: read(self.agreed.restart),
+                    overloaded: read(self.agreed.overloaded),
                 }
             }
-            Err(fault) => {
-                for w in 0..IMAGE_WORDS {
-                    image.output.set_word(w, 0);
-                }
-                let (line, column, _) = self.source.locate(fault.span.start);
-                self.events.push(Event {
-                    at: now,
-                    kind: ProgramEventKind::PlcStopped {
-                        line: u32::try_from(line).unwrap_or(u32::MAX),
-                        column: u32::try_from(column).unwrap_or(u32::MAX),
-                        cause: fault.cause,
-                    },
-                });
-                self.stopped = Some(fault);
-                SAFE
-            }
+            Err(fault) => self.stop(now, image, fault),
         }
     }
 
@@ -199,7 +251,21 @@ impl Controller for StProgram {
     }
 
     fn status(&self) -> Status {
-        Status::default()
+        Status {
+            state: self.agreed.state(&self.plc),
+            floor: self.agreed.floor(&self.plc),
+            target: self.agreed.target(&self.plc),
+        }
+    }
+
+    fn pending_calls(&self) -> Option<PendingCalls> {
+        self.agreed
+            .calls(&self.plc)
+            .map(|(cabin, hall)| PendingCalls { cabin, hall })
+    }
+
+    fn names_served_calls(&self) -> bool {
+        self.agreed.names_served_calls()
     }
 
     fn plc_link(&self) -> PlcLink {
