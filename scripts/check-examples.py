@@ -4,7 +4,7 @@
 Usage: check-examples.py ASI_LIFT_BINARY [FILE.md ...]   (default: README.md and book/src/*.md)
 
 Two kinds of fenced block are run, each in a fresh temporary directory that holds links to the
-repository's scenarios/ and examples/ (the paths the examples use), with HOME pointing there too
+repository's scenarios/, examples/ and controllers/ (the paths the examples use), with HOME pointing there too
 and the given binary first on PATH as `asi-lift`:
 
 - A transcript: a ```text or ```console block whose first line starts with `$ `. Each `$` line
@@ -100,7 +100,7 @@ def output_matches(expected, actual):
 
 def sandbox(root, binary):
     work = Path(tempfile.mkdtemp(prefix="asi-lift-examples-"))
-    for name in ("scenarios", "examples"):
+    for name in ("scenarios", "examples", "controllers"):
         (work / name).symlink_to(root / name)
     bin_dir = work / ".bin"
     bin_dir.mkdir()

@@ -2342,3 +2342,82 @@ fn serve_takes_a_structured_text_program_as_the_plc() {
     assert_eq!(json["controller"], idle.display().to_string());
     assert_eq!(json["live"]["controller"], "program");
 }
+
+/// The reference program with the lab's library (`--library`, or `library` beside `program`
+/// in a scenario) gives the built-in program's report; without the library it is refused
+/// with a hint; a library without a program is refused.
+#[test]
+fn the_reference_program_runs_with_its_library() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let lift = root.join("controllers/lift.st");
+    let lab = root.join("controllers/lab.st");
+    let json = |args: &[&std::ffi::OsStr]| -> serde_json::Value {
+        let out = asi_lift()
+            .args(["run", "demo", "--until", "15s", "--format", "json"])
+            .args(args)
+            .output()
+            .expect("asi-lift run");
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        serde_json::from_slice(&out.stdout).expect("JSON")
+    };
+    let builtin = json(&[]);
+    let mut st = json(&[
+        "--controller".as_ref(),
+        lift.as_os_str(),
+        "--library".as_ref(),
+        lab.as_os_str(),
+    ]);
+    assert_eq!(st["controller"], lift.display().to_string());
+    st.as_object_mut().expect("an object").remove("controller");
+    assert_eq!(st, builtin);
+
+    let err = fails(
+        asi_lift()
+            .args(["run", "--until", "1s", "--controller"])
+            .arg(&lift),
+    );
+    assert!(err.contains("compile it with --library FILE.st"), "{err}");
+    let err = fails(
+        asi_lift()
+            .args(["run", "--until", "1s", "--library"])
+            .arg(&lab),
+    );
+    assert!(
+        err.contains("--library: a library goes with a program"),
+        "{err}"
+    );
+
+    // The scenario's keys, relative to the scenario file.
+    let d = temp();
+    std::fs::copy(&lift, d.path().join("lift.st")).expect("copy");
+    std::fs::copy(&lab, d.path().join("lab.st")).expect("copy");
+    let sc = d.path().join("sc.toml");
+    std::fs::write(
+        &sc,
+        "name = \"demo\"\nduration = \"15s\"\n[controller]\nprogram = \"lift.st\"\nlibrary = [\"lab.st\"]\n",
+    )
+    .expect("write");
+    let out = asi_lift()
+        .args(["run", "--format", "json"])
+        .arg(&sc)
+        .output()
+        .expect("asi-lift run");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let from_file: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    assert_eq!(from_file["violations"], serde_json::json!([]));
+    assert_eq!(from_file["arrivals"], builtin["arrivals"]);
+    std::fs::write(&sc, "[controller]\nlibrary = [\"lab.st\"]\n").expect("write");
+    let err = fails(asi_lift().arg("run").arg(&sc));
+    assert!(
+        err.contains(":2:11: controller.library: a library goes with a program"),
+        "{err}"
+    );
+}

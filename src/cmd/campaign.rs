@@ -77,6 +77,10 @@ pub struct CampaignArgs {
     /// before the first run.
     #[arg(long, value_name = "FILE.st")]
     pub controller: Option<PathBuf>,
+    /// Compile the program of `--controller` together with this library (e.g.
+    /// `controllers/lab.st`). Repeatable.
+    #[arg(long, value_name = "FILE.st")]
+    pub library: Vec<PathBuf>,
     /// Overwrite the --out file if it exists.
     #[arg(long)]
     pub force: bool,
@@ -93,10 +97,15 @@ pub fn run(args: CampaignArgs) -> Result<u8, String> {
         None => std::thread::available_parallelism().map_or(1, |n| n.get()),
     };
     let profile = Profile::resolve(&args.profile).map_err(|e| e.to_string())?;
+    if args.controller.is_none() && !args.library.is_empty() {
+        return Err(
+            "--library: a library goes with a program: give --controller FILE.st too".into(),
+        );
+    }
     let program = args
         .controller
         .as_deref()
-        .map(super::run::load_program)
+        .map(|p| super::run::load_program(p, &args.library))
         .transpose()?;
     let plan = Plan {
         seed: args.seed,
@@ -132,6 +141,9 @@ pub fn run(args: CampaignArgs) -> Result<u8, String> {
     // So is the program.
     if let Some(p) = &args.controller {
         super::output::refuse_inputs("--out", &out_path, &[("--controller", p)])?;
+    }
+    for l in &args.library {
+        super::output::refuse_inputs("--out", &out_path, &[("--library", l)])?;
     }
     let mut out = open_output(&out_path, args.force)?;
     let out_name = if out_path == Path::new("-") {

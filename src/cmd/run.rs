@@ -29,6 +29,10 @@ pub struct RunArgs {
     /// compile is refused before the run with every error, each at its line and column.
     #[arg(long, value_name = "FILE.st")]
     pub controller: Option<PathBuf>,
+    /// Compile the program of `--controller` together with this library of function blocks,
+    /// types and globals (e.g. the lab's handshakes, `controllers/lab.st`). Repeatable.
+    #[arg(long, value_name = "FILE.st")]
+    pub library: Vec<PathBuf>,
     /// End the simulation at this time (e.g. 30s, 2min): earlier than the scenario's
     /// duration, it stops the run there; later, it extends the run to it.
     #[arg(long, value_name = "DURATION")]
@@ -129,6 +133,7 @@ pub fn run(args: RunArgs) -> Result<u8, String> {
         force,
         pulse_exact,
         controller,
+        library,
     } = args;
     let until = match until {
         None => None,
@@ -158,7 +163,7 @@ pub fn run(args: RunArgs) -> Result<u8, String> {
     if let Some(path) = file {
         outs.input("the scenario", path)?;
     }
-    set_program(&mut sc, controller.as_deref(), &mut outs)?;
+    set_program(&mut sc, controller.as_deref(), &library, &mut outs)?;
     // Standard output is a stream: when the trace or the plot takes it and no --report is
     // given, the report is only its summary, on standard error.
     let stdout = Some(Path::new("-"));
@@ -310,24 +315,50 @@ pub fn trace_form(form: Option<TraceForm>, path: &Path) -> TraceFormat {
     }
 }
 
-/// The Structured Text program of `--controller FILE.st`, read and compiled; every error at
-/// once if it is refused.
-pub fn load_program(path: &Path) -> Result<rig::scenario::program::ProgramFile, String> {
-    rig::scenario::program::ProgramFile::read(path).map_err(|e| format!("--controller {e}"))
+/// The Structured Text program of `--controller FILE.st` with the libraries of `--library`,
+/// read and compiled; every error at once if it is refused.
+pub fn load_program(
+    path: &Path,
+    libraries: &[PathBuf],
+) -> Result<rig::scenario::program::ProgramFile, String> {
+    rig::scenario::program::ProgramFile::read(path, libraries).map_err(|e| {
+        // A program written on a library (the lab's handshakes) and given without it.
+        let unknown = [
+            "no type is named `",
+            "no function or block instance is named `",
+        ];
+        let hint = if libraries.is_empty() && unknown.iter().any(|u| e.contains(u)) {
+            "\n(if the program uses a library's blocks or types, compile it with --library \
+             FILE.st, e.g. --library controllers/lab.st)"
+        } else {
+            ""
+        };
+        format!("--controller {e}{hint}")
+    })
 }
 
-/// `--controller FILE.st` in the place of the scenario's program, if given; the program's
-/// file is an input the outputs must not overwrite.
+/// `--controller FILE.st` (with `--library`) in the place of the scenario's program, if
+/// given; the program's and its libraries' files are inputs the outputs must not overwrite.
 pub fn set_program(
     sc: &mut Scenario,
     controller: Option<&Path>,
+    libraries: &[PathBuf],
     outs: &mut Outputs,
 ) -> Result<(), String> {
-    if let Some(path) = controller {
-        sc.program = Some(load_program(path)?);
+    match controller {
+        Some(path) => sc.program = Some(load_program(path, libraries)?),
+        None if !libraries.is_empty() => {
+            return Err(
+                "--library: a library goes with a program: give --controller FILE.st too".into(),
+            )
+        }
+        None => {}
     }
     if let Some(p) = &sc.program {
         outs.input("the program", p.path())?;
+        for l in p.libraries() {
+            outs.input("the library", l)?;
+        }
     }
     Ok(())
 }

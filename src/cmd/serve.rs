@@ -39,6 +39,10 @@ pub struct ServeArgs {
     /// `[controller] program`; external with `--ttk4145`].
     #[arg(long, value_name = "builtin|external|FILE.st", value_parser = parse_controller)]
     pub controller: Option<ControllerArg>,
+    /// Compile the program of `--controller FILE.st` together with this library (e.g.
+    /// `controllers/lab.st`). Repeatable.
+    #[arg(long, value_name = "FILE.st")]
+    pub library: Vec<PathBuf>,
     /// Also serve the TTK4145 lab elevator protocol (4-byte messages) on this address, for
     /// the course's elevator controllers (the asi-lift guide, chapter "The TTK4145 front
     /// end"); the built-in
@@ -141,6 +145,7 @@ pub fn run(args: ServeArgs) -> Result<u8, String> {
         listen,
         speed,
         controller,
+        library,
         ttk4145,
         http,
         allow_hosts,
@@ -231,7 +236,7 @@ pub fn run(args: ServeArgs) -> Result<u8, String> {
     if let Some(path) = file {
         outs.input("the scenario", path)?;
     }
-    set_program(&mut sc, program.as_deref(), &mut outs)?;
+    set_program(&mut sc, program.as_deref(), &library, &mut outs)?;
     let report_sink = outs.add("--report", &report)?;
     if trace.as_deref() == Some(Path::new("-")) {
         return Err("--trace: a live run's trace goes to a file, not to standard output".into());

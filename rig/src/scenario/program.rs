@@ -20,25 +20,53 @@ pub const MAX_PROGRAM_BYTES: u64 = 4 << 20;
 pub struct ProgramFile {
     path: PathBuf,
     text: Arc<str>,
+    /// The libraries compiled with it (function blocks, types and globals it uses, such as
+    /// the lab's handshakes in `controllers/lab.st`): each file's path, as given, and text.
+    libraries: Vec<(PathBuf, Arc<str>)>,
     compiled: Arc<StProgram>,
 }
 
 impl ProgramFile {
     /// The program in the file at `path`, read (at most [`MAX_PROGRAM_BYTES`], UTF-8) and
-    /// compiled. The error names the file and says why; a program that does not compile is
-    /// refused with every error at once, each as `file:line:column` with its line and a
-    /// caret.
-    pub fn read(path: &Path) -> Result<ProgramFile, String> {
-        let name = path.display().to_string();
-        let file = std::fs::File::open(path).map_err(|e| format!("{name}: {e}"))?;
-        let text = read_text(&name, file, MAX_PROGRAM_BYTES)?;
-        ProgramFile::from_text(path, &text)
+    /// compiled together with the libraries in the files `libraries`. The error names the
+    /// file and says why; a program that does not compile is refused with every error at
+    /// once, each as `file:line:column` with its line and a caret.
+    pub fn read(path: &Path, libraries: &[PathBuf]) -> Result<ProgramFile, String> {
+        let read = |p: &Path| -> Result<String, String> {
+            let name = p.display().to_string();
+            let file = std::fs::File::open(p).map_err(|e| format!("{name}: {e}"))?;
+            read_text(&name, file, MAX_PROGRAM_BYTES)
+        };
+        let libs = libraries
+            .iter()
+            .map(|l| Ok((l.clone(), read(l)?)))
+            .collect::<Result<Vec<_>, String>>()?;
+        ProgramFile::from_texts(path, &read(path)?, &libs)
     }
 
-    /// The program `text`, named by `path` in its messages and in the report, compiled.
+    /// The program `text`, named by `path` in its messages and in the report, compiled alone.
     pub fn from_text(path: &Path, text: &str) -> Result<ProgramFile, String> {
+        ProgramFile::from_texts(path, text, &[])
+    }
+
+    /// The program `text` (named by `path`) compiled together with the `libraries` (each a
+    /// file's path and text).
+    pub fn from_texts(
+        path: &Path,
+        text: &str,
+        libraries: &[(PathBuf, String)],
+    ) -> Result<ProgramFile, String> {
         let name = path.display().to_string();
-        let compiled = StProgram::compile(&name, text).map_err(|e| {
+        let lib_names: Vec<String> = libraries
+            .iter()
+            .map(|(p, _)| p.display().to_string())
+            .collect();
+        let libs: Vec<(&str, &str)> = lib_names
+            .iter()
+            .zip(libraries)
+            .map(|(n, (_, t))| (n.as_str(), t.as_str()))
+            .collect();
+        let compiled = StProgram::compile_with(&libs, &name, text).map_err(|e| {
             format!(
                 "{name}: the program is refused ({} error{}):\n{}",
                 e.count,
@@ -49,8 +77,17 @@ impl ProgramFile {
         Ok(ProgramFile {
             path: path.to_owned(),
             text: text.into(),
+            libraries: libraries
+                .iter()
+                .map(|(p, t)| (p.clone(), Arc::from(t.as_str())))
+                .collect(),
             compiled: Arc::new(compiled),
         })
+    }
+
+    /// The libraries' paths, as given.
+    pub fn libraries(&self) -> impl Iterator<Item = &Path> {
+        self.libraries.iter().map(|(p, _)| p.as_path())
     }
 
     /// The file's path, as given.
@@ -65,9 +102,9 @@ impl ProgramFile {
 }
 
 impl PartialEq for ProgramFile {
-    /// The same file with the same text (the compiled program follows from the text).
+    /// The same files with the same texts (the compiled program follows from them).
     fn eq(&self, other: &ProgramFile) -> bool {
-        self.path == other.path && self.text == other.text
+        self.path == other.path && self.text == other.text && self.libraries == other.libraries
     }
 }
 
@@ -76,6 +113,10 @@ impl fmt::Debug for ProgramFile {
         f.debug_struct("ProgramFile")
             .field("path", &self.path)
             .field("bytes", &self.text.len())
+            .field(
+                "libraries",
+                &self.libraries.iter().map(|(p, _)| p).collect::<Vec<_>>(),
+            )
             .finish()
     }
 }

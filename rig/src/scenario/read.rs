@@ -12,7 +12,7 @@ use lift_model::config::{MAX_FLOORS, MIN_FLOORS};
 use lift_model::{Button, LoadLevel, SensorFault, VaneSensor};
 use serde::Deserialize;
 use std::ops::Range;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use toml::Spanned;
 
 #[derive(Deserialize)]
@@ -65,6 +65,7 @@ struct RawBus {
 struct RawController {
     scan: Option<Spanned<String>>,
     program: Option<Spanned<String>>,
+    library: Option<Spanned<Vec<String>>>,
 }
 
 #[derive(Deserialize)]
@@ -658,8 +659,9 @@ fn read_bus(loc: &Locator<'_>, b: &RawBus, sc: &mut Scenario) -> Result<(), Scen
 }
 
 /// `[controller]`: the PLC scan, and the program if not the built-in one (a Structured Text
-/// file, its path relative to the scenario file's directory), read and compiled here so that
-/// a program that cannot run is refused with the scenario.
+/// file, its path relative to the scenario file's directory) with its libraries (`library`,
+/// a list of such files), read and compiled here so that a program that cannot run is
+/// refused with the scenario.
 fn read_controller(
     loc: &Locator<'_>,
     c: &RawController,
@@ -677,22 +679,39 @@ fn read_controller(
             ));
         }
     }
-    if let Some(p) = &c.program {
-        let dir = Path::new(loc.file).parent().unwrap_or(Path::new(""));
-        let path = dir.join(p.get_ref());
-        let (line, column) = loc.position(p.span().start);
-        // Not through `Locator::error`: the program's own messages quote its source lines,
-        // which must be shown whole.
-        sc.program =
-            Some(
-                super::program::ProgramFile::read(&path).map_err(|message| ScenarioError {
-                    file: loc.file.to_owned(),
-                    line,
-                    column,
-                    field: "controller.program".into(),
-                    message,
+    let dir = Path::new(loc.file).parent().unwrap_or(Path::new(""));
+    let libraries: Vec<PathBuf> = c
+        .library
+        .iter()
+        .flat_map(|l| l.get_ref())
+        .map(|l| dir.join(l))
+        .collect();
+    match (&c.program, &c.library) {
+        (Some(p), _) => {
+            let path = dir.join(p.get_ref());
+            let (line, column) = loc.position(p.span().start);
+            // Not through `Locator::error`: the program's own messages quote its source
+            // lines, which must be shown whole.
+            sc.program = Some(
+                super::program::ProgramFile::read(&path, &libraries).map_err(|message| {
+                    ScenarioError {
+                        file: loc.file.to_owned(),
+                        line,
+                        column,
+                        field: "controller.program".into(),
+                        message,
+                    }
                 })?,
             );
+        }
+        (None, Some(l)) => {
+            return Err(loc.error(
+                Some(l.span()),
+                "controller.library",
+                "a library goes with a program: give `program` too",
+            ))
+        }
+        (None, None) => {}
     }
     Ok(())
 }

@@ -24,6 +24,42 @@ fn a_program_is_read_relative_to_the_scenario_and_written_back_absolute() {
     let file = dir.join("sc.toml");
     let name = file.display().to_string();
     let sc = Scenario::from_toml(&name, "[controller]\nprogram = \"idle.st\"\n").expect("read");
+    // A program on a library: both relative to the scenario, both written back absolute.
+    std::fs::write(
+        dir.join("lib.st"),
+        "FUNCTION Off : BOOL\nVAR_INPUT x : BOOL; END_VAR\n  Off := FALSE;\nEND_FUNCTION\n",
+    )
+    .expect("write");
+    std::fs::write(
+        dir.join("uses.st"),
+        "PROGRAM Lift\nVAR Restart : BOOL; END_VAR\n  Restart := Off(x := TRUE);\nEND_PROGRAM\n",
+    )
+    .expect("write");
+    let with_lib = Scenario::from_toml(
+        &name,
+        "[controller]\nprogram = \"uses.st\"\nlibrary = [\"lib.st\"]\n",
+    )
+    .expect("read with a library");
+    let lib_text = with_lib.to_toml();
+    let lib_abs = std::path::absolute(dir.join("lib.st")).expect("absolute");
+    assert!(
+        lib_text.contains(&format!("library = [\"{}\"]", lib_abs.display())),
+        "{lib_text}"
+    );
+    let lib_again = Scenario::from_toml("elsewhere/y.toml", &lib_text).expect("read back");
+    let libs: Vec<&std::path::Path> = lib_again
+        .program
+        .as_ref()
+        .expect("a program")
+        .libraries()
+        .collect();
+    assert_eq!(libs, [lib_abs.as_path()]);
+    assert!(
+        Scenario::from_toml(&name, "[controller]\nprogram = \"uses.st\"\n")
+            .expect_err("Off is the library's")
+            .to_string()
+            .contains("uses.st:3:14")
+    );
     let p = sc.program.as_ref().expect("a program");
     assert_eq!(p.path(), dir.join("idle.st"));
     let text = sc.to_toml();

@@ -52,8 +52,15 @@ impl Scenario {
         if let Some(p) = &self.program {
             // Absolute, so that the file written (a campaign's reproducer) finds the program
             // wherever it is put.
-            let path = std::path::absolute(p.path()).unwrap_or_else(|_| p.path().to_owned());
-            let _ = writeln!(s, "program = {}", toml_string(&path.to_string_lossy()));
+            let absolute = |p: &std::path::Path| {
+                let p = std::path::absolute(p).unwrap_or_else(|_| p.to_owned());
+                toml_string(&p.to_string_lossy())
+            };
+            let _ = writeln!(s, "program = {}", absolute(p.path()));
+            let libraries: Vec<String> = p.libraries().map(absolute).collect();
+            if !libraries.is_empty() {
+                let _ = writeln!(s, "library = [{}]", libraries.join(", "));
+            }
         }
         let _ = writeln!(s, "\n[safety]\npower_on_reset = {}", self.power_on_reset);
         // Written only when on, so that the files of scenarios without it stay as they were.
