@@ -59,3 +59,24 @@ fn an_outside_controller_that_does_nothing_moves_nothing() {
     assert!((report.final_state.position_mm - 650.0).abs() < 1e-9);
     assert!(report.violations.is_empty(), "{:?}", report.violations);
 }
+
+/// A controller that does not tell which calls it serves (an outside one here) is judged by
+/// the lift: a call pressed where the cabin stands level at rest is served at once; one
+/// pressed at another floor is not served while the cabin does not go there.
+#[test]
+fn a_call_pressed_where_the_cabin_stands_is_served_at_once() {
+    let text = "name = \"here\"\nduration = \"6s\"\n[lift]\nstart_mm = 0.0\n\
+                [[event]]\nat = \"2s\"\npress = \"cabin:1\"\n\
+                [[event]]\nat = \"3s\"\npress = \"hall-down:2\"\n";
+    let sc = Scenario::from_toml("here.toml", text).expect("a scenario");
+    let r = Rig::new(sc)
+        .expect("a rig")
+        .with_external_controller()
+        .run(None);
+    let served: Vec<(u8, f64, f64)> = r
+        .served
+        .iter()
+        .map(|s| (s.floor, s.requested_at_s, s.served_at_s))
+        .collect();
+    assert_eq!(served, [(1, 2.0, 2.0)]);
+}

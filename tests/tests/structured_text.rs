@@ -129,3 +129,55 @@ END_PROGRAM",
     assert!(moved > 20.0, "the cabin rose {moved} mm");
     assert!(!r.final_state.moving, "and came to rest");
 }
+
+/// The guide's worked program (`examples/st/shuttle.st` on `controllers/lab.st`, run by
+/// `examples/st/shuttle.toml`): four journeys between floors 1 and 2, held with the door open,
+/// STOP dropping the call until a new press restarts the circuit; the displays show the
+/// floor the cabin stands at; no violation.
+#[test]
+fn the_worked_shuttle_program_serves_its_calls_and_shows_its_floor() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let path = root.join("examples/st/shuttle.toml");
+    let text = std::fs::read_to_string(&path).expect("the scenario");
+    let sc = rig::Scenario::from_toml(&path.display().to_string(), &text)
+        .unwrap_or_else(|e| panic!("{e}"));
+    let mut rig = Rig::new(sc).expect("the rig");
+    // At 15 s the cabin stands at floor 2: both stations and the cabin show floor 2.
+    while rig
+        .step_until(asi_phy::SimTime::from_millis(15_000))
+        .is_some()
+    {}
+    for id in [
+        lift_model::DisplayId::Floor(1),
+        lift_model::DisplayId::Floor(2),
+        lift_model::DisplayId::Cabin,
+    ] {
+        match rig.lift().display(id) {
+            Some(lift_model::DisplayState::Showing(w)) => {
+                assert_eq!((w.floor, w.moving, w.fault), (2, false, false), "{id:?}")
+            }
+            other => panic!("{id:?} shows {other:?}"),
+        }
+    }
+    let r = rig.run(None);
+    assert_no_violations(&r);
+    let floors: Vec<u8> = r.arrivals.iter().map(|a| a.floor).collect();
+    assert_eq!(floors, [2, 1, 2, 1]);
+    // Held with the door open from 22 s to 25 s: at floor 1 only after 25 s.
+    assert!(r.arrivals[1].at_s > 25.0, "{:?}", r.arrivals[1]);
+    // STOP at 42 s: K1 opens once; the cabin reaches floor 2 only after the press at 55 s.
+    assert_eq!(r.safety.trips.first().map(|t| t.at_s), Some(42.0));
+    assert!(
+        r.safety
+            .trips
+            .iter()
+            .all(|t| (42.0..=51.1).contains(&t.at_s)),
+        "only the STOP and its K1: {:?}",
+        r.safety.trips
+    );
+    assert!(r.arrivals[2].at_s > 55.0, "{:?}", r.arrivals[2]);
+    assert_eq!(
+        r.controller.as_deref(),
+        Some(root.join("examples/st/shuttle.st").to_str().expect("UTF-8"))
+    );
+}

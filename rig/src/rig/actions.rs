@@ -14,6 +14,9 @@ impl Rig {
         let result = match action {
             Action::Press { button, hold } => {
                 self.people.passengers.press(t, *button);
+                if let Some(floor) = button.floor() {
+                    self.call_pressed(floor, t);
+                }
                 self.lift.press(t, *button, *hold)
             }
             Action::Load(l) => self.lift.set_load(t, *l),

@@ -58,10 +58,36 @@ impl Rig {
         }
     }
 
+    /// The drive is commanded to move (the converter's run bit with a set-point above
+    /// standstill).
+    fn drive_commanded(&self) -> bool {
+        self.wiring.applied.run && self.wiring.applied.setpoint_ua > STANDSTILL_UA
+    }
+
+    /// The floor the cabin stands level at, at rest with the drive commanded to stand still,
+    /// if it does.
+    pub(super) fn standing_at(&self) -> Option<u8> {
+        if self.drive_commanded() || self.lift.velocity_mm_s() != 0.0 {
+            return None;
+        }
+        self.lift.config().level_floor(self.lift.position_mm())
+    }
+
+    /// A call pressed at `floor` at `at`: where no program tells which call a stop serves,
+    /// a cabin standing level at that floor answers it at once (the passenger is there).
+    pub(super) fn call_pressed(&mut self, floor: u8, at: SimTime) {
+        if self.controller.names_served_calls() || self.standing_at() != Some(floor) {
+            return;
+        }
+        let served = self.people.passengers.arrived(floor, at);
+        self.report.served.extend(served);
+        self.riders_answered();
+    }
+
     /// The cabin came to rest: an arrival if it stands level at a floor with the drive
     /// commanded to stand still.
     pub(super) fn stopped(&mut self, at: SimTime, position_mm: f64) {
-        if self.wiring.applied.run && self.wiring.applied.setpoint_ua > STANDSTILL_UA {
+        if self.drive_commanded() {
             return;
         }
         let cfg = self.lift.config();
