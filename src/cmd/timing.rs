@@ -45,6 +45,15 @@ pub struct TimingArgs {
         allow_negative_numbers = true
     )]
     pub samples: u32,
+    /// Time this IEC 61131-3 Structured Text program as the PLC on the lab bus instead of the
+    /// built-in one; the latency study needs a program that tells its state, floor, target
+    /// and calls through the agreed variables (`controllers/lift.st` does).
+    #[arg(long, value_name = "FILE.st")]
+    pub controller: Option<PathBuf>,
+    /// Compile the program of `--controller` together with this library (e.g.
+    /// `controllers/lab.st`). Repeatable.
+    #[arg(long, value_name = "FILE.st")]
+    pub library: Vec<PathBuf>,
     /// Write the report as JSON instead of the table.
     #[arg(long)]
     pub json: bool,
@@ -69,14 +78,33 @@ pub fn run(args: TimingArgs) -> Result<u8, String> {
         seed,
         duration,
         samples,
+        controller,
+        library,
         json,
         svg,
         force,
     } = args;
-    let opts = timing_options(bus, extra_slaves, error_rate, seed, &duration, samples)?;
+    let mut opts = timing_options(bus, extra_slaves, error_rate, seed, &duration, samples)?;
+    match (&controller, &opts.bus) {
+        (Some(path), BusChoice::Lab { .. }) => {
+            opts.program = Some(super::run::load_program(path, &library)?);
+        }
+        (Some(_), _) => {
+            return Err("--controller: a program is timed on the lab bus only (--bus lab)".into())
+        }
+        (None, _) if !library.is_empty() => {
+            return Err(
+                "--library: a library goes with a program: give --controller FILE.st too".into(),
+            )
+        }
+        (None, _) => {}
+    }
     // Refuse an existing SVG before spending the simulation on it.
     super::output::clean_up_on_signals()?;
     let mut outs = Outputs::new(force);
+    for input in controller.iter().chain(&library) {
+        outs.input("the program", input)?;
+    }
     let svg_out = match &svg {
         Some(path) => Some((path, outs.add("--svg", path)?)),
         None => None,

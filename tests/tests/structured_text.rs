@@ -181,3 +181,39 @@ fn the_worked_shuttle_program_serves_its_calls_and_shows_its_floor() {
         Some(root.join("examples/st/shuttle.st").to_str().expect("UTF-8"))
     );
 }
+
+/// `asi-lift timing --controller`: the reference program timed on the lab bus gives the
+/// built-in program's figures, latency by latency (the study reads the state, floor, target
+/// and calls every controller may tell), but the cabin panel's word, which only the built-in
+/// program counts; a program that does not tell its state is refused with the reason.
+#[test]
+fn the_timing_study_times_the_reference_program_as_the_built_in_one() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let program = rig::scenario::program::ProgramFile::read(
+        &root.join("controllers/lift.st"),
+        &[root.join("controllers/lab.st")],
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    let opts = |program| {
+        let mut o = rig::timing::TimingOptions::default();
+        o.duration = SimDuration::from_secs(5);
+        o.samples = 4;
+        o.program = program;
+        o
+    };
+    let builtin = rig::timing::analyse(&opts(None)).expect("the built-in program timed");
+    let st = rig::timing::analyse(&opts(Some(program))).expect("lift.st timed");
+    let (mut b, s) = (builtin.lab.expect("lab"), st.lab.expect("lab"));
+    assert_eq!(b.latencies.hall.len(), 4);
+    assert_eq!(s.cabin_panel_word_ms.samples, 0);
+    b.cabin_panel_word_ms = s.cabin_panel_word_ms.clone();
+    assert_eq!(format!("{b:?}"), format!("{s:?}"));
+
+    let silent = rig::scenario::program::ProgramFile::from_text(
+        std::path::Path::new("idle.st"),
+        "PROGRAM P\nVAR Restart : BOOL; END_VAR\n  Restart := TRUE;\nEND_PROGRAM\n",
+    )
+    .expect("compiles");
+    let err = rig::timing::analyse(&opts(Some(silent))).expect_err("never ready");
+    assert!(err.to_string().contains("does not tell its state"), "{err}");
+}

@@ -3,7 +3,7 @@
 
 use super::bus::READY_WITHIN;
 use super::collector::{lock, take, BusWindow, Collector};
-use super::latency::{builtin, ready_at, sample_latencies, wait_resetting};
+use super::latency::{ready_at, sample_latencies, wait_resetting, InService};
 use super::options::{AnalysisError, TimingOptions};
 use super::report::LabTiming;
 use super::stats::{ms, Summary, Ticker};
@@ -32,9 +32,10 @@ pub(super) fn run_lab(
     rig.lab_mut()
         .bus_mut()
         .set_trace_callback(Some(Box::new(move |r| lock(&sink).record(r))));
-    let init_resets = initialise(&mut rig)?;
-    let (words, window) = measure_window(&mut rig, &shared, opts.duration);
-    let mut latencies = sample_latencies(&mut rig, &shared, opts);
+    let mut service = InService::default();
+    let init_resets = initialise(&mut rig, &mut service)?;
+    let (words, window) = measure_window(&mut rig, &shared, opts.duration, &mut service);
+    let mut latencies = sample_latencies(&mut rig, &shared, opts, service.0);
     latencies.operator_resets += init_resets;
     rig.lab_mut().bus_mut().set_trace_callback(None);
     drop(rig);
@@ -61,16 +62,27 @@ fn lab_scenario(opts: &TimingOptions, extra: u8) -> Scenario {
     sc.door_closed = true;
     sc.pulse_error_rate = opts.pulse_error_rate;
     sc.extra_slaves = extra;
+    sc.program = opts.program.clone();
     sc
 }
 
 /// Brings the lift to ready at floor 1; the operator's resets on the way. The Safety-at-Work
 /// monitor may trip under line noise during initialisation too: the operator resets it, as
 /// during the latency samples.
-fn initialise(rig: &mut Rig) -> Result<u32, AnalysisError> {
+fn initialise(rig: &mut Rig, service: &mut InService) -> Result<u32, AnalysisError> {
     let mut resets = 0;
-    match wait_resetting(rig, READY_WITHIN, &mut resets, |r| ready_at(r, 1)) {
+    let ready = wait_resetting(rig, READY_WITHIN, &mut resets, |r| {
+        service.note(r);
+        ready_at(r, 1)
+    });
+    match ready {
         Some(_) => Ok(resets),
+        None if rig.controller_status().state.is_none() => Err(AnalysisError::NotReady {
+            what: "the controller does not tell its state, floor and target (a Structured \
+                   Text program tells them through the agreed variables `State`, `Floor` and \
+                   `Target`), so the lift is never seen ready at floor 1",
+            within: READY_WITHIN,
+        }),
         None => Err(AnalysisError::NotReady {
             what: "the lift did not initialise at floor 1",
             within: READY_WITHIN,
@@ -84,6 +96,7 @@ fn measure_window(
     rig: &mut Rig,
     shared: &Mutex<Collector>,
     duration: SimDuration,
+    service: &mut InService,
 ) -> (WordTimers, BusWindow) {
     let start = rig.now();
     lock(shared).start_window();
@@ -93,6 +106,7 @@ fn measure_window(
     let mut words = WordTimers::new();
     words.poll(rig);
     while rig.step_until(start + duration).is_some() {
+        service.note(rig);
         words.poll(rig);
     }
     lock(shared).end_window();
@@ -144,8 +158,11 @@ impl WordTimers {
             let w = d.engine().words();
             self.display.poll(w.good() as u64 + w.bad() as u64, now);
         }
-        let w = builtin(rig).cabin_panel().words();
-        self.panel.poll(w.good() as u64 + w.bad() as u64, now);
+        // The cabin word as the PLC receives it: only the built-in program counts it.
+        if let Some(plc) = rig.plc() {
+            let w = plc.cabin_panel().words();
+            self.panel.poll(w.good() as u64 + w.bad() as u64, now);
+        }
         if let Some(a) = lab.analog_output() {
             self.analog.poll(a.values_received() as u64, now);
             self.setpoint.poll(a.values_received() as u64, now);

@@ -16,21 +16,63 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::sync::Mutex;
 
-/// The lift stands at `floor`, ready to depart: program at the floor without a fault, drive
-/// powered and not moving, no STOP demand.
+/// The states in which the program is in service (initialised, its automat running): the
+/// built-in program's `is_initialised`, told through [`controller::Controller::status`].
+const IN_SERVICE: [State; 7] = [
+    State::AtFloor,
+    State::OverloadFault,
+    State::MovingUp,
+    State::MovingDown,
+    State::Braking,
+    State::StopFault,
+    State::Halted,
+];
+
+/// Whether the controller tells that it is in service.
+pub(super) fn in_service(rig: &Rig) -> bool {
+    rig.controller_status()
+        .state
+        .is_some_and(|s| IN_SERVICE.contains(&s))
+}
+
+/// Since when the controller has been in service without a break (the built-in program's
+/// `initialised_at`): noted at every moment the study steps through.
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct InService(pub(super) Option<SimTime>);
+
+impl InService {
+    /// Notes the controller's state at the moment reached.
+    pub(super) fn note(&mut self, rig: &Rig) {
+        if in_service(rig) {
+            self.0.get_or_insert(rig.now());
+        } else {
+            self.0 = None;
+        }
+    }
+}
+
+/// The lift stands at `floor`, ready to depart: the program at the floor without a fault
+/// (the state it tells; for the built-in program, its display shows neither moving nor a
+/// fault exactly then), its target that floor, the converter's run bit off on the bus, the
+/// drive powered and not moving, no STOP demand. Any controller that tells its state, floor
+/// and target (the built-in program, a Structured Text program through the agreed variables)
+/// can be timed.
 pub(super) fn ready_at(rig: &Rig, floor: u8) -> bool {
-    let p = builtin(rig).program();
-    let d = p.outputs().display;
-    p.is_initialised()
-        && !d.moving
-        && !d.fault
-        && p.current_floor() == floor
-        && p.target() == floor
-        && !p.outputs().run
+    let status = rig.controller_status();
+    status.state == Some(State::AtFloor)
+        && status.floor == Some(floor)
+        && status.target == Some(floor)
+        && !run_bit(rig)
         && rig.lift().velocity_mm_s() == 0.0
         && rig.lift().k1_closed()
         && rig.lift().converter_ready()
         && rig.estop_out()
+}
+
+/// The converter's run bit (D0 of its slave) in the output image the controller wrote.
+fn run_bit(rig: &Rig) -> bool {
+    asi_phy::SlaveAddr::a(lab::address::CONVERTER)
+        .is_some_and(|a| rig.lab().bus().image().output.nibble(a).bit(0))
 }
 
 /// Steps `rig` until `cond` holds (checked now and after every moment), at most `limit`.
@@ -72,9 +114,7 @@ pub(super) fn wait_resetting(
             return Some(rig.now());
         }
         powered |= rig.lift().k1_closed();
-        let tripped = (builtin(rig).program().is_initialised() || powered)
-            && rig.estop_out()
-            && !rig.lift().k1_closed();
+        let tripped = (in_service(rig) || powered) && rig.estop_out() && !rig.lift().k1_closed();
         if tripped && reset_at.is_none_or(|t| rig.now() >= t + SimDuration::from_secs(1)) {
             let at = rig.now() + OPERATOR_REACTION;
             rig.schedule(at, Action::Reset);
@@ -91,12 +131,7 @@ pub(super) fn wait_resetting(
 const PRESS_STREAM: u64 = 0x7469_6D69_6E67;
 
 /// The seeded source of press moments.
-/// The built-in program the timing studies measure (their rigs never get another).
-pub(super) fn builtin(rig: &Rig) -> &controller::plc::Plc {
-    rig.plc()
-        .expect("the timing studies run the built-in program")
-}
-
+/// The seeded source of press moments.
 fn press_rng(seed: u64) -> ChaCha8Rng {
     ChaCha8Rng::seed_from_u64(seed ^ PRESS_STREAM)
 }
@@ -115,8 +150,8 @@ const HOLD: SimDuration = SimDuration::from_millis(300);
 
 /// The program has arrived at `floor` (it stands there, possibly in the STOP fault).
 fn arrived(rig: &Rig, floor: u8) -> bool {
-    let p = builtin(rig).program();
-    p.current_floor() == floor && matches!(p.state(), State::AtFloor | State::StopFault)
+    let status = rig.controller_status();
+    status.floor == Some(floor) && matches!(status.state, Some(State::AtFloor | State::StopFault))
 }
 
 /// Notes the first moment the program is seen arrived at `floor`.
@@ -131,12 +166,14 @@ pub(super) fn sample_latencies(
     rig: &mut Rig,
     shared: &Mutex<Collector>,
     opts: &TimingOptions,
+    initialised_at: Option<SimTime>,
 ) -> Latencies {
     let mut s = Sampler {
-        dwell: builtin(rig).program().config().dwell,
+        // The built-in program's dwell: the press moments need only its order of magnitude.
+        dwell: controller::ControllerConfig::default().dwell,
         stop_delay: safety::LiftSafetyConfig::default().estop_delay,
         // When the program last arrived at a floor: it departs no earlier than a dwell later.
-        arrival: builtin(rig).program().initialised_at(),
+        arrival: initialised_at,
         rig,
         shared,
         rng: press_rng(opts.seed),
@@ -213,8 +250,10 @@ impl Sampler<'_> {
         // Registered: the program holds the call (as its target or in FIFO_Patra).
         let mut resets = 0;
         let registered = wait_resetting(self.rig, STEP_LIMIT, &mut resets, |r| {
-            let p = builtin(r).program();
-            r.now() >= press && (p.target() == there || p.fifo_hall().contains(&there))
+            r.now() >= press
+                && (r.controller_status().target == Some(there)
+                    || r.controller_calls()
+                        .is_some_and(|c| c.hall.contains(&there)))
         });
         let shared = self.shared;
         let rig = &mut *self.rig;

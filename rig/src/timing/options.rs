@@ -91,6 +91,9 @@ pub struct TimingOptions {
     pub duration: SimDuration,
     /// Latency samples of each chain (lab bus only).
     pub samples: u32,
+    /// The PLC program timed on the lab bus, if not the built-in one: a Structured Text
+    /// program that tells its state, floor, target and calls through the agreed variables.
+    pub program: Option<crate::scenario::program::ProgramFile>,
 }
 
 impl Default for TimingOptions {
@@ -101,6 +104,7 @@ impl Default for TimingOptions {
             seed: 1,
             duration: SimDuration::from_secs(60),
             samples: 100,
+            program: None,
         }
     }
 }
