@@ -11,6 +11,7 @@ fn opts(bus: BusChoice, p: f64, secs: u64, samples: u32) -> TimingOptions {
         seed: 7,
         duration: SimDuration::from_secs(secs),
         samples,
+        program: None,
     }
 }
 
