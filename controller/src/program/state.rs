@@ -96,6 +96,15 @@ impl State {
         State::Halted,
     ];
 
+    /// Whether the program is in service: initialised, its automat running (not waiting for
+    /// its inputs, initialising or in a bus fault).
+    pub fn in_service(self) -> bool {
+        !matches!(
+            self,
+            State::WaitingForInputs | State::Initialising | State::BusFault
+        )
+    }
+
     /// The state of a name ([`State::name`]).
     pub fn from_name(name: &str) -> Option<State> {
         State::ALL.into_iter().find(|s| s.name() == name)

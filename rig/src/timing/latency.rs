@@ -16,23 +16,10 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::sync::Mutex;
 
-/// The states in which the program is in service (initialised, its automat running): the
-/// built-in program's `is_initialised`, told through [`controller::Controller::status`].
-const IN_SERVICE: [State; 7] = [
-    State::AtFloor,
-    State::OverloadFault,
-    State::MovingUp,
-    State::MovingDown,
-    State::Braking,
-    State::StopFault,
-    State::Halted,
-];
-
-/// Whether the controller tells that it is in service.
+/// Whether the controller tells that it is in service ([`State::in_service`]: the built-in
+/// program's `is_initialised`).
 pub(super) fn in_service(rig: &Rig) -> bool {
-    rig.controller_status()
-        .state
-        .is_some_and(|s| IN_SERVICE.contains(&s))
+    rig.controller_status().state.is_some_and(State::in_service)
 }
 
 /// Since when the controller has been in service without a break (the built-in program's
