@@ -518,19 +518,23 @@ impl Bus {
             self.next_event = self.master.poll_at(t).unwrap_or(SimTime::MAX);
             return;
         };
-        if self.may_run_quick(tx.request) && self.line_takes_clean(tx.request, t) {
-            // As the clean line would: the frame at its end plus the pause.
-            let f = quick::request_frame(tx.request, t, self.request_last);
-            let cur = Current::new(tx, t, f.end, true);
-            let at = (f.end + self.timing.min_pause()).max(t);
+        if let Some(who) = self
+            .may_run_quick(tx.request)
+            .filter(|_| self.line_takes_clean(tx.request, t))
+        {
+            // As the clean line would: the frame at its end plus the pause. The frame itself
+            // ([`quick::request_frame`]) is built only where the bus keeps it.
+            let end = t + self.request_last;
+            let cur = Current::new(tx, t, end, true);
+            let at = (end + self.timing.min_pause()).max(t);
             if at <= self.horizon && !self.output_taken {
                 // Its request frame's event falls within: the transaction goes on at once,
                 // held in locals rather than in the bus until it has to wait.
                 self.now = at;
-                self.quick_from(at, cur, f);
+                self.quick_from(at, cur, who);
             } else {
                 self.cur = Some(cur);
-                self.held = Some(f);
+                self.held = Some(quick::request_frame(tx.request, t, self.request_last));
                 self.state = State::AwaitRequestFrame;
                 self.next_event = at;
             }
