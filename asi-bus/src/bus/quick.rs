@@ -63,9 +63,9 @@ impl Bus {
     /// alone. Inlined into the bus's one event loop (`Bus::events_through`), where most
     /// transactions run; as a call of its own it cost more (measured when the events still
     /// were a call each, and again after).
-    #[inline(always)]
     ///
     /// `who`: the slave that takes the request ([`Bus::may_run_quick`]).
+    #[inline(always)]
     pub(super) fn quick_from(&mut self, t: SimTime, mut cur: Current, who: u64) {
         cur.request_frames = 1;
         let request = if self.run_takes_request(t, cur.start, cur.req_end, cur.tx.request) {
