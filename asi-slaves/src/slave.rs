@@ -293,7 +293,9 @@ impl Slave {
     ///
     /// The standard Data_Exchange (nearly every request) is answered here; every other
     /// request out of line ([`Slave::handle_other`]), so that the common answer does not
-    /// save and restore the registers the others need.
+    /// save and restore the registers the others need. Inlined into the bus's quick
+    /// transaction, where nearly every request is taken.
+    #[inline(always)]
     pub fn handle(&mut self, now: SimTime, req: Request) -> Option<Response> {
         if let Some(outputs) = self.standard_data_exchange(req) {
             let (inputs, moved) = self.device.exchange_noted(now, outputs);

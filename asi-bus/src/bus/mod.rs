@@ -66,7 +66,8 @@ use outputs::NO_OUTPUT;
 pub use watch::{Look, LookWatch, Stop, Watch};
 
 /// A request taken by a slave, as the bus tells it: a Data_Exchange from its bits
-/// ([`Request::as_data_exchange`]), every other by its call, decoded once.
+/// ([`Request::as_data_exchange`]), the cycle's Read_Status from its bits too, every other by
+/// its call, decoded once.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Told {
     /// A Data_Exchange to this address with these output bits.
@@ -80,8 +81,41 @@ impl Told {
     fn of(req: Request) -> Told {
         match req.as_data_exchange() {
             Some((a, data)) => Told::Exchange(a, data),
+            // CB 1, I4..I0 = 11110: Read_Status of an A (or single) slave at any address,
+            // the call the master's cycle makes once (asi-phy's decoder, `Request::call`;
+            // held to it for every request by the test below).
+            None if req.cb() && req.info() == 0b11110 => Told::Call(Call::ReadStatus {
+                address: req.address(),
+                select: asi_phy::Select::A,
+            }),
             None => Told::Call(req.call()),
         }
+    }
+}
+
+#[cfg(test)]
+mod told_tests {
+    use super::*;
+
+    /// Every request the 14 bits can hold is told as its call: a Data_Exchange by its
+    /// address and data, every other call as `Request::call` decodes it.
+    #[test]
+    fn every_request_is_told_as_its_call() {
+        let mut status = 0;
+        for bits in 0u16..1 << 14 {
+            let Ok(q) = Request::from_bits(bits) else {
+                continue;
+            };
+            let want = match q.call() {
+                Call::DataExchange { address, data } if q.as_data_exchange().is_some() => {
+                    Told::Exchange(address, data)
+                }
+                call => Told::Call(call),
+            };
+            status += usize::from(matches!(want, Told::Call(Call::ReadStatus { .. })));
+            assert_eq!(Told::of(q), want, "{bits:014b}");
+        }
+        assert!(status >= 31, "{status} Read_Status requests");
     }
 }
 
@@ -219,6 +253,9 @@ pub struct Bus {
     /// ([`quick::last_pulse`]), worked out once as `transaction` is.
     request_last: SimDuration,
     response_last: SimDuration,
+    /// From a quick request's first pulse to its frame's event: `request_last` and the pause
+    /// after it (time saturates, so adding the two at once is adding each in turn).
+    request_event: SimDuration,
     master: Master,
     slaves: Vec<SlaveSlot>,
     addr_index: [u64; 32],
@@ -304,6 +341,7 @@ impl Bus {
             transaction: timing.transaction(),
             request_last: quick::last_pulse(timing.half_bit(), Request::BITS),
             response_last: quick::last_pulse(timing.half_bit(), Response::BITS),
+            request_event: quick::last_pulse(timing.half_bit(), Request::BITS) + timing.min_pause(),
             master_rx: Listener::new(&timing.receiver(Expect::Responses)),
             medium: Medium::quiet(&timing),
             line_plain: true,
@@ -518,19 +556,24 @@ impl Bus {
             self.next_event = self.master.poll_at(t).unwrap_or(SimTime::MAX);
             return;
         };
-        if self.may_run_quick(tx.request) && self.line_takes_clean(tx.request, t) {
-            // As the clean line would: the frame at its end plus the pause.
-            let f = quick::request_frame(tx.request, t, self.request_last);
-            let cur = Current::new(tx, t, f.end, true);
-            let at = (f.end + self.timing.min_pause()).max(t);
+        if let Some(who) = self
+            .may_run_quick(tx.request)
+            .filter(|_| self.line_takes_clean(tx.request, t))
+        {
+            // As the clean line would: the frame at its end plus the pause. The frame itself
+            // ([`quick::request_frame`]) is built only where the bus keeps it.
+            let end = t + self.request_last;
+            let cur = Current::new(tx, t, end, true);
+            let at = t + self.request_event;
+            debug_assert_eq!(at, (end + self.timing.min_pause()).max(t));
             if at <= self.horizon && !self.output_taken {
                 // Its request frame's event falls within: the transaction goes on at once,
                 // held in locals rather than in the bus until it has to wait.
                 self.now = at;
-                self.quick_from(at, cur, f);
+                self.quick_from(at, cur, who);
             } else {
                 self.cur = Some(cur);
-                self.held = Some(f);
+                self.held = Some(quick::request_frame(tx.request, t, self.request_last));
                 self.state = State::AwaitRequestFrame;
                 self.next_event = at;
             }

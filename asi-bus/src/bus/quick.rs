@@ -18,12 +18,15 @@ impl Bus {
     /// and the transaction goes on as it would have. Held to the line's path by a lockstep
     /// test against the pulse-exact bus (`tests/quick.rs`) and by the rig's fast-path
     /// equivalence (tests/tests/fast_path.rs).
-    pub(super) fn may_run_quick(&self, req: Request) -> bool {
+    ///
+    /// Returns the slaves that take the request (at most one; none where no slave has its
+    /// address), for [`Bus::quick_from`]; `None` where the transaction may not run quick.
+    pub(super) fn may_run_quick(&self, req: Request) -> Option<u64> {
         if self.groups.len() != 1 || !self.slaves_powered || req.is_broadcast_reset() {
-            return false;
+            return None;
         }
         let who = self.groups[0].members & self.addr_index[req.address().get() as usize];
-        who & who.wrapping_sub(1) == 0
+        (who & who.wrapping_sub(1) == 0).then_some(who)
     }
 
     /// A quick transaction's request frame, at `t`: what `request_frame` and `hear` do with
@@ -38,22 +41,37 @@ impl Bus {
             self.request_frame(t);
             return;
         };
+        debug_assert_eq!(
+            f,
+            request_frame(cur.tx.request, cur.start, self.request_last),
+            "the held request frame is not the transaction's own"
+        );
         self.cur = None;
-        self.quick_from(t, cur, f);
+        // What `may_run_quick` found at the start: anything that changes the slaves or their
+        // addresses since releases the held request first.
+        let who = self.groups[0].members & self.addr_index[cur.tx.request.address().get() as usize];
+        self.quick_from(t, cur, who);
     }
 
-    /// [`Bus::quick_request`] of transaction `cur`, its request frame `f` held: both in
-    /// locals, and put in the bus only where the transaction has to wait for a later event
-    /// (or leaves the quick path), so that a transaction run in one go from its start
-    /// (`start_transaction`) never stores them. Inlined into the bus's one event loop
-    /// (`Bus::events_through`), where most transactions run; as a call of its own it cost
-    /// more (measured when the events still were a call each, and again after).
+    /// [`Bus::quick_request`] of transaction `cur`, its request held: in locals, and put in
+    /// the bus only where the transaction has to wait for a later event (or leaves the quick
+    /// path), so that a transaction run in one go from its start (`start_transaction`) never
+    /// stores it. The held request's frame is [`request_frame`] of the transaction's request at
+    /// its start (`cur.start` to `cur.req_end`), and the held answer's [`answer_frame`] of the
+    /// answer at its start: each is built only where a receiver takes it or the transaction
+    /// keeps it in the bus, not in a run of clean quick transactions, which takes the times
+    /// alone. Inlined into the bus's one event loop (`Bus::events_through`), where most
+    /// transactions run; as a call of its own it cost more (measured when the events still
+    /// were a call each, and again after).
+    ///
+    /// `who`: the slave that takes the request ([`Bus::may_run_quick`]).
     #[inline(always)]
-    pub(super) fn quick_from(&mut self, t: SimTime, mut cur: Current, f: Frame) {
+    pub(super) fn quick_from(&mut self, t: SimTime, mut cur: Current, who: u64) {
         cur.request_frames = 1;
-        let request = if self.run_takes_request(t, &f, cur.tx.request) {
+        let request = if self.run_takes_request(t, cur.start, cur.req_end, cur.tx.request) {
             Some(cur.tx.request)
         } else {
+            let f = request_frame(cur.tx.request, cur.start, self.request_last);
             let r = hear_in_step(
                 &mut self.groups[0].listener,
                 &mut self.monitors,
@@ -68,21 +86,26 @@ impl Bus {
         let base = cur.start + self.transaction;
         let mut answer = None;
         if let Some(q) = request {
-            let who = self.groups[0].members & self.addr_index[q.address().get() as usize];
+            debug_assert_eq!(
+                who,
+                self.groups[0].members & self.addr_index[q.address().get() as usize],
+                "not the slave of {q:?}"
+            );
             if who != 0 {
-                self.ask_slaves(t, q, who, |r| answer = Some(r));
+                answer = self.ask_one(t, q, who);
             }
         }
         let timing = self.timing;
+        // The held answer: its start and the answer.
         let mut held = None;
         if let Some(r) = answer {
-            let start = f.end + timing.master_pause();
+            let start = cur.req_end + timing.master_pause();
             let tg = || Transmission::response(r, start, timing.half_bit());
             // The line is as the request found it (idle, nothing recorded: anything that
             // changes that releases the held request first), so only its faults are left to
             // ask, and on a plain line there are none.
             if self.line_plain || self.medium.pass_untouched(&tg()) {
-                held = Some((answer_frame(r, start, self.response_last), Some(r)));
+                held = Some((start, r));
             } else {
                 // The line touches the answer: the transaction goes on the line's path, from
                 // the bus (`hear` finds it there).
@@ -112,41 +135,75 @@ impl Bus {
             };
         } else {
             self.cur = Some(cur);
-            self.held = held.map(|(f, _)| f);
-            self.held_answer = held.and_then(|(_, r)| r);
+            self.held = held.map(|(start, r)| answer_frame(r, start, self.response_last));
+            self.held_answer = held.map(|(_, r)| r);
             self.state = State::AwaitResponse;
             self.next_event = next;
         }
+    }
+
+    /// [`Bus::ask_slaves`] of request `req` at `now` for the one slave `who` (a quick
+    /// transaction's: [`Bus::may_run_quick`]); its answer. A Data_Exchange, almost every
+    /// call, is taken here, inlined into the quick transaction; every other call goes to
+    /// `ask_slaves`. The same calls into the slave and the same notes as there.
+    #[inline(always)]
+    fn ask_one(&mut self, now: SimTime, req: Request, who: u64) -> Option<Response> {
+        debug_assert_eq!(who & who.wrapping_sub(1), 0, "more than one slave");
+        let told = Told::of(req);
+        let i = who.trailing_zeros() as usize;
+        let (Told::Exchange(..), Some(slot)) = (told, self.slaves.get_mut(i)) else {
+            let mut answer = None;
+            self.ask_slaves(now, req, who, |r| answer = Some(r));
+            return answer;
+        };
+        let mut r = None;
+        if slot.attached {
+            r = slot.slave.handle(now, req);
+            self.drive_total += u64::from(slot.slave.take_drive_moved());
+        }
+        self.note_output(req, told);
+        r
     }
 
     /// A quick transaction's end, at `t`: the held answer's frame to the master's receiver,
     /// the slaves' and the monitors', then the master's verdict ([`Bus::close`]).
     pub(super) fn quick_finish(&mut self, t: SimTime) -> Option<SimTime> {
         let cur = self.cur.take()?;
-        let held = self.held.take().map(|f| (f, self.held_answer.take()));
+        // A held answer's frame is always kept with its answer (`quick_from`), and both are
+        // taken together (here and in `release_held`).
+        let held = match (self.held.take(), self.held_answer.take()) {
+            (Some(f), Some(a)) => {
+                debug_assert_eq!(
+                    f,
+                    answer_frame(a, f.start, self.response_last),
+                    "the held answer's frame is not its own"
+                );
+                Some((f.start, a))
+            }
+            (None, _) => None,
+            (Some(f), None) => return self.quick_end_unknown(t, cur, f),
+        };
         self.quick_end(t, cur, held)
     }
 
-    /// [`Bus::quick_finish`] of transaction `cur` with its held answer (`held`: the frame
-    /// and the answer it was made of, if known) in locals.
+    /// [`Bus::quick_finish`] of transaction `cur` with its held answer (`held`: the answer's
+    /// start and the answer) in locals.
     #[inline(always)]
     fn quick_end(
         &mut self,
         t: SimTime,
         mut cur: Current,
-        held: Option<(Frame, Option<Response>)>,
+        held: Option<(SimTime, Response)>,
     ) -> Option<SimTime> {
-        if let Some((f, answer)) = held {
-            cur.line_end = cur.line_end.max(f.end);
-            if let Some(a) = answer {
-                if self.run_takes_answer(t, &mut cur, &f, a) {
-                    return self.close(t, &cur);
-                }
+        if let Some((start, a)) = held {
+            let end = start + self.response_last;
+            cur.line_end = cur.line_end.max(end);
+            if self.run_takes_answer(t, &mut cur, start, end, a) {
+                return self.close(t, &cur);
             }
-            // The held frame is the answer's own (`quick_from` made it of `answer`).
-            cur.master_hears_as(&mut self.master_rx, &self.timing, &f, |r| match answer {
-                Some(a) => r.response_sent(a),
-                None => r.response(),
+            let f = answer_frame(a, start, self.response_last);
+            cur.master_hears_as(&mut self.master_rx, &self.timing, &f, |r| {
+                r.response_sent(a)
             });
             hear_in_step(
                 &mut self.groups[0].listener,
@@ -159,7 +216,24 @@ impl Bus {
         self.close(t, &cur)
     }
 
-    /// `true` if clean request frame `f` of request `q`, heard at `t`, is taken in a run of
+    /// [`Bus::quick_end`] of a held frame `f` without the answer it was made of (which the bus
+    /// never leaves: kept for completeness), heard as the line would hand it on.
+    #[inline(never)]
+    fn quick_end_unknown(&mut self, t: SimTime, mut cur: Current, f: Frame) -> Option<SimTime> {
+        cur.line_end = cur.line_end.max(f.end);
+        cur.master_hears(&mut self.master_rx, &self.timing, &f);
+        hear_in_step(
+            &mut self.groups[0].listener,
+            &mut self.monitors,
+            &mut self.monitor_in_step,
+            t,
+            &f,
+        );
+        self.close(t, &cur)
+    }
+
+    /// `true` if the clean request frame of request `q` from `start` to `end`, heard at `t`,
+    /// is taken in a run of
     /// clean quick transactions ([`Unsettled`]): every receiver on the bus would take it as
     /// the valid request `q` (the slaves' receiver, in the state the run has left it,
     /// synchronised and not within a response window; the first monitor's, in step with it),
@@ -167,7 +241,7 @@ impl Bus {
     /// instead of writing it into them. Starts a run where the receivers allow one; `false`,
     /// with the receivers settled, where the frame must go to them.
     #[inline(always)]
-    fn run_takes_request(&mut self, t: SimTime, f: &Frame, q: Request) -> bool {
+    fn run_takes_request(&mut self, t: SimTime, start: SimTime, end: SimTime, q: Request) -> bool {
         let slaves = &self.groups[0].listener;
         let window_from = match self.unsettled {
             Some(u) => u.window_open.then_some(u.slaves_end),
@@ -187,19 +261,19 @@ impl Bus {
         };
         // Within the window it would be taken for a response (`Listener::accept`).
         if window_from.is_some_and(|from| {
-            f.start >= from && f.start.as_nanos() - from.as_nanos() <= slaves.response_window()
+            start >= from && start.as_nanos() - from.as_nanos() <= slaves.response_window()
         }) {
             self.settle();
             return false;
         }
         match &mut self.unsettled {
             Some(u) => {
-                u.slaves_end = f.end;
+                u.slaves_end = end;
                 u.window_open = true;
             }
             None => {
                 self.unsettled = Some(Unsettled {
-                    slaves_end: f.end,
+                    slaves_end: end,
                     window_open: true,
                     master_end: None,
                 });
@@ -209,32 +283,38 @@ impl Bus {
             self.monitor_in_step = true;
             first.hear(t, Heard::Request(q));
         }
-        debug_assert_eq!(f.raw, u32::from(q.bits()), "not the frame of {q:?}");
         true
     }
 
-    /// `true` if clean answer frame `f` of answer `a`, heard at `t` in transaction `cur`, is
-    /// taken in the run of clean quick transactions ([`Bus::run_takes_request`]): the
+    /// `true` if the clean answer frame of answer `a` from `start` to `end`, heard at `t` in
+    /// transaction `cur`, is taken in the run of clean quick transactions ([`Bus::run_takes_request`]): the
     /// slaves' receiver takes it as a valid response (it starts within the window the
     /// request opened), the master's (synchronised) as a valid response where it starts in
     /// the master's response window, and the monitor judges it. `false`, with the
     /// receivers settled, where the frame must go to them.
     #[inline(always)]
-    fn run_takes_answer(&mut self, t: SimTime, cur: &mut Current, f: &Frame, a: Response) -> bool {
+    fn run_takes_answer(
+        &mut self,
+        t: SimTime,
+        cur: &mut Current,
+        start: SimTime,
+        end: SimTime,
+        a: Response,
+    ) -> bool {
         let Some(u) = self.unsettled.as_mut() else {
             return false;
         };
         let rw = self.groups[0].listener.response_window();
         let from = u.slaves_end;
-        if !(u.window_open && f.start >= from && f.start.as_nanos() - from.as_nanos() <= rw) {
+        if !(u.window_open && start >= from && start.as_nanos() - from.as_nanos() <= rw) {
             self.settle();
             return false;
         }
-        u.slaves_end = f.end;
+        u.slaves_end = end;
         u.window_open = false;
         // What `Current::master_hears_as` does with a valid response.
-        if f.start > cur.req_end && f.start <= cur.req_end + self.timing.response_timeout() {
-            u.master_end = Some(f.end);
+        if start > cur.req_end && start <= cur.req_end + self.timing.response_timeout() {
+            u.master_end = Some(end);
             cur.responses += 1;
             if cur.responses == 1 {
                 cur.response = Some(a);
@@ -245,7 +325,6 @@ impl Bus {
         if let Some(first) = self.monitors.first_mut() {
             first.hear(t, Heard::Response(a));
         }
-        debug_assert_eq!(f.raw, u32::from(a.bits()), "not the frame of {a:?}");
         true
     }
 
