@@ -688,9 +688,11 @@ PROGRAM P VAR Floors : INT := 4; Algorithm : LiftAlgorithm; END_VAR END_PROGRAM"
         let mut p = StProgram::compile("p.st", prog).unwrap_or_else(|e| panic!("{e}"));
         assert_eq!(p.value("Floors"), Some(Value::Int(4)));
         assert_eq!(p.value("Algorithm"), Some(Value::Int(0)));
-        let mut settings = ControllerConfig::default();
-        settings.floors = 3;
-        settings.algorithm = Algorithm::Collective;
+        let settings = ControllerConfig {
+            floors: 3,
+            algorithm: Algorithm::Collective,
+            ..ControllerConfig::default()
+        };
         p.configure(&settings);
         assert_eq!(p.value("Floors"), Some(Value::Int(3)));
         assert_eq!(p.value("Algorithm"), Some(Value::Int(1)));
