@@ -143,6 +143,7 @@ impl Value {
 }
 
 /// `v` as a value of `e`: integers wrap to its width, reals round to its precision.
+#[inline]
 fn coerce(v: Value, e: Elem) -> Value {
     match e {
         Elem::Bool => Value::Bool(v.bool()),
@@ -547,7 +548,11 @@ impl Machine<'_> {
         match s {
             IStmt::Assign(p, e, x) => {
                 let v = self.eval(x, base)?;
-                self.write(p, *e, v, base)?;
+                match p {
+                    Place::Mem(a) => self.memory[base.wrapping_add(*a) as usize] = coerce(v, *e),
+                    Place::Abs(a) => self.memory[*a as usize] = coerce(v, *e),
+                    _ => self.write(p, *e, v, base)?,
+                }
             }
             IStmt::CallFb {
                 fb,
@@ -674,6 +679,8 @@ impl Machine<'_> {
         self.tick(Span::default())?;
         Ok(match x {
             IExpr::Const(v) => *v,
+            IExpr::Read(Place::Mem(a), _) => self.memory[base.wrapping_add(*a) as usize],
+            IExpr::Read(Place::Abs(a), _) => self.memory[*a as usize],
             IExpr::Read(p, e) => self.read(p, *e, base)?,
             IExpr::Neg(a, e) => {
                 let v = self.eval(a, base)?;
