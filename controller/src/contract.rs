@@ -13,7 +13,7 @@
 //! whose owner writes the output image itself between the rig's moments.
 
 use crate::plc::{FromSafety, Plc, ToSafety};
-use crate::program::{Event, State};
+use crate::program::{ControllerConfig, Event, State};
 use asi_master::{PlcLink, ProcessImage};
 use asi_phy::{SimDuration, SimTime};
 use std::any::Any;
@@ -64,6 +64,13 @@ pub trait Controller: Send + 'static + ControllerClone {
     fn program_name(&self) -> Option<&str> {
         None
     }
+
+    /// The scenario's controller settings (`[controller]`: the floors served, the control
+    /// algorithm, the scan), given by the rig when the controller takes the built-in
+    /// program's place, before its first scan. A controller with settings of its own ignores
+    /// them (the default).
+    fn configure(&mut self, _settings: &ControllerConfig) {}
+
     /// The controller as [`Any`], for a caller that wants its own type back.
     fn as_any(&self) -> &dyn Any;
 

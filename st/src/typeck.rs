@@ -144,6 +144,15 @@ enum Found<'a> {
     Nothing,
 }
 
+/// The name `e` is, through parentheses, if it is a bare name.
+pub(crate) fn bare_name(e: &Expr) -> Option<&crate::ast::Ident> {
+    match &e.kind {
+        ExprKind::Name(i) => Some(i),
+        ExprKind::Paren(x) => bare_name(x),
+        _ => None,
+    }
+}
+
 fn type_name(c: &Checked, t: &Type) -> String {
     match t {
         Type::Elem(e) => e.name().to_owned(),
@@ -173,6 +182,8 @@ impl<'a> Typer<'a> {
         }
     }
 
+    /// What `key` names: a local, a global, the function's own result (inside it), an
+    /// enumeration's value, a block; the first of these that has the name.
     fn find(&self, key: &str) -> Found<'a> {
         if let Some(v) = self.locals.get(key) {
             return Found::Var(v);
@@ -184,6 +195,12 @@ impl<'a> Typer<'a> {
             .find(|v| v.name.eq_ignore_ascii_case(key))
         {
             return Found::Var(v);
+        }
+        // Inside a function its name is its result, whatever enumeration has the name too.
+        if self.c.pous.get(self.pou).is_some_and(|p| {
+            matches!(p.kind, PouKind::Function(_)) && p.name.eq_ignore_ascii_case(key)
+        }) {
+            return Found::Pou(self.pou);
         }
         let mut in_enums = self
             .c
@@ -216,8 +233,9 @@ impl<'a> Typer<'a> {
         use crate::ast::Init;
         match (init, ty) {
             (Init::Expr(e), _) => {
-                let t = self.expr(e);
-                self.expect_into(&t, &Ty::Known(ty.clone()), e.span);
+                let want = Ty::Known(ty.clone());
+                let t = self.expr_into(e, &want);
+                self.expect_into(&t, &want, e.span);
             }
             (Init::Array(elems, span), Type::Array(a)) => {
                 let capacity =
@@ -290,7 +308,7 @@ impl<'a> Typer<'a> {
                     }
                 }
                 let to = self.place(target);
-                let from = self.expr(value);
+                let from = self.expr_into(value, &to);
                 self.expect_into(&from, &to, value.span);
             }
             StmtKind::Call(e) => {
@@ -334,7 +352,7 @@ impl<'a> Typer<'a> {
                         };
                         let mut bounds = Vec::new();
                         for v in &values {
-                            let t = self.expr(v);
+                            let t = self.expr_into(v, &sel);
                             if ok {
                                 self.expect_into(&t, &sel, v.span);
                             }
@@ -659,10 +677,36 @@ impl<'a> Typer<'a> {
                 }
             }
             ExprKind::Binary(op, a, b) => {
-                let (ta, tb) = (self.expr(a), self.expr(b));
+                // A bare enumeration value takes the other side's enumeration.
+                let value = |t: &Self, x: &Expr| {
+                    bare_name(x).is_some_and(|i| matches!(t.find(&i.key()), Found::EnumValue(_)))
+                };
+                let (ta, tb) = if value(self, a) && !value(self, b) {
+                    let tb = self.expr(b);
+                    (self.expr_into(a, &tb), tb)
+                } else {
+                    let ta = self.expr(a);
+                    let tb = self.expr_into(b, &ta);
+                    (ta, tb)
+                };
                 self.binary(*op, ta, tb, e.span)
             }
         }
+    }
+
+    /// `e` typed where a value of `want` is expected: a bare name that is no variable and is
+    /// a value of `want`'s enumeration is that enumeration's (a value of two enumerations
+    /// takes the one the context expects); anything else as [`Typer::expr`] types it.
+    fn expr_into(&mut self, e: &Expr, want: &Ty) -> Ty {
+        if let (Some(i), Ty::Known(Type::Enum(n))) = (bare_name(e), want) {
+            let key = i.key();
+            if matches!(self.find(&key), Found::EnumValue(_))
+                && self.c.enums[*n].values.iter().any(|(k, _)| *k == key)
+            {
+                return Ty::Known(Type::Enum(*n));
+            }
+        }
+        self.expr(e)
     }
 
     fn lit(&mut self, l: &Lit, span: Span) -> Ty {
@@ -926,7 +970,17 @@ impl<'a> Typer<'a> {
             }
             _ => {}
         }
-        match self.find(&key) {
+        // A called name is a function or a block instance, never an enumeration's value.
+        let found = match self.find(&key) {
+            Found::EnumValue(_) => self
+                .c
+                .pous
+                .iter()
+                .position(|p| p.name.eq_ignore_ascii_case(&key))
+                .map_or(Found::Nothing, Found::Pou),
+            f => f,
+        };
+        match found {
             Found::Pou(p) if matches!(self.c.pous[p].kind, PouKind::Function(_)) => {
                 self.calls.push((p, span));
                 let f = &self.c.pous[p];
@@ -1042,7 +1096,7 @@ impl<'a> Typer<'a> {
                     self.expect_into(&pin.1, &to, a.value.span);
                 }
                 (false, false) => {
-                    let from = self.expr(&a.value);
+                    let from = self.expr_into(&a.value, &pin.1);
                     self.expect_into(&from, &pin.1, a.value.span);
                 }
                 (true, false) => self.error(

@@ -312,3 +312,87 @@ END_PROGRAM");
         );
     }
 }
+
+/// A function named as an enumeration's value is called by its name, and inside it the name
+/// is its result; elsewhere the bare name is the value.
+#[test]
+fn an_enumeration_value_does_not_hide_a_function_of_its_name() {
+    let (mut p, _) = plc("TYPE Phase : (Idle, Ready); END_TYPE
+FUNCTION Ready : BOOL
+VAR_INPUT x : INT; END_VAR
+  Ready := x > 2;
+END_FUNCTION
+PROGRAM P
+VAR a, b : BOOL; s : Phase; END_VAR
+  a := Ready(3);
+  b := Ready(x := 1);
+  s := Ready;
+END_PROGRAM");
+    p.scan(0, &mut words()).expect("a scan");
+    let s = p.address("s").and_then(|a| p.read(a));
+    assert_eq!(
+        (int(&p, "a"), int(&p, "b"), s),
+        (1, 0, Some(Value::Int(1))),
+        "the calls give the function's results, the name alone the value"
+    );
+}
+
+/// A bare value of two enumerations takes the one its context expects: assigned, compared,
+/// passed to a function, a block's input, a CASE label, an initial value.
+#[test]
+fn a_value_of_two_enumerations_takes_the_expected_one() {
+    let (mut p, _) = plc("TYPE
+  Light : (Red, Amber, Green);
+  Mood : (Calm, Green, Red);
+END_TYPE
+FUNCTION IsRed : BOOL
+VAR_INPUT m : Mood; END_VAR
+  IsRed := m = Red;
+END_FUNCTION
+FUNCTION_BLOCK Keep
+VAR_INPUT m : Mood; END_VAR
+VAR_OUTPUT out : Mood; END_VAR
+  out := m;
+END_FUNCTION_BLOCK
+PROGRAM P
+VAR
+  l : Light := Green;
+  m : Mood := Green;
+  k : Keep;
+  eq, ne, called, paren : BOOL;
+  kept : Mood;
+  arm : INT;
+END_VAR
+  m := Red;
+  l := Red;
+  eq := Red = m;
+  ne := l <> (Green);
+  called := IsRed(Red);
+  k(m := Red);
+  kept := k.out;
+  paren := (m = (Red)) AND (Red = l);
+  CASE m OF
+    Calm: arm := 1;
+    Red: arm := 3;
+  ELSE
+    arm := 9;
+  END_CASE;
+END_PROGRAM");
+    let get = |p: &Plc, n: &str| p.address(n).and_then(|a| p.read(a));
+    let n = |v: i64| Some(Value::Int(v));
+    assert_eq!((get(&p, "l"), get(&p, "m")), (n(2), n(1)), "initial values");
+    p.scan(0, &mut words()).expect("a scan");
+    assert_eq!((get(&p, "m"), get(&p, "l")), (n(2), n(0)), "assigned");
+    assert_eq!(
+        (
+            int(&p, "eq"),
+            int(&p, "ne"),
+            int(&p, "called"),
+            int(&p, "paren")
+        ),
+        (1, 1, 1, 1),
+        "compared, and passed to a function"
+    );
+    assert_eq!(get(&p, "kept"), n(2), "a block's input");
+    assert_eq!(int(&p, "arm"), 3, "a CASE label");
+}

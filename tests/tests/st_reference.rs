@@ -12,6 +12,7 @@ use asi_lift_tests::scenario;
 use asi_master::record::TransactionRecord;
 use asi_phy::SimDuration;
 use controller::structured::StProgram;
+use controller::Algorithm;
 use rig::campaign::generate::generate;
 use rig::campaign::profile::Profile;
 use rig::rig::Rig;
@@ -34,7 +35,7 @@ struct Seen {
 fn seen(sc: &Scenario, st: bool, until: Option<SimDuration>) -> Seen {
     let mut rig = Rig::new(sc.clone()).unwrap_or_else(|e| panic!("{}: {e}", sc.name));
     if st {
-        rig = rig.with_controller(reference());
+        rig = rig.with_controller(reference().with_scan(sc.plc_scan));
     }
     let records = Arc::new(Mutex::new(Vec::new()));
     let sink = records.clone();
@@ -111,6 +112,29 @@ fn the_reference_program_equals_the_built_in_one_on_the_demo() {
 fn the_reference_program_equals_the_built_in_one_in_the_first_30_s_of_some_scenarios() {
     for name in ["stop", "door", "overload", "lost-cabin-slave"] {
         agree(name, &scenario(name), Some(SimDuration::from_secs(30)));
+    }
+}
+
+/// The scenario's floors and algorithm reach the program (`Floors`, `Algorithm`): a busy
+/// 100 s under the collective control, and the first 40 s of the first random campaign
+/// runs with two floors (FIFO) and three floors (collective), whose floor stations beyond the
+/// floors served must stay untouched.
+#[test]
+fn the_reference_program_follows_the_scenario_s_floors_and_algorithm() {
+    let mut busy = scenario("busy");
+    busy.algorithm = Algorithm::Collective;
+    agree("busy, collective", &busy, Some(SimDuration::from_secs(100)));
+    let profile = Profile::built_in("default").expect("a built-in profile");
+    for (floors, algorithm) in [(2, Algorithm::Fifo), (3, Algorithm::Collective)] {
+        let g = (0..1000)
+            .map(|i| generate(2026, i, &profile))
+            .find(|g| g.scenario.floors == floors && g.scenario.algorithm == algorithm)
+            .expect("such a run among the first thousand");
+        agree(
+            &format!("{} ({floors} floors, {algorithm:?})", g.scenario.name),
+            &g.scenario,
+            Some(SimDuration::from_secs(40)),
+        );
     }
 }
 

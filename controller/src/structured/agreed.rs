@@ -9,7 +9,8 @@
 //! not their names: an enumeration's values are matched by name against the agreed ones, so a
 //! program may declare its own copy with only the values it uses.
 
-use crate::dispatch::{HallDir, ServedCall, Source};
+use crate::dispatch::{Algorithm, HallDir, ServedCall, Source};
+use crate::program::ControllerConfig;
 use crate::program::{HaltReason, InitStart, LostReason, ProgramEventKind, State};
 use asi_phy::SimTime;
 use st::check::{Checked, Type, Var};
@@ -25,6 +26,12 @@ pub const RESTART: &str = "Restart";
 pub const OVERLOADED: &str = "Overloaded";
 /// Set before each scan: the PLC's clock, the time since the run began. TIME or LTIME.
 pub const NOW: &str = "Now";
+/// Set once, before the first scan: the floors the scenario's lift serves (`[controller]
+/// floors`, 2 to 4 on the lab bus). An integer, not a CONSTANT.
+pub const FLOORS: &str = "Floors";
+/// Set once, before the first scan: the scenario's control algorithm (`[controller]
+/// algorithm`), an enumeration of the values of [`ALGORITHM_VALUES`], not a CONSTANT.
+pub const ALGORITHM: &str = "Algorithm";
 /// Read for the report: the program's state, an enumeration of the values of [`STATE_VALUES`].
 pub const STATE: &str = "State";
 /// Read for the report: the floor the program counts the cabin at. An integer.
@@ -58,6 +65,12 @@ pub const STATE_VALUES: [(&str, State); 10] = [
     ("Braking", State::Braking),
     ("StopFault", State::StopFault),
     ("Halted", State::Halted),
+];
+
+/// The values of the algorithm's enumeration (`LiftAlgorithm`) and the algorithms they name.
+pub const ALGORITHM_VALUES: [(&str, Algorithm); 2] = [
+    ("Fifo", Algorithm::Fifo),
+    ("Collective", Algorithm::Collective),
 ];
 
 /// The event kinds (`LiftEvent.Kind`), as [`ProgramEventKind`] names them.
@@ -137,6 +150,8 @@ pub(super) struct Agreed {
     pub(super) restart: Option<u32>,
     pub(super) overloaded: Option<u32>,
     pub(super) now: Option<(u32, Elem)>,
+    floors: Option<(u32, Elem)>,
+    algorithm: Option<(u32, EnumMap)>,
     state: Option<(u32, EnumMap)>,
     floor: Option<u32>,
     target: Option<u32>,
@@ -245,6 +260,28 @@ impl Agreed {
             match v.ty {
                 Type::Elem(e @ (Elem::Time | Elem::Ltime)) => a.now = addr(v).map(|at| (at, e)),
                 _ => wrong(v, "must be a TIME or an LTIME"),
+            }
+        }
+        for name in [FLOORS, ALGORITHM] {
+            let Some(v) = find(checked, name) else {
+                continue;
+            };
+            if v.constant {
+                wrong(
+                    v,
+                    "is set from the scenario before the first scan, so it cannot be a CONSTANT",
+                );
+            } else if name == FLOORS {
+                match int_elem(&v.ty) {
+                    Some(e) => a.floors = addr(v).map(|at| (at, e)),
+                    None => wrong(v, "must be of an integer type"),
+                }
+            } else {
+                let names = ALGORITHM_VALUES.map(|(n, _)| n);
+                match enum_map(checked, &v.ty, &names) {
+                    Ok(m) => a.algorithm = addr(v).map(|at| (at, m)),
+                    Err(e) => wrong(v, &e),
+                }
             }
         }
         if let Some(v) = find(checked, STATE) {
@@ -382,6 +419,23 @@ impl Agreed {
             reasons,
             span: v.span,
         })
+    }
+
+    /// The scenario's settings into the program's `Floors` and `Algorithm`, where it
+    /// declares them (an algorithm its enumeration has no value for is not written).
+    pub(super) fn configure(&self, plc: &mut Plc, settings: &ControllerConfig) {
+        if let Some((at, e)) = self.floors {
+            plc.write(at, Value::Int(i64::from(settings.floors)), e);
+        }
+        if let Some((at, map)) = &self.algorithm {
+            let k = ALGORITHM_VALUES
+                .iter()
+                .position(|(_, a)| *a == settings.algorithm);
+            if let Some(&(n, _)) = map.iter().find(|(_, i)| Some(*i) == k) {
+                // An enumeration's value is a DINT in the program's memory.
+                plc.write(*at, Value::Int(n), Elem::Dint);
+            }
+        }
     }
 
     /// Whether the program names the calls each stop serves (it has the event buffer).
@@ -619,6 +673,41 @@ END_PROGRAM";
         assert!(r.contains("needs `EventCount` beside it"), "{r}");
         let r = refused("PROGRAM P VAR CabinCallCount : INT; END_VAR END_PROGRAM");
         assert!(r.contains("needs `CabinCalls` beside it"), "{r}");
+    }
+
+    /// `Floors` and `Algorithm` take the scenario's settings before the first scan; a
+    /// CONSTANT or a wrong type is refused at its declaration.
+    #[test]
+    fn the_scenario_settings_are_set_into_floors_and_algorithm() {
+        use crate::contract::Controller;
+        use crate::dispatch::Algorithm;
+        use crate::program::ControllerConfig;
+        use st::run::Value;
+        let prog = "TYPE LiftAlgorithm : (Fifo, Collective); END_TYPE
+PROGRAM P VAR Floors : INT := 4; Algorithm : LiftAlgorithm; END_VAR END_PROGRAM";
+        let mut p = StProgram::compile("p.st", prog).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(p.value("Floors"), Some(Value::Int(4)));
+        assert_eq!(p.value("Algorithm"), Some(Value::Int(0)));
+        let settings = ControllerConfig {
+            floors: 3,
+            algorithm: Algorithm::Collective,
+            ..ControllerConfig::default()
+        };
+        p.configure(&settings);
+        assert_eq!(p.value("Floors"), Some(Value::Int(3)));
+        assert_eq!(p.value("Algorithm"), Some(Value::Int(1)));
+        // A program's own copy of the type with only FIFO keeps its value for collective.
+        let prog = "TYPE Algo : (Fifo); END_TYPE
+PROGRAM P VAR Floors : SINT; Algorithm : Algo; END_VAR END_PROGRAM";
+        let mut p = StProgram::compile("p.st", prog).unwrap_or_else(|e| panic!("{e}"));
+        p.configure(&settings);
+        assert_eq!(p.value("Floors"), Some(Value::Int(3)));
+        assert_eq!(p.value("Algorithm"), Some(Value::Int(0)));
+        let r = refused("VAR_GLOBAL CONSTANT Floors : INT := 4; END_VAR PROGRAM P END_PROGRAM");
+        assert!(r.contains("`Floors` is a variable the rig reads or sets (the agreed interface): it is set from the scenario before the first scan, so it cannot be a CONSTANT"), "{r}");
+        let r = refused("PROGRAM P VAR Floors : REAL; Algorithm : INT; END_VAR END_PROGRAM");
+        assert!(r.contains("`Floors` is a variable the rig reads or sets (the agreed interface): it must be of an integer type"), "{r}");
+        assert!(r.contains("`Algorithm` is a variable the rig reads or sets (the agreed interface): it must be an enumeration of some of the values Fifo, Collective"), "{r}");
     }
 
     /// A program without the agreed variables runs, and tells nothing (the rig counts its

@@ -12,14 +12,15 @@
 mod agreed;
 
 pub use agreed::{
-    CABIN_CALLS, CABIN_CALL_COUNT, EVENTS, EVENT_COUNT, FLOOR, HALL_CALLS, HALL_CALL_COUNT,
-    KIND_VALUES, NOW, REASON_VALUES, SOURCE_VALUES, STATE, STATE_VALUES, TARGET,
+    ALGORITHM, ALGORITHM_VALUES, CABIN_CALLS, CABIN_CALL_COUNT, EVENTS, EVENT_COUNT, FLOOR, FLOORS,
+    HALL_CALLS, HALL_CALL_COUNT, KIND_VALUES, NOW, REASON_VALUES, SOURCE_VALUES, STATE,
+    STATE_VALUES, TARGET,
 };
 pub use agreed::{ESTOP_OUT, OVERLOADED, RESTART};
 
 use crate::contract::{Controller, PendingCalls, Status};
 use crate::plc::{FromSafety, ToSafety};
-use crate::program::{Event, ProgramEventKind};
+use crate::program::{ControllerConfig, Event, ProgramEventKind};
 use agreed::Agreed;
 use asi_master::image::IMAGE_WORDS;
 use asi_master::{PlcLink, ProcessImage};
@@ -277,6 +278,10 @@ impl Controller for StProgram {
 
     fn program_name(&self) -> Option<&str> {
         Some(&self.name)
+    }
+
+    fn configure(&mut self, settings: &ControllerConfig) {
+        self.agreed.configure(&mut self.plc, settings);
     }
 
     fn as_any(&self) -> &dyn Any {

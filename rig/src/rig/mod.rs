@@ -231,6 +231,16 @@ struct Probes {
     stretch_scans: u64,
 }
 
+/// The built-in program's settings from the scenario's `[controller]` table (the rest at
+/// their defaults).
+fn controller_settings(sc: &Scenario) -> ControllerConfig {
+    let mut cfg = ControllerConfig::default();
+    cfg.floors = sc.floors;
+    cfg.algorithm = sc.algorithm;
+    cfg.scan = sc.plc_scan;
+    cfg
+}
+
 impl Rig {
     /// A rig at power-on for `sc`: its PLC runs the scenario's Structured Text program
     /// ([`Scenario::program`]) if it has one, else the built-in program.
@@ -254,13 +264,7 @@ impl Rig {
             lab.bus_mut()
                 .set_line_faults(sc.seed, FaultRates::uniform(rate));
         }
-        let plc = Plc::new({
-            let mut cfg = ControllerConfig::default();
-            cfg.floors = sc.floors;
-            cfg.algorithm = sc.algorithm;
-            cfg.scan = sc.plc_scan;
-            cfg
-        })?;
+        let plc = Plc::new(controller_settings(&sc))?;
         let safety_cfg = LiftSafetyConfig::default();
         let estop_delay = safety_cfg.estop_delay;
         let safety = LiftSafety::new(safety_cfg)?;
@@ -903,10 +907,12 @@ impl Rig {
         self.own_moments_changed();
     }
 
-    /// Puts `controller` in the built-in program's place: the rig scans it every
+    /// Puts `controller` in the built-in program's place, with the scenario's controller
+    /// settings ([`Controller::configure`]): the rig scans it every
     /// [`Controller::scan_period`] from the moment reached. Bus, slaves, plant, safety logic
     /// and invariant watch run as before.
-    pub fn with_controller(mut self, controller: impl Controller) -> Rig {
+    pub fn with_controller(mut self, mut controller: impl Controller) -> Rig {
+        controller.configure(&controller_settings(&self.sc));
         self.report.controller = controller.program_name().map(str::to_owned);
         self.controller = Box::new(controller);
         self.agenda.next_plc = self.agenda.next_plc.max(self.agenda.now);

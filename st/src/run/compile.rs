@@ -271,7 +271,8 @@ impl Compiler<'_> {
     fn init_into(&mut self, init: &ast::Init, t: &Type, at: u32) {
         match (init, t) {
             (ast::Init::Expr(e), _) => {
-                if let (Some(v), Some(el)) = (self.const_value(e), elem_of(t)) {
+                let v = self.enum_init(e, t).or_else(|| self.const_value(e));
+                if let (Some(v), Some(el)) = (v, elem_of(t)) {
                     self.memory[at as usize] = coerce(v, el);
                 }
             }
@@ -306,6 +307,34 @@ impl Compiler<'_> {
             }
             _ => {}
         }
+    }
+
+    /// The value of `key` in the enumeration of `t`, if `t` is one and has it.
+    fn enum_value(&self, t: &Type, key: &str) -> Option<Value> {
+        let Type::Enum(n) = t else { return None };
+        let (_, v) = self
+            .c
+            .enums
+            .get(*n)?
+            .values
+            .iter()
+            .find(|(k, _)| k == key)?;
+        Some(Value::Int(i64::try_from(*v).ok()?))
+    }
+
+    /// An initial value `e` of a variable of type `t`: a bare name that is no CONSTANT and is
+    /// a value of `t`'s enumeration, as the typer takes it (`typeck`'s `expr_into`).
+    fn enum_init(&self, e: &Expr, t: &Type) -> Option<Value> {
+        let key = crate::typeck::bare_name(e)?.key();
+        if self
+            .c
+            .globals
+            .iter()
+            .any(|g| g.name.eq_ignore_ascii_case(&key))
+        {
+            return None;
+        }
+        self.enum_value(t, &key)
     }
 
     /// A constant expression's value (initial values: literals, constants, enumeration
@@ -435,7 +464,7 @@ impl Compiler<'_> {
             StmtKind::Assign { target, value } => {
                 let (place, ty) = self.place(sc, target)?;
                 match elem_of(&ty) {
-                    Some(e) => IStmt::Assign(place, e, self.expr_as(sc, value, e)),
+                    Some(e) => IStmt::Assign(place, e, self.expr_into(sc, value, &ty, e)),
                     None => {
                         let (src, _) = self.place(sc, value)?;
                         IStmt::Copy(place, src, self.size(&ty))
@@ -482,7 +511,7 @@ impl Compiler<'_> {
                             if a.output {
                                 outputs.push((off, el, self.place(sc, &a.value)?.0));
                             } else {
-                                inputs.push((off, el, self.expr_as(sc, &a.value, el)));
+                                inputs.push((off, el, self.expr_into(sc, &a.value, &v.ty, el)));
                             }
                         }
                         IStmt::CallFb {
@@ -506,7 +535,11 @@ impl Compiler<'_> {
                 arms,
                 otherwise,
             } => {
-                let (sel, _) = self.expr(sc, selector);
+                let (sel, st) = self.expr(sc, selector);
+                let label = |v: &Expr| match &st {
+                    CTy::Known(t) => self.enum_in(sc, v, t).or_else(|| self.const_value(v)),
+                    _ => self.const_value(v),
+                };
                 let arms = arms
                     .iter()
                     .map(|(labels, body)| {
@@ -514,12 +547,10 @@ impl Compiler<'_> {
                             .iter()
                             .filter_map(|l| match l {
                                 CaseLabel::Value(v) => {
-                                    let n = self.const_value(v)?.int();
+                                    let n = label(v)?.int();
                                     Some((n, n))
                                 }
-                                CaseLabel::Range(a, b) => {
-                                    Some((self.const_value(a)?.int(), self.const_value(b)?.int()))
-                                }
+                                CaseLabel::Range(a, b) => Some((label(a)?.int(), label(b)?.int())),
                             })
                             .collect();
                         (ranges, self.stmts(sc, body))
@@ -795,7 +826,18 @@ impl Compiler<'_> {
                 }
             }
             ExprKind::Binary(op, x, y) => {
-                let ((a, ta), (b, tb)) = (self.expr(sc, x), self.expr(sc, y));
+                let ((mut a, ta), (mut b, tb)) = (self.expr(sc, x), self.expr(sc, y));
+                // A bare enumeration value takes the other side's enumeration.
+                if let CTy::Known(t) = &tb {
+                    if let Some(v) = self.enum_in(sc, x, t) {
+                        a = IExpr::Const(v);
+                    }
+                }
+                if let CTy::Known(t) = &ta {
+                    if let Some(v) = self.enum_in(sc, y, t) {
+                        b = IExpr::Const(v);
+                    }
+                }
                 let el = self.operands(&ta, &tb);
                 let fix = |x: IExpr, t: &CTy| match (x, t) {
                     (IExpr::Const(v), CTy::IntLit(_) | CTy::RealLit) => IExpr::Const(coerce(v, el)),
@@ -845,6 +887,24 @@ impl Compiler<'_> {
                 }
             }
             ExprKind::Call(callee, args) => self.call(sc, callee, args),
+        }
+    }
+
+    /// `e` where a value of `want` is expected: a bare name that names no variable and is a
+    /// value of `want`'s enumeration, as the typer takes it (`typeck`'s `expr_into`).
+    fn enum_in(&self, sc: &Scope, e: &Expr, want: &Type) -> Option<Value> {
+        let key = crate::typeck::bare_name(e)?.key();
+        if self.place(sc, e).is_some() {
+            return None;
+        }
+        self.enum_value(want, &key)
+    }
+
+    /// `e` as a value of `el`, the type of `want` (see [`Compiler::enum_in`]).
+    fn expr_into(&self, sc: &Scope, e: &Expr, want: &Type, el: Elem) -> IExpr {
+        match self.enum_in(sc, e, want) {
+            Some(v) => IExpr::Const(v),
+            None => self.expr_as(sc, e, el),
         }
     }
 
@@ -942,7 +1002,7 @@ impl Compiler<'_> {
                 continue;
             };
             let el = elem_of(&v.ty).unwrap_or(Elem::Dint);
-            compiled.push((start + off, el, self.expr_as(sc, &a.value, el)));
+            compiled.push((start + off, el, self.expr_into(sc, &a.value, &v.ty, el)));
         }
         let result = pou.result.clone().unwrap_or(Type::Elem(Elem::Dint));
         let el = elem_of(&result).unwrap_or(Elem::Dint);

@@ -143,6 +143,7 @@ impl Value {
 }
 
 /// `v` as a value of `e`: integers wrap to its width, reals round to its precision.
+#[inline]
 fn coerce(v: Value, e: Elem) -> Value {
     match e {
         Elem::Bool => Value::Bool(v.bool()),
@@ -405,11 +406,18 @@ impl Plc {
             budget: self.budget.0,
             at: Span::default(),
         };
-        let r = m.stmts(&code[self.program], 0).map(|_| ());
+        let r = m.stmts(&code[self.program], 0).map(|_| ()).map_err(|f| *f);
         self.code = code;
         r
     }
 }
+
+/// What a step of the machine gives: the fault boxed, so that the result of every step stays
+/// small (a fault comes once, at the end of a scan).
+type Run<T> = Result<T, Box<Fault>>;
+
+/// A call's inputs up to this many are held on the stack while they are evaluated.
+const ARGS_ON_STACK: usize = 8;
 
 struct Machine<'a> {
     memory: &'a mut Vec<Value>,
@@ -425,7 +433,7 @@ struct Machine<'a> {
 }
 
 impl Machine<'_> {
-    fn tick(&mut self, span: Span) -> Result<(), Fault> {
+    fn tick(&mut self, span: Span) -> Run<()> {
         if self.left == 0 {
             // Where nothing finer is known, the loop that ran out of the budget.
             let span = if span == Span::default() {
@@ -433,17 +441,17 @@ impl Machine<'_> {
             } else {
                 span
             };
-            return Err(Fault {
+            return Err(Box::new(Fault {
                 span,
                 cause: FaultCause::Watchdog(self.budget),
-            });
+            }));
         }
         self.left -= 1;
         Ok(())
     }
 
     /// The address of `p` (a memory place), with `base` the frame's start.
-    fn addr(&mut self, p: &Place, base: u32) -> Result<u32, Fault> {
+    fn addr(&mut self, p: &Place, base: u32) -> Run<u32> {
         match p {
             Place::Mem(a) => Ok(base.wrapping_add(*a)),
             Place::Abs(a) => Ok(*a),
@@ -457,14 +465,14 @@ impl Machine<'_> {
                 for (ix, lo, hi, stride) in terms {
                     let i = self.eval(ix, base)?.int();
                     if i < *lo || i > *hi {
-                        return Err(Fault {
+                        return Err(Box::new(Fault {
                             span: *span,
                             cause: FaultCause::IndexOutOfRange {
                                 index: i,
                                 lo: *lo,
                                 hi: *hi,
                             },
-                        });
+                        }));
                     }
                     a += (i - lo) as u32 * stride;
                 }
@@ -474,8 +482,11 @@ impl Machine<'_> {
         }
     }
 
-    fn read(&mut self, p: &Place, e: Elem, base: u32) -> Result<Value, Fault> {
+    fn read(&mut self, p: &Place, e: Elem, base: u32) -> Run<Value> {
         Ok(match p {
+            // The most frequent places first, without the address's detour.
+            Place::Mem(a) => self.memory[base.wrapping_add(*a) as usize],
+            Place::Abs(a) => self.memory[*a as usize],
             Place::InBit(w, b) => Value::Bool(self.image.input(*w) >> b & 1 == 1),
             Place::InWord(w) => coerce(Value::Uint(u64::from(self.image.input(*w))), e),
             Place::OutBit(w, b) => Value::Bool(self.image.output(*w) >> b & 1 == 1),
@@ -491,7 +502,7 @@ impl Machine<'_> {
         })
     }
 
-    fn write(&mut self, p: &Place, e: Elem, v: Value, base: u32) -> Result<(), Fault> {
+    fn write(&mut self, p: &Place, e: Elem, v: Value, base: u32) -> Run<()> {
         let v = coerce(v, e);
         match p {
             Place::OutBit(w, b) => {
@@ -522,7 +533,7 @@ impl Machine<'_> {
         Ok(())
     }
 
-    fn stmts(&mut self, ss: &[IStmt], base: u32) -> Result<Flow, Fault> {
+    fn stmts(&mut self, ss: &[IStmt], base: u32) -> Run<Flow> {
         for s in ss {
             match self.stmt(s, base)? {
                 Flow::Next => {}
@@ -532,12 +543,16 @@ impl Machine<'_> {
         Ok(Flow::Next)
     }
 
-    fn stmt(&mut self, s: &IStmt, base: u32) -> Result<Flow, Fault> {
+    fn stmt(&mut self, s: &IStmt, base: u32) -> Run<Flow> {
         self.tick(Span::default())?;
         match s {
             IStmt::Assign(p, e, x) => {
                 let v = self.eval(x, base)?;
-                self.write(p, *e, v, base)?;
+                match p {
+                    Place::Mem(a) => self.memory[base.wrapping_add(*a) as usize] = coerce(v, *e),
+                    Place::Abs(a) => self.memory[*a as usize] = coerce(v, *e),
+                    _ => self.write(p, *e, v, base)?,
+                }
             }
             IStmt::CallFb {
                 fb,
@@ -660,10 +675,12 @@ impl Machine<'_> {
 }
 
 impl Machine<'_> {
-    fn eval(&mut self, x: &IExpr, base: u32) -> Result<Value, Fault> {
+    fn eval(&mut self, x: &IExpr, base: u32) -> Run<Value> {
         self.tick(Span::default())?;
         Ok(match x {
             IExpr::Const(v) => *v,
+            IExpr::Read(Place::Mem(a), _) => self.memory[base.wrapping_add(*a) as usize],
+            IExpr::Read(Place::Abs(a), _) => self.memory[*a as usize],
             IExpr::Read(p, e) => self.read(p, *e, base)?,
             IExpr::Neg(a, e) => {
                 let v = self.eval(a, base)?;
@@ -715,37 +732,47 @@ impl Machine<'_> {
                 self.binary(*op, *e, a, b, *span)?
             }
             IExpr::Call(block, (start, len), args, result, e) => {
-                let mut values = Vec::with_capacity(args.len());
-                for (_, pe, x) in args {
-                    values.push(coerce(self.eval(x, base)?, *pe));
+                // The inputs are all evaluated before the frame is reset (an input may call
+                // the same function); on the stack for the usual few, so a call allocates
+                // nothing.
+                let mut few = [Value::Int(0); ARGS_ON_STACK];
+                let mut many = Vec::new();
+                let values: &mut [Value] = if args.len() <= ARGS_ON_STACK {
+                    &mut few[..args.len()]
+                } else {
+                    many.resize(args.len(), Value::Int(0));
+                    &mut many
+                };
+                for (slot, (_, pe, x)) in values.iter_mut().zip(args) {
+                    *slot = coerce(self.eval(x, base)?, *pe);
                 }
                 let range = *start as usize..(*start + *len) as usize;
                 self.memory[range.clone()].copy_from_slice(&self.initial[range]);
-                for ((addr, _, _), v) in args.iter().zip(values) {
-                    self.memory[*addr as usize] = v;
+                for ((addr, _, _), v) in args.iter().zip(values.iter()) {
+                    self.memory[*addr as usize] = *v;
                 }
                 let code = self.code;
                 self.stmts(&code[*block], 0)?;
                 coerce(self.memory[*result as usize], *e)
             }
             IExpr::Std(f, e, args) => {
-                let mut vs = Vec::with_capacity(args.len());
-                for a in args {
-                    vs.push(self.eval(a, base)?);
+                let mut few = [Value::Int(0); ARGS_ON_STACK];
+                let mut many = Vec::new();
+                let vs: &mut [Value] = if args.len() <= ARGS_ON_STACK {
+                    &mut few[..args.len()]
+                } else {
+                    many.resize(args.len(), Value::Int(0));
+                    &mut many
+                };
+                for (slot, a) in vs.iter_mut().zip(args) {
+                    *slot = self.eval(a, base)?;
                 }
-                std_fn(*f, *e, &vs)
+                std_fn(*f, *e, vs)
             }
         })
     }
 
-    fn binary(
-        &mut self,
-        op: BinOp,
-        e: Elem,
-        a: Value,
-        b: Value,
-        span: Span,
-    ) -> Result<Value, Fault> {
+    fn binary(&mut self, op: BinOp, e: Elem, a: Value, b: Value, span: Span) -> Run<Value> {
         use BinOp::*;
         if e.is_real() {
             let (x, y) = (a.real(), b.real());
@@ -782,10 +809,10 @@ impl Machine<'_> {
             ));
         }
         if matches!(op, Div | Mod) && b.int() == 0 && b.uint() == 0 {
-            return Err(Fault {
+            return Err(Box::new(Fault {
                 span,
                 cause: FaultCause::DivisionByZero,
-            });
+            }));
         }
         let unsigned = e.int_range().is_some_and(|(lo, _)| lo == 0) || e.is_bits();
         let v = if unsigned {
