@@ -6,6 +6,7 @@ pub mod campaign;
 pub mod completions;
 pub mod decode;
 pub mod encode;
+pub mod explore;
 pub mod man;
 pub mod output;
 pub mod picture;

@@ -1,0 +1,264 @@
+//! `asi-lift explore`: every fault of the catalogue at every instant of a grid over a
+//! scenario, each fork run to its verdict; one JSON line per fork and the FMEA sheet;
+//! `explore summarize` merges result files (the asi-lift guide, "The fault explorer").
+
+use super::run::{load_program, load_scenario};
+use super::{open_output, print_out, read_input, EXIT_VIOLATIONS};
+use asi_phy::{SimDuration, SimTime};
+use clap::Subcommand;
+use rig::campaign::run::Shard;
+use rig::explore::catalogue::{parse_kinds, FaultKind, Params};
+use rig::explore::summary::{sheet, summarize};
+use rig::explore::{explore, ForkLine, Plan, Verdict};
+use rig::Rig;
+use std::io::{IsTerminal, Write};
+use std::path::{Path, PathBuf};
+
+/// What `asi-lift explore` does besides exploring.
+#[derive(Subcommand)]
+pub enum ExploreAction {
+    /// Merge the JSON lines of one exploration (its shards, in any order) into its FMEA
+    /// sheet: fault kind × lift phase, the count of each verdict.
+    Summarize {
+        /// The result files (`-` for standard input).
+        #[arg(required = true, value_name = "FILE")]
+        files: Vec<PathBuf>,
+        /// Write the sheet as JSON.
+        #[arg(long)]
+        json: bool,
+    },
+}
+
+/// The arguments of `asi-lift explore`.
+#[derive(clap::Args)]
+pub struct ExploreArgs {
+    /// The scenario: a file (TOML) or the name of a built-in one.
+    #[arg(value_name = "SCENARIO")]
+    pub scenario: Option<PathBuf>,
+    /// Which faults: `single`, one fault per fork (pairs are not there yet).
+    #[arg(long, value_name = "single", default_value = "single")]
+    pub faults: String,
+    /// The grid's step: a fork at every multiple of it within the window.
+    #[arg(long, value_name = "DURATION", default_value = "100ms")]
+    pub every: String,
+    /// The first and the last instant of the grid, START..END (e.g. 10s..20s) [default: the
+    /// whole scenario, but its last horizon-free instant].
+    #[arg(long, value_name = "START..END")]
+    pub window: Option<String>,
+    /// The fault kinds, comma-separated (e.g. slave-off:7,stop,vane) [default: the whole
+    /// catalogue].
+    #[arg(long, value_name = "KIND,…")]
+    pub kinds: Option<String>,
+    /// How long a fork runs on after its fault at most.
+    #[arg(long, value_name = "DURATION", default_value = "60s")]
+    pub horizon: String,
+    /// How long a slave stays off the bus before it is put back.
+    #[arg(long, value_name = "DURATION", default_value = "2s")]
+    pub off_for: String,
+    /// Worker threads [default: all cores].
+    #[arg(long, value_name = "J", allow_negative_numbers = true)]
+    pub jobs: Option<usize>,
+    /// Run only the K-th of N disjoint parts (1-based): the forks whose index i has
+    /// i mod N = K - 1.
+    #[arg(long, value_name = "K/N", value_parser = parse_shard)]
+    pub shard: Option<Shard>,
+    /// Write the JSON lines to this file instead of standard output.
+    #[arg(long, value_name = "FILE.jsonl")]
+    pub out: Option<PathBuf>,
+    /// Run this IEC 61131-3 Structured Text program as the PLC instead of the built-in one.
+    #[arg(long, value_name = "FILE.st")]
+    pub controller: Option<PathBuf>,
+    /// Overwrite the --out file if it exists.
+    #[arg(long)]
+    pub force: bool,
+}
+
+fn duration(flag: &str, text: &str) -> Result<SimDuration, String> {
+    text.trim()
+        .parse::<SimDuration>()
+        .map_err(|e| format!("{flag} {text}: {e}"))
+}
+
+/// The plan the arguments give for the scenario `sc`.
+fn plan(args: &ExploreArgs, sc: &rig::Scenario) -> Result<Plan, String> {
+    if args.faults != "single" {
+        return Err(format!(
+            "--faults {}: only `single` is there yet (one fault per fork)",
+            args.faults
+        ));
+    }
+    let every = duration("--every", &args.every)?;
+    if every < SimDuration::from_millis(1) {
+        return Err(format!(
+            "--every {}: the grid's step is at least 1 ms",
+            args.every
+        ));
+    }
+    let horizon = duration("--horizon", &args.horizon)?;
+    if horizon.is_zero() {
+        return Err(format!(
+            "--horizon {}: must be longer than zero",
+            args.horizon
+        ));
+    }
+    let off_for = duration("--off-for", &args.off_for)?;
+    if off_for.is_zero() {
+        return Err(format!(
+            "--off-for {}: must be longer than zero",
+            args.off_for
+        ));
+    }
+    let end = SimTime::ZERO + sc.duration;
+    let window = match &args.window {
+        None => (SimTime::ZERO + every, end - SimDuration::from_nanos(1)),
+        Some(w) => {
+            let err = |why: String| format!("--window {w}: {why}");
+            let (a, b) = w
+                .split_once("..")
+                .ok_or_else(|| err("expected START..END, e.g. 10s..20s".into()))?;
+            let a: SimDuration = a.trim().parse().map_err(|e| err(format!("{e}")))?;
+            let b: SimDuration = b.trim().parse().map_err(|e| err(format!("{e}")))?;
+            if b < a {
+                return Err(err("END must not come before START".into()));
+            }
+            if SimTime::ZERO + b >= end {
+                return Err(err(format!(
+                    "END must come before the scenario's end ({})",
+                    sc.duration
+                )));
+            }
+            (SimTime::ZERO + a, SimTime::ZERO + b)
+        }
+    };
+    let kinds = match &args.kinds {
+        None => FaultKind::all_for(sc),
+        Some(k) => parse_kinds(k, sc).map_err(|e| format!("--kinds: {e}"))?,
+    };
+    Ok(Plan {
+        kinds,
+        params: Params {
+            off_for,
+            ..Params::default()
+        },
+        every,
+        window,
+        horizon,
+        shard: args.shard.unwrap_or(Shard::ALL),
+    })
+}
+
+/// `asi-lift explore`: runs the plan, writes the lines, prints the sheet to standard error.
+pub fn run(args: ExploreArgs) -> Result<u8, String> {
+    let jobs = match args.jobs {
+        Some(0) => return Err("--jobs: 0: give at least one worker thread".into()),
+        Some(j) => j,
+        None => std::thread::available_parallelism().map_or(1, |n| n.get()),
+    };
+    let (sc, file) = load_scenario(args.scenario.as_deref(), None)?;
+    let plan = plan(&args, &sc)?;
+    let program = args
+        .controller
+        .as_deref()
+        .map(load_program)
+        .transpose()?
+        .map(|p| p.with_scan(sc.plc_scan));
+    let out_path = args.out.clone().unwrap_or_else(|| PathBuf::from("-"));
+    let mut inputs: Vec<(&str, &Path)> = Vec::new();
+    if let Some(f) = file {
+        inputs.push(("the scenario", f));
+    }
+    if let Some(c) = &args.controller {
+        inputs.push(("--controller", c));
+    }
+    super::output::refuse_inputs("--out", &out_path, &inputs)?;
+    let mut out = open_output(&out_path, args.force)?;
+    let out_name = if out_path == Path::new("-") {
+        "standard output".to_string()
+    } else {
+        out_path.display().to_string()
+    };
+    let make = || -> Result<Rig, String> {
+        let rig = Rig::new(sc.clone()).map_err(|e| e.to_string())?;
+        Ok(match &program {
+            Some(p) => rig.with_controller(p.clone()),
+            None => rig,
+        })
+    };
+    // A panic in a fork is its verdict, reported in its line: keep the workers' panic
+    // messages off the terminal.
+    let default_hook = std::panic::take_hook();
+    std::panic::set_hook(Box::new(move |info| {
+        let worker = std::thread::current()
+            .name()
+            .is_some_and(|n| n.starts_with("explore-worker-"));
+        if !worker {
+            default_hook(info);
+        }
+    }));
+    let count = plan.count();
+    let bar = if std::io::stderr().is_terminal() {
+        let bar = indicatif::ProgressBar::new(count);
+        if let Ok(style) = indicatif::ProgressStyle::with_template(
+            "{elapsed_precise} [{bar:30}] {pos}/{len} forks, {per_sec}, eta {eta}",
+        ) {
+            bar.set_style(style.progress_chars("=> "));
+        }
+        bar
+    } else {
+        indicatif::ProgressBar::hidden()
+    };
+    let mut lines: Vec<ForkLine> = Vec::new();
+    let reader_gone = std::cell::Cell::new(false);
+    let mut sink = |l: ForkLine| -> Result<(), String> {
+        let text = l
+            .to_json_line()
+            .map_err(|e| format!("fork {}: its line as JSON: {e}", l.index))?;
+        lines.push(l);
+        writeln!(out, "{text}").map_err(|e| {
+            if e.kind() == std::io::ErrorKind::BrokenPipe {
+                reader_gone.set(true);
+            }
+            format!("{out_name}: {e}")
+        })
+    };
+    let mut progress = |done: &[ForkLine]| bar.inc(done.len() as u64);
+    let result = explore(&make, &plan, jobs, &mut sink, &mut progress);
+    bar.finish_and_clear();
+    let _ = std::panic::take_hook();
+    if reader_gone.get() {
+        return Ok(0);
+    }
+    result.map_err(|e| e.0)?;
+    out.flush().map_err(|e| format!("{out_name}: {e}"))?;
+    drop(out);
+    let s = sheet(&sc.name, plan.forks(), &lines);
+    eprint!("{}", s.to_text());
+    let bad = lines
+        .iter()
+        .any(|l| matches!(l.verdict, Verdict::Violation | Verdict::Panic));
+    Ok(if bad { EXIT_VIOLATIONS } else { 0 })
+}
+
+/// `asi-lift explore summarize`.
+pub fn summarize_files(files: &[PathBuf], json: bool) -> Result<u8, String> {
+    let mut texts = Vec::new();
+    for f in files {
+        let name = if f == Path::new("-") {
+            "standard input".to_string()
+        } else {
+            f.display().to_string()
+        };
+        texts.push((name, read_input(f, super::MAX_RESULTS_BYTES)?));
+    }
+    let s = summarize(&texts)?;
+    print_out(&if json {
+        s.to_json().map_err(|e| format!("the sheet as JSON: {e}"))? + "\n"
+    } else {
+        s.to_text()
+    })?;
+    Ok(0)
+}
+
+fn parse_shard(s: &str) -> Result<Shard, String> {
+    s.parse()
+}
