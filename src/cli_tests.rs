@@ -395,6 +395,114 @@ fn outputs_follow_the_umask_and_a_replaced_file_keeps_its_mode() {
     assert_eq!(mode(&report), 0o664);
 }
 
+/// `explore` names the flag and the cause of each bad argument, before it runs anything.
+#[test]
+fn explore_refuses_bad_flags_with_their_names_and_causes() {
+    let cases: [(&[&str], &str); 10] = [
+        (
+            &["--every", "0ms"],
+            "--every 0ms: the grid's step is at least 1 ms",
+        ),
+        (&["--every", "fast"], "--every fast: "),
+        (
+            &["--window", "10s"],
+            "--window 10s: expected START..END, e.g. 10s..20s",
+        ),
+        (
+            &["--window", "20s..10s"],
+            "--window 20s..10s: END must not come before START",
+        ),
+        (
+            &["--window", "10s..80s"],
+            "--window 10s..80s: END must come before the scenario's end (80 s)",
+        ),
+        (
+            &["--kinds", "door-close"],
+            "--kinds: `door-close`: unknown fault kind (use slave-off:N,",
+        ),
+        (
+            &["--kinds", "encoder-failed"],
+            "--kinds: `encoder-failed`: needs `[drive] safe = true`",
+        ),
+        (
+            &["--horizon", "0s"],
+            "--horizon 0s: must be longer than zero",
+        ),
+        (
+            &["--faults", "triples"],
+            "--faults triples: only `single` is there yet",
+        ),
+        (
+            &["--jobs", "0"],
+            "--jobs: 0: give at least one worker thread",
+        ),
+    ];
+    for (args, want) in cases {
+        let err = fails(asi_lift().arg("explore").arg("demo").args(args));
+        assert!(err.contains(want), "{args:?}: {err}");
+        assert!(err.len() < 400, "{args:?}: {err}");
+    }
+    let err = fails(asi_lift().args(["explore", "demo", "--shard", "3/2"]));
+    assert!(err.contains("--shard"), "{err}");
+    assert!(err.contains("numbered from 1"), "{err}");
+}
+
+/// `explore` writes its lines to `--out` and its sheet to standard error; `explore summarize`
+/// merges the shards' files into the whole's sheet; an existing `--out` is kept.
+#[test]
+fn explore_shards_merge_into_the_whole_sheet() {
+    let d = temp();
+    let run = |out: &Path, shard: &str| {
+        let status = asi_lift()
+            .args([
+                "explore",
+                "demo",
+                "--every",
+                "500ms",
+                "--window",
+                "15s..15.5s",
+            ])
+            .args(["--kinds", "stop,crank", "--horizon", "3s", "--shard", shard])
+            .arg("--out")
+            .arg(out)
+            .output()
+            .expect("asi-lift runs");
+        assert!(status.status.success(), "{status:?}");
+        String::from_utf8_lossy(&status.stderr).into_owned()
+    };
+    let whole = d.path().join("whole.jsonl");
+    let sheet = run(&whole, "1/1");
+    assert!(
+        sheet.starts_with("exploration of `demo`: 4 of 4 forks\n"),
+        "{sheet}"
+    );
+    let (a, b) = (d.path().join("a.jsonl"), d.path().join("b.jsonl"));
+    run(&a, "1/2");
+    run(&b, "2/2");
+    let summary = |files: &[&Path]| {
+        let out = asi_lift()
+            .args(["explore", "summarize"])
+            .args(files)
+            .output()
+            .expect("asi-lift runs");
+        assert!(out.status.success(), "{out:?}");
+        String::from_utf8_lossy(&out.stdout).into_owned()
+    };
+    assert_eq!(summary(&[&b, &a]), summary(&[&whole]));
+    assert_eq!(summary(&[&whole]), sheet);
+    let err = fails(
+        asi_lift()
+            .args([
+                "explore", "demo", "--every", "1s", "--window", "15s..15s", "--out",
+            ])
+            .arg(&whole),
+    );
+    assert!(
+        err.contains("exists; pass --force to overwrite it"),
+        "{err}"
+    );
+}
+
 #[test]
 fn numbers_out_of_range_are_named_compactly_with_the_range() {
     let d = temp();
