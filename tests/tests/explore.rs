@@ -260,3 +260,69 @@ fn a_panic_is_one_forks_verdict_and_the_sweep_goes_on() {
         lines[0].detail
     );
 }
+
+/// Wide sweeps, in release (`.ci/run`): the demo's single-fault sweep every second over its
+/// whole run with one worker and with two shards gives the same lines, none a panic; and at 40
+/// instants drawn over the demo, the safe drive's scenario and the busy one, each with a kind
+/// drawn from the catalogue, the fork gives the verdict of the scenario with the fault written
+/// in, run from power-on.
+#[test]
+#[ignore = "release: a wide sweep (.ci/run)"]
+fn wide_sweeps_do_not_depend_on_the_shards_and_forks_are_the_faults_written_in() {
+    let sc = demo();
+    let end_ms = sc.duration.as_nanos() / 1_000_000;
+    let p = plan(&[], (1_000, end_ms - 1_000), 1_000, 60);
+    let p = Plan {
+        kinds: FaultKind::all_for(&sc),
+        ..p
+    };
+    let whole = lines_of(&make_demo, &p, 2);
+    assert_eq!(whole.len() as u64, p.forks());
+    assert!(whole.iter().all(|l| l.verdict != Verdict::Panic));
+    let mut merged = Vec::new();
+    for k in 1..=2 {
+        let shard = Plan {
+            shard: Shard { k, n: 2 },
+            ..p.clone()
+        };
+        merged.extend(lines_of(&make_demo, &shard, 1));
+    }
+    merged.sort_by_key(|l| l.index);
+    assert_eq!(merged, whole);
+
+    let horizon = SimDuration::from_secs(30);
+    let mut x: u64 = 0x5eed;
+    let mut draw = |n: u64| {
+        // SplitMix64: a fixed sample, the same every run.
+        x = x.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = x;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        (z ^ (z >> 31)) % n
+    };
+    for name in ["demo", "safe-drive", "busy"] {
+        let sc = rig::scenario::builtin::Builtin::find(name)
+            .expect("built in")
+            .scenario()
+            .expect("a scenario");
+        let kinds = FaultKind::all_for(&sc);
+        let end_ms = sc.duration.as_nanos() / 1_000_000;
+        let mut instants: Vec<u64> = (0..40).map(|_| 1 + draw(end_ms - 2)).collect();
+        instants.sort_unstable();
+        let mut base = Rig::new(sc.clone()).expect("a rig");
+        for ms in instants {
+            let at = SimTime::from_millis(ms);
+            while base.step_until(at - SimDuration::from_nanos(1)).is_some() {}
+            let kind = kinds[draw(kinds.len() as u64) as usize];
+            let p = Plan {
+                kinds: vec![kind],
+                horizon,
+                ..plan(&[], (ms, ms), 1000, 30)
+            };
+            let forked = fork(&base, kind, &p, at);
+            let written = written_in(sc.clone(), kind, at, at + horizon);
+            let from_power_on = judge(Rig::new(written).expect("a rig"), at, horizon);
+            assert_eq!(forked, from_power_on, "{name}: {kind} at {at}");
+        }
+    }
+}
