@@ -465,6 +465,8 @@ fn explore_shards_merge_into_the_whole_sheet() {
             .args(["--kinds", "stop,crank", "--horizon", "3s", "--shard", shard])
             .arg("--out")
             .arg(out)
+            .arg("--svg")
+            .arg(out.with_extension("svg"))
             .output()
             .expect("asi-lift runs");
         assert!(status.status.success(), "{status:?}");
@@ -489,6 +491,23 @@ fn explore_shards_merge_into_the_whole_sheet() {
         String::from_utf8_lossy(&out.stdout).into_owned()
     };
     assert_eq!(summary(&[&b, &a]), summary(&[&whole]));
+    // The shards' picture is the whole's, byte for byte.
+    let merged_svg = d.path().join("merged.svg");
+    let out = asi_lift()
+        .args(["explore", "summarize"])
+        .args([&b, &a])
+        .arg("--svg")
+        .arg(&merged_svg)
+        .output()
+        .expect("asi-lift runs");
+    assert!(out.status.success(), "{out:?}");
+    let read = |p: &Path| std::fs::read_to_string(p).expect("an SVG");
+    let svg = read(&merged_svg);
+    assert_eq!(svg, read(&whole.with_extension("svg")));
+    assert!(
+        svg.starts_with("<svg ") && svg.contains("stop at 15 s: "),
+        "{svg}"
+    );
     assert_eq!(summary(&[&whole]), sheet);
     let err = fails(
         asi_lift()

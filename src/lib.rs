@@ -119,9 +119,12 @@ pub fn run(cli: Cli) -> Result<u8, String> {
         },
         Command::Explore { action, args } => match action {
             None => cmd::explore::run(args),
-            Some(cmd::explore::ExploreAction::Summarize { files, json }) => {
-                cmd::explore::summarize_files(&files, json)
-            }
+            Some(cmd::explore::ExploreAction::Summarize {
+                files,
+                json,
+                svg,
+                force,
+            }) => cmd::explore::summarize_files(&files, json, svg.as_deref(), force),
         },
         Command::Completions(args) => cmd::completions::run(args, Cli::command()),
         Command::Man(args) => cmd::man::run(args, Cli::command()),

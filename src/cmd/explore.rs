@@ -26,6 +26,13 @@ pub enum ExploreAction {
         /// Write the sheet as JSON.
         #[arg(long)]
         json: bool,
+        /// Draw the picture of the outcomes (fault kind × instant, above the cabin's
+        /// position) into this SVG file.
+        #[arg(long, value_name = "FILE.svg")]
+        svg: Option<PathBuf>,
+        /// Overwrite the --svg file if it exists.
+        #[arg(long)]
+        force: bool,
     },
 }
 
@@ -68,7 +75,11 @@ pub struct ExploreArgs {
     /// Run this IEC 61131-3 Structured Text program as the PLC instead of the built-in one.
     #[arg(long, value_name = "FILE.st")]
     pub controller: Option<PathBuf>,
-    /// Overwrite the --out file if it exists.
+    /// Draw the picture of the outcomes (fault kind × instant, above the cabin's position)
+    /// into this SVG file.
+    #[arg(long, value_name = "FILE.svg")]
+    pub svg: Option<PathBuf>,
+    /// Overwrite the --out and --svg files if they exist.
     #[arg(long)]
     pub force: bool,
 }
@@ -171,6 +182,15 @@ pub fn run(args: ExploreArgs) -> Result<u8, String> {
         inputs.push(("--controller", c));
     }
     super::output::refuse_inputs("--out", &out_path, &inputs)?;
+    if let Some(svg) = &args.svg {
+        super::output::refuse_inputs("--svg", svg, &inputs)?;
+        if svg.exists() && !args.force {
+            return Err(format!(
+                "{} exists; pass --force to overwrite it",
+                svg.display()
+            ));
+        }
+    }
     let mut out = open_output(&out_path, args.force)?;
     let out_name = if out_path == Path::new("-") {
         "standard output".to_string()
@@ -231,6 +251,9 @@ pub fn run(args: ExploreArgs) -> Result<u8, String> {
     result.map_err(|e| e.0)?;
     out.flush().map_err(|e| format!("{out_name}: {e}"))?;
     drop(out);
+    if let Some(svg) = &args.svg {
+        write_svg(svg, &lines, args.force)?;
+    }
     let s = sheet(&sc.name, plan.forks(), &lines);
     eprint!("{}", s.to_text());
     let bad = lines
@@ -239,8 +262,28 @@ pub fn run(args: ExploreArgs) -> Result<u8, String> {
     Ok(if bad { EXIT_VIOLATIONS } else { 0 })
 }
 
+/// Writes the picture of `lines` to `path`, never over a file unless `force`.
+fn write_svg(path: &Path, lines: &[ForkLine], force: bool) -> Result<(), String> {
+    let mut f = open_output(path, force).map_err(|e| format!("--svg: {e}"))?;
+    f.write_all(super::explore_svg::svg(lines).as_bytes())
+        .and_then(|()| f.flush())
+        .map_err(|e| format!("--svg {}: {e}", path.display()))
+}
+
 /// `asi-lift explore summarize`.
-pub fn summarize_files(files: &[PathBuf], json: bool) -> Result<u8, String> {
+pub fn summarize_files(
+    files: &[PathBuf],
+    json: bool,
+    svg: Option<&Path>,
+    force: bool,
+) -> Result<u8, String> {
+    if let Some(svg) = svg {
+        let inputs: Vec<(&str, &Path)> = files
+            .iter()
+            .map(|f| ("a result file", f.as_path()))
+            .collect();
+        super::output::refuse_inputs("--svg", svg, &inputs)?;
+    }
     let mut texts = Vec::new();
     for f in files {
         let name = if f == Path::new("-") {
@@ -251,6 +294,17 @@ pub fn summarize_files(files: &[PathBuf], json: bool) -> Result<u8, String> {
         texts.push((name, read_input(f, super::MAX_RESULTS_BYTES)?));
     }
     let s = summarize(&texts)?;
+    if let Some(path) = svg {
+        let mut lines: Vec<ForkLine> = Vec::new();
+        for (_, text) in &texts {
+            for raw in text.lines().filter(|l| !l.trim().is_empty()) {
+                // Read once already by `summarize`, which refused anything malformed.
+                lines.push(serde_json::from_str(raw).map_err(|e| e.to_string())?);
+            }
+        }
+        lines.sort_by_key(|l| l.index);
+        write_svg(path, &lines, force)?;
+    }
     print_out(&if json {
         s.to_json().map_err(|e| format!("the sheet as JSON: {e}"))? + "\n"
     } else {

@@ -7,6 +7,7 @@ pub mod completions;
 pub mod decode;
 pub mod encode;
 pub mod explore;
+mod explore_svg;
 pub mod man;
 pub mod output;
 pub mod picture;

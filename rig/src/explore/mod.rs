@@ -187,6 +187,8 @@ pub struct ForkLine {
     pub at_s: f64,
     /// What the lift was doing then.
     pub phase: Phase,
+    /// Where the cabin was then, mm above the floor-1 level (0.1 mm).
+    pub position_mm: f64,
     /// How the fork ended.
     pub verdict: Verdict,
     /// The violation's kind, for a violation.
@@ -568,6 +570,7 @@ pub fn explore(
                                 return;
                             }
                         };
+                        let position_mm = (base.rig.lift().position_mm() * 10.0).round() / 10.0;
                         let mut lines = Vec::new();
                         for (k, kind) in plan.kinds.iter().enumerate() {
                             let index = i * kinds + k as u64;
@@ -582,6 +585,7 @@ pub fn explore(
                                 fault: kind.name(),
                                 at_s: round3(at.as_secs_f64()),
                                 phase,
+                                position_mm,
                                 verdict: j.verdict,
                                 violation: j.violation,
                                 action: j.action,
