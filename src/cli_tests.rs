@@ -398,7 +398,7 @@ fn outputs_follow_the_umask_and_a_replaced_file_keeps_its_mode() {
 /// `explore` names the flag and the cause of each bad argument, before it runs anything.
 #[test]
 fn explore_refuses_bad_flags_with_their_names_and_causes() {
-    let cases: [(&[&str], &str); 10] = [
+    let cases: [(&[&str], &str); 12] = [
         (
             &["--every", "0ms"],
             "--every 0ms: the grid's step is at least 1 ms",
@@ -426,7 +426,15 @@ fn explore_refuses_bad_flags_with_their_names_and_causes() {
         ),
         (
             &["--horizon", "0s"],
-            "--horizon 0s: must be longer than zero",
+            "--horizon 0s: must be longer than zero and at most 86400 s",
+        ),
+        (
+            &["--horizon", "1000000h"],
+            "--horizon 1000000h: must be longer than zero and at most",
+        ),
+        (
+            &["--every", "100s"],
+            "--every 100s: no instant of the grid falls within the window",
         ),
         (
             &["--faults", "triples"],

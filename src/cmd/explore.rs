@@ -106,9 +106,9 @@ fn plan(args: &ExploreArgs, sc: &rig::Scenario) -> Result<Plan, String> {
         ));
     }
     let horizon = duration("--horizon", &args.horizon)?;
-    if horizon.is_zero() {
+    if horizon.is_zero() || horizon > MAX_HORIZON {
         return Err(format!(
-            "--horizon {}: must be longer than zero",
+            "--horizon {}: must be longer than zero and at most {MAX_HORIZON}",
             args.horizon
         ));
     }
@@ -145,7 +145,7 @@ fn plan(args: &ExploreArgs, sc: &rig::Scenario) -> Result<Plan, String> {
         None => FaultKind::all_for(sc),
         Some(k) => parse_kinds(k, sc).map_err(|e| format!("--kinds: {e}"))?,
     };
-    Ok(Plan {
+    let plan = Plan {
         kinds,
         params: Params {
             off_for,
@@ -155,8 +155,18 @@ fn plan(args: &ExploreArgs, sc: &rig::Scenario) -> Result<Plan, String> {
         window,
         horizon,
         shard: args.shard.unwrap_or(Shard::ALL),
-    })
+    };
+    if plan.instants() == 0 {
+        return Err(format!(
+            "--every {}: no instant of the grid falls within the window and before the scenario's end ({})",
+            args.every, sc.duration
+        ));
+    }
+    Ok(plan)
 }
+
+/// The longest horizon: a day of lift after the fault is more than any stop takes to show.
+const MAX_HORIZON: SimDuration = SimDuration::from_secs(24 * 3600);
 
 /// `asi-lift explore`: runs the plan, writes the lines, prints the sheet to standard error.
 pub fn run(args: ExploreArgs) -> Result<u8, String> {
