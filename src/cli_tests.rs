@@ -2274,3 +2274,68 @@ fn run_takes_a_structured_text_program_as_the_plc() {
     assert_eq!(json["controller"], good.display().to_string());
     assert_eq!(json["violations"], serde_json::json!([]));
 }
+
+/// The reproducer of a failing fork: a header that says what failed and how to run it, then
+/// the scenario with the fault written in to the fork's horizon, which reads back as that
+/// scenario.
+#[test]
+fn an_explorers_reproducer_is_the_scenario_with_the_fault_written_in() {
+    use asi_phy::{SimDuration, SimTime};
+    use rig::explore::catalogue::{FaultKind, Params};
+    use rig::explore::{ForkLine, Phase, Plan, Verdict};
+    let sc = rig::Scenario::demo().expect("the demo");
+    let plan = Plan {
+        kinds: vec![FaultKind::Stop, FaultKind::DoorOpen],
+        params: Params::default(),
+        every: SimDuration::from_millis(500),
+        window: (SimTime::from_millis(20_000), SimTime::from_millis(21_000)),
+        horizon: SimDuration::from_secs(30),
+        shard: rig::campaign::run::Shard::ALL,
+    };
+    // Fork 3: the second instant (20.5 s), the second kind (door-open).
+    let line = ForkLine {
+        index: 3,
+        forks: 6,
+        scenario: "demo".into(),
+        fault: "door-open".into(),
+        at_s: 20.5,
+        phase: Phase::Travelling,
+        position_mm: 500.0,
+        verdict: Verdict::Panic,
+        violation: None,
+        action: None,
+        detail: "boom\nbang".into(),
+        after_s: 0.0,
+        ran_s: 0.0,
+        reproducer: None,
+    };
+    let (name, text) = asi_lift::cmd::explore::reproducer(
+        &sc,
+        &plan,
+        &line,
+        Path::new("out"),
+        Some(Path::new("my.st")),
+    );
+    assert_eq!(name, "fork-0000003-door-open.toml");
+    let header: Vec<&str> = text.lines().take(3).collect();
+    assert_eq!(
+        header,
+        [
+            "# asi-lift explore reproducer: fault door-open at 20.5 s in scenario `demo` (travelling phase), fork 3 of 6",
+            "# fails: panic: boom bang",
+            "# reproduce: asi-lift run out/fork-0000003-door-open.toml --controller my.st",
+        ]
+    );
+    let mut back = rig::Scenario::from_toml(&name, &text).expect("a scenario");
+    back.events.iter_mut().for_each(|e| e.line = 0);
+    let mut want = rig::explore::written_in(
+        sc,
+        FaultKind::DoorOpen,
+        &plan.params,
+        SimTime::from_millis(20_500),
+        plan.horizon,
+    );
+    want.events.iter_mut().for_each(|e| e.line = 0);
+    assert_eq!(back, want);
+    assert_eq!(back.duration, SimDuration::from_millis(50_500));
+}

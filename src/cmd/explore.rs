@@ -79,6 +79,10 @@ pub struct ExploreArgs {
     /// into this SVG file.
     #[arg(long, value_name = "FILE.svg")]
     pub svg: Option<PathBuf>,
+    /// Where the scenario files that reproduce violations and panics go (created when
+    /// needed): the scenario with the fault written in, to the fork's horizon.
+    #[arg(long, value_name = "DIR", default_value = "explore-failures")]
+    pub failures: PathBuf,
     /// Overwrite the --out and --svg files if they exist.
     #[arg(long)]
     pub force: bool,
@@ -239,7 +243,21 @@ pub fn run(args: ExploreArgs) -> Result<u8, String> {
     };
     let mut lines: Vec<ForkLine> = Vec::new();
     let reader_gone = std::cell::Cell::new(false);
-    let mut sink = |l: ForkLine| -> Result<(), String> {
+    if args.failures.exists() && !args.failures.is_dir() {
+        return Err(format!(
+            "--failures {}: exists and is not a directory",
+            args.failures.display()
+        ));
+    }
+    let mut written = 0u64;
+    let mut sink = |mut l: ForkLine| -> Result<(), String> {
+        if matches!(l.verdict, Verdict::Violation | Verdict::Panic) {
+            let (name, text) =
+                reproducer(&sc, &plan, &l, &args.failures, args.controller.as_deref());
+            let path = super::campaign::write_reproducer(&args.failures, &name, &text)?;
+            l.reproducer = path.file_name().map(|n| n.to_string_lossy().into_owned());
+            written += 1;
+        }
         let text = l
             .to_json_line()
             .map_err(|e| format!("fork {}: its line as JSON: {e}", l.index))?;
@@ -266,10 +284,55 @@ pub fn run(args: ExploreArgs) -> Result<u8, String> {
     }
     let s = sheet(&sc.name, plan.forks(), &lines);
     eprint!("{}", s.to_text());
+    if written > 0 {
+        eprintln!(
+            "{} written to {}",
+            rig::report::count(written, "reproducer", "reproducers"),
+            args.failures.display()
+        );
+    }
     let bad = lines
         .iter()
         .any(|l| matches!(l.verdict, Verdict::Violation | Verdict::Panic));
     Ok(if bad { EXIT_VIOLATIONS } else { 0 })
+}
+
+/// The reproducer of the fork of `line` in the exploration `plan` of `sc`: its file name and
+/// text, a comment header (what failed, how to run it) and the scenario with the fault
+/// written in, lasting to the fork's horizon.
+pub fn reproducer(
+    sc: &rig::Scenario,
+    plan: &Plan,
+    line: &ForkLine,
+    failures: &Path,
+    controller: Option<&Path>,
+) -> (String, String) {
+    let kinds = plan.kinds.len() as u64;
+    let kind = plan.kinds[(line.index % kinds) as usize];
+    let at = plan.instant(line.index / kinds);
+    let repro = rig::explore::written_in(sc.clone(), kind, &plan.params, at, plan.horizon);
+    let name = format!(
+        "fork-{:07}-{}.toml",
+        line.index,
+        kind.name().replace(':', "-")
+    );
+    let one_line = |t: &str| t.replace(['\n', '\r'], " ");
+    let header = format!(
+        "# asi-lift explore reproducer: fault {kind} at {} in scenario `{}` ({} phase), fork {} of {}\n\
+         # fails: {}{}: {}\n\
+         # reproduce: asi-lift run {}{}\n\n",
+        at - SimTime::ZERO,
+        one_line(&sc.name),
+        line.phase,
+        line.index,
+        line.forks,
+        line.verdict,
+        line.violation.map_or(String::new(), |v| format!(" {v}")),
+        one_line(&line.detail),
+        failures.join(&name).display(),
+        controller.map_or(String::new(), |c| format!(" --controller {}", c.display()))
+    );
+    (name, header + &repro.to_toml())
 }
 
 /// Writes the picture of `lines` to `path`, never over a file unless `force`.

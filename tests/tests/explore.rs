@@ -9,7 +9,7 @@ use rig::campaign::run::Shard;
 use rig::explore::catalogue::{FaultKind, Params};
 use rig::explore::summary::{sheet, summarize};
 use rig::explore::{explore, fork, judge, ForkLine, Plan, Verdict};
-use rig::scenario::{Scenario, ScenarioEvent};
+use rig::scenario::Scenario;
 use rig::Rig;
 
 fn demo() -> Scenario {
@@ -103,23 +103,9 @@ fn the_lines_are_the_same_whatever_the_jobs_and_the_shards() {
     assert!(e.contains("overlapping shards"), "{e}");
 }
 
-/// The scenario with `kind`'s events written in at `at`, as its own events.
-fn written_in(mut sc: Scenario, kind: FaultKind, at: SimTime, end: SimTime) -> Scenario {
-    for (offset, action) in kind.actions(&Params::default()) {
-        let t = at + offset;
-        // After the scenario's own events at the same time, as `Rig::schedule` puts them.
-        let pos = sc.events.partition_point(|e| e.at <= t);
-        sc.events.insert(
-            pos,
-            ScenarioEvent {
-                at: t,
-                action,
-                line: 0,
-            },
-        );
-    }
-    sc.duration = end - SimTime::ZERO;
-    sc
+/// The scenario with `kind`'s events written in at `at`, lasting to `end`.
+fn written_in(sc: Scenario, kind: FaultKind, at: SimTime, end: SimTime) -> Scenario {
+    rig::explore::written_in(sc, kind, &Params::default(), at, end - at)
 }
 
 /// A fork of the run at an instant gives the verdict, and the whole report, of the same fault

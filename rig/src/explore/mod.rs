@@ -205,6 +205,10 @@ pub struct ForkLine {
     /// Where the fork ended, seconds after the injection: the verdict's certainty (less
     /// than the horizon when it ended early).
     pub ran_s: f64,
+    /// For a violation or a panic: the file name of the scenario that reproduces it (the
+    /// fault written in), in the failures directory.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reproducer: Option<String>,
 }
 
 impl ForkLine {
@@ -441,6 +445,33 @@ pub fn judge(mut rig: Rig, from: SimTime, horizon: SimDuration) -> Judged {
     }
 }
 
+/// The scenario `sc` with `kind`'s events written in from `at`, as its own events (after the
+/// scenario's events at the same times, where [`Rig::schedule`] puts them), lasting to the
+/// fork's horizon: run from power-on it is the fork (tested), so it reproduces the fork's
+/// verdict with `asi-lift run`.
+pub fn written_in(
+    mut sc: crate::Scenario,
+    kind: FaultKind,
+    params: &Params,
+    at: SimTime,
+    horizon: SimDuration,
+) -> crate::Scenario {
+    for (offset, action) in kind.actions(params) {
+        let t = at + offset;
+        let pos = sc.events.partition_point(|e| e.at <= t);
+        sc.events.insert(
+            pos,
+            crate::scenario::ScenarioEvent {
+                at: t,
+                action,
+                line: 0,
+            },
+        );
+    }
+    sc.duration = (at + horizon) - SimTime::ZERO;
+    sc
+}
+
 /// Schedules `kind`'s events on `rig` from `at`.
 pub fn inject(rig: &mut Rig, kind: FaultKind, params: &Params, at: SimTime) {
     for (offset, action) in kind.actions(params) {
@@ -522,8 +553,8 @@ pub fn explore(
     if plan.window.1 >= first.end() {
         return Err(Stopped(format!(
             "--window: the last instant {} is not before the scenario's end {}",
-            plan.window.1,
-            first.end()
+            plan.window.1 - SimTime::ZERO,
+            first.end() - SimTime::ZERO
         )));
     }
     drop(first);
@@ -564,7 +595,8 @@ pub fn explore(
                             Ok(p) => p,
                             Err(p) => {
                                 let _ = done_tx.send(Err(format!(
-                                    "the scenario without faults panics before {at}: {}",
+                                    "the scenario without faults panics before {}: {}",
+                                    at - SimTime::ZERO,
                                     panic_message(&p)
                                 )));
                                 return;
@@ -592,6 +624,7 @@ pub fn explore(
                                 detail: j.detail,
                                 after_s: round3((j.at.max(at) - at).as_secs_f64()),
                                 ran_s: round3((j.ran_to.max(at) - at).as_secs_f64()),
+                                reproducer: None,
                             });
                         }
                         if done_tx.send(Ok((i, lines))).is_err() {
