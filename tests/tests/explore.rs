@@ -312,3 +312,35 @@ fn wide_sweeps_do_not_depend_on_the_shards_and_forks_are_the_faults_written_in()
         }
     }
 }
+
+/// Findings of the explorer, kept as they reproduce: the built-in `safe-drive` scenario (a
+/// cabin call to floor 4 at 15 s, STOP at 21 s, SS1) swept with single faults every 2 s
+/// (`asi-lift explore safe-drive --every 2s`) gives six stop overruns, among them a vane sensor
+/// stuck on and a converter running away down at 20 s, while the cabin travels: after STOP the
+/// cabin passes the next floor in its direction by more than the watch allows. The scenario
+/// files are the explorer's reproducers; a change that ends these overruns must change this
+/// test on purpose.
+#[test]
+fn the_safe_drive_scenario_with_a_fault_before_stop_overruns_the_next_floor() {
+    for (file, text, at_s) in [
+        (
+            "explore-safe-drive-vane-right-stuck-on.toml",
+            include_str!("data/explore-safe-drive-vane-right-stuck-on.toml"),
+            22.638,
+        ),
+        (
+            "explore-safe-drive-runaway-down.toml",
+            include_str!("data/explore-safe-drive-runaway-down.toml"),
+            22.770,
+        ),
+    ] {
+        let sc = Scenario::from_toml(file, text).expect("the reproducer reads");
+        let report = Rig::new(sc).expect("a rig").run(None);
+        let first = report.violations.first().expect("a violation");
+        assert_eq!(
+            (first.kind, rig::report::round3(first.at_s)),
+            (rig::report::ViolationKind::StopOverrun, at_s),
+            "{file}"
+        );
+    }
+}
