@@ -1916,6 +1916,7 @@ fn man_out_writes_a_page_per_subcommand_and_keeps_what_exists() {
                 "asi-lift-scenarios-show.1",
                 "asi-lift-stand-show.1",
                 "asi-lift-campaign-summarize.1",
+                "asi-lift-explore-summarize.1",
             ]
             .map(String::from),
         )
