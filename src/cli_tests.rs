@@ -395,6 +395,141 @@ fn outputs_follow_the_umask_and_a_replaced_file_keeps_its_mode() {
     assert_eq!(mode(&report), 0o664);
 }
 
+/// `explore` names the flag and the cause of each bad argument, before it runs anything.
+#[test]
+fn explore_refuses_bad_flags_with_their_names_and_causes() {
+    let cases: [(&[&str], &str); 12] = [
+        (
+            &["--every", "0ms"],
+            "--every 0ms: the grid's step is at least 1 ms",
+        ),
+        (&["--every", "fast"], "--every fast: "),
+        (
+            &["--window", "10s"],
+            "--window 10s: expected START..END, e.g. 10s..20s",
+        ),
+        (
+            &["--window", "20s..10s"],
+            "--window 20s..10s: END must not come before START",
+        ),
+        (
+            &["--window", "10s..80s"],
+            "--window 10s..80s: END must come before the scenario's end (80 s)",
+        ),
+        (
+            &["--kinds", "door-close"],
+            "--kinds: `door-close`: unknown fault kind (use slave-off:N,",
+        ),
+        (
+            &["--kinds", "encoder-failed"],
+            "--kinds: `encoder-failed`: needs `[drive] safe = true`",
+        ),
+        (
+            &["--horizon", "0s"],
+            "--horizon 0s: must be longer than zero and at most 86400 s",
+        ),
+        (
+            &["--horizon", "1000000h"],
+            "--horizon 1000000h: must be longer than zero and at most",
+        ),
+        (
+            &["--every", "100s"],
+            "--every 100s: no instant of the grid falls within the window",
+        ),
+        (
+            &["--faults", "triples"],
+            "--faults triples: only `single` is there yet",
+        ),
+        (
+            &["--jobs", "0"],
+            "--jobs: 0: give at least one worker thread",
+        ),
+    ];
+    for (args, want) in cases {
+        let err = fails(asi_lift().arg("explore").arg("demo").args(args));
+        assert!(err.contains(want), "{args:?}: {err}");
+        assert!(err.len() < 400, "{args:?}: {err}");
+    }
+    let err = fails(asi_lift().args(["explore", "demo", "--shard", "3/2"]));
+    assert!(err.contains("--shard"), "{err}");
+    assert!(err.contains("numbered from 1"), "{err}");
+}
+
+/// `explore` writes its lines to `--out` and its sheet to standard error; `explore summarize`
+/// merges the shards' files into the whole's sheet; an existing `--out` is kept.
+#[test]
+fn explore_shards_merge_into_the_whole_sheet() {
+    let d = temp();
+    let run = |out: &Path, shard: &str| {
+        let status = asi_lift()
+            .args([
+                "explore",
+                "demo",
+                "--every",
+                "500ms",
+                "--window",
+                "15s..15.5s",
+            ])
+            .args(["--kinds", "stop,crank", "--horizon", "3s", "--shard", shard])
+            .arg("--out")
+            .arg(out)
+            .arg("--svg")
+            .arg(out.with_extension("svg"))
+            .output()
+            .expect("asi-lift runs");
+        assert!(status.status.success(), "{status:?}");
+        String::from_utf8_lossy(&status.stderr).into_owned()
+    };
+    let whole = d.path().join("whole.jsonl");
+    let sheet = run(&whole, "1/1");
+    assert!(
+        sheet.starts_with("exploration of `demo`: 4 of 4 forks\n"),
+        "{sheet}"
+    );
+    let (a, b) = (d.path().join("a.jsonl"), d.path().join("b.jsonl"));
+    run(&a, "1/2");
+    run(&b, "2/2");
+    let summary = |files: &[&Path]| {
+        let out = asi_lift()
+            .args(["explore", "summarize"])
+            .args(files)
+            .output()
+            .expect("asi-lift runs");
+        assert!(out.status.success(), "{out:?}");
+        String::from_utf8_lossy(&out.stdout).into_owned()
+    };
+    assert_eq!(summary(&[&b, &a]), summary(&[&whole]));
+    // The shards' picture is the whole's, byte for byte.
+    let merged_svg = d.path().join("merged.svg");
+    let out = asi_lift()
+        .args(["explore", "summarize"])
+        .args([&b, &a])
+        .arg("--svg")
+        .arg(&merged_svg)
+        .output()
+        .expect("asi-lift runs");
+    assert!(out.status.success(), "{out:?}");
+    let read = |p: &Path| std::fs::read_to_string(p).expect("an SVG");
+    let svg = read(&merged_svg);
+    assert_eq!(svg, read(&whole.with_extension("svg")));
+    assert!(
+        svg.starts_with("<svg ") && svg.contains("stop at 15 s: "),
+        "{svg}"
+    );
+    assert_eq!(summary(&[&whole]), sheet);
+    let err = fails(
+        asi_lift()
+            .args([
+                "explore", "demo", "--every", "1s", "--window", "15s..15s", "--out",
+            ])
+            .arg(&whole),
+    );
+    assert!(
+        err.contains("exists; pass --force to overwrite it"),
+        "{err}"
+    );
+}
+
 #[test]
 fn numbers_out_of_range_are_named_compactly_with_the_range() {
     let d = temp();
@@ -1781,6 +1916,7 @@ fn man_out_writes_a_page_per_subcommand_and_keeps_what_exists() {
                 "asi-lift-scenarios-show.1",
                 "asi-lift-stand-show.1",
                 "asi-lift-campaign-summarize.1",
+                "asi-lift-explore-summarize.1",
             ]
             .map(String::from),
         )
@@ -2420,4 +2556,63 @@ fn the_reference_program_runs_with_its_library() {
         err.contains(":2:11: controller.library: a library goes with a program"),
         "{err}"
     );
+}
+
+/// The reproducer of a failing fork: a header that says what failed and how to run it, then
+/// the scenario with the fault written in to the fork's horizon, which reads back as that
+/// scenario.
+#[test]
+fn an_explorers_reproducer_is_the_scenario_with_the_fault_written_in() {
+    use asi_phy::{SimDuration, SimTime};
+    use rig::explore::catalogue::{FaultKind, Params};
+    use rig::explore::{ForkLine, Phase, Plan, Verdict};
+    let sc = rig::Scenario::demo().expect("the demo");
+    let plan = Plan {
+        kinds: vec![FaultKind::Stop, FaultKind::DoorOpen],
+        params: Params::default(),
+        every: SimDuration::from_millis(500),
+        window: (SimTime::from_millis(20_000), SimTime::from_millis(21_000)),
+        horizon: SimDuration::from_secs(30),
+        shard: rig::campaign::run::Shard::ALL,
+    };
+    // Fork 3: the second instant (20.5 s), the second kind (door-open).
+    let line = ForkLine {
+        index: 3,
+        forks: 6,
+        scenario: "demo".into(),
+        fault: "door-open".into(),
+        at_s: 20.5,
+        phase: Phase::Travelling,
+        position_mm: 500.0,
+        verdict: Verdict::Panic,
+        violation: None,
+        action: None,
+        detail: "boom\nbang".into(),
+        after_s: 0.0,
+        ran_s: 0.0,
+        reproducer: None,
+    };
+    let (name, text) = asi_lift::cmd::explore::reproducer(&sc, &plan, &line, Path::new("out"));
+    assert_eq!(name, "fork-0000003-door-open.toml");
+    let header: Vec<&str> = text.lines().take(3).collect();
+    assert_eq!(
+        header,
+        [
+            "# asi-lift explore reproducer: fault door-open at 20.5 s in scenario `demo` (travelling phase), fork 3 of 6",
+            "# fails: panic: boom bang",
+            "# reproduce: asi-lift run out/fork-0000003-door-open.toml",
+        ]
+    );
+    let mut back = rig::Scenario::from_toml(&name, &text).expect("a scenario");
+    back.events.iter_mut().for_each(|e| e.line = 0);
+    let mut want = rig::explore::written_in(
+        sc,
+        FaultKind::DoorOpen,
+        &plan.params,
+        SimTime::from_millis(20_500),
+        plan.horizon,
+    );
+    want.events.iter_mut().for_each(|e| e.line = 0);
+    assert_eq!(back, want);
+    assert_eq!(back.duration, SimDuration::from_millis(50_500));
 }

@@ -78,6 +78,18 @@ enum Command {
         #[command(flatten)]
         args: cmd::campaign::CampaignArgs,
     },
+    /// Inject every fault of the catalogue at every instant of a grid over a scenario (the
+    /// asi-lift guide, chapter "The fault explorer"): the run is forked at each instant, each
+    /// fork runs to its verdict (back in service, a safe stop that needs a person, a violation,
+    /// a panic); one JSON line per fork, the FMEA sheet of fault kind × lift phase; or merge
+    /// result files with `explore summarize`.
+    #[command(args_conflicts_with_subcommands = true)]
+    Explore {
+        #[command(subcommand)]
+        action: Option<cmd::explore::ExploreAction>,
+        #[command(flatten)]
+        args: cmd::explore::ExploreArgs,
+    },
     /// Print the shell completion script for bash, zsh, fish, elvish or powershell
     /// (`asi-lift completions bash > ~/.local/share/bash-completion/completions/asi-lift`).
     Completions(cmd::completions::CompletionsArgs),
@@ -104,6 +116,15 @@ pub fn run(cli: Cli) -> Result<u8, String> {
             Some(cmd::campaign::CampaignAction::Summarize { files, json }) => {
                 cmd::campaign::summarize_files(&files, json)
             }
+        },
+        Command::Explore { action, args } => match action {
+            None => cmd::explore::run(args),
+            Some(cmd::explore::ExploreAction::Summarize {
+                files,
+                json,
+                svg,
+                force,
+            }) => cmd::explore::summarize_files(&files, json, svg.as_deref(), force),
         },
         Command::Completions(args) => cmd::completions::run(args, Cli::command()),
         Command::Man(args) => cmd::man::run(args, Cli::command()),

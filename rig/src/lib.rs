@@ -42,6 +42,7 @@
 //! ```
 
 pub mod campaign;
+pub mod explore;
 pub mod referee;
 pub mod report;
 pub mod rig;

@@ -6,6 +6,8 @@ pub mod campaign;
 pub mod completions;
 pub mod decode;
 pub mod encode;
+pub mod explore;
+mod explore_svg;
 pub mod man;
 pub mod output;
 pub mod picture;

@@ -8,6 +8,7 @@ mod clones;
 mod controllers;
 mod display_word;
 mod end_to_end;
+mod explore;
 mod fast_path;
 mod line_noise;
 mod master_leds;

@@ -46,7 +46,11 @@ impl<L> Faulty<L> {
     }
 
     /// Seeded random line faults from now on (`FaultRates::NONE` or `None` switches them off).
+    /// The faults the injector it replaces has injected stay counted.
     pub fn set_faults(&mut self, injector: Option<FaultInjector>) {
+        if let Some(old) = self.injector.take() {
+            self.faults_injected += old.injected();
+        }
         self.injector = injector.filter(|i| !i.rates().is_clean());
     }
 

@@ -668,7 +668,8 @@ mod tests {
                         f @ (Fault::ConverterRunaway { .. }
                         | Fault::ConverterRepaired
                         | Fault::EncoderFailed
-                        | Fault::EncoderRepaired),
+                        | Fault::EncoderRepaired
+                        | Fault::LineNoise { .. }),
                     ) => {
                         format!("{f:?}")
                     }

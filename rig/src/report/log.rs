@@ -297,6 +297,10 @@ pub enum RigNote {
     TraceNotWritten(String),
     /// AS-i power is back after a power fail.
     PowerBack,
+    /// A burst of line noise is over: the line has its own noise again.
+    NoiseOver,
+    /// A burst of line noise with a rate that is no probability: nothing happens.
+    NoNoise(String),
     /// The operator presses the safety reset after power-on.
     ResetAfterPowerOn,
     /// A scenario's fault names a slave address the lab bus does not have.
@@ -332,6 +336,8 @@ impl std::fmt::Display for RigNote {
             RigNote::StoppedEarly => f.write_str("the run was stopped early by its caller"),
             RigNote::TraceNotWritten(e) => write!(f, "the bus trace could not be written: {e}"),
             RigNote::PowerBack => f.write_str("AS-i power back"),
+            RigNote::NoiseOver => f.write_str("the burst of line noise is over"),
+            RigNote::NoNoise(e) => write!(f, "no burst of line noise: {e}"),
             RigNote::ResetAfterPowerOn => {
                 f.write_str("operator presses the safety reset after power-on")
             }

@@ -3,6 +3,10 @@
 
 use super::*;
 
+/// Mixed into the scenario's seed for a burst of line noise, with the burst's start: each
+/// burst draws its own faults.
+const NOISE_BURST_SEED: u64 = 0x6e6f_6973_655f_6275;
+
 impl Rig {
     pub(super) fn apply(&mut self, t: SimTime, ev: &ScenarioEvent) {
         self.act(t, Actor::Scenario, &ev.action);
@@ -109,6 +113,22 @@ impl Rig {
                 }
                 self.wiring.plant_dirty = true;
             }
+            Fault::LineNoise { rate, duration } => {
+                // The reader and the catalogue take only probabilities; a bad one is a note.
+                match PulseErrorRate::new(rate) {
+                    Ok(r) => {
+                        let seed = self.sc.seed ^ NOISE_BURST_SEED ^ t.as_nanos();
+                        self.lab
+                            .bus_mut()
+                            .set_line_faults(seed, FaultRates::uniform(r));
+                        self.agenda.timers.push((t + duration, Timer::NoiseOver));
+                    }
+                    Err(e) => self.log(
+                        Actor::Scenario,
+                        LogEvent::Note(RigNote::NoNoise(e.to_string())),
+                    ),
+                }
+            }
             Fault::EncoderFailed | Fault::EncoderRepaired => {
                 // The scenario reader takes these only with the safe drive.
                 match self.safety.drive.as_mut() {
@@ -147,6 +167,20 @@ impl Rig {
                 Timer::ErrAck(on) => self.safety.err_ack = on,
                 Timer::Attendant(Round::Ack) => self.act(t, Actor::Attendant, &Action::Ack),
                 Timer::Attendant(Round::Reset) => self.act(t, Actor::Attendant, &Action::Reset),
+                // The line's own noise again, once no other burst goes on.
+                Timer::NoiseOver
+                    if !self
+                        .agenda
+                        .timers
+                        .iter()
+                        .any(|(_, k)| *k == Timer::NoiseOver) =>
+                {
+                    let rates = PulseErrorRate::new(self.sc.pulse_error_rate)
+                        .map_or(FaultRates::NONE, FaultRates::uniform);
+                    self.lab.bus_mut().set_line_faults(self.sc.seed, rates);
+                    self.log(Actor::Rig, LogEvent::Note(RigNote::NoiseOver));
+                }
+                Timer::NoiseOver => {}
                 Timer::PowerBack => {
                     self.lab.bus_mut().set_supply_voltage(NOMINAL_VOLTS);
                     self.log(Actor::Rig, LogEvent::Note(RigNote::PowerBack));

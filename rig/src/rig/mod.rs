@@ -12,6 +12,7 @@
 
 mod actions;
 mod drive;
+mod fork;
 mod invariants;
 mod las;
 mod log_bound;
@@ -91,6 +92,8 @@ enum Timer {
     OperatorReset(bool),
     ErrAck(bool),
     PowerBack,
+    /// A burst of line noise is over.
+    NoiseOver,
     /// The attendant's acknowledge or reset of a round.
     Attendant(Round),
 }

@@ -46,6 +46,9 @@ fn describe(a: &Action) -> String {
             }
             Fault::EncoderFailed => "fault: the safe drive's encoder cannot be read".into(),
             Fault::EncoderRepaired => "fault cleared: the safe drive's encoder reads again".into(),
+            Fault::LineNoise { rate, duration } => {
+                format!("fault: a burst of line noise, pulse error rate {rate}, for {duration}")
+            }
         },
     }
 }
@@ -94,6 +97,11 @@ pub(super) struct Attendant {
 
 impl Attendant {
     /// From `t` on, the attendant watches.
+    /// Whether an attendant is at work (a scenario's `attend` has come).
+    pub(super) fn started(&self) -> bool {
+        self.on
+    }
+
     pub(super) fn start(&mut self, t: asi_phy::SimTime) {
         if !self.on {
             self.on = true;

@@ -159,6 +159,15 @@ pub enum Fault {
     EncoderFailed,
     /// The encoder is repaired: it reads again (a trip stays until the operator's reset).
     EncoderRepaired,
+    /// A burst of line noise: for a while every pulse on the line is corrupted with this
+    /// probability (on top of nothing: the burst's draws take the place of the line's own noise,
+    /// which goes on afterwards from its own seed again).
+    LineNoise {
+        /// The probability that a pulse is corrupted, 0 < rate ≤ 1.
+        rate: f64,
+        /// How long.
+        duration: SimDuration,
+    },
 }
 
 /// The PLC scan periods the program works with. The cabin's 32-bit word takes 14 handshake steps of

@@ -104,6 +104,7 @@ struct RawFault {
     duration: Option<Spanned<String>>,
     sensor: Option<Spanned<String>>,
     direction: Option<Spanned<String>>,
+    rate: Option<Spanned<f64>>,
 }
 
 /// Turns byte offsets into lines and columns, and names errors.
@@ -385,6 +386,9 @@ fn fault(
     if !kind.starts_with("converter-runaway") {
         unused(raw.direction.is_some(), "direction")?;
     }
+    if kind != "line-noise" {
+        unused(raw.rate.is_some(), "rate")?;
+    }
     match kind {
         "slave-offline" | "slave-online" => {
             unused(raw.duration.is_some(), "duration")?;
@@ -479,13 +483,34 @@ fn fault(
                 Fault::EncoderRepaired
             })
         }
+        "line-noise" => {
+            unused(raw.slave.is_some(), "slave")?;
+            unused(raw.sensor.is_some(), "sensor")?;
+            let d = dur()?;
+            let r = raw.rate.as_ref().ok_or_else(|| {
+                loc.error(
+                    Some(f.span()),
+                    format!("{field}.rate"),
+                    format!("`{kind}` needs `rate = P`, the probability that a pulse is corrupted"),
+                )
+            })?;
+            let rate = *r.get_ref();
+            if !(rate > 0.0 && rate <= 1.0) {
+                return Err(loc.error(
+                    Some(r.span()),
+                    format!("{field}.rate"),
+                    format!("{rate}: a burst's rate is a probability above 0 and at most 1"),
+                ));
+            }
+            Ok(Fault::LineNoise { rate, duration: d })
+        }
         other => Err(loc.error(
             Some(raw.kind.span()),
             format!("{field}.kind"),
             format!(
                 "unknown fault `{other}`: use slave-offline, slave-online, power-fail, safe-link-drop, \
                  vane-stuck-on, vane-stuck-off, vane-repaired, converter-runaway, converter-repaired, \
-                 encoder-failed or encoder-repaired"
+                 encoder-failed, encoder-repaired or line-noise"
             ),
         )),
     }

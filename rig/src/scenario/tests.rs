@@ -609,8 +609,9 @@ fn the_safe_drive_and_the_converter_runaway_are_read_and_checked() {
     assert!(e.starts_with("t.toml:2:8: drive.safe: "), "{e}");
     let e = err("[drive]\nsafe = true\nsafety = true\n");
     assert!(e.contains("unknown field `safety`"), "{e}");
-    assert!(err(&ev("{ kind = \"runaway\" }"))
-        .contains("converter-runaway, converter-repaired, encoder-failed or encoder-repaired"));
+    assert!(err(&ev("{ kind = \"runaway\" }")).contains(
+        "converter-runaway, converter-repaired, encoder-failed, encoder-repaired or line-noise"
+    ));
 }
 
 /// Random and mutated bytes into the scenario reader: never a panic; an error names its file
@@ -675,4 +676,40 @@ mod fuzz {
             check(text.as_bytes())?;
         }
     }
+}
+
+#[test]
+fn a_burst_of_line_noise_is_read_written_and_checked() {
+    let text = "[[event]]\nat = \"5s\"\nfault = { kind = \"line-noise\", rate = 0.01, duration = \"500ms\" }\n";
+    let sc = Scenario::from_toml("t.toml", text).expect("reads");
+    let burst = Fault::LineNoise {
+        rate: 0.01,
+        duration: SimDuration::from_millis(500),
+    };
+    assert_eq!(sc.events[0].action, Action::Fault(burst));
+    // Written and read back, the same burst.
+    let mut back = Scenario::from_toml("t.toml", &sc.to_toml()).expect("reads back");
+    back.events
+        .iter_mut()
+        .for_each(|e| e.line = sc.events[0].line);
+    assert_eq!(back, sc);
+    let ev = |fault: &str| format!("[[event]]\nat = \"5s\"\nfault = {fault}\n");
+    assert_eq!(
+        err(&ev("{ kind = \"line-noise\", duration = \"1s\" }")),
+        "t.toml:3:9: event[1].fault.rate: `line-noise` needs `rate = P`, the probability that a pulse is corrupted"
+    );
+    assert_eq!(
+        err(&ev("{ kind = \"line-noise\", rate = 0.01 }")),
+        "t.toml:3:9: event[1].fault.duration: `line-noise` needs `duration = \"…\"`"
+    );
+    assert_eq!(
+        err(&ev("{ kind = \"line-noise\", rate = 1.5, duration = \"1s\" }")),
+        "t.toml:3:39: event[1].fault.rate: 1.5: a burst's rate is a probability above 0 and at most 1"
+    );
+    assert_eq!(
+        err(&ev(
+            "{ kind = \"power-fail\", rate = 0.1, duration = \"1s\" }"
+        )),
+        "t.toml:3:9: event[1].fault.rate: `power-fail` takes no `rate`"
+    );
 }

@@ -177,5 +177,9 @@ fn fault_text(f: &Fault) -> String {
         Fault::ConverterRepaired => "{ kind = \"converter-repaired\" }".into(),
         Fault::EncoderFailed => "{ kind = \"encoder-failed\" }".into(),
         Fault::EncoderRepaired => "{ kind = \"encoder-repaired\" }".into(),
+        Fault::LineNoise { rate, duration } => format!(
+            "{{ kind = \"line-noise\", rate = {rate:?}, duration = \"{}\" }}",
+            exact_duration(*duration)
+        ),
     }
 }
