@@ -1,9 +1,9 @@
 #!/usr/bin/env bash
-# A campaign on a real batch engine (the book, "Campaigns", "On a cluster"): starts a
-# single-node Slurm cluster from Debian's packages (slurm-wlm, munge; installed if missing),
-# submits a campaign as a job array with deploy/slurm.sh, merges the shards' lines and checks
-# that they equal the same campaign run here in one piece; then checks the Kubernetes Indexed
-# Job file's YAML. Needs root (it installs packages and starts the daemons) and the release
+# Campaigns and explorations on a real batch engine (the book, "Campaigns", "Scale-out"; "The
+# fault explorer"): starts a single-node Slurm cluster from Debian's packages (slurm-wlm,
+# munge; installed if missing), submits a campaign (deploy/slurm.sh) and an exploration
+# (deploy/slurm-explore.sh) as job arrays, merges the shards' lines and checks that they equal
+# the same runs here in one piece; then checks the Kubernetes Indexed Job file's YAML. Needs root (it installs packages and starts the daemons) and the release
 # binary (cargo build --release --bin asi-lift).
 #
 #   scripts/ci-slurm.sh [ASI_LIFT]     # default: target/release/asi-lift
@@ -132,6 +132,32 @@ fi
 cmp "$work/merged.summary" "$work/local.summary"
 cat "$work/merged.summary"
 echo "ci-slurm: $(wc -l < "$work/merged.sorted") lines from $SHARDS Slurm shards equal the local run's"
+
+# An exploration the same way: the demo's single faults every 2 s in 10..30 s as an array of
+# 3 tasks with deploy/slurm-explore.sh; the merged lines and sheet equal a local run's.
+xout="$work/explore"
+mkdir -p "$xout"
+echo "ci-slurm: submitting 3 shards of an exploration of the demo"
+if ! SCENARIO=demo EVERY=2s WINDOW=10s..30s HORIZON=30s OUT_DIR="$xout" ASI_LIFT="$ASI_LIFT" \
+    timeout 900 sbatch --wait --array=0-2 --cpus-per-task=1 --chdir="$work" \
+    --output="$work/explore-task-%a.log" deploy/slurm-explore.sh; then
+  cat "$work"/explore-task-*.log "$work"/log/*.log >&2 || true
+  exit 1
+fi
+"$ASI_LIFT" explore demo --every 2s --window 10s..30s --horizon 30s --jobs "$cpus" \
+  --out "$work/explore-local.jsonl" --failures "$work/explore-local-failures" 2>/dev/null \
+  || [ $? -eq 3 ]
+sort "$xout"/shard-*.jsonl > "$work/explore-merged.sorted"
+sort "$work/explore-local.jsonl" > "$work/explore-local.sorted"
+if ! cmp -s "$work/explore-merged.sorted" "$work/explore-local.sorted"; then
+  echo "ci-slurm: the Slurm shards' exploration lines differ from the local run's:" >&2
+  diff "$work/explore-merged.sorted" "$work/explore-local.sorted" | head -20 >&2
+  exit 1
+fi
+"$ASI_LIFT" explore summarize "$xout"/shard-*.jsonl > "$work/explore-merged.sheet"
+"$ASI_LIFT" explore summarize "$work/explore-local.jsonl" > "$work/explore-local.sheet"
+cmp "$work/explore-merged.sheet" "$work/explore-local.sheet"
+echo "ci-slurm: $(wc -l < "$work/explore-merged.sorted") fork lines from 3 Slurm shards equal the local run's"
 
 # The Kubernetes Indexed Job file: YAML that parses, one shard per completion index.
 python3 -c "import yaml" 2>/dev/null || python3 -m pip install -q pyyaml
