@@ -104,60 +104,47 @@ if [ "$ready" != yes ]; then
 fi
 sinfo -h -o '%N %T %c'
 
-# The campaign as a job array of SHARDS tasks, each one shard; --wait returns when all are
-# done, with a failure if any task failed.
-out="$work/results"
-mkdir -p "$out"
-echo "ci-slurm: submitting $SHARDS shards of a $RUNS-run campaign"
-if ! RUNS=$RUNS SEED=$SEED PROFILE=$PROFILE OUT_DIR="$out" ASI_LIFT="$ASI_LIFT" \
-    timeout 900 sbatch --wait --array=0-$((SHARDS - 1)) --cpus-per-task=1 --chdir="$work" \
-    --output="$work/task-%a.log" deploy/slurm.sh; then
-  cat "$work"/task-*.log "$work"/log/*.log >&2 || true
-  exit 1
-fi
-ls "$out"/shard-*-of-$SHARDS.jsonl
+# Submits the job file $2 as an array of $3 tasks (settings in the environment) and waits for
+# all; then checks that the shards' lines, merged, equal the local run's file $4 and that
+# `asi-lift $1 summarize` gives the same for both. Results go to $work/$1.
+slurm_equals_local() {
+  local what="$1" job="$2" tasks="$3" local_lines="$4" out="$work/$1"
+  mkdir -p "$out"
+  echo "ci-slurm: submitting $what in $tasks shards"
+  # --wait returns when all tasks are done, with a failure if any task failed.
+  if ! OUT_DIR="$out" ASI_LIFT="$ASI_LIFT" \
+      timeout 900 sbatch --wait --array=0-$((tasks - 1)) --cpus-per-task=1 --chdir="$work" \
+      --output="$work/$what-task-%a.log" "$job"; then
+    cat "$work/$what"-task-*.log "$work"/log/*.log >&2 || true
+    exit 1
+  fi
+  sort "$out"/shard-*-of-"$tasks".jsonl > "$out/merged.sorted"
+  sort "$local_lines" > "$out/local.sorted"
+  if ! cmp -s "$out/merged.sorted" "$out/local.sorted"; then
+    echo "ci-slurm: the Slurm shards' $what lines differ from the local run's:" >&2
+    diff "$out/merged.sorted" "$out/local.sorted" | head -20 >&2
+    exit 1
+  fi
+  "$ASI_LIFT" "$what" summarize "$out"/shard-*.jsonl > "$out/merged.summary"
+  "$ASI_LIFT" "$what" summarize "$local_lines" > "$out/local.summary"
+  cmp "$out/merged.summary" "$out/local.summary"
+  cat "$out/merged.summary"
+  echo "ci-slurm: $(wc -l < "$out/merged.sorted") $what lines from $tasks Slurm shards equal the local run's"
+}
 
-# The same campaign in one piece, here; the merged shards must give the same lines.
+# The campaign, here in one piece and as a job array of SHARDS tasks (deploy/slurm.sh).
 "$ASI_LIFT" campaign --runs $RUNS --seed $SEED --profile $PROFILE --jobs "$cpus" \
-  --out "$work/local.jsonl" --failures "$work/local-failures" || [ $? -eq 3 ]
-sort "$out"/shard-*.jsonl > "$work/merged.sorted"
-sort "$work/local.jsonl" > "$work/local.sorted"
-if ! cmp -s "$work/merged.sorted" "$work/local.sorted"; then
-  echo "ci-slurm: the Slurm shards' lines differ from the local run's:" >&2
-  diff "$work/merged.sorted" "$work/local.sorted" | head -20 >&2
-  exit 1
-fi
-"$ASI_LIFT" campaign summarize "$out"/shard-*.jsonl > "$work/merged.summary"
-"$ASI_LIFT" campaign summarize "$work/local.jsonl" > "$work/local.summary"
-cmp "$work/merged.summary" "$work/local.summary"
-cat "$work/merged.summary"
-echo "ci-slurm: $(wc -l < "$work/merged.sorted") lines from $SHARDS Slurm shards equal the local run's"
+  --out "$work/campaign-local.jsonl" --failures "$work/campaign-local-failures" || [ $? -eq 3 ]
+RUNS=$RUNS SEED=$SEED PROFILE=$PROFILE \
+  slurm_equals_local campaign deploy/slurm.sh "$SHARDS" "$work/campaign-local.jsonl"
 
-# An exploration the same way: the demo's single faults every 2 s in 10..30 s as an array of
-# 3 tasks with deploy/slurm-explore.sh; the merged lines and sheet equal a local run's.
-xout="$work/explore"
-mkdir -p "$xout"
-echo "ci-slurm: submitting 3 shards of an exploration of the demo"
-if ! SCENARIO=demo EVERY=2s WINDOW=10s..30s HORIZON=30s OUT_DIR="$xout" ASI_LIFT="$ASI_LIFT" \
-    timeout 900 sbatch --wait --array=0-2 --cpus-per-task=1 --chdir="$work" \
-    --output="$work/explore-task-%a.log" deploy/slurm-explore.sh; then
-  cat "$work"/explore-task-*.log "$work"/log/*.log >&2 || true
-  exit 1
-fi
+# An exploration: the demo's single faults every 2 s in 10..30 s, here and as an array of 3
+# tasks (deploy/slurm-explore.sh).
 "$ASI_LIFT" explore demo --every 2s --window 10s..30s --horizon 30s --jobs "$cpus" \
   --out "$work/explore-local.jsonl" --failures "$work/explore-local-failures" 2>/dev/null \
   || [ $? -eq 3 ]
-sort "$xout"/shard-*.jsonl > "$work/explore-merged.sorted"
-sort "$work/explore-local.jsonl" > "$work/explore-local.sorted"
-if ! cmp -s "$work/explore-merged.sorted" "$work/explore-local.sorted"; then
-  echo "ci-slurm: the Slurm shards' exploration lines differ from the local run's:" >&2
-  diff "$work/explore-merged.sorted" "$work/explore-local.sorted" | head -20 >&2
-  exit 1
-fi
-"$ASI_LIFT" explore summarize "$xout"/shard-*.jsonl > "$work/explore-merged.sheet"
-"$ASI_LIFT" explore summarize "$work/explore-local.jsonl" > "$work/explore-local.sheet"
-cmp "$work/explore-merged.sheet" "$work/explore-local.sheet"
-echo "ci-slurm: $(wc -l < "$work/explore-merged.sorted") fork lines from 3 Slurm shards equal the local run's"
+SCENARIO=demo EVERY=2s WINDOW=10s..30s HORIZON=30s \
+  slurm_equals_local explore deploy/slurm-explore.sh 3 "$work/explore-local.jsonl"
 
 # The Kubernetes Indexed Job file: YAML that parses, one shard per completion index.
 python3 -c "import yaml" 2>/dev/null || python3 -m pip install -q pyyaml
